@@ -1,0 +1,66 @@
+// burnish: the command line over burnish_core.
+#include "command.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+
+namespace burnish::cli {
+
+std::vector<CommandEntry>& commandRegistry() {
+    static std::vector<CommandEntry> registry;
+    return registry;
+}
+
+int fail(const std::string& message) {
+    std::fprintf(stderr, "burnish: error: %s\n", message.c_str());
+    return 1;
+}
+
+} // namespace burnish::cli
+
+int main(int argc, char** argv) {
+    using namespace burnish::cli;
+    CLI::App app{"Burnish: specular colour, gloss and normal-map prefiltering for real-time materials.\n"
+                 "Every formula is measured against its exact form and its cost.",
+                 "burnish"};
+    app.set_version_flag("--version", "burnish 0.1.0");
+    app.require_subcommand(1);
+
+    auto& registry = commandRegistry();
+    std::sort(registry.begin(), registry.end(), [](const auto& a, const auto& b) { return a.order < b.order; });
+    std::vector<std::pair<CLI::App*, std::function<int()>>> runners;
+    for (const auto& entry : registry) {
+        const size_t before = app.get_subcommands({}).size();
+        auto run = entry.setup(app);
+        const auto subs = app.get_subcommands({});
+        for (size_t i = before; i < subs.size(); ++i) runners.emplace_back(subs[i], run);
+    }
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        // One clear line; --help on the failing subcommand says more.
+        std::string where = "burnish";
+        for (const auto& [sub, run] : runners)
+            if (sub->parsed()) where = "burnish " + sub->get_name();
+        std::fprintf(stderr, "burnish: error: %s (see '%s --help')\n", e.what(), where.c_str());
+        return e.get_exit_code() == 0 ? 2 : e.get_exit_code();
+    }
+
+    for (const auto& [sub, run] : runners)
+        if (sub->parsed()) {
+            try {
+                return run();
+            } catch (const std::exception& e) {
+                return fail(e.what());
+            }
+        }
+    return fail("no subcommand given (see 'burnish --help')");
+}

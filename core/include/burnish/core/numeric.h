@@ -1,0 +1,49 @@
+// Constants and guarded elementary functions shared by every shading formula.
+// Everything here is header-only and templated on the float type so the same code
+// serves double-precision references and float kernels that the compiler can vectorize.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace burnish {
+
+template <class T> inline constexpr T kPi = T(3.141592653589793238462643383279502884L);
+template <class T> inline constexpr T kInvPi = T(0.318309886183790671537767526745028724L);
+template <class T> inline constexpr T kLn2 = T(0.693147180559945309417232121458176568L);
+
+/// Largest specular power any Burnish function produces or accepts; larger inputs are clamped.
+/// 1e9 keeps the normalized Blinn-Phong peak (n+2)/(2π) ≈ 1.6e8 far from float overflow and
+/// its reciprocal (a variance of 1e-9) a normal float.
+inline constexpr double kMaxPower = 1e9;
+/// Smallest variance: the variance of kMaxPower under the 1/n convention.
+inline constexpr double kMinVariance = 1.0 / kMaxPower;
+/// Cosines below this are treated as this value in divisions (visibility terms, Beckmann):
+/// bounds 1/cos at 1e6 while changing no result that has a visible effect.
+inline constexpr double kMinCosine = 1e-6;
+
+template <class T> constexpr T saturate(T x) { return std::clamp(x, T(0), T(1)); }
+
+/// Clamps a power to [0, kMaxPower]; NaN becomes 0.
+template <class T> constexpr T clampPower(T n) {
+    return n > T(0) ? std::min(n, T(kMaxPower)) : T(0); // NaN fails n > 0
+}
+
+/// max(c, 0)^n evaluated as exp(n·log c), the overflow- and NaN-free form of pow for lobes:
+/// returns 1 for n == 0 (the limit, also at c == 0), 0 for c <= 0 and n > 0, and never NaN.
+template <class T> inline T powCos(T c, T n) {
+    n = clampPower(n);
+    if (n == T(0)) return T(1);
+    if (!(c > T(0))) return T(0);
+    if (c >= T(1)) return T(1);
+    return std::exp(n * std::log(c));
+}
+
+/// x^p for x in [0, 1] and p >= 0 (Fresnel-style powers), never NaN: 0^0 = 1, 0^p = 0.
+template <class T> inline T powUnit(T x, T p) { return powCos(x, p); }
+
+/// True when x is neither NaN nor infinite.
+template <class T> constexpr bool isFinite(T x) { return std::isfinite(x); }
+
+} // namespace burnish

@@ -1,0 +1,63 @@
+#include <burnish/core/image.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <system_error>
+
+namespace burnish {
+
+namespace fs = std::filesystem;
+
+Result<Image> readImage(const fs::path& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) return Error{"image '" + path.string() + "' does not exist"};
+    if (fs::is_directory(path, ec)) return Error{"'" + path.string() + "' is a folder, not an image"};
+
+    // Data maps are read as stored: OpenImageIO would otherwise premultiply the colour of PNG/TGA
+    // files by their alpha ("associated alpha"), scaling an RGBA normal map's vectors by the
+    // height map in its alpha.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path.string(), &config);
+    if (!in) {
+        std::string why = OIIO::geterror();
+        if (why.empty()) why = "unknown or unsupported format";
+        return Error{"cannot read image '" + path.string() + "': " + why};
+    }
+    const OIIO::ImageSpec& spec = in->spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+        return Error{"image '" + path.string() + "' has no pixels"};
+    if (spec.width > kMaxImageSide || spec.height > kMaxImageSide ||
+        static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height) > kMaxImageTexels)
+        return Error{"image '" + path.string() + "' is " + std::to_string(spec.width) + "x" +
+                     std::to_string(spec.height) + ", larger than Burnish accepts (65536 on a side, 2^30 texels)"};
+    if (spec.nchannels > 4)
+        return Error{"image '" + path.string() + "' has " + std::to_string(spec.nchannels) +
+                     " channels; Burnish reads 1 to 4"};
+    if (spec.depth > 1) return Error{"image '" + path.string() + "' is a volume texture; Burnish reads 2D images"};
+
+    Image image;
+    image.width = spec.width;
+    image.height = spec.height;
+    image.channels = spec.nchannels;
+    image.source.path = path.string();
+    image.source.formatName = in->format_name();
+    image.source.channelType = spec.format.c_str();
+    image.source.bitsPerChannel = static_cast<int>(spec.format.size() * 8);
+    image.source.isFloat = spec.format.is_floating_point();
+    image.source.colorSpace = spec.get_string_attribute("oiio:ColorSpace");
+    try {
+        image.pixels.resize(image.texelCount() * static_cast<size_t>(image.channels));
+    } catch (const std::bad_alloc&) {
+        return Error{"not enough memory to read image '" + path.string() + "'"};
+    }
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+        std::string why = in->geterror();
+        if (why.empty()) why = "corrupt or truncated data";
+        return Error{"cannot read image '" + path.string() + "': " + why};
+    }
+    in->close();
+    return image;
+}
+
+} // namespace burnish

@@ -1,0 +1,221 @@
+#include <burnish/core/normal_map.h>
+
+#include "temp_dir.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+using namespace burnish;
+
+namespace {
+
+// Unit length after renormalization, to float precision.
+constexpr float kUnitTolerance = 1e-6f;
+// One 8-bit step in [-1, 1]: 2/255.
+constexpr float kByteStep = 2.0f / 255.0f;
+
+Image makeImage(int w, int h, int c, const std::vector<float>& pixels, bool isFloat = false) {
+    Image image;
+    image.width = w;
+    image.height = h;
+    image.channels = c;
+    image.pixels = pixels;
+    image.source.isFloat = isFloat;
+    return image;
+}
+
+// Encodes unit normals as unsigned [0,1] RGB.
+Image encodeRgb(int w, int h, const std::vector<glm::vec3>& normals) {
+    std::vector<float> px;
+    for (const auto& n : normals) {
+        px.push_back(n.x * 0.5f + 0.5f);
+        px.push_back(n.y * 0.5f + 0.5f);
+        px.push_back(n.z * 0.5f + 0.5f);
+    }
+    return makeImage(w, h, 3, px);
+}
+
+bool writeImage(const std::filesystem::path& path, int w, int h, int c, OIIO::TypeDesc type,
+                const std::vector<float>& pixels) {
+    OIIO::ImageSpec spec(w, h, c, type);
+    auto out = OIIO::ImageOutput::create(path.string());
+    if (!out || !out->open(path.string(), spec)) return false;
+    const bool ok = out->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
+    return out->close() && ok;
+}
+
+} // namespace
+
+TEST(NormalMap, DecodesUnsignedRgbAndRenormalizes) {
+    const glm::vec3 tilted = glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f));
+    auto map = decodeNormalMap(encodeRgb(2, 1, {tilted, glm::vec3(0, 0, 1)}));
+    ASSERT_TRUE(map.ok()) << map.error();
+    EXPECT_NEAR(glm::length(map->at(0, 0)), 1.0f, kUnitTolerance);
+    EXPECT_NEAR(map->at(0, 0).x, tilted.x, 1e-6f);
+    EXPECT_NEAR(map->at(0, 0).y, tilted.y, 1e-6f);
+    EXPECT_FALSE(map->diagnostics.zRebuilt);
+}
+
+TEST(NormalMap, DirectXGreenIsFlipped) {
+    const glm::vec3 n = glm::normalize(glm::vec3(0.1f, 0.4f, 0.9f));
+    NormalMapOptions options;
+    options.green = GreenConvention::DirectX;
+    auto map = decodeNormalMap(encodeRgb(1, 1, {n}), options);
+    ASSERT_TRUE(map.ok());
+    EXPECT_NEAR(map->at(0, 0).y, -n.y, 1e-6f);
+    EXPECT_NEAR(map->at(0, 0).x, n.x, 1e-6f);
+}
+
+TEST(NormalMap, TwoChannelMapRebuildsZ) {
+    const float x = 0.3f, y = -0.4f;
+    auto map = decodeNormalMap(makeImage(1, 1, 2, {x * 0.5f + 0.5f, y * 0.5f + 0.5f}));
+    ASSERT_TRUE(map.ok()) << map.error();
+    EXPECT_TRUE(map->diagnostics.zRebuilt);
+    EXPECT_NEAR(map->at(0, 0).z, std::sqrt(1.0f - x * x - y * y), 1e-6f);
+}
+
+TEST(NormalMap, ConstantBlueIsReadAsTwoChannel) {
+    // A BC5-style export: RG vary, blue is 0 everywhere.
+    auto map = decodeNormalMap(makeImage(2, 1, 3, {0.6f, 0.5f, 0.0f, 0.4f, 0.55f, 0.0f}));
+    ASSERT_TRUE(map.ok()) << map.error();
+    EXPECT_TRUE(map->diagnostics.zRebuilt);
+    EXPECT_GT(map->at(0, 0).z, 0.9f);
+}
+
+TEST(NormalMap, AlphaIsNeverMixedIntoTheNormal) {
+    std::vector<float> px = {0.5f, 0.5f, 1.0f, 0.0f, 0.5f, 0.5f, 1.0f, 1.0f};
+    auto map = decodeNormalMap(makeImage(2, 1, 4, px));
+    ASSERT_TRUE(map.ok());
+    EXPECT_TRUE(map->diagnostics.alphaIgnored);
+    EXPECT_EQ(map->at(0, 0), map->at(1, 0));
+}
+
+TEST(NormalMap, SignedFloatMapsAreDetected) {
+    const glm::vec3 n = glm::normalize(glm::vec3(-0.3f, 0.2f, 0.9f));
+    auto map = decodeNormalMap(makeImage(1, 1, 3, {n.x, n.y, n.z}, /*isFloat=*/true));
+    ASSERT_TRUE(map.ok()) << map.error();
+    EXPECT_TRUE(map->diagnostics.signedValues);
+    EXPECT_NEAR(map->at(0, 0).x, n.x, 1e-6f);
+}
+
+TEST(NormalMap, NanTexelsAreReportedAndReplaced) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    auto image = encodeRgb(2, 2, {glm::vec3(0, 0, 1), glm::vec3(0, 0, 1), glm::vec3(0, 0, 1), glm::vec3(0, 0, 1)});
+    image.pixels[3] = nan;
+    image.pixels[7] = std::numeric_limits<float>::infinity();
+    auto map = decodeNormalMap(image);
+    ASSERT_TRUE(map.ok()) << map.error();
+    EXPECT_EQ(map->diagnostics.nonFiniteTexels, 2u);
+    ASSERT_FALSE(map->diagnostics.warnings.empty());
+    for (const auto& n : map->normals) EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z));
+}
+
+TEST(NormalMap, RejectsOneChannelImages) {
+    auto map = decodeNormalMap(makeImage(1, 1, 1, {0.5f}));
+    ASSERT_FALSE(map.ok());
+    EXPECT_NE(map.error().find("height or gloss"), std::string::npos) << map.error();
+}
+
+TEST(NormalMap, RejectsPhotosAndAcceptsThemOnRequest) {
+    // A "photo": random colours, most stored vectors far from unit length, many pointing down.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    std::vector<float> px(64 * 64 * 3);
+    for (auto& v : px) v = u(rng);
+    auto map = decodeNormalMap(makeImage(64, 64, 3, px));
+    ASSERT_FALSE(map.ok());
+    EXPECT_NE(map.error().find("does not look like a tangent-space normal map"), std::string::npos) << map.error();
+
+    NormalMapOptions options;
+    options.allowImplausible = true;
+    auto forced = decodeNormalMap(makeImage(64, 64, 3, px), options);
+    ASSERT_TRUE(forced.ok());
+    EXPECT_FALSE(forced->diagnostics.warnings.empty());
+}
+
+TEST(NormalMap, RejectsMidGreyHeightMapsStoredAsRgb) {
+    std::vector<float> px(16 * 16 * 3, 0.5f);
+    for (size_t i = 0; i < px.size(); i += 3) px[i] = px[i + 1] = px[i + 2] = 0.3f + 0.001f * float(i % 50);
+    EXPECT_FALSE(decodeNormalMap(makeImage(16, 16, 3, px)).ok());
+}
+
+TEST(NormalMap, EightBitFlatMapDecodesToOneDirection) {
+    // (128, 128, 255) is the flat normal of 8-bit maps: it is not exactly +z, but every texel
+    // must decode to the same unit vector (no spread, hence no false roughness).
+    std::vector<float> px;
+    for (int i = 0; i < 16; ++i) px.insert(px.end(), {128.0f / 255.0f, 128.0f / 255.0f, 1.0f});
+    auto map = decodeNormalMap(makeImage(4, 4, 3, px));
+    ASSERT_TRUE(map.ok());
+    for (const auto& n : map->normals) {
+        EXPECT_EQ(n, map->normals[0]);
+        EXPECT_NEAR(glm::length(n), 1.0f, kUnitTolerance);
+        EXPECT_NEAR(n.z, 1.0f, kByteStep * kByteStep);
+    }
+}
+
+TEST(ImageIo, ReadsFormatsAndSizes) {
+    test::TempDir dir;
+    struct Case {
+        const char* name;
+        OIIO::TypeDesc type;
+        int w, h;
+    };
+    // Odd sizes and 1×1 included; each format round-trips the flat normal.
+    const Case cases[] = {{"a.png", OIIO::TypeDesc::UINT8, 3, 5},   {"b.png", OIIO::TypeDesc::UINT16, 1, 1},
+                          {"c.tga", OIIO::TypeDesc::UINT8, 7, 2},   {"d.exr", OIIO::TypeDesc::HALF, 4, 4},
+                          {"e.tif", OIIO::TypeDesc::FLOAT, 5, 3},   {"f.jpg", OIIO::TypeDesc::UINT8, 8, 8}};
+    for (const auto& c : cases) {
+        std::vector<float> px;
+        for (int i = 0; i < c.w * c.h; ++i) px.insert(px.end(), {0.5f, 0.5f, 1.0f});
+        ASSERT_TRUE(writeImage(dir / c.name, c.w, c.h, 3, c.type, px)) << c.name;
+        auto map = loadNormalMap(dir / c.name);
+        ASSERT_TRUE(map.ok()) << c.name << ": " << map.error();
+        EXPECT_EQ(map->width, c.w);
+        EXPECT_EQ(map->height, c.h);
+        // JPEG is lossy: allow a few 8-bit steps.
+        EXPECT_NEAR(map->at(0, 0).z, 1.0f, 4 * kByteStep) << c.name;
+    }
+}
+
+TEST(ImageIo, ClearErrorsForMissingAndCorruptFiles) {
+    test::TempDir dir;
+    auto missing = readImage(dir / "nope.png");
+    ASSERT_FALSE(missing.ok());
+    EXPECT_NE(missing.error().find("does not exist"), std::string::npos);
+
+    std::ofstream(dir / "corrupt.png") << "\x89PNG\r\n\x1a\n this is not a png";
+    auto corrupt = readImage(dir / "corrupt.png");
+    ASSERT_FALSE(corrupt.ok());
+    EXPECT_NE(corrupt.error().find("corrupt.png"), std::string::npos) << corrupt.error();
+
+    auto folder = readImage(dir.path());
+    ASSERT_FALSE(folder.ok());
+    EXPECT_NE(folder.error().find("folder"), std::string::npos);
+}
+
+TEST(ImageIo, TruncatedFileIsAnError) {
+    test::TempDir dir;
+    std::vector<float> px(64 * 64 * 3, 0.5f);
+    ASSERT_TRUE(writeImage(dir / "full.png", 64, 64, 3, OIIO::TypeDesc::UINT8, px));
+    const auto size = std::filesystem::file_size(dir / "full.png");
+    std::filesystem::copy_file(dir / "full.png", dir / "cut.png");
+    std::filesystem::resize_file(dir / "cut.png", size / 2);
+    EXPECT_FALSE(readImage(dir / "cut.png").ok());
+}
+
+TEST(ImageIo, AlphaIsNotPremultipliedIntoTheColour) {
+    // RGBA normal maps often carry a height map in alpha; reading must not scale RGB by it.
+    test::TempDir dir;
+    std::vector<float> px = {0.5f, 0.5f, 1.0f, 0.25f};
+    ASSERT_TRUE(writeImage(dir / "rgba.png", 1, 1, 4, OIIO::TypeDesc::UINT8, px));
+    auto image = readImage(dir / "rgba.png");
+    ASSERT_TRUE(image.ok()) << image.error();
+    EXPECT_NEAR(image->at(0, 0, 2), 1.0f, 1e-6f);
+    EXPECT_NEAR(image->at(0, 0, 3), 64.0f / 255.0f, 1e-6f);
+}

@@ -138,6 +138,8 @@ NormalPyramid NormalPyramid::build(std::shared_ptr<const NormalMap> map, const P
     level0.height = finest.height;
     level0.xStart = childStarts(finest.width, finest.width);
     level0.yStart = childStarts(finest.height, finest.height);
+    level0.xChild = level0.xStart;
+    level0.yChild = level0.yStart;
     pyramid.m_levels.push_back(std::move(level0));
 
     while (pyramid.m_levels.back().width > 1 || pyramid.m_levels.back().height > 1) {
@@ -152,6 +154,8 @@ NormalPyramid NormalPyramid::build(std::shared_ptr<const NormalMap> map, const P
         parent.yStart.resize(size_t(parent.height) + 1);
         for (int x = 0; x <= parent.width; ++x) parent.xStart[size_t(x)] = child.xStart[size_t(cx[size_t(x)])];
         for (int y = 0; y <= parent.height; ++y) parent.yStart[size_t(y)] = child.yStart[size_t(cy[size_t(y)])];
+        parent.xChild = cx;
+        parent.yChild = cy;
         parent.box.resize(size_t(parent.width) * size_t(parent.height));
 
         tbb::parallel_for(0, parent.height, [&](int y) {

@@ -73,6 +73,8 @@ struct PyramidLevel {
     int height = 0;
     std::vector<int> xStart; // finest column where column x's footprint starts; size width+1
     std::vector<int> yStart; // finest row where row y's footprint starts; size height+1
+    std::vector<int> xChild; // first column of level k−1 under column x; size width+1 (level 0: identity)
+    std::vector<int> yChild; // first row of level k−1 under row y; size height+1
     std::vector<NormalMoments> box; // box moments, row-major (empty for level 0: see NormalPyramid)
 };
 

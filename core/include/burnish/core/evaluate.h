@@ -1,0 +1,90 @@
+// Ground truth and the error of every prefiltering method against it, per mip.
+//
+// The ground truth is the texts' experiment (render big, downsample) done in texture space:
+// for mip k, a texel's footprint is its block of finest texels (the aligned 2^k×2^k block for
+// power-of-two maps; see normal_pyramid.h for other sizes), and
+//   GT = mean over the footprint of D_s(n_i·h)·max(0, n_i·l)
+// with D_s the normalized Blinn-Phong NDF of the base power s. A method's value is its own NDF
+// (methods.h) times max(0, n̄·l) with the method's normal n̄, using box-footprint moments.
+// Directions: the view at `viewAngle` from the macro normal (azimuth 0); half vectors at the
+// polar angles `halfAngles` and `azimuths` evenly spaced azimuths (one at 0); pairs whose light
+// is within `horizon` of the horizon are dropped.
+#pragma once
+
+#include <burnish/core/methods.h>
+#include <burnish/core/normal_map.h>
+#include <burnish/core/normal_pyramid.h>
+#include <burnish/core/result.h>
+
+#include <glm/vec3.hpp>
+
+#include <functional>
+#include <vector>
+
+namespace burnish {
+
+struct EvaluateOptions {
+    std::vector<double> basePowers{512.0};
+    int firstMip = 1;
+    int lastMip = 4; // clamped to the map's last level
+    double viewAngleDeg = 30.0;
+    std::vector<double> halfAnglesDeg{0.0, 2.5, 5.0, 10.0, 15.0, 20.0, 30.0};
+    int azimuths = 8;
+    double horizonDeg = 3.0;
+    std::vector<Method> methods = allMethods();
+    MethodParams params;
+    BorderMode border = BorderMode::Wrap;
+    /// Keep per-texel error maps (relative L1 per texel: Σ_dir|M − GT| / Σ_dir GT).
+    bool errorMaps = false;
+};
+
+/// One light/view pair in tangent space.
+struct DirectionPair {
+    glm::dvec3 l;
+    glm::dvec3 v;
+    glm::dvec3 h;
+};
+
+/// The direction pairs the options define, in a fixed order.
+std::vector<DirectionPair> evaluationDirections(const EvaluateOptions& options);
+
+struct MipError {
+    Method method;
+    double basePower;
+    int mip;
+    double relativeL1;  // Σ|M − GT| / Σ GT over texels and directions
+    double energyRatio; // Σ M / Σ GT
+};
+
+struct ErrorMap {
+    Method method;
+    double basePower;
+    int mip;
+    int width;
+    int height;
+    std::vector<float> relativeError; // per texel, row-major
+};
+
+struct EvaluationResult {
+    std::vector<MipError> errors;
+    std::vector<ErrorMap> maps;
+    std::vector<DirectionPair> directions;
+    int firstMip = 0;
+    int lastMip = 0;
+    double seconds = 0.0;
+};
+
+/// Ground truth of one texel's footprint for one direction pair (the brute-force definition,
+/// used by tests and by evaluateMethods' hierarchical sums).
+double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s, const DirectionPair& d);
+
+/// A method's value for one texel and direction.
+double methodValue(const TexelLobe& lobe, const DirectionPair& d);
+
+/// Errors of every requested method, power and mip. Fails on bad options (no directions left,
+/// empty power list, non-positive power, mip range outside the map). `progress` (if set) is
+/// called with the fraction done.
+Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOptions& options,
+                                         const std::function<void(double)>& progress = {});
+
+} // namespace burnish

@@ -1,0 +1,205 @@
+#include <burnish/core/evaluate.h>
+
+#include <burnish/core/ndf.h>
+
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+
+namespace burnish {
+
+namespace {
+
+double radians(double deg) { return deg * kPi<double> / 180.0; }
+
+struct Accumulator {
+    double absError = 0.0;
+    double method = 0.0;
+    double truth = 0.0;
+};
+
+} // namespace
+
+std::vector<DirectionPair> evaluationDirections(const EvaluateOptions& options) {
+    std::vector<DirectionPair> pairs;
+    const double thetaV = radians(options.viewAngleDeg);
+    const glm::dvec3 v(std::sin(thetaV), 0.0, std::cos(thetaV));
+    const double minLz = std::sin(radians(options.horizonDeg));
+    for (double thetaDeg : options.halfAnglesDeg) {
+        const double thetaH = radians(thetaDeg);
+        // At θh = 0 every azimuth gives the same half vector: count it once.
+        const int count = thetaDeg == 0.0 ? 1 : std::max(options.azimuths, 1);
+        for (int j = 0; j < count; ++j) {
+            const double phi = 2.0 * kPi<double> * j / count;
+            const glm::dvec3 h(std::sin(thetaH) * std::cos(phi), std::sin(thetaH) * std::sin(phi), std::cos(thetaH));
+            const glm::dvec3 l = 2.0 * glm::dot(v, h) * h - v;
+            if (l.z < minLz) continue;
+            pairs.push_back({glm::normalize(l), v, h});
+        }
+    }
+    return pairs;
+}
+
+double methodValue(const TexelLobe& lobe, const DirectionPair& d) {
+    return methodNdf(lobe, d.h) * std::max(0.0, glm::dot(glm::dvec3(lobe.normal), d.l));
+}
+
+static double truthOfNormal(const glm::dvec3& n, double s, const DirectionPair& d) {
+    return blinnPhongNdf(glm::dot(n, d.h), s) * std::max(0.0, glm::dot(n, d.l));
+}
+
+double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s, const DirectionPair& d) {
+    const PyramidLevel& l = pyramid.level(mip);
+    double sum = 0.0;
+    for (int j = l.yStart[size_t(y)]; j < l.yStart[size_t(y) + 1]; ++j)
+        for (int i = l.xStart[size_t(x)]; i < l.xStart[size_t(x) + 1]; ++i)
+            sum += truthOfNormal(glm::dvec3(pyramid.finest().at(i, j)), s, d);
+    return sum / pyramid.footprintCount(mip, x, y);
+}
+
+Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOptions& options,
+                                         const std::function<void(double)>& progress) {
+    const auto start = std::chrono::steady_clock::now();
+    if (map.texelCount() == 0) return Error{"the normal map is empty"};
+    if (options.basePowers.empty()) return Error{"no base power given"};
+    for (double s : options.basePowers)
+        if (!(s > 0.0) || !(s <= kMaxPower)) return Error{"base power " + std::to_string(s) + " is outside (0, 1e9]"};
+    if (options.methods.empty()) return Error{"no method given"};
+    if (!(options.viewAngleDeg >= 0.0 && options.viewAngleDeg < 90.0))
+        return Error{"view angle must lie in [0, 90) degrees"};
+    const auto directions = evaluationDirections(options);
+    if (directions.empty()) return Error{"no light direction lies above the horizon limit for these angles"};
+
+    // The pyramid only borrows the map for the duration of this call.
+    const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
+    const NormalPyramid pyramid = NormalPyramid::build(borrowed, {options.border, FilterKernel::Box});
+    const int lastLevel = pyramid.levelCount() - 1;
+    if (options.firstMip < 0 || options.firstMip > lastLevel || options.lastMip < options.firstMip)
+        return Error{"mip range " + std::to_string(options.firstMip) + ".." + std::to_string(options.lastMip) +
+                     " does not fit a " + std::to_string(map.width) + "x" + std::to_string(map.height) +
+                     " map (levels 0.." + std::to_string(lastLevel) + ")"};
+    const int firstMip = options.firstMip;
+    const int lastMip = std::min(options.lastMip, lastLevel);
+    const int mipCount = lastMip - firstMip + 1;
+    const size_t methodCount = options.methods.size();
+
+    EvaluationResult result;
+    result.directions = directions;
+    result.firstMip = firstMip;
+    result.lastMip = lastMip;
+
+    // Hierarchical sums of the per-texel truth: level k = Σ of its children at level k−1.
+    std::vector<std::vector<double>> sums(size_t(lastMip) + 1);
+    for (int k = 0; k <= lastMip; ++k)
+        sums[size_t(k)].resize(size_t(pyramid.level(k).width) * size_t(pyramid.level(k).height));
+
+    const double totalSteps = double(options.basePowers.size() * directions.size());
+    double stepsDone = 0.0;
+    for (double s : options.basePowers) {
+        // Lobes of every method at every evaluated mip.
+        std::vector<std::vector<std::vector<TexelLobe>>> lobes(methodCount, std::vector<std::vector<TexelLobe>>(size_t(mipCount)));
+        for (size_t m = 0; m < methodCount; ++m)
+            for (int k = firstMip; k <= lastMip; ++k) {
+                const PyramidLevel& level = pyramid.level(k);
+                auto& out = lobes[m][size_t(k - firstMip)];
+                out.resize(size_t(level.width) * size_t(level.height));
+                tbb::parallel_for(0, level.height, [&](int y) {
+                    for (int x = 0; x < level.width; ++x)
+                        out[size_t(y) * size_t(level.width) + size_t(x)] =
+                            methodLobe(options.methods[m], pyramid.boxMoments(k, x, y), s, options.params);
+                });
+            }
+
+        std::vector<std::vector<Accumulator>> acc(methodCount, std::vector<Accumulator>(size_t(mipCount)));
+        // Per-texel sums for the error maps: [method][mip] |M − GT| and [mip] GT.
+        std::vector<std::vector<std::vector<double>>> texelAbs;
+        std::vector<std::vector<double>> texelTruth;
+        if (options.errorMaps) {
+            texelAbs.assign(methodCount, std::vector<std::vector<double>>(size_t(mipCount)));
+            texelTruth.resize(size_t(mipCount));
+            for (int k = firstMip; k <= lastMip; ++k) {
+                const size_t n = sums[size_t(k)].size();
+                texelTruth[size_t(k - firstMip)].assign(n, 0.0);
+                for (size_t m = 0; m < methodCount; ++m) texelAbs[m][size_t(k - firstMip)].assign(n, 0.0);
+            }
+        }
+
+        for (const DirectionPair& d : directions) {
+            const PyramidLevel& l0 = pyramid.level(0);
+            tbb::parallel_for(0, l0.height, [&](int y) {
+                for (int x = 0; x < l0.width; ++x)
+                    sums[0][size_t(y) * size_t(l0.width) + size_t(x)] =
+                        truthOfNormal(glm::dvec3(map.at(x, y)), s, d);
+            });
+            for (int k = 1; k <= lastMip; ++k) {
+                const PyramidLevel& level = pyramid.level(k);
+                const PyramidLevel& child = pyramid.level(k - 1);
+                tbb::parallel_for(0, level.height, [&](int y) {
+                    for (int x = 0; x < level.width; ++x) {
+                        double sum = 0.0;
+                        for (int j = level.yChild[size_t(y)]; j < level.yChild[size_t(y) + 1]; ++j)
+                            for (int i = level.xChild[size_t(x)]; i < level.xChild[size_t(x) + 1]; ++i)
+                                sum += sums[size_t(k - 1)][size_t(j) * size_t(child.width) + size_t(i)];
+                        sums[size_t(k)][size_t(y) * size_t(level.width) + size_t(x)] = sum;
+                    }
+                });
+            }
+            for (int k = firstMip; k <= lastMip; ++k) {
+                const PyramidLevel& level = pyramid.level(k);
+                const size_t mi = size_t(k - firstMip);
+                // Per-row partial sums, added in row order afterwards: deterministic results.
+                std::vector<Accumulator> rows(size_t(level.height) * methodCount);
+                tbb::parallel_for(0, level.height, [&](int y) {
+                    for (int x = 0; x < level.width; ++x) {
+                        const size_t t = size_t(y) * size_t(level.width) + size_t(x);
+                        const double truth = sums[size_t(k)][t] / pyramid.footprintCount(k, x, y);
+                        if (options.errorMaps) texelTruth[mi][t] += truth;
+                        for (size_t m = 0; m < methodCount; ++m) {
+                            const double value = methodValue(lobes[m][mi][t], d);
+                            Accumulator& a = rows[size_t(y) * methodCount + m];
+                            a.absError += std::abs(value - truth);
+                            a.method += value;
+                            a.truth += truth;
+                            if (options.errorMaps) texelAbs[m][mi][t] += std::abs(value - truth);
+                        }
+                    }
+                });
+                for (int y = 0; y < level.height; ++y)
+                    for (size_t m = 0; m < methodCount; ++m) {
+                        const Accumulator& r = rows[size_t(y) * methodCount + m];
+                        acc[m][mi].absError += r.absError;
+                        acc[m][mi].method += r.method;
+                        acc[m][mi].truth += r.truth;
+                    }
+            }
+            stepsDone += 1.0;
+            if (progress) progress(stepsDone / totalSteps);
+        }
+
+        for (size_t m = 0; m < methodCount; ++m)
+            for (int k = firstMip; k <= lastMip; ++k) {
+                const Accumulator& a = acc[m][size_t(k - firstMip)];
+                // Σ GT > 0 whenever a direction has its light above the horizon and a normal faces
+                // it; a truth of exactly 0 (all normals facing away) reports zero error and energy 1.
+                const bool lit = a.truth > 0.0;
+                result.errors.push_back({options.methods[m], s, k, lit ? a.absError / a.truth : 0.0,
+                                         lit ? a.method / a.truth : 1.0});
+                if (options.errorMaps) {
+                    const PyramidLevel& level = pyramid.level(k);
+                    ErrorMap em{options.methods[m], s, k, level.width, level.height, {}};
+                    const auto& absSum = texelAbs[m][size_t(k - firstMip)];
+                    const auto& truthSum = texelTruth[size_t(k - firstMip)];
+                    em.relativeError.resize(absSum.size());
+                    for (size_t t = 0; t < absSum.size(); ++t)
+                        em.relativeError[t] = truthSum[t] > 0.0 ? float(absSum[t] / truthSum[t]) : 0.0f;
+                    result.maps.push_back(std::move(em));
+                }
+            }
+    }
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+}
+
+} // namespace burnish

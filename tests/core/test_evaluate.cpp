@@ -1,0 +1,153 @@
+#include <burnish/core/evaluate.h>
+
+#include <burnish/core/ndf.h>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <random>
+
+using namespace burnish;
+
+namespace {
+
+std::vector<glm::vec3> gaussianSlopes(int count, double sigma, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g(0.0, sigma);
+    std::vector<glm::vec3> n(static_cast<size_t>(count));
+    for (auto& v : n) v = glm::vec3(glm::normalize(glm::dvec3(g(rng), g(rng), 1.0)));
+    return n;
+}
+
+// Finest texel values are summed in a different order by the hierarchical evaluator than by the
+// direct loop: agreement to double rounding over a few thousand terms.
+constexpr double kSumTolerance = 1e-9;
+
+} // namespace
+
+TEST(Evaluate, DirectionsFollowTheDefinition) {
+    EvaluateOptions options;
+    const auto dirs = evaluationDirections(options);
+    // θh = 0 once, 6 other angles × 8 azimuths, minus pairs with the light below 3° of the horizon.
+    EXPECT_LE(dirs.size(), 1u + 6u * 8u);
+    EXPECT_GE(dirs.size(), 30u);
+    for (const auto& d : dirs) {
+        EXPECT_NEAR(glm::length(d.l), 1.0, 1e-12);
+        EXPECT_GE(d.l.z, std::sin(3.0 * kPi<double> / 180.0) - 1e-12);
+        EXPECT_NEAR(glm::dot(glm::normalize(d.l + d.v), d.h), 1.0, 1e-9); // h is the half vector
+        EXPECT_NEAR(std::acos(d.v.z) * 180.0 / kPi<double>, 30.0, 1e-9);
+    }
+    // At a grazing view, many lights fall below the horizon and are dropped.
+    options.viewAngleDeg = 80.0;
+    EXPECT_LT(evaluationDirections(options).size(), dirs.size());
+}
+
+TEST(Evaluate, MatchesBruteForceSumOnATinyMap) {
+    const int size = 8;
+    const NormalMap map = makeNormalMap(size, size, gaussianSlopes(size * size, 0.2, 11));
+    EvaluateOptions options;
+    options.basePowers = {64.0};
+    options.firstMip = 1;
+    options.lastMip = 3;
+    options.methods = {Method::Naive, Method::Lean};
+    auto result = evaluateMethods(map, options);
+    ASSERT_TRUE(result.ok()) << result.error();
+
+    const auto shared = std::shared_ptr<const NormalMap>(&map, [](const NormalMap*) {});
+    const NormalPyramid pyramid = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
+    for (const MipError& e : result->errors) {
+        double absSum = 0.0, truthSum = 0.0, methodSum = 0.0;
+        const PyramidLevel& level = pyramid.level(e.mip);
+        for (const auto& d : result->directions)
+            for (int y = 0; y < level.height; ++y)
+                for (int x = 0; x < level.width; ++x) {
+                    // The definition, written out: mean over the block of D_s(n_i·h) max(0, n_i·l).
+                    double truth = 0.0;
+                    const int block = 1 << e.mip;
+                    for (int j = y * block; j < (y + 1) * block; ++j)
+                        for (int i = x * block; i < (x + 1) * block; ++i) {
+                            const glm::dvec3 n = map.at(i, j);
+                            truth += blinnPhongNdf(glm::dot(n, d.h), 64.0) * std::max(0.0, glm::dot(n, d.l));
+                        }
+                    truth /= block * block;
+                    EXPECT_NEAR(groundTruthTexel(pyramid, e.mip, x, y, 64.0, d), truth, kSumTolerance * (1 + truth));
+                    const double value = methodValue(methodLobe(e.method, pyramid.boxMoments(e.mip, x, y), 64.0), d);
+                    absSum += std::abs(value - truth);
+                    truthSum += truth;
+                    methodSum += value;
+                }
+        EXPECT_NEAR(e.relativeL1, absSum / truthSum, kSumTolerance) << methodName(e.method) << " mip " << e.mip;
+        EXPECT_NEAR(e.energyRatio, methodSum / truthSum, kSumTolerance);
+    }
+}
+
+TEST(Evaluate, FlatMapEveryIsotropicMethodIsExact) {
+    const NormalMap map = makeNormalMap(16, 16, std::vector<glm::vec3>(256, glm::vec3(0, 0, 1)));
+    EvaluateOptions options;
+    options.methods = {Method::Naive, Method::Toksvig, Method::ToksvigMap, Method::VarianceToGloss, Method::Vmf};
+    options.basePowers = {256.0};
+    auto result = evaluateMethods(map, options);
+    ASSERT_TRUE(result.ok()) << result.error();
+    // variance-to-gloss maps s to 1/(0 + 1/(s+1)) − 1 = s; the others keep s. vMF's κ is clamped
+    // to kMaxPower at r = 1, which adds 1/kMaxPower to 1/p: a relative power change of s/kMaxPower,
+    // and a relative change of D of the same order over the evaluated half angles.
+    for (const auto& e : result->errors) {
+        const double tolerance = e.method == Method::Vmf ? 4.0 * 256.0 / kMaxPower : 1e-9;
+        EXPECT_NEAR(e.relativeL1, 0.0, tolerance) << methodName(e.method);
+    }
+}
+
+TEST(Evaluate, NaiveIsWorstAndGrowsWithMip) {
+    // A rough Gaussian slope field: as footprints grow, the naive lobe stays sharp while the
+    // truth spreads out (the texts' "too shiny" experiment).
+    const int size = 64;
+    const NormalMap map = makeNormalMap(size, size, gaussianSlopes(size * size, 0.25, 5));
+    EvaluateOptions options;
+    options.basePowers = {512.0};
+    options.firstMip = 1;
+    options.lastMip = 5;
+    auto result = evaluateMethods(map, options);
+    ASSERT_TRUE(result.ok()) << result.error();
+    auto error = [&](Method m, int mip) {
+        for (const auto& e : result->errors)
+            if (e.method == m && e.mip == mip) return e.relativeL1;
+        return -1.0;
+    };
+    for (int mip = 2; mip <= 5; ++mip) EXPECT_GT(error(Method::Naive, mip), error(Method::Naive, mip - 1));
+    for (int mip = 1; mip <= 5; ++mip)
+        for (Method m : allMethods()) {
+            if (m != Method::Naive) {
+                EXPECT_LT(error(m, mip), error(Method::Naive, mip)) << methodName(m) << " mip " << mip;
+            }
+        }
+}
+
+TEST(Evaluate, ErrorMapsAverageToTheReportedError) {
+    const NormalMap map = makeNormalMap(16, 16, gaussianSlopes(256, 0.2, 9));
+    EvaluateOptions options;
+    options.errorMaps = true;
+    options.methods = {Method::Toksvig};
+    options.lastMip = 2;
+    auto result = evaluateMethods(map, options);
+    ASSERT_TRUE(result.ok());
+    ASSERT_EQ(result->maps.size(), 2u);
+    for (const auto& m : result->maps) {
+        EXPECT_EQ(m.width, 16 >> m.mip);
+        for (float v : m.relativeError) EXPECT_TRUE(std::isfinite(v) && v >= 0.0f);
+    }
+}
+
+TEST(Evaluate, RejectsBadOptions) {
+    const NormalMap map = makeNormalMap(4, 4, std::vector<glm::vec3>(16, glm::vec3(0, 0, 1)));
+    EvaluateOptions options;
+    options.firstMip = 5;
+    EXPECT_FALSE(evaluateMethods(map, options).ok());
+    options = {};
+    options.basePowers = {-1.0};
+    EXPECT_FALSE(evaluateMethods(map, options).ok());
+    options = {};
+    options.viewAngleDeg = 89.0;
+    options.halfAnglesDeg = {0.0}; // the mirror light of an 89° view is 1° above the horizon: dropped
+    EXPECT_FALSE(evaluateMethods(map, options).ok());
+}

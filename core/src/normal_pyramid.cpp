@@ -65,18 +65,15 @@ std::vector<int> childStarts(int childSize, int parentSize) {
     return starts;
 }
 
-int wrapOrClamp(int i, int size, BorderMode border) {
+} // namespace
+
+int borderIndex(int i, int size, BorderMode border) {
     if (border == BorderMode::Clamp) return std::clamp(i, 0, size - 1);
     const int m = i % size;
     return m < 0 ? m + size : m;
 }
 
-struct Taps {
-    int radius;
-    double w[5];
-};
-
-Taps kernelTaps(FilterKernel kernel) {
+KernelTaps kernelTaps(FilterKernel kernel) {
     switch (kernel) {
     case FilterKernel::Box:
         return {0, {1, 0, 0, 0, 0}};
@@ -91,8 +88,6 @@ Taps kernelTaps(FilterKernel kernel) {
     }
     return {0, {1, 0, 0, 0, 0}};
 }
-
-} // namespace
 
 float NormalMoments::lengthNa() const { return std::min(glm::length(mean), 1.0f); }
 
@@ -198,7 +193,7 @@ NormalMoments NormalPyramid::boxMoments(int k, int x, int y) const {
 }
 
 NormalMoments NormalPyramid::moments(int k, int x, int y) const {
-    const Taps taps = kernelTaps(m_options.kernel);
+    const KernelTaps taps = kernelTaps(m_options.kernel);
     if (taps.radius == 0) return boxMoments(k, x, y);
     const PyramidLevel& l = level(k);
     NormalMoments local[25];
@@ -207,8 +202,8 @@ NormalMoments NormalPyramid::moments(int k, int x, int y) const {
     size_t count = 0;
     for (int j = -taps.radius; j <= taps.radius; ++j)
         for (int i = -taps.radius; i <= taps.radius; ++i) {
-            const int xi = wrapOrClamp(x + i, l.width, m_options.border);
-            const int yj = wrapOrClamp(y + j, l.height, m_options.border);
+            const int xi = borderIndex(x + i, l.width, m_options.border);
+            const int yj = borderIndex(y + j, l.height, m_options.border);
             local[count] = boxMoments(k, xi, yj);
             items[count] = &local[count];
             weights[count] = taps.w[i + taps.radius] * taps.w[j + taps.radius] * footprintCount(k, xi, yj);

@@ -62,6 +62,16 @@ enum class BorderMode { Wrap, Clamp };
 /// Variance": tent [Lazarov 2011] or Gaussian). Gaussian: 5×5, σ = 1 texel of the level.
 enum class FilterKernel { Box, Tent, Gaussian };
 
+/// The separable weights of a kernel: taps −radius..radius, summing to 1.
+struct KernelTaps {
+    int radius = 0;
+    double w[5] = {1, 0, 0, 0, 0};
+};
+KernelTaps kernelTaps(FilterKernel kernel);
+
+/// Index i mapped into [0, size) by the border mode.
+int borderIndex(int i, int size, BorderMode border);
+
 struct PyramidOptions {
     BorderMode border = BorderMode::Wrap;
     FilterKernel kernel = FilterKernel::Tent;

@@ -1,0 +1,264 @@
+#include <burnish/core/bake.h>
+
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+
+namespace burnish {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
+
+float unit(double v) { return float(std::clamp(v, 0.0, 1.0)); }
+
+// Smallest power of two >= x (and >= 2^-4), so stored ranges are exact binary scales.
+double binaryScale(double x) { return std::exp2(std::ceil(std::log2(std::max(x, 1.0 / 16.0)))); }
+
+// Per level, the authored base variance 1/s averaged over each texel's footprint and then
+// filtered with the pyramid's kernel: variances (not powers or gloss values) are what average
+// correctly under minification (Baker & Hill 2012: "storing power as 1/s will cause MIP filter to
+// operate correctly").
+class BaseVariancePyramid {
+public:
+    BaseVariancePyramid(const NormalPyramid& pyramid, const std::vector<float>& gloss, const GlossEncoding& encoding)
+        : m_pyramid(pyramid) {
+        const int levels = pyramid.levelCount();
+        m_levels.resize(size_t(levels));
+        const PyramidLevel& l0 = pyramid.level(0);
+        m_levels[0].resize(size_t(l0.width) * size_t(l0.height));
+        for (size_t i = 0; i < gloss.size(); ++i)
+            m_levels[0][i] = varianceFromPower(encoding.power(gloss[i]), VarianceConvention::InversePower);
+        for (int k = 1; k < levels; ++k) {
+            const PyramidLevel& level = pyramid.level(k);
+            const PyramidLevel& child = pyramid.level(k - 1);
+            auto& out = m_levels[size_t(k)];
+            out.resize(size_t(level.width) * size_t(level.height));
+            for (int y = 0; y < level.height; ++y)
+                for (int x = 0; x < level.width; ++x) {
+                    double sum = 0.0, weight = 0.0;
+                    for (int j = level.yChild[size_t(y)]; j < level.yChild[size_t(y) + 1]; ++j)
+                        for (int i = level.xChild[size_t(x)]; i < level.xChild[size_t(x) + 1]; ++i) {
+                            const double w = pyramid.footprintCount(k - 1, i, j);
+                            sum += w * m_levels[size_t(k - 1)][size_t(j) * size_t(child.width) + size_t(i)];
+                            weight += w;
+                        }
+                    out[size_t(y) * size_t(level.width) + size_t(x)] = sum / weight;
+                }
+        }
+    }
+
+    /// Base power at a texel of level k, with the pyramid's kernel applied.
+    double power(int k, int x, int y) const {
+        const KernelTaps taps = kernelTaps(m_pyramid.options().kernel);
+        const PyramidLevel& level = m_pyramid.level(k);
+        double sum = 0.0, weight = 0.0;
+        for (int j = -taps.radius; j <= taps.radius; ++j)
+            for (int i = -taps.radius; i <= taps.radius; ++i) {
+                const int xi = borderIndex(x + i, level.width, m_pyramid.options().border);
+                const int yj = borderIndex(y + j, level.height, m_pyramid.options().border);
+                const double w = taps.w[i + taps.radius] * taps.w[j + taps.radius] * m_pyramid.footprintCount(k, xi, yj);
+                sum += w * m_levels[size_t(k)][size_t(yj) * size_t(level.width) + size_t(xi)];
+                weight += w;
+            }
+        return powerFromVariance(sum / weight, VarianceConvention::InversePower);
+    }
+
+private:
+    const NormalPyramid& m_pyramid;
+    std::vector<std::vector<double>> m_levels;
+};
+
+BakedTexture makeTexture(std::string role, std::string description, std::vector<ChannelDecode> decode,
+                         bool highPrecision = false) {
+    BakedTexture t;
+    t.role = std::move(role);
+    t.description = std::move(description);
+    t.channels = int(decode.size());
+    t.decode = std::move(decode);
+    t.needsHighPrecision = highPrecision;
+    return t;
+}
+
+std::vector<ChannelDecode> normalDecode() {
+    return {{"normal.x", 2.0, -1.0}, {"normal.y", 2.0, -1.0}, {"normal.z", 2.0, -1.0}};
+}
+
+} // namespace
+
+const BakedTexture* BakeOutput::find(const std::string& role) const {
+    for (const auto& t : textures)
+        if (t.role == role) return &t;
+    return nullptr;
+}
+
+Result<std::vector<float>> glossFromImage(const Image& image, int width, int height) {
+    if (image.width != width || image.height != height)
+        return Error{"gloss map is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                     " but the normal map is " + std::to_string(width) + "x" + std::to_string(height)};
+    std::vector<float> gloss(image.texelCount());
+    for (size_t i = 0; i < gloss.size(); ++i) {
+        const float v = image.pixels[i * size_t(image.channels)];
+        if (!std::isfinite(v)) return Error{"gloss map has a NaN or infinite texel at index " + std::to_string(i)};
+        gloss[i] = std::clamp(v, 0.0f, 1.0f);
+    }
+    return gloss;
+}
+
+Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
+    if (map.texelCount() == 0) return Error{"the normal map is empty"};
+    if (!(options.basePower > 0.0) || !(options.basePower <= kMaxPower))
+        return Error{"base power must lie in (0, 1e9]"};
+    if (options.authoredGloss) {
+        if (options.authoredGloss->size() != map.texelCount())
+            return Error{"authored gloss has " + std::to_string(options.authoredGloss->size()) + " texels, the normal map " +
+                         std::to_string(map.texelCount())};
+        for (float g : *options.authoredGloss)
+            if (!std::isfinite(g)) return Error{"authored gloss has a NaN or infinite texel"};
+    }
+
+    BakeOutput out;
+    out.method = options.method;
+    auto start = Clock::now();
+    const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
+    const NormalPyramid pyramid = NormalPyramid::build(borrowed, options.pyramid);
+    std::optional<BaseVariancePyramid> base;
+    if (options.authoredGloss) base.emplace(pyramid, *options.authoredGloss, options.encoding);
+    out.stats.pyramidSeconds = seconds(start);
+    start = Clock::now();
+
+    const int levels = options.mipCount > 0 ? std::min(options.mipCount, pyramid.levelCount()) : pyramid.levelCount();
+    out.stats.mipCount = levels;
+    const Method method = options.method;
+    const bool slopeMethod = method == Method::Lean || method == Method::Clean;
+
+    // Lobes and moments of every texel of every level, computed once.
+    std::vector<std::vector<TexelLobe>> lobes(static_cast<size_t>(levels));
+    std::vector<std::vector<NormalMoments>> moments(static_cast<size_t>(levels));
+    std::vector<std::vector<double>> basePowers(static_cast<size_t>(levels));
+    for (int k = 0; k < levels; ++k) {
+        const PyramidLevel& level = pyramid.level(k);
+        const size_t n = size_t(level.width) * size_t(level.height);
+        lobes[size_t(k)].resize(n);
+        moments[size_t(k)].resize(n);
+        basePowers[size_t(k)].resize(n);
+        tbb::parallel_for(0, level.height, [&](int y) {
+            for (int x = 0; x < level.width; ++x) {
+                const size_t t = size_t(y) * size_t(level.width) + size_t(x);
+                const double s = base ? base->power(k, x, y) : options.basePower;
+                moments[size_t(k)][t] = pyramid.moments(k, x, y);
+                basePowers[size_t(k)][t] = s;
+                lobes[size_t(k)][t] = methodLobe(method, moments[size_t(k)][t], s, options.params);
+            }
+        });
+    }
+
+    // Binary scales for the slope textures, so their [0, 1] storage covers every mip.
+    double maxB = 0.0, maxM = 0.0;
+    if (slopeMethod)
+        for (int k = 0; k < levels; ++k)
+            for (size_t t = 0; t < lobes[size_t(k)].size(); ++t) {
+                const auto& m = moments[size_t(k)][t];
+                const auto M = m.slopeSecondMoments();
+                const double invS = 1.0 / std::max(basePowers[size_t(k)][t], 1e-6);
+                maxB = std::max({maxB, std::abs(double(m.slope.x)), std::abs(double(m.slope.y))});
+                maxM = std::max({maxM, double(M[0]) + invS, double(M[1]) + invS});
+            }
+    const double sB = binaryScale(maxB);
+    const double sM = binaryScale(maxM);
+
+    // The textures each method stores.
+    const bool unnormalized = method == Method::Toksvig;
+    out.textures.push_back(makeTexture("normal",
+                                       unnormalized ? "unnormalized mean normal Na (its length carries the variance)"
+                                                    : "renormalized mean normal",
+                                       normalDecode()));
+    const bool glossTexture = !slopeMethod;
+    if (glossTexture) {
+        const bool adjusted = method == Method::VarianceToGloss || method == Method::Vmf;
+        out.textures.push_back(makeTexture("gloss",
+                                           std::string(adjusted ? "adjusted gloss, " : "authored gloss, ") +
+                                               options.encoding.formula(),
+                                           {{"gloss", 1.0, 0.0}}));
+    }
+    if (method == Method::ToksvigMap)
+        out.textures.push_back(makeTexture("toksvig",
+                                           "Toksvig factor f_t for power " + std::to_string(options.params.toksvigMapPower) +
+                                               "; convert with ft /= lerp(s/fixed_s, 1, ft)",
+                                           {{"toksvig", 1.0, 0.0}}));
+    if (method == Method::Lean) {
+        out.textures.push_back(makeTexture("lean-b", "LEAN slope mean B", {{"B.x", 2 * sB, -sB}, {"B.y", 2 * sB, -sB}}, true));
+        out.textures.push_back(makeTexture("lean-m", "LEAN second moments M with 1/s on the diagonal",
+                                           {{"M.xx", sM, 0.0}, {"M.yy", sM, 0.0}, {"M.xy", 2 * sM, -sM}}, true));
+        out.textures.push_back(makeTexture("lean-gloss",
+                                           "compact LEAN: log2(1/Sigma_x)/13, log2(1/Sigma_y)/13, correlation (rho+1)/2",
+                                           {{"gloss.x", 1.0, 0.0}, {"gloss.y", 1.0, 0.0}, {"rho", 2.0, -1.0}}));
+    }
+    if (method == Method::Clean)
+        out.textures.push_back(makeTexture("clean", "CLEAN: B and (M.xx + M.yy)/2 with 1/s added",
+                                           {{"B.x", 2 * sB, -sB}, {"B.y", 2 * sB, -sB}, {"M.avg", sM, 0.0}}, true));
+
+    for (auto& tex : out.textures) tex.mips.resize(size_t(levels));
+    for (int k = 0; k < levels; ++k) {
+        const PyramidLevel& level = pyramid.level(k);
+        for (auto& tex : out.textures) {
+            auto& mip = tex.mips[size_t(k)];
+            mip.width = level.width;
+            mip.height = level.height;
+            mip.texels.resize(size_t(level.width) * size_t(level.height) * size_t(tex.channels));
+        }
+        std::vector<size_t> lowRow(static_cast<size_t>(level.height), 0), highRow(static_cast<size_t>(level.height), 0);
+        tbb::parallel_for(0, level.height, [&](int y) {
+            for (int x = 0; x < level.width; ++x) {
+                const size_t t = size_t(y) * size_t(level.width) + size_t(x);
+                const TexelLobe& lobe = lobes[size_t(k)][t];
+                const NormalMoments& m = moments[size_t(k)][t];
+                const double s = basePowers[size_t(k)][t];
+                for (auto& tex : out.textures) {
+                    float* px = &tex.mips[size_t(k)].texels[t * size_t(tex.channels)];
+                    if (tex.role == "normal") {
+                        const glm::vec3 n = unnormalized ? m.mean : m.meanDirection();
+                        for (int c = 0; c < 3; ++c) px[c] = unit(0.5 * double(n[c]) + 0.5);
+                    } else if (tex.role == "gloss") {
+                        const bool adjusted = method == Method::VarianceToGloss || method == Method::Vmf;
+                        const double p = adjusted ? lobe.power : s;
+                        if (p < options.encoding.minPower()) ++lowRow[size_t(y)];
+                        if (p > options.encoding.maxPower()) ++highRow[size_t(y)];
+                        px[0] = unit(options.encoding.value(p));
+                    } else if (tex.role == "toksvig") {
+                        px[0] = unit(toksvigFactor(m.lengthNa(), options.params.toksvigMapPower));
+                    } else if (tex.role == "lean-b" || tex.role == "clean") {
+                        px[0] = unit(double(m.slope.x) / (2 * sB) + 0.5);
+                        px[1] = unit(double(m.slope.y) / (2 * sB) + 0.5);
+                        if (tex.role == "clean") {
+                            const auto M = m.slopeSecondMoments();
+                            px[2] = unit((0.5 * (double(M[0]) + double(M[1])) + 1.0 / s) / sM);
+                        }
+                    } else if (tex.role == "lean-m") {
+                        const auto M = m.slopeSecondMoments();
+                        px[0] = unit((double(M[0]) + 1.0 / s) / sM);
+                        px[1] = unit((double(M[1]) + 1.0 / s) / sM);
+                        px[2] = unit(double(M[2]) / (2 * sM) + 0.5);
+                    } else if (tex.role == "lean-gloss") {
+                        const auto& S = lobe.slopeCov;
+                        px[0] = unit(encodeLogVariance(S[0]));
+                        px[1] = unit(encodeLogVariance(S[1]));
+                        const double rho = S[2] / std::sqrt(std::max(S[0] * S[1], 1e-300));
+                        px[2] = unit(0.5 * std::clamp(rho, -1.0, 1.0) + 0.5);
+                    }
+                }
+            }
+        });
+        for (int y = 0; y < level.height; ++y) {
+            out.stats.glossClampedLow += lowRow[size_t(y)];
+            out.stats.glossClampedHigh += highRow[size_t(y)];
+        }
+    }
+    out.stats.methodSeconds = seconds(start);
+    return out;
+}
+
+} // namespace burnish

@@ -1,0 +1,206 @@
+#include <burnish/core/bake.h>
+
+#include <burnish/core/ndf.h>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <random>
+
+using namespace burnish;
+
+namespace {
+
+NormalMap gaussianField(int size, double sigmaX, double sigmaY, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> gx(0.0, sigmaX), gy(0.0, sigmaY);
+    std::vector<glm::vec3> n(static_cast<size_t>(size) * static_cast<size_t>(size));
+    for (auto& v : n) v = glm::vec3(glm::normalize(glm::dvec3(gx(rng), gy(rng), 1.0)));
+    return makeNormalMap(size, size, std::move(n));
+}
+
+double decode(const BakedTexture& t, int mip, int x, int y, int c) {
+    const auto& m = t.mips[size_t(mip)];
+    const double stored = m.texels[(size_t(y) * size_t(m.width) + size_t(x)) * size_t(t.channels) + size_t(c)];
+    return stored * t.decode[size_t(c)].scale + t.decode[size_t(c)].bias;
+}
+
+double meanGlossPower(const BakeOutput& out, const GlossEncoding& enc, int mip) {
+    const BakedTexture* g = out.find("gloss");
+    double sum = 0;
+    const auto& m = g->mips[size_t(mip)];
+    for (float v : m.texels) sum += enc.power(v);
+    return sum / double(m.texels.size());
+}
+
+// A gloss value stored as float in [0,1] and decoded through the encoding: the power comes back to
+// float precision of the stored log-space value (1e-6 of 13·ln 2 ≈ 1e-5 relative).
+constexpr double kGlossRoundTrip = 1e-4;
+
+} // namespace
+
+TEST(Bake, FlatMapGivesTheBasePowerBackAtEveryMip) {
+    for (Method method : {Method::Naive, Method::Toksvig, Method::VarianceToGloss, Method::Vmf}) {
+        BakeOptions options;
+        options.method = method;
+        options.basePower = 700.0;
+        const NormalMap flat = makeNormalMap(16, 16, std::vector<glm::vec3>(256, glm::vec3(0, 0, 1)));
+        auto out = bake(flat, options);
+        ASSERT_TRUE(out.ok()) << out.error();
+        EXPECT_EQ(out->stats.mipCount, 5);
+        for (int k = 0; k < 5; ++k)
+            EXPECT_NEAR(meanGlossPower(*out, options.encoding, k) / 700.0, 1.0, kGlossRoundTrip)
+                << methodName(method) << " mip " << k;
+    }
+}
+
+TEST(Bake, EightBitFlatMapBakesToTheBasePower) {
+    // (128,128,255) decodes to one slightly tilted direction everywhere: no spread, no roughness.
+    Image image;
+    image.width = image.height = 8;
+    image.channels = 3;
+    for (int i = 0; i < 64; ++i) image.pixels.insert(image.pixels.end(), {128 / 255.f, 128 / 255.f, 1.0f});
+    auto map = decodeNormalMap(image);
+    ASSERT_TRUE(map.ok());
+    BakeOptions options;
+    options.basePower = 4096.0;
+    auto out = bake(*map, options);
+    ASSERT_TRUE(out.ok());
+    for (int k = 0; k < out->stats.mipCount; ++k)
+        EXPECT_NEAR(meanGlossPower(*out, options.encoding, k) / 4096.0, 1.0, kGlossRoundTrip);
+}
+
+TEST(Bake, GaussianSlopeFieldBakesItsVariance) {
+    // Slopes with σ = 0.1 per axis: normals' projected variance ≈ 2σ² (for small σ). At the top
+    // mip the footprint is the whole map, so variance-to-gloss must give 1/(v + 1/(s+1)) − 1 with
+    // v the sample variance, and LEAN's M − BBᵀ must be σ² per axis (sample of 4096 → ±3%).
+    const double sigma = 0.1;
+    const NormalMap map = gaussianField(64, sigma, sigma, 3);
+    BakeOptions options;
+    options.pyramid.kernel = FilterKernel::Box;
+    options.basePower = 1e4;
+    options.method = Method::Lean;
+    auto lean = bake(map, options);
+    ASSERT_TRUE(lean.ok());
+    const int top = lean->stats.mipCount - 1;
+    const BakedTexture* M = lean->find("lean-m");
+    const BakedTexture* B = lean->find("lean-b");
+    ASSERT_TRUE(M && B);
+    const double bx = decode(*B, top, 0, 0, 0), by = decode(*B, top, 0, 0, 1);
+    const double varX = decode(*M, top, 0, 0, 0) - 1.0 / 1e4 - bx * bx;
+    const double varY = decode(*M, top, 0, 0, 1) - 1.0 / 1e4 - by * by;
+    constexpr double kSampleTolerance = 0.06; // 4096 samples: relative std of a variance ≈ sqrt(2/4096) = 2.2%
+    EXPECT_NEAR(varX / (sigma * sigma), 1.0, kSampleTolerance);
+    EXPECT_NEAR(varY / (sigma * sigma), 1.0, kSampleTolerance);
+
+    options.method = Method::VarianceToGloss;
+    auto v2g = bake(map, options);
+    ASSERT_TRUE(v2g.ok());
+    const double p = meanGlossPower(*v2g, options.encoding, top);
+    // v ≈ 2σ²/(1+σ²)-ish for slope σ; invert the method's formula to recover v.
+    const double v = 1.0 / (p + 1.0) - 1.0 / (1e4 + 1.0);
+    EXPECT_NEAR(v / (2 * sigma * sigma), 1.0, 0.08);
+}
+
+TEST(Bake, GroovedMapIsAnisotropicOnlyForLean) {
+    // Grooves along y: normals tilt in x only (alternating ±0.3 slope by column).
+    std::vector<glm::vec3> n;
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x) n.push_back(glm::normalize(glm::vec3((x % 2) ? 0.3f : -0.3f, 0.0f, 1.0f)));
+    const NormalMap map = makeNormalMap(16, 16, n);
+    BakeOptions options;
+    options.basePower = 1e4;
+    options.pyramid.kernel = FilterKernel::Box;
+    options.method = Method::Lean;
+    auto lean = bake(map, options);
+    ASSERT_TRUE(lean.ok());
+    const BakedTexture* M = lean->find("lean-m");
+    const double mxx = decode(*M, 1, 0, 0, 0), myy = decode(*M, 1, 0, 0, 1);
+    EXPECT_NEAR(mxx, 0.09 + 1e-4, 1e-3);
+    EXPECT_NEAR(myy, 1e-4, 1e-4);
+    const BakedTexture* compact = lean->find("lean-gloss");
+    EXPECT_LT(decode(*compact, 1, 0, 0, 0), decode(*compact, 1, 0, 0, 1)); // rougher along x
+
+    options.method = Method::Clean;
+    auto clean = bake(map, options);
+    ASSERT_TRUE(clean.ok());
+    const double avg = decode(*clean->find("clean"), 1, 0, 0, 2);
+    EXPECT_NEAR(avg, 0.5 * (0.09 + 2e-4), 1e-3); // one isotropic value: the mean of both axes
+}
+
+TEST(Bake, BimodalCheckerOfTwoTiltsRoughensAndKeepsTheMeanNormal) {
+    std::vector<glm::vec3> n;
+    const glm::vec3 a = glm::normalize(glm::vec3(0.4f, 0.1f, 1.0f)), b = glm::normalize(glm::vec3(-0.4f, 0.1f, 1.0f));
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) n.push_back(((x + y) % 2) ? a : b);
+    BakeOptions options;
+    options.pyramid.kernel = FilterKernel::Box;
+    options.basePower = 2048;
+    auto out = bake(makeNormalMap(8, 8, n), options);
+    ASSERT_TRUE(out.ok());
+    const BakedTexture* normal = out->find("normal");
+    // Mean of the two tilts points along (0, 0.1, 1) renormalized.
+    const glm::dvec3 expected = glm::normalize(glm::dvec3(a + b));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(decode(*normal, 1, 0, 0, c), expected[c], 1e-6);
+    EXPECT_LT(meanGlossPower(*out, options.encoding, 1), 20.0); // ±21.8° tilts: far rougher than 2048
+    EXPECT_NEAR(meanGlossPower(*out, options.encoding, 0) / 2048.0, 1.0, kGlossRoundTrip); // box: mip 0 untouched
+}
+
+TEST(Bake, OddSizesNanTexelsAndTwoChannelMapsBake) {
+    Image image;
+    image.width = 3;
+    image.height = 5;
+    image.channels = 2;
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<float> u(0.35f, 0.65f);
+    for (int i = 0; i < 15; ++i) image.pixels.insert(image.pixels.end(), {u(rng), u(rng)});
+    image.pixels[4] = std::numeric_limits<float>::quiet_NaN();
+    auto map = decodeNormalMap(image);
+    ASSERT_TRUE(map.ok()) << map.error();
+    EXPECT_EQ(map->diagnostics.nonFiniteTexels, 1u);
+    for (Method m : allMethods()) {
+        BakeOptions options;
+        options.method = m;
+        auto out = bake(*map, options);
+        ASSERT_TRUE(out.ok()) << methodName(m) << ": " << out.error();
+        EXPECT_EQ(out->stats.mipCount, 3); // 3×5 → 1×2 → 1×1
+        for (const auto& t : out->textures)
+            for (const auto& mip : t.mips)
+                for (float v : mip.texels) EXPECT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << t.role;
+    }
+}
+
+TEST(Bake, AuthoredGlossIsAveragedAsVariance) {
+    // Half the texels at power 8192, half at 8: the mip-1 base power is the harmonic mean
+    // 1/((1/8192 + 1/8)/2) ≈ 15.98, not the gloss mean (which would give sqrt(8192·8) = 256).
+    const NormalMap flat = makeNormalMap(2, 2, std::vector<glm::vec3>(4, glm::vec3(0, 0, 1)));
+    BakeOptions options;
+    options.method = Method::Naive;
+    options.pyramid.kernel = FilterKernel::Box;
+    const auto& enc = options.encoding;
+    options.authoredGloss = std::vector<float>{float(enc.value(8192)), float(enc.value(8)), float(enc.value(8)),
+                                               float(enc.value(8192))};
+    auto out = bake(flat, options);
+    ASSERT_TRUE(out.ok());
+    EXPECT_NEAR(meanGlossPower(*out, enc, 1), 2.0 / (1.0 / 8192 + 1.0 / 8), 1e-2);
+
+    options.authoredGloss = std::vector<float>{0.5f};
+    EXPECT_FALSE(bake(flat, options).ok()); // wrong size
+    options.authoredGloss = std::vector<float>(4, std::numeric_limits<float>::quiet_NaN());
+    EXPECT_FALSE(bake(flat, options).ok());
+}
+
+TEST(Bake, IsDeterministic) {
+    const NormalMap map = gaussianField(32, 0.2, 0.1, 8);
+    for (Method m : allMethods()) {
+        BakeOptions options;
+        options.method = m;
+        auto a = bake(map, options);
+        auto b = bake(map, options);
+        ASSERT_TRUE(a.ok() && b.ok());
+        for (size_t t = 0; t < a->textures.size(); ++t)
+            for (size_t k = 0; k < a->textures[t].mips.size(); ++k)
+                EXPECT_EQ(a->textures[t].mips[k].texels, b->textures[t].mips[k].texels);
+    }
+}

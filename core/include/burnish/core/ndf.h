@@ -58,7 +58,9 @@ template <class T> inline T beckmannNdf(T NoH, T m) {
     const T mMin = T(std::sqrt(2.0 / (kMaxPower + 2.0)));
     m = (m > mMin) ? m : mMin;
     if (!(NoH > T(0))) return T(0);
-    NoH = std::min(NoH, T(1));
+    // kMinCosine (numeric.h) in the divisions: below it m²c² and c⁴ underflow float to 0 and logD
+    // became −inf + inf = NaN; D there is exp(−1/(m²c²))-small for every m a power maps to.
+    NoH = std::clamp(NoH, T(kMinCosine), T(1));
     const T c2 = NoH * NoH;
     const T m2 = m * m;
     // Evaluated as one exponential so the 0·∞ of exp(-∞)/c⁴ at grazing NoH never happens.
@@ -70,7 +72,9 @@ template <class T> inline T beckmannNdf(T NoH, T m) {
 // Walter et al. 2007, "Microfacet Models for Refraction": D = α² / (π((n·h)²(α²−1)+1)²)
 template <class T> inline T ggxNdf(T NoH, T alpha) {
     const T aMin = T(std::sqrt(2.0 / (kMaxPower + 2.0)));
-    alpha = (alpha > aMin) ? alpha : aMin;
+    // Upper bound 1/aMin ≈ 2.2e4: a flatter lobe than any power describes, and it keeps α² and d² finite
+    // in float (α = +inf would give inf/inf).
+    alpha = (alpha > aMin) ? std::min(alpha, T(1) / aMin) : aMin;
     if (!(NoH > T(0))) return T(0);
     NoH = std::min(NoH, T(1));
     const T a2 = alpha * alpha;

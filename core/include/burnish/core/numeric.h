@@ -23,7 +23,8 @@ inline constexpr double kMinVariance = 1.0 / kMaxPower;
 /// bounds 1/cos at 1e6 while changing no result that has a visible effect.
 inline constexpr double kMinCosine = 1e-6;
 
-template <class T> constexpr T saturate(T x) { return std::clamp(x, T(0), T(1)); }
+/// Clamps to [0, 1]; NaN becomes 0, so a NaN cosine can never travel further into a lobe.
+template <class T> constexpr T saturate(T x) { return x > T(0) ? (x < T(1) ? x : T(1)) : T(0); }
 
 /// Clamps a power to [0, kMaxPower]; NaN becomes 0.
 template <class T> constexpr T clampPower(T n) {

@@ -29,7 +29,10 @@ template <class T> inline T sgLobe(T c, T n, T x) {
 /// into the decoded power ("ModifiedSpecularPower"), one MAD and one EXP2.
 template <class T> inline T sgLobeExp2(T c, T modifiedPower) {
     if (!(c > T(0))) return T(0);
-    return std::exp2(modifiedPower * std::min(c, T(1)) - modifiedPower);
+    // A clamped like every power (NaN and negative → 0, at most kMaxPower/ln 2): +inf would give
+    // inf − inf = NaN, and a negative A would raise the lobe above 1 (to overflow).
+    const T A = modifiedPower > T(0) ? std::min(modifiedPower, T(kMaxPower / kLn2<double>)) : T(0);
+    return std::exp2(A * std::min(c, T(1)) - A);
 }
 
 /// The per-power best-fit offset x(n) as a table in log n, made by fitting (see fit.h) and

@@ -46,7 +46,7 @@ template <class T> inline T visibilityCookTorrance(T NoL, T NoV, T NoH, T VoH) {
 // Walter et al. 2007, eq. 25 (as Smith G1 with a = cosθ/(m sinθ)): G1 = 2/(1 + erf(a) + exp(−a²)/(a√π))
 template <class T> inline T smithBeckmannG1(T NoX, T m) {
     NoX = std::max(saturate(NoX), T(kMinCosine));
-    m = std::max(m, T(1e-6));
+    m = m > T(1e-6) ? m : T(1e-6); // also NaN → 1e-6, the smoothest, as beckmannNdf does
     const T sinT = std::sqrt(std::max(T(0), T(1) - NoX * NoX));
     if (sinT <= T(0)) return T(1);
     const T a = NoX / (m * sinT);
@@ -67,7 +67,8 @@ template <class T> inline T visibilitySmithBeckmann(T NoL, T NoV, T m) {
 template <class T> inline T visibilitySmithGgxCorrelated(T NoL, T NoV, T alpha) {
     NoL = std::max(saturate(NoL), T(kMinCosine));
     NoV = std::max(saturate(NoV), T(kMinCosine));
-    const T a2 = saturate(alpha * alpha);
+    // α² clamped to [0, 1]; NaN → 0 (the smoothest, as ggxNdf does) since saturate keeps NaN.
+    const T a2 = alpha * alpha > T(0) ? std::min(alpha * alpha, T(1)) : T(0);
     const T gv = NoL * std::sqrt(NoV * NoV * (T(1) - a2) + a2);
     const T gl = NoV * std::sqrt(NoL * NoL * (T(1) - a2) + a2);
     return T(2) / (gv + gl);

@@ -1,0 +1,114 @@
+// `burnish evaluate`: every prefiltering method against the texture-space ground truth, per mip,
+// next to its cost.
+#include "command.h"
+#include "common.h"
+
+#include <burnish/core/evaluate_report.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+namespace burnish::cli {
+
+namespace {
+
+struct EvaluateCliOptions {
+    std::string input;
+    std::vector<double> powers{512.0};
+    int firstMip = 1;
+    int lastMip = 4;
+    double viewAngle = 30.0;
+    std::vector<std::string> methods;
+    std::string out = "burnish-evaluate";
+    bool errorMaps = false;
+    int bakeRuns = 3;
+    std::string border = "wrap";
+    double toksvigMapPower = 100.0;
+    bool json = false;
+    NormalMapCliOptions normalMap;
+};
+
+int runEvaluate(const EvaluateCliOptions& o) {
+    auto map = loadNormalMap(o.input, toNormalMapOptions(o.normalMap));
+    if (!map) return fail(map.error());
+    for (const auto& w : map->diagnostics.warnings) std::fprintf(stderr, "burnish: warning: %s\n", w.c_str());
+
+    EvaluationReportOptions options;
+    options.inputName = std::filesystem::path(o.input).filename().string();
+    options.bakeRuns = o.bakeRuns;
+    options.evaluate.basePowers = o.powers;
+    options.evaluate.firstMip = o.firstMip;
+    options.evaluate.lastMip = o.lastMip;
+    options.evaluate.viewAngleDeg = o.viewAngle;
+    options.evaluate.border = o.border == "clamp" ? BorderMode::Clamp : BorderMode::Wrap;
+    options.evaluate.errorMaps = o.errorMaps;
+    options.evaluate.params.toksvigMapPower = o.toksvigMapPower;
+    if (!o.methods.empty()) {
+        options.evaluate.methods.clear();
+        for (const auto& name : o.methods) {
+            auto m = methodFromName(name);
+            if (!m) return fail(m.error());
+            options.evaluate.methods.push_back(*m);
+        }
+    }
+
+    ProgressBar bar("evaluating");
+    auto report = buildEvaluationReport(*map, options, [&](double f) { bar.update(f); });
+    bar.finish();
+    if (!report) return fail(report.error());
+    if (auto st = writeEvaluationReport(*report, o.out); !st) return fail(st.error());
+    if (o.json)
+        std::printf("%s\n", evaluationJson(*report).dump(2).c_str());
+    else
+        std::printf("%s\nWritten to %s/ (evaluate.md, evaluate.json, two PNG plots%s).\n",
+                    evaluationMarkdown(*report).c_str(), o.out.c_str(), o.errorMaps ? ", errors/*.exr" : "");
+    return 0;
+}
+
+const CommandRegistration registration{
+    50, [](CLI::App& app) -> std::function<int()> {
+        auto o = std::make_shared<EvaluateCliOptions>();
+        CLI::App* sub = app.add_subcommand(
+            "evaluate",
+            "Measure every prefiltering method against the ground truth (render big, downsample, done in "
+            "texture space) per mip, next to its bake time, shading cost and storage.");
+        sub->add_option("input", o->input, "Tangent-space normal map (PNG, TGA, JPEG, EXR, TIFF, DDS).")
+            ->required()
+            ->type_name("IN");
+        sub->add_option("--power", o->powers, "Base Blinn-Phong power(s) s of the ground truth (default 512).")
+            ->check(CLI::Range(1e-3, 1e9))
+            ->type_name("S");
+        sub->add_option("--first-mip", o->firstMip, "First mip level evaluated (default 1).")
+            ->check(CLI::Range(0, 30));
+        sub->add_option("--last-mip", o->lastMip,
+                        "Last mip level evaluated (default 4; limited to the map's last level).")
+            ->check(CLI::Range(0, 30));
+        sub->add_option("--view-angle", o->viewAngle, "View angle from the macro normal in degrees (default 30).")
+            ->check(CLI::Range(0.0, 89.0));
+        sub->add_option("--methods", o->methods,
+                        "Methods to evaluate, comma separated (default all: naive, toksvig, toksvig-map, "
+                        "variance-to-gloss, lean, clean, vmf).")
+            ->delimiter(',')
+            ->type_name("LIST");
+        sub->add_option("--out", o->out, "Folder for the report files (default burnish-evaluate).")
+            ->type_name("DIR");
+        sub->add_flag("--error-maps", o->errorMaps,
+                      "Also write per-texel relative error maps as EXR (errors/<method>-s<power>-mip<k>.exr).");
+        sub->add_option("--bake-runs", o->bakeRuns, "Bake timings are the median of this many runs (default 3).")
+            ->check(CLI::Range(1, 100));
+        sub->add_option("--border", o->border, "Texture borders: wrap (tiling, default) or clamp.")
+            ->check(CLI::IsMember({"wrap", "clamp"}));
+        sub->add_option("--toksvig-map-power", o->toksvigMapPower,
+                        "Fixed power the Toksvig map is baked for (default 100).")
+            ->check(CLI::Range(1.0, 1e6));
+        sub->add_flag("--json", o->json, "Print the report as JSON on stdout instead of Markdown.");
+        addNormalMapOptions(sub, o->normalMap);
+        return [o] { return runEvaluate(*o); };
+    }};
+
+} // namespace
+
+} // namespace burnish::cli

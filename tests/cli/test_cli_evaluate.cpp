@@ -1,0 +1,85 @@
+// End-to-end: `burnish evaluate` on a small synthetic normal map.
+#include "cli_run.h"
+#include "temp_dir.h"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+
+namespace {
+
+using burnish::test::lineCount;
+using burnish::test::runBurnish;
+
+
+// A 32×32 bumpy map written as 8-bit PNG.
+std::string writeBumpyMap(const burnish::test::TempDir& dir) {
+    std::mt19937 rng(4);
+    std::normal_distribution<float> g(0.0f, 0.25f);
+    std::vector<float> px;
+    for (int i = 0; i < 32 * 32; ++i) {
+        float x = g(rng), y = g(rng), z = 1.0f;
+        const float len = std::sqrt(x * x + y * y + z * z);
+        px.insert(px.end(), {x / len * 0.5f + 0.5f, y / len * 0.5f + 0.5f, z / len * 0.5f + 0.5f});
+    }
+    const auto path = (dir / "bumpy.png").string();
+    auto out = OIIO::ImageOutput::create(path);
+    OIIO::ImageSpec spec(32, 32, 3, OIIO::TypeDesc::UINT8);
+    out->open(path, spec);
+    out->write_image(OIIO::TypeDesc::FLOAT, px.data());
+    out->close();
+    return path;
+}
+
+} // namespace
+
+TEST(CliEvaluate, WritesTheReportAndNaiveIsWorst) {
+    burnish::test::TempDir dir;
+    const std::string in = writeBumpyMap(dir);
+    const auto out = dir / "report";
+    auto r = runBurnish("evaluate " + in + " --out " + out.string() + " --error-maps --bake-runs 1 --json");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* f : {"evaluate.md", "evaluate.json", "evaluate-error-per-mip.png", "evaluate-error-vs-cost.png"})
+        EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
+    EXPECT_TRUE(std::filesystem::exists(out / "errors" / "lean-s512-mip4.exr"));
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["costs"].size(), 7u);
+    EXPECT_EQ(j["errors"].size(), 7u * 4u); // 7 methods × mips 1..4
+    double naive = 0, lean = 0;
+    for (const auto& e : j["errors"]) {
+        ASSERT_TRUE(e["relative_l1"].is_number()) << e.dump();
+        if (e["mip"] == 4 && e["method"] == "naive") naive = e["relative_l1"];
+        if (e["mip"] == 4 && e["method"] == "lean") lean = e["relative_l1"];
+    }
+    EXPECT_GT(naive, lean);
+    std::ifstream md(out / "evaluate.md");
+    std::stringstream ss;
+    ss << md.rdbuf();
+    EXPECT_EQ(ss.str().find("nan"), std::string::npos);
+    EXPECT_NE(ss.str().find("| variance-to-gloss |"), std::string::npos);
+}
+
+TEST(CliEvaluate, BadInputGivesOneLine) {
+    burnish::test::TempDir dir;
+    auto missing = runBurnish("evaluate " + (dir / "missing.png").string());
+    EXPECT_NE(missing.exitCode, 0);
+    EXPECT_EQ(lineCount(missing.err), 1) << missing.err;
+    EXPECT_EQ(missing.err.rfind("burnish: error:", 0), 0u) << missing.err;
+
+    const std::string in = writeBumpyMap(dir);
+    auto badMethod = runBurnish("evaluate " + in + " --methods naive,shiny --out " + (dir / "o").string());
+    EXPECT_NE(badMethod.exitCode, 0);
+    EXPECT_NE(badMethod.err.find("unknown method 'shiny'"), std::string::npos) << badMethod.err;
+    EXPECT_EQ(lineCount(badMethod.err), 1);
+
+    auto badMip = runBurnish("evaluate " + in + " --first-mip 9 --last-mip 9 --out " + (dir / "o").string());
+    EXPECT_NE(badMip.exitCode, 0);
+    EXPECT_EQ(lineCount(badMip.err), 1) << badMip.err;
+}

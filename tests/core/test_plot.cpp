@@ -1,0 +1,153 @@
+// The plotting module: a PNG that OpenImageIO reads back at the requested size, not blank, with
+// text where labels go; clear errors instead of unlabeled plots.
+#include <burnish/core/plot.h>
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+
+namespace burnish {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Text is drawn black on white: a channel mean below this is a glyph (anti-aliased edges included).
+constexpr float kDarkThreshold = 0.35f;
+
+PlotSpec sampleSpec() {
+    PlotSpec s;
+    s.title = "Error per mip";
+    s.x = {"mip level", AxisScale::Linear, {}, {}};
+    s.y = {"RMS error", AxisScale::Log, {}, {}};
+    PlotSeries a;
+    a.name = "Toksvig";
+    a.x = {0, 1, 2, 3, 4};
+    a.y = {1e-3, 3e-3, 1e-2, 2e-2, 5e-2};
+    a.color = plotPalette(0);
+    a.line = true;
+    PlotSeries b;
+    b.name = "naive";
+    b.x = {0, 1, 2, 3, 4};
+    b.y = {1e-3, 1e-2, 0.1, 0.3, 0.6};
+    b.color = plotPalette(1);
+    b.marker = MarkerShape::HollowSquare;
+    b.pointLabels = {"a", "b", "c", "d", "e"};
+    s.series = {a, b};
+    s.width = 640;
+    s.height = 420;
+    return s;
+}
+
+/// Pixels whose mean over RGB is below kDarkThreshold inside [x0, x1) × [y0, y1).
+int darkPixels(const OIIO::ImageBuf& img, int x0, int x1, int y0, int y1) {
+    int count = 0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+            float px[3];
+            img.getpixel(x, y, px, 3);
+            if ((px[0] + px[1] + px[2]) / 3.0f < kDarkThreshold) ++count;
+        }
+    return count;
+}
+
+class PlotTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        m_dir = fs::temp_directory_path() / ("burnish_plot_" + std::to_string(::getpid()) + "_" +
+                                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(m_dir);
+    }
+    void TearDown() override { fs::remove_all(m_dir); }
+    fs::path m_dir;
+};
+
+TEST_F(PlotTest, WritesAReadablePngWithContentAndText) {
+    const PlotSpec spec = sampleSpec();
+    const fs::path png = m_dir / "plot.png";
+    const Status st = savePlotPng(spec, png);
+    ASSERT_TRUE(st.ok()) << st.error();
+
+    OIIO::ImageBuf img(png.string());
+    ASSERT_TRUE(img.read(0, 0, true, OIIO::TypeDesc::FLOAT)) << img.geterror();
+    EXPECT_EQ(img.spec().width, spec.width);
+    EXPECT_EQ(img.spec().height, spec.height);
+    EXPECT_EQ(img.spec().nchannels, 3);
+
+    const auto stats = OIIO::ImageBufAlgo::computePixelStats(img);
+    for (int c = 0; c < 3; ++c)
+        EXPECT_GT(stats.stddev[c], 0.0f) << "blank channel " << c;
+
+    // The title band holds only the title's glyphs: dark pixels there mean text was rendered.
+    constexpr int kTitleBand = 30;
+    EXPECT_GT(darkPixels(img, 0, spec.width, 0, kTitleBand), 0);
+
+    // Same plot without a title: that band is empty, so the dark pixels above came from the text.
+    PlotSpec untitled = spec;
+    untitled.title.clear();
+    auto plain = renderPlot(untitled);
+    ASSERT_TRUE(plain.ok()) << plain.error();
+    EXPECT_EQ(darkPixels(*plain, 0, spec.width, 0, 10), 0);
+
+    // Series colours reach the image: some pixel is far more orange (series b) than grey.
+    bool sawOrange = false;
+    for (int y = 0; y < spec.height && !sawOrange; ++y)
+        for (int x = 0; x < spec.width && !sawOrange; ++x) {
+            float px[3];
+            img.getpixel(x, y, px, 3);
+            sawOrange = px[0] > 0.8f && px[2] < 0.3f; // palette 1 is (1.0, 0.5, 0.06)
+        }
+    EXPECT_TRUE(sawOrange);
+}
+
+TEST_F(PlotTest, UnknownFontIsAnErrorNotAnUnlabeledPlot) {
+    PlotSpec spec = sampleSpec();
+    spec.fontName = "NoSuchFontBurnishTest";
+    const fs::path png = m_dir / "nofont.png";
+    const Status st = savePlotPng(spec, png);
+    EXPECT_FALSE(st.ok());
+    EXPECT_NE(st.error().find("NoSuchFontBurnishTest"), std::string::npos) << st.error();
+    EXPECT_FALSE(fs::exists(png));
+}
+
+TEST_F(PlotTest, BadSeriesAndSizesAreErrors) {
+    PlotSpec spec = sampleSpec();
+    spec.series[0].y.pop_back();
+    EXPECT_FALSE(renderPlot(spec).ok());
+    spec = sampleSpec();
+    spec.series[1].pointLabels.pop_back();
+    EXPECT_FALSE(renderPlot(spec).ok());
+    spec = sampleSpec();
+    spec.width = 50;
+    EXPECT_FALSE(renderPlot(spec).ok());
+}
+
+TEST_F(PlotTest, UnplaceablePointsAreSkippedNotFatal) {
+    PlotSpec spec = sampleSpec();
+    // Zero, negative, NaN and Inf cannot sit on a log axis; the rest of the plot still renders.
+    spec.series[0].y = {0.0, -1.0, std::nan(""), INFINITY, 0.01};
+    auto img = renderPlot(spec);
+    ASSERT_TRUE(img.ok()) << img.error();
+    const auto stats = OIIO::ImageBufAlgo::computePixelStats(*img);
+    for (int c = 0; c < 3; ++c)
+        EXPECT_TRUE(std::isfinite(stats.avg[c]));
+
+    // No placeable data at all still gives labelled axes (one default decade).
+    PlotSpec empty = sampleSpec();
+    for (auto& s : empty.series)
+        s.x.clear(), s.y.clear(), s.pointLabels.clear();
+    EXPECT_TRUE(renderPlot(empty).ok());
+}
+
+TEST_F(PlotTest, SaveIntoMissingFolderFailsCleanly) {
+    const fs::path png = m_dir / "missing" / "plot.png";
+    EXPECT_FALSE(savePlotPng(sampleSpec(), png).ok());
+    EXPECT_FALSE(fs::exists(png));
+}
+
+} // namespace
+} // namespace burnish

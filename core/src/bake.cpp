@@ -134,56 +134,39 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     out.stats.mipCount = levels;
     const Method method = options.method;
     const bool slopeMethod = method == Method::Lean || method == Method::Clean;
+    const bool unnormalized = method == Method::Toksvig;
+    const bool adjustedGloss = method == Method::VarianceToGloss || method == Method::Vmf;
 
-    // Lobes and moments of every texel of every level, computed once.
-    std::vector<std::vector<TexelLobe>> lobes(static_cast<size_t>(levels));
-    std::vector<std::vector<NormalMoments>> moments(static_cast<size_t>(levels));
-    std::vector<std::vector<double>> basePowers(static_cast<size_t>(levels));
-    for (int k = 0; k < levels; ++k) {
-        const PyramidLevel& level = pyramid.level(k);
-        const size_t n = size_t(level.width) * size_t(level.height);
-        lobes[size_t(k)].resize(n);
-        moments[size_t(k)].resize(n);
-        basePowers[size_t(k)].resize(n);
-        tbb::parallel_for(0, level.height, [&](int y) {
-            for (int x = 0; x < level.width; ++x) {
-                const size_t t = size_t(y) * size_t(level.width) + size_t(x);
-                const double s = base ? base->power(k, x, y) : options.basePower;
-                moments[size_t(k)][t] = pyramid.moments(k, x, y);
-                basePowers[size_t(k)][t] = s;
-                lobes[size_t(k)][t] = methodLobe(method, moments[size_t(k)][t], s, options.params);
-            }
-        });
+    // Binary scales for the slope textures, so their [0, 1] storage covers every mip. Filtered
+    // moments are convex combinations of box moments, so the box moments bound them.
+    double sB = 1.0, sM = 1.0;
+    if (slopeMethod) {
+        double maxB = 0.0, maxM = 0.0;
+        auto visit = [&](const NormalMoments& m) {
+            const auto M = m.slopeSecondMoments();
+            maxB = std::max({maxB, std::abs(double(m.slope.x)), std::abs(double(m.slope.y))});
+            maxM = std::max({maxM, double(M[0]), double(M[1])});
+        };
+        for (int k = 0; k < levels; ++k)
+            for (int y = 0; y < pyramid.level(k).height; ++y)
+                for (int x = 0; x < pyramid.level(k).width; ++x) visit(pyramid.boxMoments(k, x, y));
+        double minPower = options.basePower;
+        if (options.authoredGloss)
+            for (float g : *options.authoredGloss) minPower = std::min(minPower, options.encoding.power(g));
+        sB = binaryScale(maxB);
+        sM = binaryScale(maxM + 1.0 / std::max(minPower, 1e-6));
     }
 
-    // Binary scales for the slope textures, so their [0, 1] storage covers every mip.
-    double maxB = 0.0, maxM = 0.0;
-    if (slopeMethod)
-        for (int k = 0; k < levels; ++k)
-            for (size_t t = 0; t < lobes[size_t(k)].size(); ++t) {
-                const auto& m = moments[size_t(k)][t];
-                const auto M = m.slopeSecondMoments();
-                const double invS = 1.0 / std::max(basePowers[size_t(k)][t], 1e-6);
-                maxB = std::max({maxB, std::abs(double(m.slope.x)), std::abs(double(m.slope.y))});
-                maxM = std::max({maxM, double(M[0]) + invS, double(M[1]) + invS});
-            }
-    const double sB = binaryScale(maxB);
-    const double sM = binaryScale(maxM);
-
     // The textures each method stores.
-    const bool unnormalized = method == Method::Toksvig;
     out.textures.push_back(makeTexture("normal",
                                        unnormalized ? "unnormalized mean normal Na (its length carries the variance)"
                                                     : "renormalized mean normal",
                                        normalDecode()));
-    const bool glossTexture = !slopeMethod;
-    if (glossTexture) {
-        const bool adjusted = method == Method::VarianceToGloss || method == Method::Vmf;
+    if (!slopeMethod)
         out.textures.push_back(makeTexture("gloss",
-                                           std::string(adjusted ? "adjusted gloss, " : "authored gloss, ") +
+                                           std::string(adjustedGloss ? "adjusted gloss, " : "authored gloss, ") +
                                                options.encoding.formula(),
                                            {{"gloss", 1.0, 0.0}}));
-    }
     if (method == Method::ToksvigMap)
         out.textures.push_back(makeTexture("toksvig",
                                            "Toksvig factor f_t for power " + std::to_string(options.params.toksvigMapPower) +
@@ -200,8 +183,19 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     if (method == Method::Clean)
         out.textures.push_back(makeTexture("clean", "CLEAN: B and (M.xx + M.yy)/2 with 1/s added",
                                            {{"B.x", 2 * sB, -sB}, {"B.y", 2 * sB, -sB}, {"M.avg", sM, 0.0}}, true));
-
     for (auto& tex : out.textures) tex.mips.resize(size_t(levels));
+
+    enum class Role { Normal, Gloss, Toksvig, LeanB, LeanM, LeanGloss, Clean };
+    std::vector<Role> roles;
+    for (const auto& tex : out.textures)
+        roles.push_back(tex.role == "normal"    ? Role::Normal
+                        : tex.role == "gloss"   ? Role::Gloss
+                        : tex.role == "toksvig" ? Role::Toksvig
+                        : tex.role == "lean-b"  ? Role::LeanB
+                        : tex.role == "lean-m"  ? Role::LeanM
+                        : tex.role == "clean"   ? Role::Clean
+                                                : Role::LeanGloss);
+
     for (int k = 0; k < levels; ++k) {
         const PyramidLevel& level = pyramid.level(k);
         for (auto& tex : out.textures) {
@@ -211,43 +205,56 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
             mip.texels.resize(size_t(level.width) * size_t(level.height) * size_t(tex.channels));
         }
         std::vector<size_t> lowRow(static_cast<size_t>(level.height), 0), highRow(static_cast<size_t>(level.height), 0);
-        tbb::parallel_for(0, level.height, [&](int y) {
+        // Each row is produced from its filtered moments as they stream out of the pyramid.
+        pyramid.forEachMomentRow(k, [&](int y, const NormalMoments* row) {
             for (int x = 0; x < level.width; ++x) {
                 const size_t t = size_t(y) * size_t(level.width) + size_t(x);
-                const TexelLobe& lobe = lobes[size_t(k)][t];
-                const NormalMoments& m = moments[size_t(k)][t];
-                const double s = basePowers[size_t(k)][t];
-                for (auto& tex : out.textures) {
+                const NormalMoments& m = row[x];
+                const double s = base ? base->power(k, x, y) : options.basePower;
+                const TexelLobe lobe = methodLobe(method, m, s, options.params);
+                for (size_t r = 0; r < roles.size(); ++r) {
+                    BakedTexture& tex = out.textures[r];
                     float* px = &tex.mips[size_t(k)].texels[t * size_t(tex.channels)];
-                    if (tex.role == "normal") {
+                    switch (roles[r]) {
+                    case Role::Normal: {
                         const glm::vec3 n = unnormalized ? m.mean : m.meanDirection();
                         for (int c = 0; c < 3; ++c) px[c] = unit(0.5 * double(n[c]) + 0.5);
-                    } else if (tex.role == "gloss") {
-                        const bool adjusted = method == Method::VarianceToGloss || method == Method::Vmf;
-                        const double p = adjusted ? lobe.power : s;
+                        break;
+                    }
+                    case Role::Gloss: {
+                        const double p = adjustedGloss ? lobe.power : s;
                         if (p < options.encoding.minPower()) ++lowRow[size_t(y)];
                         if (p > options.encoding.maxPower()) ++highRow[size_t(y)];
                         px[0] = unit(options.encoding.value(p));
-                    } else if (tex.role == "toksvig") {
+                        break;
+                    }
+                    case Role::Toksvig:
                         px[0] = unit(toksvigFactor(m.lengthNa(), options.params.toksvigMapPower));
-                    } else if (tex.role == "lean-b" || tex.role == "clean") {
+                        break;
+                    case Role::LeanB:
+                    case Role::Clean:
                         px[0] = unit(double(m.slope.x) / (2 * sB) + 0.5);
                         px[1] = unit(double(m.slope.y) / (2 * sB) + 0.5);
-                        if (tex.role == "clean") {
+                        if (roles[r] == Role::Clean) {
                             const auto M = m.slopeSecondMoments();
                             px[2] = unit((0.5 * (double(M[0]) + double(M[1])) + 1.0 / s) / sM);
                         }
-                    } else if (tex.role == "lean-m") {
+                        break;
+                    case Role::LeanM: {
                         const auto M = m.slopeSecondMoments();
                         px[0] = unit((double(M[0]) + 1.0 / s) / sM);
                         px[1] = unit((double(M[1]) + 1.0 / s) / sM);
                         px[2] = unit(double(M[2]) / (2 * sM) + 0.5);
-                    } else if (tex.role == "lean-gloss") {
+                        break;
+                    }
+                    case Role::LeanGloss: {
                         const auto& S = lobe.slopeCov;
                         px[0] = unit(encodeLogVariance(S[0]));
                         px[1] = unit(encodeLogVariance(S[1]));
                         const double rho = S[2] / std::sqrt(std::max(S[0] * S[1], 1e-300));
                         px[2] = unit(0.5 * std::clamp(rho, -1.0, 1.0) + 0.5);
+                        break;
+                    }
                     }
                 }
             }

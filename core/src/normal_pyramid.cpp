@@ -10,51 +10,69 @@ namespace burnish {
 
 namespace {
 
-// Double-precision accumulator for the weighted pairwise combination of moments:
-// mean = Σ w μ_j / W, C = Σ w (C_j + (μ_j − μ)(μ_j − μ)ᵀ) / W (Chan, Golub & LeVeque 1979).
-struct MomentSum {
-    double w = 0.0;
-    double mean[3] = {0, 0, 0};
-    double slope[2] = {0, 0};
+// Weighted raw sums in double: W, ΣwN (3), Σw NNᵀ (6: xx yy zz xy xz yz), Σw b (2), Σw bbᵀ (3).
+// Central moments are recovered as Σw NNᵀ/W − μμᵀ in double, whose rounding (~1e-16 of |μ|² = 1)
+// is far below any variance that matters (the smallest, 1/kMaxPower, is 1e-9), while the inputs
+// are the float-stored central moments of the level below.
+struct RawMoments {
+    double v[15] = {};
 
-    void addMeans(const NormalMoments& m, double weight) {
-        w += weight;
-        for (int i = 0; i < 3; ++i) mean[i] += weight * double(m.mean[i]);
-        for (int i = 0; i < 2; ++i) slope[i] += weight * double(m.slope[i]);
+    void add(const NormalMoments& m, double w) {
+        const double mx = m.mean.x, my = m.mean.y, mz = m.mean.z, bx = m.slope.x, by = m.slope.y;
+        v[0] += w;
+        v[1] += w * mx;
+        v[2] += w * my;
+        v[3] += w * mz;
+        v[4] += w * (double(m.cov[0]) + mx * mx);
+        v[5] += w * (double(m.cov[1]) + my * my);
+        v[6] += w * (double(m.cov[2]) + mz * mz);
+        v[7] += w * (double(m.cov[3]) + mx * my);
+        v[8] += w * (double(m.cov[4]) + mx * mz);
+        v[9] += w * (double(m.cov[5]) + my * mz);
+        v[10] += w * bx;
+        v[11] += w * by;
+        v[12] += w * (double(m.slopeCov[0]) + bx * bx);
+        v[13] += w * (double(m.slopeCov[1]) + by * by);
+        v[14] += w * (double(m.slopeCov[2]) + bx * by);
+    }
+
+    void addNormal(const glm::vec3& n, double w) {
+        const double x = n.x, y = n.y, z = n.z;
+        const double zs = std::max(z, double(kMinSlopeZ));
+        const double bx = x / zs, by = y / zs;
+        v[0] += w;
+        v[1] += w * x;
+        v[2] += w * y;
+        v[3] += w * z;
+        v[4] += w * x * x;
+        v[5] += w * y * y;
+        v[6] += w * z * z;
+        v[7] += w * x * y;
+        v[8] += w * x * z;
+        v[9] += w * y * z;
+        v[10] += w * bx;
+        v[11] += w * by;
+        v[12] += w * bx * bx;
+        v[13] += w * by * by;
+        v[14] += w * bx * by;
+    }
+
+    NormalMoments toMoments() const {
+        NormalMoments out;
+        if (!(v[0] > 0.0)) return out;
+        const double inv = 1.0 / v[0];
+        const double mx = v[1] * inv, my = v[2] * inv, mz = v[3] * inv, bx = v[10] * inv, by = v[11] * inv;
+        out.mean = glm::vec3(float(mx), float(my), float(mz));
+        out.slope = glm::vec2(float(bx), float(by));
+        // Variances are clamped at 0 against rounding; covariances are left signed.
+        out.cov = {float(std::max(0.0, v[4] * inv - mx * mx)), float(std::max(0.0, v[5] * inv - my * my)),
+                   float(std::max(0.0, v[6] * inv - mz * mz)), float(v[7] * inv - mx * my),
+                   float(v[8] * inv - mx * mz), float(v[9] * inv - my * mz)};
+        out.slopeCov = {float(std::max(0.0, v[12] * inv - bx * bx)), float(std::max(0.0, v[13] * inv - by * by)),
+                        float(v[14] * inv - bx * by)};
+        return out;
     }
 };
-
-NormalMoments combine(const NormalMoments* const* items, const double* weights, size_t count) {
-    MomentSum sum;
-    for (size_t j = 0; j < count; ++j) sum.addMeans(*items[j], weights[j]);
-    NormalMoments out;
-    if (!(sum.w > 0.0)) return out;
-    double mu[3], beta[2];
-    for (int i = 0; i < 3; ++i) mu[i] = sum.mean[i] / sum.w;
-    for (int i = 0; i < 2; ++i) beta[i] = sum.slope[i] / sum.w;
-    double c[6] = {0, 0, 0, 0, 0, 0};
-    double sc[3] = {0, 0, 0};
-    for (size_t j = 0; j < count; ++j) {
-        const NormalMoments& m = *items[j];
-        const double w = weights[j];
-        const double d[3] = {double(m.mean[0]) - mu[0], double(m.mean[1]) - mu[1], double(m.mean[2]) - mu[2]};
-        c[0] += w * (double(m.cov[0]) + d[0] * d[0]);
-        c[1] += w * (double(m.cov[1]) + d[1] * d[1]);
-        c[2] += w * (double(m.cov[2]) + d[2] * d[2]);
-        c[3] += w * (double(m.cov[3]) + d[0] * d[1]);
-        c[4] += w * (double(m.cov[4]) + d[0] * d[2]);
-        c[5] += w * (double(m.cov[5]) + d[1] * d[2]);
-        const double e[2] = {double(m.slope[0]) - beta[0], double(m.slope[1]) - beta[1]};
-        sc[0] += w * (double(m.slopeCov[0]) + e[0] * e[0]);
-        sc[1] += w * (double(m.slopeCov[1]) + e[1] * e[1]);
-        sc[2] += w * (double(m.slopeCov[2]) + e[0] * e[1]);
-    }
-    out.mean = glm::vec3(float(mu[0]), float(mu[1]), float(mu[2]));
-    out.slope = glm::vec2(float(beta[0]), float(beta[1]));
-    for (int i = 0; i < 6; ++i) out.cov[size_t(i)] = float(c[i] / sum.w);
-    for (int i = 0; i < 3; ++i) out.slopeCov[size_t(i)] = float(sc[i] / sum.w);
-    return out;
-}
 
 // Finest-level start of each child interval: parent x covers children
 // [⌊x·wc/wp⌋, ⌊(x+1)·wc/wp⌋) of the level below.
@@ -117,9 +135,9 @@ NormalMoments NormalMoments::ofNormal(const glm::vec3& n) {
 }
 
 NormalMoments combineMoments(const NormalMoments* moments, const double* weights, size_t count) {
-    std::vector<const NormalMoments*> items(count);
-    for (size_t i = 0; i < count; ++i) items[i] = &moments[i];
-    return combine(items.data(), weights, count);
+    RawMoments raw;
+    for (size_t i = 0; i < count; ++i) raw.add(moments[i], weights[i]);
+    return raw.toMoments();
 }
 
 NormalPyramid NormalPyramid::build(std::shared_ptr<const NormalMap> map, const PyramidOptions& options) {
@@ -154,26 +172,17 @@ NormalPyramid NormalPyramid::build(std::shared_ptr<const NormalMap> map, const P
         parent.box.resize(size_t(parent.width) * size_t(parent.height));
 
         tbb::parallel_for(0, parent.height, [&](int y) {
-            std::vector<NormalMoments> leaf;
-            std::vector<const NormalMoments*> items;
-            std::vector<double> weights;
             for (int x = 0; x < parent.width; ++x) {
-                items.clear();
-                weights.clear();
-                leaf.clear();
+                RawMoments raw;
                 for (int j = cy[size_t(y)]; j < cy[size_t(y) + 1]; ++j)
                     for (int i = cx[size_t(x)]; i < cx[size_t(x) + 1]; ++i) {
-                        if (k == 0) leaf.push_back(NormalMoments::ofNormal(finest.at(i, j)));
-                        weights.push_back(double(pyramid.footprintCount(k, i, j)));
+                        if (k == 0)
+                            raw.addNormal(finest.at(i, j), 1.0);
+                        else
+                            raw.add(child.box[size_t(j) * size_t(child.width) + size_t(i)],
+                                    double(pyramid.footprintCount(k, i, j)));
                     }
-                if (k == 0)
-                    for (const auto& m : leaf) items.push_back(&m);
-                else
-                    for (int j = cy[size_t(y)]; j < cy[size_t(y) + 1]; ++j)
-                        for (int i = cx[size_t(x)]; i < cx[size_t(x) + 1]; ++i)
-                            items.push_back(&child.box[size_t(j) * size_t(child.width) + size_t(i)]);
-                parent.box[size_t(y) * size_t(parent.width) + size_t(x)] =
-                    combine(items.data(), weights.data(), items.size());
+                parent.box[size_t(y) * size_t(parent.width) + size_t(x)] = raw.toMoments();
             }
         });
         pyramid.m_levels.push_back(std::move(parent));
@@ -196,20 +205,73 @@ NormalMoments NormalPyramid::moments(int k, int x, int y) const {
     const KernelTaps taps = kernelTaps(m_options.kernel);
     if (taps.radius == 0) return boxMoments(k, x, y);
     const PyramidLevel& l = level(k);
-    NormalMoments local[25];
-    const NormalMoments* items[25];
-    double weights[25];
-    size_t count = 0;
+    RawMoments raw;
     for (int j = -taps.radius; j <= taps.radius; ++j)
         for (int i = -taps.radius; i <= taps.radius; ++i) {
             const int xi = borderIndex(x + i, l.width, m_options.border);
             const int yj = borderIndex(y + j, l.height, m_options.border);
-            local[count] = boxMoments(k, xi, yj);
-            items[count] = &local[count];
-            weights[count] = taps.w[i + taps.radius] * taps.w[j + taps.radius] * footprintCount(k, xi, yj);
-            ++count;
+            raw.add(boxMoments(k, xi, yj), taps.w[i + taps.radius] * taps.w[j + taps.radius] * footprintCount(k, xi, yj));
         }
-    return combine(items, weights, count);
+    return raw.toMoments();
+}
+
+void NormalPyramid::forEachMomentRow(int k, const std::function<void(int y, const NormalMoments* row)>& fn) const {
+    const PyramidLevel& l = level(k);
+    const int width = l.width;
+    const KernelTaps taps = kernelTaps(m_options.kernel);
+    // Blocks of rows: each block filters its rows plus a halo of `radius` rows horizontally once.
+    constexpr int kBlockRows = 16;
+    const int blocks = (l.height + kBlockRows - 1) / kBlockRows;
+    tbb::parallel_for(0, blocks, [&](int block) {
+        const int y0 = block * kBlockRows;
+        const int y1 = std::min(l.height, y0 + kBlockRows);
+        std::vector<NormalMoments> out(static_cast<size_t>(width));
+        if (taps.radius == 0) {
+            for (int y = y0; y < y1; ++y) {
+                for (int x = 0; x < width; ++x) out[size_t(x)] = boxMoments(k, x, y);
+                fn(y, out.data());
+            }
+            return;
+        }
+        const int r = taps.radius;
+        const int rows = (y1 - y0) + 2 * r;
+        // Horizontally filtered raw sums of rows y0−r .. y1+r−1 (border-mapped).
+        std::vector<RawMoments> horizontal(size_t(rows) * size_t(width));
+        std::vector<RawMoments> single(static_cast<size_t>(width));
+        for (int j = 0; j < rows; ++j) {
+            const int yy = borderIndex(y0 - r + j, l.height, m_options.border);
+            for (int x = 0; x < width; ++x) {
+                RawMoments m;
+                if (k == 0)
+                    m.addNormal(m_map->at(x, yy), 1.0);
+                else
+                    m.add(l.box[size_t(yy) * size_t(width) + size_t(x)], double(footprintCount(k, x, yy)));
+                single[size_t(x)] = m;
+            }
+            RawMoments* h = &horizontal[size_t(j) * size_t(width)];
+            for (int x = 0; x < width; ++x) {
+                RawMoments sum;
+                for (int i = -r; i <= r; ++i) {
+                    const RawMoments& s = single[size_t(borderIndex(x + i, width, m_options.border))];
+                    const double w = taps.w[i + r];
+                    for (int c = 0; c < 15; ++c) sum.v[c] += w * s.v[c];
+                }
+                h[x] = sum;
+            }
+        }
+        for (int y = y0; y < y1; ++y) {
+            for (int x = 0; x < width; ++x) {
+                RawMoments sum;
+                for (int j = -r; j <= r; ++j) {
+                    const RawMoments& h = horizontal[size_t(y - y0 + r + j) * size_t(width) + size_t(x)];
+                    const double w = taps.w[j + r];
+                    for (int c = 0; c < 15; ++c) sum.v[c] += w * h.v[c];
+                }
+                out[size_t(x)] = sum.toMoments();
+            }
+            fn(y, out.data());
+        }
+    });
 }
 
 } // namespace burnish

@@ -19,6 +19,7 @@
 #include <glm/vec3.hpp>
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -102,6 +103,10 @@ public:
     NormalMoments boxMoments(int k, int x, int y) const;
     /// Moments with the pyramid's kernel applied (equal to boxMoments for FilterKernel::Box).
     NormalMoments moments(int k, int x, int y) const;
+    /// Calls fn(y, row) for every row of level k, row holding the kernel-filtered moments of its
+    /// `width` texels (equal to moments(k, x, y)). Rows are computed in parallel blocks with a
+    /// separable filter over double-precision sums; fn is called concurrently for distinct rows.
+    void forEachMomentRow(int k, const std::function<void(int y, const NormalMoments* row)>& fn) const;
     /// Number of finest texels in the footprint of texel (x, y) of level k.
     int footprintCount(int k, int x, int y) const;
 

@@ -1,4 +1,6 @@
 // End-to-end tests of `burnish fit`.
+#include "cli_run.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -39,16 +41,8 @@ protected:
     void TearDown() override { fs::remove_all(m_dir); }
 
     RunResult run(const std::string& args) const {
-        const fs::path out = m_dir / "stdout.txt";
-        const fs::path err = m_dir / "stderr.txt";
-        const std::string cmd = std::string("\"") + BURNISH_EXE + "\" " + args + " >\"" + out.string() +
-                                "\" 2>\"" + err.string() + "\"";
-        const int status = std::system(cmd.c_str());
-        RunResult r;
-        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        return r;
+        const auto r = burnish::test::runBurnish(args);
+        return {r.exitCode, r.out, r.err};
     }
 
     fs::path m_dir;

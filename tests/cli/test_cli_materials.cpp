@@ -3,6 +3,8 @@
 #include <burnish/core/color.h>
 #include <burnish/core/materials.h>
 
+#include "cli_run.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -16,49 +18,10 @@
 
 namespace {
 
-struct RunResult {
-    int exitCode = -1;
-    std::string out;
-    std::string err;
-};
+using RunResult = burnish::test::CliResult;
+using burnish::test::runBurnish;
 
-std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s)
-        q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
-
-// Runs `burnish <args>`, capturing stdout through the pipe and stderr through a file.
-RunResult runBurnish(const std::string& args) {
-    static int counter = 0;
-    const auto errPath = std::filesystem::path(::testing::TempDir()) /
-                         ("burnish_cli_materials_err_" + std::to_string(::getpid()) + "_" +
-                          std::to_string(counter++) + ".txt");
-    const std::string command = quote(BURNISH_EXE) + " " + args + " 2>" + quote(errPath.string());
-    RunResult result;
-    FILE* pipe = ::popen(command.c_str(), "r");
-    if (!pipe) return result;
-    char buffer[4096];
-    size_t n;
-    while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
-        result.out.append(buffer, n);
-    const int status = ::pclose(pipe);
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream err(errPath);
-    std::stringstream ss;
-    ss << err.rdbuf();
-    result.err = ss.str();
-    std::filesystem::remove(errPath);
-    return result;
-}
-
-int countLines(const std::string& s) {
-    int lines = 0;
-    for (char c : s)
-        lines += c == '\n';
-    return lines;
-}
+int countLines(const std::string& s) { return burnish::test::lineCount(s); }
 
 // The line of `text` that starts (after indentation) with `name` followed by a space.
 std::string lineFor(const std::string& text, const std::string& name) {
@@ -109,7 +72,7 @@ TEST(CliMaterials, CorruptFileIsOneLineErrorAndNonZeroExit) {
     const auto path = std::filesystem::path(::testing::TempDir()) /
                       ("burnish_cli_corrupt_materials_" + std::to_string(::getpid()) + ".json");
     ASSERT_TRUE(burnish::writeFileAtomic(path, "{ \"version\": 1, \"materials\": [ {\"name\": ").ok());
-    const RunResult r = runBurnish("materials --file " + quote(path.string()));
+    const RunResult r = runBurnish("materials --file " + burnish::test::shellQuote(path.string()));
     std::filesystem::remove(path);
     EXPECT_NE(r.exitCode, 0);
     EXPECT_EQ(countLines(r.err), 1) << r.err;
@@ -124,7 +87,7 @@ TEST(CliMaterials, ValidFileReplacesTheBuiltinTable) {
     burnish::MaterialTable table = burnish::builtinMaterialTable();
     table.materials.resize(1); // water only
     ASSERT_TRUE(burnish::writeFileAtomic(path, burnish::materialTableToJson(table)).ok());
-    const RunResult r = runBurnish("materials --json --file " + quote(path.string()));
+    const RunResult r = runBurnish("materials --json --file " + burnish::test::shellQuote(path.string()));
     std::filesystem::remove(path);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);

@@ -49,4 +49,3 @@ const bool kRegistered = [] {
 
 } // namespace
 
-BENCHMARK_MAIN();

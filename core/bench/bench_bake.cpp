@@ -1,0 +1,101 @@
+// Benchmarks of the bake and the ground-truth evaluation (figures, not pass/fail):
+//   BM_Bake/<method>   in-memory bake of a 4096² normal map, all mips (pyramid included)
+//   BM_Pyramid         the normal pyramid alone, 4096²
+//   BM_Evaluate        `burnish evaluate`'s core on a 1024² map, mips 1-4, one power, all methods
+// The map is BURNISH_BENCH_NORMAL_MAP (any normal map, tiled to the size) when set, else a
+// deterministic synthetic bumpy map. Run: build/core/burnish_bench --benchmark_filter='Bake|Pyramid|Evaluate'
+#include <burnish/core/bake.h>
+#include <burnish/core/evaluate.h>
+
+#include <benchmark/benchmark.h>
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <optional>
+#include <random>
+
+namespace {
+
+using namespace burnish;
+
+// The source map tiled (or synthesized) to size×size; cached per size.
+const NormalMap& benchMap(int size, std::string& label) {
+    static std::map<int, NormalMap> cache;
+    static std::map<int, std::string> labels;
+    auto it = cache.find(size);
+    if (it != cache.end()) {
+        label = labels[size];
+        return it->second;
+    }
+    std::vector<glm::vec3> normals(static_cast<size_t>(size) * static_cast<size_t>(size));
+    const char* path = std::getenv("BURNISH_BENCH_NORMAL_MAP");
+    std::optional<NormalMap> source;
+    if (path) {
+        auto loaded = loadNormalMap(path);
+        if (loaded) source = std::move(*loaded);
+    }
+    if (source) {
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x)
+                normals[size_t(y) * size_t(size) + size_t(x)] = source->at(x % source->width, y % source->height);
+        labels[size] = std::string("tiled ") + path;
+    } else {
+        // Bumps at several scales plus noise: rough at every mip, like a real map.
+        std::mt19937 rng(1);
+        std::normal_distribution<float> noise(0.0f, 0.05f);
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x) {
+                const float u = float(x), v = float(y);
+                const float dx = 0.3f * std::sin(u * 0.05f) + 0.1f * std::sin(u * 0.7f + v * 0.3f) + noise(rng);
+                const float dy = 0.3f * std::cos(v * 0.04f) + 0.1f * std::sin(v * 0.9f - u * 0.2f) + noise(rng);
+                normals[size_t(y) * size_t(size) + size_t(x)] = glm::normalize(glm::vec3(dx, dy, 1.0f));
+            }
+        labels[size] = "synthetic";
+    }
+    label = labels[size];
+    return cache.emplace(size, makeNormalMap(size, size, std::move(normals))).first->second;
+}
+
+void BM_Bake(benchmark::State& state) {
+    std::string label;
+    const NormalMap& map = benchMap(4096, label);
+    BakeOptions options;
+    options.method = allMethods()[size_t(state.range(0))];
+    for (auto _ : state) {
+        auto out = bake(map, options);
+        benchmark::DoNotOptimize(out);
+    }
+    state.SetLabel(std::string(methodName(options.method)) + ", " + label);
+    state.counters["Mtexels/s"] = benchmark::Counter(double(map.texelCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Bake)->DenseRange(0, 6)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
+
+void BM_Pyramid(benchmark::State& state) {
+    std::string label;
+    const NormalMap& map = benchMap(4096, label);
+    const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
+    for (auto _ : state) {
+        auto pyramid = NormalPyramid::build(borrowed);
+        benchmark::DoNotOptimize(pyramid);
+    }
+    state.SetLabel(label);
+}
+BENCHMARK(BM_Pyramid)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
+
+void BM_Evaluate(benchmark::State& state) {
+    std::string label;
+    const NormalMap& map = benchMap(1024, label);
+    EvaluateOptions options;
+    options.firstMip = 1;
+    options.lastMip = 4;
+    for (auto _ : state) {
+        auto result = evaluateMethods(map, options);
+        benchmark::DoNotOptimize(result);
+    }
+    state.SetLabel(label);
+}
+BENCHMARK(BM_Evaluate)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
+
+} // namespace

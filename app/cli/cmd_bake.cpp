@@ -1,0 +1,524 @@
+// `burnish bake`: a normal map (and an optional authored gloss map) through a prefiltering method
+// into an engine preset's textures with full mip chains, plus bake.json. One job from the
+// options, or many from a manifest.
+#include "command.h"
+
+#include <burnish/core/atomic_file.h>
+#include <burnish/core/bake.h>
+#include <burnish/core/export.h>
+#include <burnish/core/image.h>
+#include <burnish/core/normal_map.h>
+#include <burnish/core/presets.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+namespace burnish::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+/// One bake as the user described it (names not yet resolved).
+struct JobSpec {
+    std::string input;
+    std::string out;
+    std::string preset;
+    std::optional<std::string> method;
+    std::optional<double> power;
+    std::optional<std::string> gloss;
+    std::optional<std::string> format;
+    std::optional<std::string> compression;
+    std::optional<std::string> kernel;
+    std::optional<std::string> border;
+    std::optional<std::string> green;
+    std::optional<std::string> layout;
+    std::optional<double> metallic;
+    bool force = false;
+    bool allowImplausible = false;
+    bool allowEightBit = false;
+};
+
+/// A job with every name resolved and checked: nothing of it is read or written yet.
+struct Job {
+    JobSpec spec;
+    Preset preset;
+    Method method = Method::VarianceToGloss;
+    BakeOptions bake;
+    NormalMapOptions normalMap;
+    ExportOptions exportOptions;
+};
+
+template <class T>
+Result<T> choice(const char* option, const std::string& value,
+                 std::initializer_list<std::pair<const char*, T>> choices) {
+    std::string names;
+    for (const auto& [name, v] : choices) {
+        if (value == name) return v;
+        names += (names.empty() ? "" : ", ") + std::string(name);
+    }
+    return Error{fmt::format("{} '{}' is not known (known: {})", option, value, names)};
+}
+
+std::string joined(const std::vector<std::string>& names) {
+    std::string out;
+    for (const auto& n : names)
+        out += (out.empty() ? "" : ", ") + n;
+    return out;
+}
+
+std::vector<std::string> methodNames() {
+    std::vector<std::string> names;
+    for (Method m : allMethods())
+        names.emplace_back(methodName(m));
+    return names;
+}
+
+std::vector<std::string> formatNames() {
+    std::vector<std::string> names;
+    for (ExportFormat f : allExportFormats())
+        names.emplace_back(exportFormatName(f));
+    return names;
+}
+
+std::vector<std::string> compressionNames() {
+    std::vector<std::string> names;
+    for (DdsCompression c : allDdsCompressions())
+        names.emplace_back(ddsCompressionName(c));
+    return names;
+}
+
+Result<Job> resolve(const JobSpec& spec) {
+    Job job;
+    job.spec = spec;
+    if (spec.input.empty()) return Error{"no input normal map given"};
+    if (spec.out.empty()) return Error{"no output folder given (--out DIR)"};
+    if (spec.preset.empty())
+        return Error{"no preset given (--preset P; known: " + joined(builtinPresetNames()) + ")"};
+
+    auto preset = findPreset(spec.preset);
+    if (!preset) return Error{preset.error()};
+    job.preset = std::move(preset.value());
+
+    job.method = job.preset.method;
+    if (spec.method) {
+        const auto m = methodFromName(*spec.method);
+        if (!m) return Error{"--method: " + m.error()};
+        job.method = *m;
+    }
+    if (const Status s = checkPresetMethod(job.preset, job.method); !s) return Error{s.error()};
+
+    if (spec.format) {
+        const auto f = exportFormatFromName(*spec.format);
+        if (!f) return Error{"--format: " + f.error()};
+        job.exportOptions.format = *f;
+    }
+    if (spec.compression) {
+        const auto c = ddsCompressionFromName(*spec.compression);
+        if (!c) return Error{"--compression: " + c.error()};
+        if (job.exportOptions.format.value_or(job.preset.format) != ExportFormat::Dds)
+            return Error{
+                "--compression " + *spec.compression + " applies to --format dds only (the format is " +
+                std::string(exportFormatName(job.exportOptions.format.value_or(job.preset.format))) + ")"};
+        job.exportOptions.compression = *c;
+    }
+    if (spec.metallic) {
+        if (!job.preset.findParameter("metallic")) {
+            std::vector<std::string> with;
+            for (const auto& p : builtinPresets())
+                if (p.findParameter("metallic")) with.push_back(p.name);
+            return Error{"--metallic: preset '" + job.preset.name +
+                         "' stores no metallic channel (presets with one: " + joined(with) + ")"};
+        }
+        job.exportOptions.parameters["metallic"] = *spec.metallic;
+    }
+    if (spec.power && !(*spec.power > 0.0 && *spec.power <= kMaxPower))
+        return Error{fmt::format("--power {:g} must lie in (0, {:g}]", *spec.power, kMaxPower)};
+
+    job.bake.method = job.method;
+    job.bake.encoding = job.preset.encoding;
+    if (spec.power) job.bake.basePower = *spec.power;
+    if (spec.kernel) {
+        const auto k = choice<FilterKernel>(
+            "--kernel", *spec.kernel,
+            {{"box", FilterKernel::Box}, {"tent", FilterKernel::Tent}, {"gaussian", FilterKernel::Gaussian}});
+        if (!k) return Error{k.error()};
+        job.bake.pyramid.kernel = *k;
+    }
+    if (spec.border) {
+        const auto b = choice<BorderMode>("--border", *spec.border,
+                                          {{"wrap", BorderMode::Wrap}, {"clamp", BorderMode::Clamp}});
+        if (!b) return Error{b.error()};
+        job.bake.pyramid.border = *b;
+    }
+    if (spec.green) {
+        const auto g = choice<GreenConvention>(
+            "--green", *spec.green,
+            {{"opengl", GreenConvention::OpenGL}, {"directx", GreenConvention::DirectX}});
+        if (!g) return Error{g.error()};
+        job.normalMap.green = *g;
+    }
+    if (spec.layout) {
+        const auto l = choice<NormalLayout>(
+            "--layout", *spec.layout,
+            {{"auto", NormalLayout::Auto}, {"rgb", NormalLayout::Rgb}, {"rg", NormalLayout::Rg}});
+        if (!l) return Error{l.error()};
+        job.normalMap.layout = *l;
+    }
+    job.normalMap.allowImplausible = spec.allowImplausible;
+    job.exportOptions.allowEightBit = spec.allowEightBit;
+    job.exportOptions.overwrite = spec.force ? Overwrite::Allow : Overwrite::Refuse;
+    job.exportOptions.stem = fs::path(spec.input).stem().string();
+    if (job.exportOptions.stem.empty()) return Error{"input '" + spec.input + "' has no file name"};
+    return job;
+}
+
+/// A one-line progress bar on stderr, drawn only when stderr is a terminal.
+class Progress {
+public:
+    Progress()
+        : m_enabled(::isatty(STDERR_FILENO) == 1) {}
+    void show(const std::string& label, const char* stage, int step, int steps) {
+        if (!m_enabled) return;
+        constexpr int kWidth = 24;
+        const int filled = steps > 0 ? kWidth * step / steps : kWidth;
+        std::fprintf(stderr, "\r%-32.32s %-8s [%s%s]", label.c_str(), stage,
+                     std::string(size_t(filled), '#').c_str(),
+                     std::string(size_t(kWidth - filled), '.').c_str());
+        std::fflush(stderr);
+        m_drawn = true;
+    }
+    void clear() {
+        if (!m_enabled || !m_drawn) return;
+        std::fprintf(stderr, "\r%78s\r", "");
+        std::fflush(stderr);
+        m_drawn = false;
+    }
+    ~Progress() { clear(); }
+
+private:
+    bool m_enabled;
+    bool m_drawn = false;
+};
+
+Result<Json> runJob(const Job& job, Progress& progress, const std::string& label) {
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    constexpr int kSteps = 3;
+    progress.show(label, "reading", 0, kSteps);
+    const auto map = loadNormalMap(job.spec.input, job.normalMap);
+    if (!map) return Error{map.error()};
+
+    BakeOptions options = job.bake;
+    if (job.spec.gloss) {
+        const auto image = readImage(*job.spec.gloss);
+        if (!image) return Error{"--gloss: " + image.error()};
+        auto gloss = glossFromImage(*image, map->width, map->height);
+        if (!gloss) return Error{"--gloss '" + *job.spec.gloss + "': " + gloss.error()};
+        options.authoredGloss = std::move(gloss.value());
+    }
+
+    progress.show(label, "baking", 1, kSteps);
+    const auto baked = bake(*map, options);
+    if (!baked) return Error{baked.error()};
+
+    progress.show(label, "writing", 2, kSteps);
+    std::error_code ec;
+    fs::create_directories(job.spec.out, ec);
+    if (ec) return Error{"cannot create output folder '" + job.spec.out + "': " + ec.message()};
+
+    BakeRecord record;
+    record.inputs = {{"normalMap", job.spec.input},
+                     {"glossMap", job.spec.gloss ? Json(*job.spec.gloss) : Json(nullptr)},
+                     {"width", map->width},
+                     {"height", map->height},
+                     {"source",
+                      {{"format", map->source.formatName},
+                       {"channelType", map->source.channelType},
+                       {"bitsPerChannel", map->source.bitsPerChannel}}}};
+    const ExportFormat format = job.exportOptions.format.value_or(job.preset.format);
+    record.options = {
+        {"preset", job.spec.preset},
+        {"method", std::string(methodName(job.method))},
+        {"power", options.authoredGloss ? Json(nullptr) : Json(options.basePower)},
+        {"format", std::string(exportFormatName(format))},
+        {"compression", job.exportOptions.compression
+                            ? Json(std::string(ddsCompressionName(*job.exportOptions.compression)))
+                            : Json(nullptr)},
+        {"kernel", job.spec.kernel.value_or("tent")},
+        {"border", job.spec.border.value_or("wrap")},
+        {"green", job.spec.green.value_or("opengl")},
+        {"layout", job.spec.layout.value_or("auto")},
+        {"allow8bit", job.spec.allowEightBit},
+        {"allowImplausible", job.spec.allowImplausible}};
+    record.diagnostics = map->diagnostics;
+
+    const auto exported = exportBake(*baked, job.preset, job.exportOptions, job.spec.out, record);
+    if (!exported) {
+        std::string message = exported.error();
+        if (message.rfind("refusing to overwrite", 0) == 0) message += " (use --force to replace the set)";
+        return Error{message};
+    }
+    progress.show(label, "done", kSteps, kSteps);
+
+    Json files = Json::array();
+    for (const auto& f : exported->files)
+        for (const auto& p : f.paths)
+            files.push_back((fs::path(job.spec.out) / p).string());
+    Json summary = {{"input", job.spec.input},
+                    {"out", job.spec.out},
+                    {"preset", job.preset.name},
+                    {"method", std::string(methodName(job.method))},
+                    {"format", std::string(exportFormatName(format))},
+                    {"files", files},
+                    {"bakeJson", (fs::path(job.spec.out) / exported->manifestPath).string()},
+                    {"width", map->width},
+                    {"height", map->height},
+                    {"mipCount", baked->stats.mipCount},
+                    {"glossClampedLow", baked->stats.glossClampedLow},
+                    {"glossClampedHigh", baked->stats.glossClampedHigh},
+                    {"pyramidSeconds", baked->stats.pyramidSeconds},
+                    {"methodSeconds", baked->stats.methodSeconds},
+                    {"seconds", std::chrono::duration<double>(Clock::now() - start).count()},
+                    {"warnings", map->diagnostics.warnings}};
+    return summary;
+}
+
+// Manifest: {"version": 1, "jobs": [{"input": ..., "out": ..., <any option by its long name>}]}.
+// Relative paths are relative to the manifest's folder; options on the command line are defaults.
+Result<std::vector<JobSpec>> readManifest(const std::string& path, const JobSpec& defaults) {
+    const auto text = readFile(path);
+    if (!text) return Error{"--manifest: " + text.error()};
+    Json root;
+    try {
+        root = Json::parse(*text);
+    } catch (const Json::parse_error& e) {
+        return Error{"manifest '" + path + "': invalid JSON: " + e.what()};
+    }
+    const std::string where = "manifest '" + path + "'";
+    if (!root.is_object() || !root.contains("jobs") || !root["jobs"].is_array())
+        return Error{where + ": expected an object with a \"jobs\" array"};
+    for (const auto& [key, value] : root.items())
+        if (key != "jobs" && key != "version")
+            return Error{where + ": unknown field '" + key + "' (known: version, jobs)"};
+    if (root.contains("version") && !(root["version"].is_number_integer() && root["version"].get<int>() == 1))
+        return Error{where + ": version must be 1"};
+    const fs::path base = fs::path(path).parent_path();
+    auto rebase = [&](const std::string& p) {
+        return fs::path(p).is_absolute() ? p : (base / p).lexically_normal().string();
+    };
+
+    std::vector<JobSpec> jobs;
+    const auto& list = root["jobs"];
+    if (list.empty()) return Error{where + ": \"jobs\" is empty"};
+    for (size_t i = 0; i < list.size(); ++i) {
+        const Json& j = list[i];
+        const std::string at = where + " job " + std::to_string(i + 1);
+        if (!j.is_object()) return Error{at + ": must be an object"};
+        JobSpec spec = defaults;
+        for (const auto& [key, value] : j.items()) {
+            auto str = [&](std::string& dest) -> Status {
+                if (!value.is_string()) return Error{at + ": '" + key + "' must be a string"};
+                dest = value.get<std::string>();
+                return {};
+            };
+            auto optStr = [&](std::optional<std::string>& dest) -> Status {
+                if (!value.is_string()) return Error{at + ": '" + key + "' must be a string"};
+                dest = value.get<std::string>();
+                return {};
+            };
+            auto num = [&](std::optional<double>& dest) -> Status {
+                if (!value.is_number()) return Error{at + ": '" + key + "' must be a number"};
+                dest = value.get<double>();
+                return {};
+            };
+            auto flag = [&](bool& dest) -> Status {
+                if (!value.is_boolean()) return Error{at + ": '" + key + "' must be true or false"};
+                dest = value.get<bool>();
+                return {};
+            };
+            Status s;
+            if (key == "input")
+                s = str(spec.input);
+            else if (key == "out")
+                s = str(spec.out);
+            else if (key == "preset")
+                s = str(spec.preset);
+            else if (key == "method")
+                s = optStr(spec.method);
+            else if (key == "power")
+                s = num(spec.power);
+            else if (key == "gloss")
+                s = optStr(spec.gloss);
+            else if (key == "format")
+                s = optStr(spec.format);
+            else if (key == "compression")
+                s = optStr(spec.compression);
+            else if (key == "kernel")
+                s = optStr(spec.kernel);
+            else if (key == "border")
+                s = optStr(spec.border);
+            else if (key == "green")
+                s = optStr(spec.green);
+            else if (key == "layout")
+                s = optStr(spec.layout);
+            else if (key == "metallic")
+                s = num(spec.metallic);
+            else if (key == "force")
+                s = flag(spec.force);
+            else if (key == "allow-implausible")
+                s = flag(spec.allowImplausible);
+            else if (key == "allow-8bit")
+                s = flag(spec.allowEightBit);
+            else
+                s = Error{at + ": unknown field '" + key +
+                          "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
+                          "border, "
+                          "green, layout, metallic, force, allow-implausible, allow-8bit)"};
+            if (!s) return Error{s.error()};
+        }
+        if (j.contains("input")) spec.input = rebase(spec.input);
+        if (j.contains("out")) spec.out = rebase(spec.out);
+        if (j.contains("gloss") && spec.gloss) spec.gloss = rebase(*spec.gloss);
+        if (j.contains("preset") && spec.preset.size() > 5 &&
+            spec.preset.substr(spec.preset.size() - 5) == ".json")
+            spec.preset = rebase(spec.preset);
+        jobs.push_back(std::move(spec));
+    }
+    return jobs;
+}
+
+std::string helpFooter() {
+    std::string text = "\nPresets (--preset NAME, or --preset FILE.json):\n";
+    for (const auto& p : builtinPresets()) {
+        std::vector<std::string> fits;
+        for (Method m : compatibleMethods(p))
+            fits.emplace_back(methodName(m));
+        text += fmt::format("  {:<10} {}\n  {:<10}   default method {}, format {}, {} normals; methods: {}\n"
+                            "  {:<10}   {}\n",
+                            p.name, p.title, "", methodName(p.method), exportFormatName(p.format),
+                            p.green == GreenConvention::DirectX ? "DirectX (-Y)" : "OpenGL (+Y)",
+                            joined(fits), "", p.conversion);
+    }
+    for (const auto& e : builtinPresetErrors())
+        text += "  (broken built-in: " + e + ")\n";
+    text += "\nMethods (--method):\n";
+    for (Method m : allMethods())
+        text += fmt::format("  {:<18} {}\n", methodName(m), methodDescription(m));
+    text +=
+        "\nFormats (--format): " + joined(formatNames()) +
+        "\n  png8/png16/tga write one file per mip (<stem>_<file>_mip<k>.<ext> for k >= 1); exr and tiff "
+        "one\n"
+        "  MIP-mapped file; dds the whole chain in one file.\n"
+        "DDS compressions (--compression): bc4 (1 channel), bc5 (normal x, y), bc3 (RGB + alpha), rgba8.\n"
+        "\nManifest (--manifest FILE): {\"version\": 1, \"jobs\": [{\"input\": \"a.png\", \"out\": \"dir\", "
+        "\"preset\": "
+        "\"unity\", ...}]}\n  any option by its long name; relative paths from the manifest's folder; "
+        "options given "
+        "on the\n  command line are every job's defaults. All jobs are checked before the first runs.\n"
+        "\nEach output folder gets bake.json: every file's channels and decode rule (value = stored*scale + "
+        "bias).\n";
+    return text;
+}
+
+} // namespace
+
+static CommandRegistration registration(40, [](CLI::App& app) -> std::function<int()> {
+    auto* cmd = app.add_subcommand(
+        "bake", "Bake a normal map's prefiltered gloss/LEAN textures for an engine preset");
+    auto spec = std::make_shared<JobSpec>();
+    auto manifest = std::make_shared<std::string>();
+    auto json = std::make_shared<bool>(false);
+
+    cmd->add_option("input", spec->input, "Tangent-space normal map (PNG, TGA, EXR, TIFF, DDS, ...)");
+    cmd->add_option("--preset", spec->preset, "Engine preset: a name listed below, or a preset FILE.json");
+    cmd->add_option("--method", spec->method,
+                    "Prefiltering method (default: the preset's): " + joined(methodNames()));
+    cmd->add_option("--out", spec->out, "Output folder (created if missing)");
+    cmd->add_option("--power", spec->power,
+                    "Authored Blinn-Phong power when there is no --gloss map (default 1024)");
+    cmd->add_option("--gloss", spec->gloss,
+                    "Authored gloss map (first channel), in the preset's gloss encoding");
+    cmd->add_option("--format", spec->format,
+                    "Output format (default: the preset's): " + joined(formatNames()));
+    cmd->add_option("--compression", spec->compression,
+                    "DDS compression for every file (default: each file's preset choice): " +
+                        joined(compressionNames()));
+    cmd->add_option("--kernel", spec->kernel,
+                    "Per-mip filter standing in for bilinear filtering: box, tent (default), gaussian");
+    cmd->add_option("--border", spec->border, "Texture border: wrap (default) or clamp");
+    cmd->add_option("--green", spec->green,
+                    "Green convention of the INPUT map: opengl (+Y, default) or directx (-Y)");
+    cmd->add_option("--layout", spec->layout,
+                    "Input channels holding the normal: auto (default), rgb, rg (z rebuilt)");
+    cmd->add_option("--metallic", spec->metallic,
+                    "Metalness in [0, 1] for presets with a metallic channel (gltf, unity)");
+    cmd->add_flag("--force", spec->force, "Replace existing output files (still atomically, as a set)");
+    cmd->add_flag("--allow-implausible", spec->allowImplausible,
+                  "Bake an input that does not look like a tangent-space normal map");
+    cmd->add_flag("--allow-8bit", spec->allowEightBit, "Store LEAN/CLEAN moments in 8-bit formats anyway");
+    cmd->add_flag("--json", *json, "Print a machine-readable summary on stdout");
+    cmd->add_option("--manifest", *manifest, "JSON file listing many jobs, run in order");
+    // Built lazily: listing the presets parses them, which other subcommands need not pay for.
+    cmd->footer([] { return helpFooter(); });
+
+    return [spec, manifest, json]() -> int {
+        if (!builtinPresetErrors().empty()) return fail(builtinPresetErrors().front());
+        std::vector<JobSpec> specs;
+        if (!manifest->empty()) {
+            if (!spec->input.empty()) return fail("give either an input map or --manifest, not both");
+            auto read = readManifest(*manifest, *spec);
+            if (!read) return fail(read.error());
+            specs = std::move(read.value());
+        } else {
+            if (spec->input.empty()) return fail("no input normal map given (see 'burnish bake --help')");
+            specs.push_back(*spec);
+        }
+        // Every job is checked before the first one writes anything.
+        std::vector<Job> jobs;
+        for (size_t i = 0; i < specs.size(); ++i) {
+            auto job = resolve(specs[i]);
+            if (!job)
+                return fail(specs.size() > 1 || !manifest->empty()
+                                ? "manifest job " + std::to_string(i + 1) + ": " + job.error()
+                                : job.error());
+            jobs.push_back(std::move(job.value()));
+        }
+        Progress progress;
+        Json summaries = Json::array();
+        for (size_t i = 0; i < jobs.size(); ++i) {
+            const std::string name = fs::path(jobs[i].spec.input).filename().string();
+            const std::string label =
+                jobs.size() > 1 ? fmt::format("[{}/{}] {}", i + 1, jobs.size(), name) : name;
+            auto summary = runJob(jobs[i], progress, label);
+            progress.clear();
+            if (!summary)
+                return fail(jobs.size() > 1 || !manifest->empty()
+                                ? "manifest job " + std::to_string(i + 1) + " (" + jobs[i].spec.input +
+                                      "): " + summary.error()
+                                : summary.error());
+            for (const auto& w : (*summary)["warnings"])
+                std::fprintf(stderr, "burnish: warning: %s\n", w.get<std::string>().c_str());
+            if (!*json) {
+                std::printf("%s -> %s: preset %s, method %s, %zu files + bake.json, %d mips, %.2f s\n",
+                            jobs[i].spec.input.c_str(), jobs[i].spec.out.c_str(), jobs[i].preset.name.c_str(),
+                            std::string(methodName(jobs[i].method)).c_str(), (*summary)["files"].size(),
+                            (*summary)["mipCount"].get<int>(), (*summary)["seconds"].get<double>());
+            }
+            summaries.push_back(std::move(summary.value()));
+        }
+        if (*json) std::printf("%s\n", Json{{"jobs", summaries}}.dump(2).c_str());
+        return 0;
+    };
+});
+
+} // namespace burnish::cli

@@ -1,0 +1,554 @@
+#include <burnish/core/export.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fcntl.h>
+#include <unistd.h>
+
+namespace burnish {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+namespace {
+
+/// One file of the plan with its packed values (the file's channels, before any format padding).
+struct PlannedFile {
+    ExportedFile info;
+    int channels = 0;
+    std::vector<TextureMip> mips;
+};
+
+struct Plan {
+    ExportResult result;
+    std::vector<PlannedFile> files;
+};
+
+// Channels whose sign follows the green convention: flipping y negates them. Each decodes
+// symmetrically (bias = −scale/2), so the negated value is stored as 1 − v.
+bool flipsWithGreen(const std::string& channel) {
+    return channel == "normal.y" || channel == "B.y" || channel == "M.xy" || channel == "rho";
+}
+
+std::string storageName(ExportFormat format, std::optional<DdsCompression> compression) {
+    switch (format) {
+    case ExportFormat::Png8:
+    case ExportFormat::Tga:
+        return "uint8";
+    case ExportFormat::Png16:
+    case ExportFormat::Tiff16:
+        return "uint16";
+    case ExportFormat::ExrHalf:
+        return "half";
+    case ExportFormat::ExrFloat:
+    case ExportFormat::TiffFloat:
+        return "float";
+    case ExportFormat::Dds:
+        return compression && *compression != DdsCompression::Rgba8
+                   ? std::string(ddsCompressionName(*compression))
+                   : std::string("uint8");
+    }
+    return "uint8";
+}
+
+bool onePerMip(ExportFormat format) {
+    return format == ExportFormat::Png8 || format == ExportFormat::Png16 || format == ExportFormat::Tga;
+}
+
+int storedChannelCount(ExportFormat format, std::optional<DdsCompression> compression, int channels) {
+    if (format == ExportFormat::Dds) {
+        switch (*compression) {
+        case DdsCompression::Bc4:
+            return 1;
+        case DdsCompression::Bc5:
+            return 2;
+        case DdsCompression::Bc3:
+        case DdsCompression::Rgba8:
+            return 4;
+        }
+    }
+    // TGA holds grey, RGB or RGBA: a two-channel file gets B = 0.
+    if (format == ExportFormat::Tga && channels == 2) return 3;
+    return channels;
+}
+
+Json decodeJson(const ExportedChannel& c, int index) {
+    static const char* kNames[] = {"R", "G", "B", "A"};
+    Json j;
+    j["channel"] = kNames[index];
+    j["source"] = c.source;
+    if (!c.role.empty()) j["role"] = c.role;
+    if (c.value) j["value"] = *c.value;
+    j["scale"] = c.decode.scale;
+    j["bias"] = c.decode.bias;
+    return j;
+}
+
+Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
+                      const BakeRecord& record) {
+    const ExportFormat format = options.format.value_or(preset.format);
+    if (options.compression && format != ExportFormat::Dds)
+        return Error{"a DDS compression was given but the format is " +
+                     std::string(exportFormatName(format))};
+    if (const Status s = checkPresetMethod(preset, bake.method); !s) return Error{s.error()};
+    if (options.stem.empty() || options.stem.find('/') != std::string::npos)
+        return Error{"output file stem '" + options.stem + "' must be a non-empty name without '/'"};
+
+    std::map<std::string, double> parameters;
+    for (const auto& p : preset.parameters)
+        parameters[p.name] = p.defaultValue;
+    for (const auto& [name, value] : options.parameters) {
+        const PresetParameter* p = preset.findParameter(name);
+        if (!p) {
+            std::string known;
+            for (const auto& q : preset.parameters)
+                known += (known.empty() ? "" : ", ") + q.name;
+            return Error{"preset '" + preset.name + "' has no parameter '" + name + "' (" +
+                         (known.empty() ? std::string("it has none") : "it has: " + known) + ")"};
+        }
+        if (!(value >= p->minValue && value <= p->maxValue))
+            return Error{"parameter '" + name + "' must lie in [" + std::to_string(p->minValue) + ", " +
+                         std::to_string(p->maxValue) + "]"};
+        parameters[name] = value;
+    }
+
+    Plan plan;
+    const bool flipGreen = preset.green == GreenConvention::DirectX;
+    const std::string ext(exportFormatExtension(format));
+    for (const auto& file : preset.files) {
+        PlannedFile pf;
+        pf.info.name = file.name;
+        pf.info.format = format;
+        if (format == ExportFormat::Dds) pf.info.compression = options.compression.value_or(file.dds);
+
+        // Resolve every channel to a baked texture channel, a constant or a parameter value.
+        struct Source {
+            const BakedTexture* texture = nullptr;
+            int index = 0;
+            bool flip = false;
+            float value = 0.0f;
+        };
+        std::vector<Source> sources;
+        bool highPrecision = false;
+        bool holdsNormal = false;
+        for (const auto& ch : file.channels) {
+            Source src;
+            ExportedChannel out;
+            if (ch.kind == PresetChannel::Kind::Baked) {
+                src.texture = bake.find(ch.role);
+                if (!src.texture)
+                    return Error{"the bake has no '" + ch.role + "' texture for file '" + file.name + "'"};
+                const auto& decode = src.texture->decode;
+                const auto it = std::find_if(decode.begin(), decode.end(),
+                                             [&](const auto& d) { return d.name == ch.channel; });
+                if (it == decode.end())
+                    return Error{"the bake's '" + ch.role + "' texture has no channel '" + ch.channel + "'"};
+                src.index = int(it - decode.begin());
+                src.flip = flipGreen && flipsWithGreen(ch.channel);
+                // A symmetric decode maps −value to 1 − stored; anything else cannot be flipped in place.
+                constexpr double kSymmetryTolerance = 1e-12;
+                if (src.flip && std::abs(it->bias + 0.5 * it->scale) > kSymmetryTolerance)
+                    return Error{"channel '" + ch.channel + "' cannot be flipped to the DirectX convention"};
+                highPrecision = highPrecision || src.texture->needsHighPrecision;
+                holdsNormal = holdsNormal || ch.role == "normal";
+                out.source = ch.channel;
+                out.role = ch.role;
+                out.decode = *it;
+            } else if (ch.kind == PresetChannel::Kind::Constant) {
+                src.value = float(ch.constant);
+                out.source = "constant";
+                out.decode = {"constant", 1.0, 0.0};
+                out.value = ch.constant;
+            } else {
+                src.value = float(parameters.at(ch.parameter));
+                out.source = ch.parameter;
+                out.decode = {ch.parameter, 1.0, 0.0};
+                out.value = parameters.at(ch.parameter);
+            }
+            sources.push_back(src);
+            pf.info.channels.push_back(std::move(out));
+        }
+
+        // What the storage can hold.
+        const bool zLast = file.channels.size() == 3 && file.channels[2].kind == PresetChannel::Kind::Baked &&
+                           file.channels[2].channel == "normal.z";
+        if (pf.info.compression) {
+            const auto c = *pf.info.compression;
+            const std::string cname(ddsCompressionName(c));
+            if (c == DdsCompression::Bc4 && file.channels.size() != 1)
+                return Error{"file '" + file.name + "' has " + std::to_string(file.channels.size()) +
+                             " channels; bc4 holds one (use bc3 or rgba8)"};
+            if (c == DdsCompression::Bc5 && !(file.channels.size() == 2 || zLast))
+                return Error{"file '" + file.name + "' has " + std::to_string(file.channels.size()) +
+                             " channels; bc5 holds two (a normal's x and y)"};
+            // Hill 2011: run-time Toksvig reads the variance from |Na|; a two-channel normal rebuilds
+            // a unit z and block compression changes the length.
+            if (bake.method == Method::Toksvig && holdsNormal && c != DdsCompression::Rgba8)
+                return Error{
+                    "method toksvig reads the variance from the stored normal's length, which " + cname +
+                    " destroys (Hill 2011); store the normal uncompressed (rgba8 or a non-DDS format)"};
+            if (c == DdsCompression::Bc5 && zLast) {
+                sources.pop_back();
+                pf.info.channels.pop_back();
+                pf.info.notes.push_back("bc5 keeps x and y; rebuild z = sqrt(max(0, 1 - x^2 - y^2))");
+            }
+        }
+        if (highPrecision && exportFormatIsEightBit(format) && !options.allowEightBit)
+            return Error{
+                "file '" + file.name + "' holds " + std::string(methodName(bake.method)) +
+                " moments that need 16-bit or float storage, and " + std::string(exportFormatName(format)) +
+                " stores 8 bits (choose png16, tiff16, exr-half, exr-float or tiff-float, or allow 8-bit "
+                "storage with --allow-8bit)"};
+        if (highPrecision && exportFormatIsEightBit(format))
+            pf.info.notes.push_back("8-bit storage of a high-precision texture was allowed explicitly");
+        if (flipGreen && std::any_of(sources.begin(), sources.end(), [](const Source& s) { return s.flip; }))
+            pf.info.notes.push_back(
+                "DirectX convention (-Y): y-odd channels are stored flipped (1 - v) and decode "
+                "to the DirectX value");
+
+        pf.channels = int(sources.size());
+        pf.info.storedChannels = storedChannelCount(format, pf.info.compression, pf.channels);
+        pf.info.storage = storageName(format, pf.info.compression);
+
+        // Pack every level.
+        const BakedTexture* any = nullptr;
+        for (const auto& t : bake.textures)
+            if (!t.mips.empty()) any = any ? any : &t;
+        if (!any) return Error{"the bake holds no texture levels"};
+        const size_t levels = any->mips.size();
+        for (const auto& s : sources)
+            if (s.texture && s.texture->mips.size() != levels)
+                return Error{"the bake's textures have different mip counts"};
+        pf.mips.resize(levels);
+        for (size_t k = 0; k < levels; ++k) {
+            const int w = any->mips[k].width;
+            const int h = any->mips[k].height;
+            const size_t n = size_t(w) * size_t(h);
+            auto& mip = pf.mips[k];
+            mip.width = w;
+            mip.height = h;
+            mip.texels.resize(n * size_t(pf.channels));
+            for (size_t c = 0; c < sources.size(); ++c) {
+                const Source& s = sources[c];
+                if (!s.texture) {
+                    for (size_t t = 0; t < n; ++t)
+                        mip.texels[t * sources.size() + c] = s.value;
+                    continue;
+                }
+                const TextureMip& in = s.texture->mips[k];
+                if (in.width != w || in.height != h)
+                    return Error{"the bake's textures have different mip sizes"};
+                const size_t tc = size_t(s.texture->channels);
+                for (size_t t = 0; t < n; ++t) {
+                    const float v = std::clamp(in.texels[t * tc + size_t(s.index)], 0.0f, 1.0f);
+                    mip.texels[t * sources.size() + c] = s.flip ? 1.0f - v : v;
+                }
+            }
+            pf.info.mipSizes.emplace_back(w, h);
+        }
+
+        const std::string base = options.stem + "_" + file.name;
+        if (onePerMip(format))
+            for (size_t k = 0; k < levels; ++k)
+                pf.info.paths.push_back(k == 0 ? base + "." + ext
+                                               : base + "_mip" + std::to_string(k) + "." + ext);
+        else
+            pf.info.paths.push_back(base + "." + ext);
+        plan.files.push_back(std::move(pf));
+    }
+
+    // bake.json: everything needed to decode the files, and nothing that varies between runs.
+    ExportResult& result = plan.result;
+    result.manifestPath = "bake.json";
+    Json m;
+    m["schema"] = "burnish-bake";
+    m["version"] = 1;
+    m["preset"] = {{"name", preset.name},
+                   {"title", preset.title},
+                   {"origin", preset.origin},
+                   {"conversion", preset.conversion}};
+    m["method"] = std::string(methodName(bake.method));
+    m["gloss"] = {{"encoding", preset.encoding.name()},
+                  {"formula", preset.encoding.formula()},
+                  {"minPower", preset.encoding.minPower()},
+                  {"maxPower", preset.encoding.maxPower()}};
+    m["green"] = preset.green == GreenConvention::DirectX ? "directx" : "opengl";
+    m["format"] = std::string(exportFormatName(format));
+    m["inputs"] = record.inputs;
+    m["options"] = record.options;
+    Json params = Json::object();
+    for (const auto& [name, value] : parameters)
+        params[name] = value;
+    m["parameters"] = params;
+    m["decodeRule"] = "value = stored * scale + bias, stored in [0, 1]";
+    Json files = Json::array();
+    for (const auto& pf : plan.files) {
+        Json f;
+        f["name"] = pf.info.name;
+        f["paths"] = pf.info.paths;
+        if (pf.info.compression) f["compression"] = std::string(ddsCompressionName(*pf.info.compression));
+        f["storage"] = pf.info.storage;
+        f["storedChannels"] = pf.info.storedChannels;
+        Json channels = Json::array();
+        for (size_t c = 0; c < pf.info.channels.size(); ++c)
+            channels.push_back(decodeJson(pf.info.channels[c], int(c)));
+        f["channels"] = channels;
+        Json sizes = Json::array();
+        for (const auto& [w, h] : pf.info.mipSizes)
+            sizes.push_back({w, h});
+        f["mips"] = sizes;
+        if (!pf.info.notes.empty()) f["notes"] = pf.info.notes;
+        files.push_back(f);
+        result.files.push_back(pf.info);
+    }
+    m["files"] = files;
+    m["stats"] = {{"mipCount", bake.stats.mipCount},
+                  {"glossClampedLow", bake.stats.glossClampedLow},
+                  {"glossClampedHigh", bake.stats.glossClampedHigh}};
+    if (record.diagnostics) {
+        m["diagnostics"] = diagnosticsJson(*record.diagnostics);
+        m["warnings"] = record.diagnostics->warnings;
+    } else {
+        m["warnings"] = Json::array();
+    }
+    result.manifest = std::move(m);
+    return plan;
+}
+
+// Round to nearest integer code of an unsigned normalized format.
+template <class T> T quantize(float v, double maxCode) {
+    return static_cast<T>(std::lround(double(std::clamp(v, 0.0f, 1.0f)) * maxCode));
+}
+
+// The level's values in the type the format stores (OpenImageIO converts half itself).
+struct PixelData {
+    OIIO::TypeDesc type;
+    std::vector<std::uint8_t> u8;
+    std::vector<std::uint16_t> u16;
+    std::vector<float> f32;
+    const void* data() const {
+        return type == OIIO::TypeDesc::UINT8    ? static_cast<const void*>(u8.data())
+               : type == OIIO::TypeDesc::UINT16 ? static_cast<const void*>(u16.data())
+                                                : static_cast<const void*>(f32.data());
+    }
+};
+
+PixelData pixelsOf(const TextureMip& mip, int channels, int stored, ExportFormat format) {
+    PixelData p;
+    const size_t n = size_t(mip.width) * size_t(mip.height);
+    auto value = [&](size_t t, int c) {
+        return c < channels ? mip.texels[t * size_t(channels) + size_t(c)] : 0.0f;
+    };
+    if (format == ExportFormat::Png8 || format == ExportFormat::Tga) {
+        p.type = OIIO::TypeDesc::UINT8;
+        p.u8.resize(n * size_t(stored));
+        for (size_t t = 0; t < n; ++t)
+            for (int c = 0; c < stored; ++c)
+                p.u8[t * size_t(stored) + size_t(c)] = quantize<std::uint8_t>(value(t, c), 255.0);
+    } else if (format == ExportFormat::Png16 || format == ExportFormat::Tiff16) {
+        p.type = OIIO::TypeDesc::UINT16;
+        p.u16.resize(n * size_t(stored));
+        for (size_t t = 0; t < n; ++t)
+            for (int c = 0; c < stored; ++c)
+                p.u16[t * size_t(stored) + size_t(c)] = quantize<std::uint16_t>(value(t, c), 65535.0);
+    } else {
+        p.type = OIIO::TypeDesc::FLOAT;
+        p.f32.resize(n * size_t(stored));
+        for (size_t t = 0; t < n; ++t)
+            for (int c = 0; c < stored; ++c)
+                p.f32[t * size_t(stored) + size_t(c)] = value(t, c);
+    }
+    return p;
+}
+
+OIIO::TypeDesc fileType(ExportFormat format) {
+    switch (format) {
+    case ExportFormat::Png8:
+    case ExportFormat::Tga:
+    case ExportFormat::Dds:
+        return OIIO::TypeDesc::UINT8;
+    case ExportFormat::Png16:
+    case ExportFormat::Tiff16:
+        return OIIO::TypeDesc::UINT16;
+    case ExportFormat::ExrHalf:
+        return OIIO::TypeDesc::HALF;
+    case ExportFormat::ExrFloat:
+    case ExportFormat::TiffFloat:
+        return OIIO::TypeDesc::FLOAT;
+    }
+    return OIIO::TypeDesc::UINT8;
+}
+
+Status syncFile(const fs::path& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return Error{"cannot write '" + path.string() + "': " + std::strerror(errno)};
+    // fsync before the rename, as writeFileAtomic does: a crash must not leave an empty file.
+    const bool ok = ::fsync(fd) == 0;
+    const int err = errno;
+    ::close(fd);
+    if (!ok) return Error{"cannot write '" + path.string() + "': " + std::strerror(err)};
+    return {};
+}
+
+/// Writes levels [first, last) of a file through OpenImageIO to `staging`; the plugin is chosen
+/// from `target`'s extension.
+Status writeOiio(const PlannedFile& file, size_t first, size_t last, const fs::path& target,
+                 const fs::path& staging) {
+    const ExportFormat format = file.info.format;
+    auto out = OIIO::ImageOutput::create(target.string());
+    if (!out) return Error{"cannot write '" + target.string() + "': " + OIIO::geterror()};
+    const bool mipmapped = last - first > 1;
+    const int stored = file.info.storedChannels;
+    const TextureMip& top = file.mips[first];
+    OIIO::ImageSpec spec(top.width, top.height, stored, fileType(format));
+    // No timestamp: OpenImageIO writes the current time into TIFF and EXR headers unless the
+    // attribute is present; an empty one is left out, so output bytes depend on the data only.
+    spec.attribute("DateTime", "");
+    // The fourth channel is data (gloss, smoothness), not coverage: OpenImageIO must neither divide
+    // the colour by it on write (PNG) nor mark it associated (TIFF ExtraSamples).
+    spec.alpha_channel = -1;
+    spec.attribute("oiio:UnassociatedAlpha", 1);
+    const bool exr = format == ExportFormat::ExrHalf || format == ExportFormat::ExrFloat;
+    if (mipmapped) {
+        // Both plugins take MIP levels only for "Plain Texture" files (what maketx writes).
+        spec.attribute("textureformat", "Plain Texture");
+        if (exr) {
+            // OpenEXR MIP maps are tiled; 64² tiles keep small levels small. Level sizes round down,
+            // as the bake's do (levelmode 1 = MIPMAP_LEVELS, roundingmode 0 = ROUND_DOWN).
+            spec.tile_width = 64;
+            spec.tile_height = 64;
+            spec.attribute("openexr:levelmode", 1);
+            spec.attribute("openexr:roundingmode", 0);
+        }
+    }
+    auto fail = [&](const std::string& what) -> Status {
+        std::error_code ec;
+        out.reset();
+        fs::remove(staging, ec);
+        return Error{"cannot write '" + target.string() + "': " + what};
+    };
+    if (!out->open(staging.string(), spec, OIIO::ImageOutput::Create)) return fail(out->geterror());
+    for (size_t k = first; k < last; ++k) {
+        const TextureMip& mip = file.mips[k];
+        if (k > first) {
+            OIIO::ImageSpec level = spec;
+            level.width = level.full_width = mip.width;
+            level.height = level.full_height = mip.height;
+            // TIFF has no MIP levels of its own: OpenImageIO stores them as reduced-image subimages.
+            const auto mode = exr ? OIIO::ImageOutput::AppendMIPLevel : OIIO::ImageOutput::AppendSubimage;
+            if (!out->open(staging.string(), level, mode)) return fail(out->geterror());
+        }
+        const PixelData pixels = pixelsOf(mip, file.channels, stored, format);
+        if (!out->write_image(pixels.type, pixels.data())) return fail(out->geterror());
+    }
+    if (!out->close()) return fail(out->geterror());
+    out.reset();
+    if (const Status s = syncFile(staging); !s) {
+        std::error_code ec;
+        fs::remove(staging, ec);
+        return s;
+    }
+    return {};
+}
+
+} // namespace
+
+Json diagnosticsJson(const NormalMapDiagnostics& d) {
+    return Json{{"texels", d.texels},
+                {"nonFiniteTexels", d.nonFiniteTexels},
+                {"zeroLengthTexels", d.zeroLengthTexels},
+                {"negativeZTexels", d.negativeZTexels},
+                {"offLengthTexels", d.offLengthTexels},
+                {"meanStoredLength", d.meanStoredLength},
+                {"zRebuilt", d.zRebuilt},
+                {"alphaIgnored", d.alphaIgnored},
+                {"greenFlipped", d.greenFlipped},
+                {"signedValues", d.signedValues}};
+}
+
+Result<ExportResult> planExport(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
+                                const BakeRecord& record) {
+    auto plan = makePlan(bake, preset, options, record);
+    if (!plan) return Error{plan.error()};
+    return std::move(plan.value().result);
+}
+
+Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
+                                const fs::path& outDir, const BakeRecord& record) {
+    auto planned = makePlan(bake, preset, options, record);
+    if (!planned) return Error{planned.error()};
+    Plan& plan = planned.value();
+
+    std::error_code ec;
+    if (!fs::is_directory(outDir, ec)) return Error{"output folder '" + outDir.string() + "' does not exist"};
+
+    // Every target first: if one exists and may not be replaced, nothing is written.
+    struct Target {
+        fs::path path;
+        fs::path staging;
+        bool existed = false;
+        const PlannedFile* file = nullptr; // nullptr: bake.json
+        size_t mip = 0;                    // first level written (one-file-per-level formats)
+    };
+    std::vector<Target> targets;
+    for (const auto& pf : plan.files)
+        for (size_t i = 0; i < pf.info.paths.size(); ++i)
+            targets.push_back({outDir / pf.info.paths[i], {}, false, &pf, i});
+    targets.push_back({outDir / plan.result.manifestPath, {}, false, nullptr, 0});
+    for (auto& t : targets) {
+        t.existed = fs::exists(fs::symlink_status(t.path, ec));
+        if (t.existed && options.overwrite == Overwrite::Refuse)
+            return Error{"refusing to overwrite existing file '" + t.path.string() + "'"};
+    }
+
+    auto removeStaged = [&]() {
+        for (const auto& t : targets)
+            if (!t.staging.empty()) fs::remove(t.staging, ec);
+    };
+
+    // Stage: every file under a temporary name beside its target.
+    for (auto& t : targets) {
+        const fs::path staging = temporaryPathFor(t.path);
+        Status s;
+        if (!t.file) {
+            s = writeFileAtomic(staging, plan.result.manifest.dump(2) + "\n", Overwrite::Refuse);
+        } else if (t.file->info.format == ExportFormat::Dds) {
+            const auto bytes = encodeDds(t.file->mips, t.file->channels, *t.file->info.compression);
+            s = bytes ? writeFileAtomic(staging, *bytes, Overwrite::Refuse)
+                      : Status(Error{"cannot write '" + t.path.string() + "': " + bytes.error()});
+        } else if (onePerMip(t.file->info.format)) {
+            s = writeOiio(*t.file, t.mip, t.mip + 1, t.path, staging);
+        } else {
+            s = writeOiio(*t.file, 0, t.file->mips.size(), t.path, staging);
+        }
+        if (!s) {
+            removeStaged();
+            return Error{s.error()};
+        }
+        t.staging = staging;
+    }
+
+    // Commit: rename every staged file; on a failure, undo the renames that created new files.
+    const Overwrite commitMode = options.overwrite;
+    for (size_t i = 0; i < targets.size(); ++i) {
+        Target& t = targets[i];
+        if (const Status s = commitTemporary(t.staging, t.path, commitMode); !s) {
+            t.staging.clear(); // commitTemporary removed it
+            for (size_t j = 0; j < i; ++j)
+                if (!targets[j].existed) fs::remove(targets[j].path, ec);
+            for (size_t j = i + 1; j < targets.size(); ++j)
+                fs::remove(targets[j].staging, ec);
+            return Error{s.error()};
+        }
+        t.staging.clear();
+        plan.result.written.push_back(t.path);
+    }
+    return std::move(plan.result);
+}
+
+} // namespace burnish

@@ -1,0 +1,610 @@
+// Export: round trips through every format (read back with OpenImageIO), DDS block compression
+// within its tolerance, full mip chains, the presets' documented conversions, precision and
+// Toksvig refusals, all-or-nothing writes and byte-identical output.
+#include <burnish/core/export.h>
+
+#include <burnish/core/atomic_file.h>
+
+#include "temp_dir.h"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <sys/stat.h>
+#include <thread>
+#include <unistd.h>
+
+namespace burnish {
+namespace {
+
+namespace fs = std::filesystem;
+using burnish::test::TempDir;
+
+// Storage tolerances on a stored value in [0, 1]: half a code of round-to-nearest, plus float noise.
+constexpr double kFloatNoise = 1e-6;
+constexpr double kUint8Tolerance = 0.5 / 255.0 + kFloatNoise;
+constexpr double kUint16Tolerance = 0.5 / 65535.0 + kFloatNoise;
+// Half keeps 11 significant bits: relative rounding error 2^-11 on values <= 1.
+constexpr double kHalfTolerance = 1.0 / 2048.0;
+// Block compression on the smooth test map. BC4 (and BC5, two BC4 blocks; BC3's alpha) stores
+// 8 levels between 8-bit endpoints per 4x4 block: the error is at most half a level of the
+// block's range plus rounding, a few 8-bit codes on this map (measured: at most 2.7 codes).
+constexpr double kBc4Tolerance = 4.0 / 255.0;
+// BC3's colour is BC1: 4 colours on one segment per 4x4 block with 5:6:5 endpoints. A block whose
+// normals span a plane (x and y both varying) keeps only the segment, so the bound is the block's
+// own colour extent plus the endpoints' slack: least-squares endpoints rounded to 5 bits may sit
+// up to two 5-bit steps outside the block's box (measured on this map: up to 49 codes in y at
+// mip 2, where a block covers a quarter period of both sines; at most 0.0073 beyond one step).
+constexpr double kBc1EndpointSlack = 2.0 / 31.0;
+
+// A smooth bumpy normal map (low-frequency sines), not a power of two, so mips round down.
+NormalMap smoothMap(int w = 40, int h = 24) {
+    std::vector<glm::vec3> n(size_t(w) * size_t(h));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float sx = 0.35f * std::sin(2.0f * 3.14159265f * float(x) / float(w));
+            const float sy = 0.25f * std::cos(2.0f * 3.14159265f * float(y) / float(h));
+            n[size_t(y) * size_t(w) + size_t(x)] = glm::vec3(sx, sy, 1.0f);
+        }
+    return makeNormalMap(w, h, std::move(n));
+}
+
+NormalMap flatMap(int w, int h) {
+    return makeNormalMap(w, h, std::vector<glm::vec3>(size_t(w) * size_t(h), glm::vec3(0.0f, 0.0f, 1.0f)));
+}
+
+BakeOutput bakeWith(const NormalMap& map, Method method, const Preset& preset, double power = 256.0) {
+    BakeOptions options;
+    options.method = method;
+    options.encoding = preset.encoding;
+    options.basePower = power;
+    auto out = bake(map, options);
+    EXPECT_TRUE(out) << out.error();
+    return std::move(out.value());
+}
+
+Preset preset(const char* name) {
+    auto p = findPreset(name);
+    EXPECT_TRUE(p) << p.error();
+    return std::move(p.value());
+}
+
+struct ReadMip {
+    int width = 0;
+    int height = 0;
+    int channels = 0;
+    std::vector<float> values;
+};
+
+// Every MIP level of a file (subimage 0, levels 0..n) as OpenImageIO decodes it.
+std::vector<ReadMip> readMips(const fs::path& path) {
+    std::vector<ReadMip> mips;
+    // Alpha is data here: read it unassociated, as an engine's importer does.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path.string(), &config);
+    EXPECT_TRUE(in) << "cannot read back " << path << ": " << OIIO::geterror();
+    if (!in) return mips;
+    for (int k = 0; in->seek_subimage(0, k); ++k) {
+        const OIIO::ImageSpec& s = in->spec();
+        ReadMip m{s.width, s.height, s.nchannels,
+                  std::vector<float>(size_t(s.width) * size_t(s.height) * size_t(s.nchannels))};
+        EXPECT_TRUE(in->read_image(0, k, 0, s.nchannels, OIIO::TypeDesc::FLOAT, m.values.data()))
+            << in->geterror();
+        mips.push_back(std::move(m));
+    }
+    return mips;
+}
+
+// All levels of an exported file: one multi-level file, or one file per level.
+std::vector<ReadMip> readExported(const fs::path& dir, const ExportedFile& file) {
+    if (file.paths.size() == 1) return readMips(dir / file.paths[0]);
+    std::vector<ReadMip> mips;
+    for (const auto& p : file.paths) {
+        auto one = readMips(dir / p);
+        EXPECT_EQ(one.size(), 1u) << p;
+        if (!one.empty()) mips.push_back(std::move(one[0]));
+    }
+    return mips;
+}
+
+// The value an exported channel should hold at texel t of level k.
+double expectedStored(const BakeOutput& b, const Preset& p, const ExportedChannel& c, size_t k, size_t t) {
+    if (c.value) return *c.value;
+    const BakedTexture* tex = b.find(c.role);
+    int index = 0;
+    while (tex->decode[size_t(index)].name != c.source)
+        ++index;
+    const double v = tex->mips[k].texels[t * size_t(tex->channels) + size_t(index)];
+    const bool flip = p.green == GreenConvention::DirectX && (c.source == "normal.y" || c.source == "B.y" ||
+                                                              c.source == "M.xy" || c.source == "rho");
+    return flip ? 1.0 - v : v;
+}
+
+double storageTolerance(const ExportedFile& f) {
+    if (f.storage == "uint8") return kUint8Tolerance;
+    if (f.storage == "uint16") return kUint16Tolerance;
+    if (f.storage == "half") return kHalfTolerance;
+    if (f.storage == "float") return kFloatNoise;
+    return kBc4Tolerance; // bc4, bc5, bc3's alpha; bc3's colour: see bc1Tolerance
+}
+
+// The largest extent of any colour channel (the first three) within texel t's 4x4 block.
+double blockColourExtent(const std::vector<float>& expected, int w, int h, int channels, size_t t) {
+    const int bx = int(t % size_t(w)) / 4 * 4, by = int(t / size_t(w)) / 4 * 4;
+    double extent = 0.0;
+    for (int c = 0; c < std::min(channels, 3); ++c) {
+        double lo = 1.0, hi = 0.0;
+        for (int y = by; y < std::min(by + 4, h); ++y)
+            for (int x = bx; x < std::min(bx + 4, w); ++x) {
+                const double v = expected[(size_t(y) * size_t(w) + size_t(x)) * size_t(channels) + size_t(c)];
+                lo = std::min(lo, v);
+                hi = std::max(hi, v);
+            }
+        extent = std::max(extent, hi - lo);
+    }
+    return extent;
+}
+
+// Compares every level and channel of every exported file with the bake; returns the largest error.
+double checkRoundTrip(const fs::path& dir, const BakeOutput& b, const Preset& p, const ExportResult& r) {
+    double worst = 0.0;
+    for (const auto& f : r.files) {
+        const auto mips = readExported(dir, f);
+        EXPECT_EQ(mips.size(), b.textures[0].mips.size()) << f.name << ": not every mip level is present";
+        for (size_t k = 0; k < mips.size() && k < b.textures[0].mips.size(); ++k) {
+            EXPECT_EQ(mips[k].width, b.textures[0].mips[k].width) << f.name << " mip " << k;
+            EXPECT_EQ(mips[k].height, b.textures[0].mips[k].height) << f.name << " mip " << k;
+            EXPECT_EQ(mips[k].channels, f.storedChannels) << f.name << " mip " << k;
+            const size_t n = size_t(mips[k].width) * size_t(mips[k].height);
+            const size_t nc = f.channels.size();
+            std::vector<float> expected(n * nc);
+            for (size_t t = 0; t < n; ++t)
+                for (size_t c = 0; c < nc; ++c)
+                    expected[t * nc + c] = float(expectedStored(b, p, f.channels[c], k, t));
+            for (size_t c = 0; c < nc; ++c) {
+                const bool bc1Colour = f.storage == "bc3" && c < 3;
+                // Error beyond each texel's bound (its storage's, or for BC1 colour its block's).
+                double channelWorst = 0.0, excess = 0.0;
+                for (size_t t = 0; t < n; ++t) {
+                    const double got = mips[k].values[t * size_t(mips[k].channels) + c];
+                    const double err = std::abs(got - expected[t * nc + c]);
+                    const double bound =
+                        bc1Colour ? blockColourExtent(expected, mips[k].width, mips[k].height, int(nc), t) +
+                                        kBc1EndpointSlack
+                                  : storageTolerance(f);
+                    channelWorst = std::max(channelWorst, err);
+                    excess = std::max(excess, err - bound);
+                }
+                EXPECT_LE(excess, 0.0) << f.name << " (" << f.storage << ") mip " << k << " channel "
+                                       << f.channels[c].source << ": worst error " << channelWorst;
+                worst = std::max(worst, channelWorst);
+            }
+        }
+    }
+    return worst;
+}
+
+std::vector<std::string> listFolder(const fs::path& dir) {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir))
+        names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+bool hasTemporaries(const fs::path& dir) {
+    for (const auto& name : listFolder(dir))
+        if (name.find(".tmp-") != std::string::npos) return true;
+    return false;
+}
+
+TEST(Export, RoundTripThroughEveryFormat) {
+    const NormalMap map = smoothMap();
+    const std::vector<std::pair<ExportFormat, std::optional<DdsCompression>>> formats{
+        {ExportFormat::Png8, {}},      {ExportFormat::Png16, {}},
+        {ExportFormat::Tga, {}},       {ExportFormat::ExrHalf, {}},
+        {ExportFormat::ExrFloat, {}},  {ExportFormat::Tiff16, {}},
+        {ExportFormat::TiffFloat, {}}, {ExportFormat::Dds, DdsCompression::Rgba8},
+    };
+    // unity: 3- and 4-channel files with a parameter and constants; godot: a 1-channel file;
+    // unreal: DirectX green; lean: 2- and 3-channel high-precision files.
+    for (const char* name : {"unity", "godot", "unreal", "lean"}) {
+        const Preset p = preset(name);
+        const BakeOutput b = bakeWith(map, p.method, p);
+        for (const auto& [format, compression] : formats) {
+            SCOPED_TRACE(std::string(name) + " " + std::string(exportFormatName(format)));
+            TempDir dir;
+            ExportOptions o;
+            o.format = format;
+            o.compression = compression;
+            o.stem = "map";
+            o.allowEightBit = true;
+            o.parameters["metallic"] = 0.75;
+            if (!p.findParameter("metallic")) o.parameters.clear();
+            const auto r = exportBake(b, p, o, dir.path());
+            ASSERT_TRUE(r) << r.error();
+            EXPECT_TRUE(fs::exists(dir / "bake.json"));
+            checkRoundTrip(dir.path(), b, p, *r);
+            EXPECT_FALSE(hasTemporaries(dir.path()));
+        }
+    }
+}
+
+TEST(Export, OneFilePerMipForPngAndTga) {
+    const NormalMap map = smoothMap(40, 24); // 40x24, 20x12, 10x6, 5x3, 2x1, 1x1
+    const Preset p = preset("godot");
+    const BakeOutput b = bakeWith(map, p.method, p);
+    ASSERT_EQ(b.stats.mipCount, 6);
+    TempDir dir;
+    ExportOptions o;
+    o.stem = "m";
+    const auto r = exportBake(b, p, o, dir.path());
+    ASSERT_TRUE(r) << r.error();
+    const std::vector<std::string> expected{"bake.json",
+                                            "m_normal.png",
+                                            "m_normal_mip1.png",
+                                            "m_normal_mip2.png",
+                                            "m_normal_mip3.png",
+                                            "m_normal_mip4.png",
+                                            "m_normal_mip5.png",
+                                            "m_roughness.png",
+                                            "m_roughness_mip1.png",
+                                            "m_roughness_mip2.png",
+                                            "m_roughness_mip3.png",
+                                            "m_roughness_mip4.png",
+                                            "m_roughness_mip5.png"};
+    EXPECT_EQ(listFolder(dir.path()), expected);
+}
+
+TEST(Export, DdsBlockCompressionWithinTolerance) {
+    const NormalMap map = smoothMap(64, 32);
+    struct Case {
+        const char* preset;
+        const char* file;
+        DdsCompression compression;
+        int storedChannels;
+    };
+    for (const Case& c :
+         {Case{"godot", "roughness", DdsCompression::Bc4, 1}, Case{"godot", "normal", DdsCompression::Bc5, 2},
+          Case{"exp2", "normal", DdsCompression::Bc3, 4}}) {
+        SCOPED_TRACE(std::string(c.preset) + " " + c.file);
+        const Preset p = preset(c.preset);
+        const BakeOutput b = bakeWith(map, p.method, p);
+        TempDir dir;
+        ExportOptions o;
+        o.format = ExportFormat::Dds;
+        const auto r = exportBake(b, p, o, dir.path());
+        ASSERT_TRUE(r) << r.error();
+        for (const auto& f : r->files) {
+            if (f.name != c.file) continue;
+            EXPECT_EQ(f.compression, c.compression);
+            EXPECT_EQ(f.storedChannels, c.storedChannels);
+            ASSERT_EQ(f.paths.size(), 1u);
+            const auto mips = readMips(dir / f.paths[0]);
+            EXPECT_EQ(int(mips.size()), b.stats.mipCount) << "DDS mip count";
+        }
+        const double worst = checkRoundTrip(dir.path(), b, p, *r);
+        // Block compression is lossy but not free: a zero error would mean the check read nothing.
+        EXPECT_GT(worst, 0.0);
+    }
+}
+
+TEST(Export, DdsMipCountFollowsAShortChain) {
+    const Preset p = preset("godot");
+    BakeOptions options;
+    options.method = p.method;
+    options.encoding = p.encoding;
+    options.mipCount = 3;
+    const auto b = bake(smoothMap(32, 32), options);
+    ASSERT_TRUE(b);
+    // Every compression that holds the one-channel gloss.
+    for (DdsCompression c : {DdsCompression::Bc4, DdsCompression::Bc3, DdsCompression::Rgba8}) {
+        const std::vector<TextureMip>& mips = b->find("gloss")->mips;
+        const auto bytes = encodeDds(mips, 1, c);
+        ASSERT_TRUE(bytes) << bytes.error();
+        TempDir dir;
+        ASSERT_TRUE(writeFileAtomic(dir / "g.dds", *bytes));
+        const auto read = readMips(dir / "g.dds");
+        ASSERT_EQ(read.size(), 3u) << ddsCompressionName(c);
+        EXPECT_EQ(read[2].width, 8);
+    }
+}
+
+TEST(Export, EncodeDdsRejectsBadChains) {
+    TextureMip top{8, 8, std::vector<float>(64, 0.5f)};
+    TextureMip wrong{3, 4, std::vector<float>(12, 0.5f)};
+    const auto r = encodeDds({top, wrong}, 1, DdsCompression::Bc4);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("not half"), std::string::npos) << r.error();
+    EXPECT_FALSE(encodeDds({top}, 2, DdsCompression::Bc4));
+}
+
+// Each preset's gloss channel, read back from its default format, equals the documented
+// conversion of the baked power within the storage's quantization. The formulas are written here
+// independently of gloss.cpp.
+TEST(Export, PresetsDecodeThroughTheirDocumentedFormula) {
+    const NormalMap map = flatMap(8, 8);
+    const auto alphaOf = [](double p) { return std::sqrt(2.0 / (p + 2.0)); }; // GGX α of Blinn-Phong p
+    for (const auto& p : builtinPresets()) {
+        for (double power : {16.0, 256.0, 2000.0}) {
+            SCOPED_TRACE(p.name + " power " + std::to_string(power));
+            const BakeOutput b = bakeWith(map, p.method, p, power);
+            TempDir dir;
+            ExportOptions o;
+            o.stem = "flat";
+            const auto r = exportBake(b, p, o, dir.path());
+            ASSERT_TRUE(r) << r.error();
+            // The channel that carries the power, and its documented stored value.
+            const std::string source = p.method == Method::Lean    ? "gloss.x"
+                                       : p.method == Method::Clean ? "M.avg"
+                                                                   : "gloss";
+            double expected = 0.0;
+            const std::string enc = p.encoding.name();
+            if (p.method == Method::Lean)
+                expected = std::log2(power) / 13.0; // Σ = 1/p, g = log2(1/Σ)/13
+            else if (enc == "blackops")
+                expected = std::log2(power) / 13.0; // p = 8192^g
+            else if (enc == "exp2")
+                expected = (std::log2(power) - 1.0) / 10.0; // p = exp2(10g + 1)
+            else if (enc == "ggx-roughness")
+                expected = std::sqrt(alphaOf(power)); // r = sqrt(α)
+            else if (enc == "smoothness")
+                expected = 1.0 - std::sqrt(alphaOf(power)); // 1 − r
+            bool found = false;
+            for (const auto& f : r->files)
+                for (size_t c = 0; c < f.channels.size(); ++c) {
+                    if (f.channels[c].source != source) continue;
+                    found = true;
+                    const auto mips = readExported(dir.path(), f);
+                    ASSERT_FALSE(mips.empty());
+                    const double stored = mips[0].values[c];
+                    // A constant block compresses exactly in BC4/BC5 and BC3's alpha: 8-bit rounding is the
+                    // bound.
+                    const bool block = f.storage == "bc4" || f.storage == "bc5" || f.storage == "bc3";
+                    const double tol = block ? kUint8Tolerance : storageTolerance(f);
+                    if (p.method == Method::Clean) {
+                        // M.avg = 1/p, decoded with bake.json's rule: value = stored·scale + bias.
+                        const double value = stored * f.channels[c].decode.scale + f.channels[c].decode.bias;
+                        EXPECT_NEAR(value, 1.0 / power, tol * f.channels[c].decode.scale);
+                    } else {
+                        EXPECT_NEAR(stored, expected, tol) << f.name;
+                    }
+                }
+            EXPECT_TRUE(found) << "no '" << source << "' channel in the preset's files";
+        }
+    }
+}
+
+TEST(Export, DirectXPresetFlipsGreenOnly) {
+    const NormalMap map = smoothMap();
+    const Preset unreal = preset("unreal");
+    const BakeOutput b = bakeWith(map, unreal.method, unreal);
+    TempDir dir;
+    ExportOptions o;
+    o.format = ExportFormat::Png16;
+    const auto r = exportBake(b, unreal, o, dir.path());
+    ASSERT_TRUE(r) << r.error();
+    const auto mips = readExported(dir.path(), r->files[0]);
+    ASSERT_FALSE(mips.empty());
+    const auto& baked = b.find("normal")->mips[0].texels;
+    double worstX = 0.0, worstY = 0.0;
+    for (size_t t = 0; t < size_t(mips[0].width * mips[0].height); ++t) {
+        // Decoded with the file's own rule, y is the OpenGL y negated; x is unchanged.
+        const double x = mips[0].values[t * 3 + 0] * 2.0 - 1.0;
+        const double y = mips[0].values[t * 3 + 1] * 2.0 - 1.0;
+        worstX = std::max(worstX, std::abs(x - (baked[t * 3 + 0] * 2.0 - 1.0)));
+        worstY = std::max(worstY, std::abs(y + (baked[t * 3 + 1] * 2.0 - 1.0)));
+    }
+    // Two 16-bit codes in the decoded [-1, 1] range.
+    constexpr double kDecodedTolerance = 2.0 * kUint16Tolerance;
+    EXPECT_LE(worstX, kDecodedTolerance);
+    EXPECT_LE(worstY, kDecodedTolerance);
+}
+
+TEST(Export, HighPrecisionRefusesEightBitFormats) {
+    const Preset lean = preset("lean");
+    const BakeOutput b = bakeWith(smoothMap(), Method::Lean, lean);
+    for (ExportFormat f : {ExportFormat::Png8, ExportFormat::Tga, ExportFormat::Dds}) {
+        ExportOptions o;
+        o.format = f;
+        const auto r = planExport(b, lean, o);
+        ASSERT_FALSE(r) << exportFormatName(f);
+        EXPECT_NE(r.error().find("16-bit or float"), std::string::npos) << r.error();
+        o.allowEightBit = true;
+        EXPECT_TRUE(planExport(b, lean, o)) << exportFormatName(f);
+    }
+    ExportOptions o16;
+    o16.format = ExportFormat::Png16;
+    EXPECT_TRUE(planExport(b, lean, o16));
+}
+
+TEST(Export, ToksvigNormalRefusesBlockCompression) {
+    const Preset blackops = preset("blackops");
+    const BakeOutput b = bakeWith(smoothMap(), Method::Toksvig, blackops);
+    ExportOptions o; // blackops' default: dds, normal as bc5
+    const auto r = planExport(b, blackops, o);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("length"), std::string::npos) << r.error();
+    o.compression = DdsCompression::Bc3;
+    EXPECT_FALSE(planExport(b, blackops, o));
+    o.compression = DdsCompression::Rgba8;
+    EXPECT_TRUE(planExport(b, blackops, o));
+}
+
+TEST(Export, RejectsWhatThePresetCannotHold) {
+    const Preset godot = preset("godot");
+    const BakeOutput b = bakeWith(smoothMap(), godot.method, godot);
+    ExportOptions o;
+    o.parameters["metallic"] = 0.5;
+    auto r = planExport(b, godot, o);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("no parameter 'metallic'"), std::string::npos) << r.error();
+
+    const Preset unity = preset("unity");
+    ExportOptions range;
+    range.parameters["metallic"] = 1.5;
+    EXPECT_FALSE(planExport(bakeWith(smoothMap(), unity.method, unity), unity, range));
+
+    ExportOptions bc4;
+    bc4.format = ExportFormat::Dds;
+    bc4.compression = DdsCompression::Bc4; // the normal has three channels
+    r = planExport(b, godot, bc4);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("bc4 holds one"), std::string::npos) << r.error();
+
+    const BakeOutput lean = bakeWith(smoothMap(), Method::Lean, godot);
+    r = planExport(lean, godot, ExportOptions{});
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("methods that fit"), std::string::npos) << r.error();
+}
+
+TEST(Export, MissingFolderWritesNothing) {
+    TempDir dir;
+    const Preset p = preset("godot");
+    const BakeOutput b = bakeWith(smoothMap(), p.method, p);
+    const auto r = exportBake(b, p, ExportOptions{}, dir / "missing");
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("does not exist"), std::string::npos) << r.error();
+    EXPECT_TRUE(listFolder(dir.path()).empty());
+}
+
+TEST(Export, ReadOnlyFolderWritesNothing) {
+    if (::geteuid() == 0)
+        GTEST_SKIP() << "root writes into read-only folders; see ExportFailureLeavesNoPartialSet";
+    TempDir dir;
+    const Preset p = preset("godot");
+    const BakeOutput b = bakeWith(smoothMap(), p.method, p);
+    ASSERT_EQ(::chmod(dir.path().c_str(), 0555), 0);
+    const auto r = exportBake(b, p, ExportOptions{}, dir.path());
+    ::chmod(dir.path().c_str(), 0755);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("cannot write"), std::string::npos) << r.error();
+    EXPECT_TRUE(listFolder(dir.path()).empty());
+}
+
+// A directory where the second file's target should go makes its rename fail after the first
+// file was renamed: the set is rolled back and no temporary remains (works as root too).
+TEST(Export, ExportFailureLeavesNoPartialSet) {
+    TempDir dir;
+    const Preset p = preset("blackops");
+    const BakeOutput b = bakeWith(smoothMap(), p.method, p);
+    ExportOptions o;
+    o.stem = "m";
+    o.overwrite = Overwrite::Allow;
+    fs::create_directories(dir / "m_gloss.dds" / "blocker");
+    const auto r = exportBake(b, p, o, dir.path());
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("m_gloss.dds"), std::string::npos) << r.error();
+    EXPECT_EQ(listFolder(dir.path()), std::vector<std::string>{"m_gloss.dds"});
+    EXPECT_TRUE(fs::is_directory(dir / "m_gloss.dds" / "blocker"));
+}
+
+TEST(Export, ExistingFilesNeedOverwrite) {
+    TempDir dir;
+    const Preset p = preset("godot");
+    const BakeOutput b = bakeWith(smoothMap(), p.method, p, 100.0);
+    const BakeOutput other = bakeWith(smoothMap(), p.method, p, 1000.0);
+    ExportOptions o;
+    o.stem = "m";
+    ASSERT_TRUE(exportBake(b, p, o, dir.path()));
+    const auto before = readFile(dir / "m_roughness.png").value();
+
+    // Refused as a whole, even though only some targets exist.
+    fs::remove(dir / "m_normal.png");
+    const auto refused = exportBake(other, p, o, dir.path());
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.error().find("refusing to overwrite"), std::string::npos) << refused.error();
+    EXPECT_FALSE(fs::exists(dir / "m_normal.png"));
+    EXPECT_EQ(readFile(dir / "m_roughness.png").value(), before);
+    EXPECT_FALSE(hasTemporaries(dir.path()));
+
+    o.overwrite = Overwrite::Allow;
+    ASSERT_TRUE(exportBake(other, p, o, dir.path()));
+    EXPECT_TRUE(fs::exists(dir / "m_normal.png"));
+    EXPECT_NE(readFile(dir / "m_roughness.png").value(), before);
+    EXPECT_FALSE(hasTemporaries(dir.path()));
+}
+
+// Same bake, same bytes: every format and DDS compression, exported twice more than a second
+// apart so a timestamp in any header would show.
+TEST(Export, OutputIsByteIdenticalAcrossRuns) {
+    const NormalMap map = smoothMap();
+    const Preset godot = preset("godot");
+    const Preset exp2 = preset("exp2");
+    const BakeOutput b = bakeWith(map, godot.method, godot);
+    const BakeOutput be = bakeWith(map, exp2.method, exp2);
+    TempDir first, second;
+    auto exportAll = [&](const fs::path& root) {
+        for (ExportFormat f : allExportFormats()) {
+            const fs::path dir = root / std::string(exportFormatName(f));
+            fs::create_directories(dir);
+            ExportOptions o;
+            o.format = f;
+            ASSERT_TRUE(exportBake(b, godot, o, dir)); // bc5 + bc4 for dds
+            if (f == ExportFormat::Dds) {
+                const fs::path dir3 = root / "dds-bc3";
+                fs::create_directories(dir3);
+                ASSERT_TRUE(exportBake(be, exp2, o, dir3));
+            }
+        }
+    };
+    exportAll(first.path());
+    std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+    exportAll(second.path());
+    int compared = 0;
+    for (const auto& e : fs::recursive_directory_iterator(first.path())) {
+        if (!e.is_regular_file()) continue;
+        const fs::path rel = fs::relative(e.path(), first.path());
+        const auto a = readFile(e.path());
+        const auto c = readFile(second.path() / rel);
+        ASSERT_TRUE(a && c) << rel;
+        EXPECT_EQ(*a, *c) << rel << " differs between two runs";
+        ++compared;
+    }
+    EXPECT_GT(compared, int(allExportFormats().size()));
+}
+
+TEST(Export, BakeJsonDescribesEveryFile) {
+    TempDir dir;
+    const Preset p = preset("gltf");
+    const NormalMap map = smoothMap();
+    const BakeOutput b = bakeWith(map, p.method, p);
+    BakeRecord record;
+    record.inputs = {{"normalMap", "in.png"}};
+    record.options = {{"power", 256}};
+    NormalMapDiagnostics diagnostics;
+    diagnostics.warnings.push_back("a warning");
+    record.diagnostics = diagnostics;
+    ExportOptions o;
+    o.parameters["metallic"] = 1.0;
+    const auto r = exportBake(b, p, o, dir.path(), record);
+    ASSERT_TRUE(r) << r.error();
+    const auto text = readFile(dir / "bake.json");
+    ASSERT_TRUE(text);
+    const auto j = nlohmann::json::parse(*text);
+    EXPECT_EQ(j["preset"]["name"], "gltf");
+    EXPECT_EQ(j["method"], "variance-to-gloss");
+    EXPECT_EQ(j["inputs"]["normalMap"], "in.png");
+    EXPECT_EQ(j["warnings"][0], "a warning");
+    EXPECT_EQ(j["stats"]["mipCount"], b.stats.mipCount);
+    ASSERT_EQ(j["files"].size(), 2u);
+    const auto& mr = j["files"][1];
+    EXPECT_EQ(mr["name"], "metallicRoughness");
+    EXPECT_EQ(mr["channels"][0]["value"], 1.0);
+    EXPECT_EQ(mr["channels"][1]["source"], "gloss");
+    EXPECT_EQ(mr["channels"][2]["value"], 1.0);
+    const auto& nx = j["files"][0]["channels"][0];
+    EXPECT_EQ(nx["source"], "normal.x");
+    EXPECT_EQ(nx["scale"], 2.0);
+    EXPECT_EQ(nx["bias"], -1.0);
+    EXPECT_EQ(j["files"][0]["mips"].size(), size_t(b.stats.mipCount));
+    // The file on disk is the manifest the call returned.
+    EXPECT_EQ(j, r->manifest);
+}
+
+} // namespace
+} // namespace burnish

@@ -23,6 +23,7 @@ extern const std::string_view kPreset_unreal;
 extern const std::string_view kPreset_unity;
 extern const std::string_view kPreset_godot;
 extern const std::string_view kPreset_filament;
+extern const std::string_view kPreset_toksvig_map;
 extern const std::string_view kPreset_lean;
 extern const std::string_view kPreset_clean;
 } // namespace resources
@@ -377,7 +378,7 @@ struct BuiltinSet {
 const BuiltinSet& builtins() {
     static const BuiltinSet set = [] {
         BuiltinSet s;
-        const std::array<std::pair<const char*, std::string_view>, 9> sources{{
+        const std::array<std::pair<const char*, std::string_view>, 10> sources{{
             {"blackops", resources::kPreset_blackops},
             {"exp2", resources::kPreset_exp2},
             {"gltf", resources::kPreset_gltf},
@@ -385,6 +386,7 @@ const BuiltinSet& builtins() {
             {"unity", resources::kPreset_unity},
             {"godot", resources::kPreset_godot},
             {"filament", resources::kPreset_filament},
+            {"toksvig-map", resources::kPreset_toksvig_map},
             {"lean", resources::kPreset_lean},
             {"clean", resources::kPreset_clean},
         }};

@@ -1,6 +1,7 @@
 #include <burnish/core/export.h>
 
 #include <OpenImageIO/imageio.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -511,8 +512,12 @@ Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, co
             if (!t.staging.empty()) fs::remove(t.staging, ec);
     };
 
-    // Stage: every file under a temporary name beside its target.
-    for (auto& t : targets) {
+    // Stage: every file under a temporary name beside its target. Files and PNG/TGA levels are
+    // independent, so OpenImageIO writes them in parallel (the zlib/EXR encoding dominates large
+    // bakes); DDS files go through nvtt one at a time.
+    std::vector<Status> staged(targets.size());
+    auto stage = [&](size_t i) {
+        Target& t = targets[i];
         const fs::path staging = temporaryPathFor(t.path);
         Status s;
         if (!t.file) {
@@ -526,12 +531,20 @@ Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, co
         } else {
             s = writeOiio(*t.file, 0, t.file->mips.size(), t.path, staging);
         }
+        if (s) t.staging = staging;
+        staged[i] = s;
+    };
+    auto isDds = [&](const Target& t) { return t.file && t.file->info.format == ExportFormat::Dds; };
+    tbb::parallel_for(size_t(0), targets.size(), [&](size_t i) {
+        if (!isDds(targets[i])) stage(i);
+    });
+    for (size_t i = 0; i < targets.size(); ++i)
+        if (isDds(targets[i])) stage(i);
+    for (const Status& s : staged)
         if (!s) {
             removeStaged();
             return Error{s.error()};
         }
-        t.staging = staging;
-    }
 
     // Commit: rename every staged file; on a failure, undo the renames that created new files.
     const Overwrite commitMode = options.overwrite;

@@ -5,6 +5,8 @@
 #include "temp_dir.h"
 
 #include <OpenImageIO/imageio.h>
+#include "cli_run.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -23,49 +25,11 @@ namespace {
 namespace fs = std::filesystem;
 using burnish::test::TempDir;
 
-struct RunResult {
-    int exitCode = -1;
-    std::string out;
-    std::string err;
-};
+using RunResult = burnish::test::CliResult;
+using burnish::test::runBurnish;
 
-std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s)
-        q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
-
-// Runs `burnish <args>`, stdout through the pipe, stderr through a file.
-RunResult runBurnish(const std::string& args) {
-    static int counter = 0;
-    const auto errPath =
-        fs::path(::testing::TempDir()) /
-        ("burnish_cli_bake_err_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + ".txt");
-    const std::string command = quote(BURNISH_EXE) + " " + args + " 2>" + quote(errPath.string());
-    RunResult result;
-    FILE* pipe = ::popen(command.c_str(), "r");
-    if (!pipe) return result;
-    char buffer[4096];
-    size_t n;
-    while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
-        result.out.append(buffer, n);
-    const int status = ::pclose(pipe);
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream err(errPath);
-    std::stringstream ss;
-    ss << err.rdbuf();
-    result.err = ss.str();
-    fs::remove(errPath);
-    return result;
-}
-
-int countLines(const std::string& s) {
-    int lines = 0;
-    for (char c : s)
-        lines += c == '\n';
-    return lines;
-}
+std::string quote(const std::string& s) { return burnish::test::shellQuote(s); }
+int countLines(const std::string& s) { return burnish::test::lineCount(s); }
 
 // A 32x32 8-bit RGB tangent-space normal map with bumps (unsigned encoding, +Y green).
 void writeNormalMap(const fs::path& path, int size = 32) {

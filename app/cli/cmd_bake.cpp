@@ -5,6 +5,7 @@
 
 #include <burnish/core/atomic_file.h>
 #include <burnish/core/bake.h>
+#include <burnish/core/evaluate_report.h>
 #include <burnish/core/export.h>
 #include <burnish/core/image.h>
 #include <burnish/core/normal_map.h>
@@ -210,7 +211,7 @@ private:
     bool m_drawn = false;
 };
 
-Result<Json> runJob(const Job& job, Progress& progress, const std::string& label) {
+Result<Json> runJob(const Job& job, Progress& progress, const std::string& label, bool report) {
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
     constexpr int kSteps = 3;
@@ -290,6 +291,26 @@ Result<Json> runJob(const Job& job, Progress& progress, const std::string& label
                     {"methodSeconds", baked->stats.methodSeconds},
                     {"seconds", std::chrono::duration<double>(Clock::now() - start).count()},
                     {"warnings", map->diagnostics.warnings}};
+
+    if (report) {
+        // The ground-truth report for the same map, power and border: how far each method is from
+        // the truth per mip, next to its cost (burnish evaluate, written into <out>/report).
+        progress.show(label, "evaluating", kSteps, kSteps);
+        EvaluationReportOptions evaluation;
+        evaluation.inputName = fs::path(job.spec.input).filename().string();
+        evaluation.evaluate.basePowers = {options.basePower};
+        evaluation.evaluate.border = options.pyramid.border;
+        evaluation.evaluate.params = options.params;
+        auto built = buildEvaluationReport(*map, evaluation);
+        if (!built) return Error{"--report: " + built.error()};
+        const fs::path dir = fs::path(job.spec.out) / "report";
+        if (auto st = writeEvaluationReport(*built, dir); !st) return Error{"--report: " + st.error()};
+        summary["report"] = (dir / "evaluate.md").string();
+        if (options.authoredGloss)
+            summary["warnings"].push_back(
+                "--report evaluates the base power " + std::to_string(options.basePower) +
+                " everywhere; the ground truth does not use the authored gloss map");
+    }
     return summary;
 }
 
@@ -438,6 +459,7 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     auto spec = std::make_shared<JobSpec>();
     auto manifest = std::make_shared<std::string>();
     auto json = std::make_shared<bool>(false);
+    auto report = std::make_shared<bool>(false);
 
     cmd->add_option("input", spec->input, "Tangent-space normal map (PNG, TGA, EXR, TIFF, DDS, ...)");
     cmd->add_option("--preset", spec->preset, "Engine preset: a name listed below, or a preset FILE.json");
@@ -468,10 +490,13 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     cmd->add_flag("--allow-8bit", spec->allowEightBit, "Store LEAN/CLEAN moments in 8-bit formats anyway");
     cmd->add_flag("--json", *json, "Print a machine-readable summary on stdout");
     cmd->add_option("--manifest", *manifest, "JSON file listing many jobs, run in order");
+    cmd->add_flag("--report", *report,
+                  "Also measure every method against the ground truth for this map and power (as burnish "
+                  "evaluate, mips 1-4) and write the report into <out>/report/");
     // Built lazily: listing the presets parses them, which other subcommands need not pay for.
     cmd->footer([] { return helpFooter(); });
 
-    return [spec, manifest, json]() -> int {
+    return [spec, manifest, json, report]() -> int {
         if (!builtinPresetErrors().empty()) return fail(builtinPresetErrors().front());
         std::vector<JobSpec> specs;
         if (!manifest->empty()) {
@@ -499,7 +524,7 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
             const std::string name = fs::path(jobs[i].spec.input).filename().string();
             const std::string label =
                 jobs.size() > 1 ? fmt::format("[{}/{}] {}", i + 1, jobs.size(), name) : name;
-            auto summary = runJob(jobs[i], progress, label);
+            auto summary = runJob(jobs[i], progress, label, *report);
             progress.clear();
             if (!summary)
                 return fail(jobs.size() > 1 || !manifest->empty()

@@ -4,8 +4,8 @@
 
 #include "temp_dir.h"
 
-#include <OpenImageIO/imageio.h>
 #include "cli_run.h"
+#include <OpenImageIO/imageio.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -28,8 +28,12 @@ using burnish::test::TempDir;
 using RunResult = burnish::test::CliResult;
 using burnish::test::runBurnish;
 
-std::string quote(const std::string& s) { return burnish::test::shellQuote(s); }
-int countLines(const std::string& s) { return burnish::test::lineCount(s); }
+std::string quote(const std::string& s) {
+    return burnish::test::shellQuote(s);
+}
+int countLines(const std::string& s) {
+    return burnish::test::lineCount(s);
+}
 
 // A 32x32 8-bit RGB tangent-space normal map with bumps (unsigned encoding, +Y green).
 void writeNormalMap(const fs::path& path, int size = 32) {
@@ -211,6 +215,22 @@ TEST(CliBake, JsonSummaryParses) {
     const auto manifest =
         nlohmann::json::parse(burnish::readFile(job["bakeJson"].get<std::string>()).value());
     EXPECT_EQ(manifest["files"][1]["channels"][2]["value"], 1.0); // B = metallic
+}
+
+TEST(CliBake, ReportWritesTheGroundTruthEvaluationBesideTheTextures) {
+    TempDir dir;
+    writeNormalMap(dir / "bumps.png");
+    const auto r =
+        runBurnish("bake " + quote((dir / "bumps.png").string()) +
+                   " --preset godot --power 300 --report --json --out " + quote((dir / "o").string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto job = nlohmann::json::parse(r.out)["jobs"][0];
+    ASSERT_TRUE(job.contains("report"));
+    const auto evaluation =
+        nlohmann::json::parse(burnish::readFile(dir / "o" / "report" / "evaluate.json").value());
+    EXPECT_EQ(evaluation["base_powers"][0], 300.0); // the bake's power
+    EXPECT_EQ(evaluation["costs"].size(), 7u);      // every method, not only the baked one
+    EXPECT_TRUE(fs::exists(dir / "o" / "report" / "evaluate-error-per-mip.png"));
 }
 
 TEST(CliBake, ManifestRunsEveryJob) {

@@ -151,3 +151,34 @@ TEST(Evaluate, RejectsBadOptions) {
     options.halfAnglesDeg = {0.0}; // the mirror light of an 89° view is 1° above the horizon: dropped
     EXPECT_FALSE(evaluateMethods(map, options).ok());
 }
+
+TEST(Evaluate, RealSampleNaiveIsWorstAndGrowsWithMip) {
+    // A real 8-bit normal map (tests/data/README.md): over the default mips 1-4, the naive lobe is
+    // the furthest from the truth at every mip and drifts further as footprints grow.
+    auto map = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png");
+    ASSERT_TRUE(map.ok()) << map.error();
+    EvaluateOptions options; // power 512, mips 1-4, view 30°
+    auto result = evaluateMethods(*map, options);
+    ASSERT_TRUE(result.ok()) << result.error();
+    auto error = [&](Method m, int mip) {
+        for (const auto& e : result->errors)
+            if (e.method == m && e.mip == mip) return e.relativeL1;
+        return -1.0;
+    };
+    for (int mip = 1; mip <= 4; ++mip) {
+        if (mip > 1) {
+            EXPECT_GT(error(Method::Naive, mip), error(Method::Naive, mip - 1));
+        }
+        for (Method m : allMethods()) {
+            if (m != Method::Naive) {
+                EXPECT_LT(error(m, mip), error(Method::Naive, mip)) << methodName(m) << " mip " << mip;
+            }
+        }
+        // LEAN, the only anisotropic method, is the closest on this map.
+        for (Method m : allMethods()) {
+            if (m != Method::Lean) {
+                EXPECT_LE(error(Method::Lean, mip), error(m, mip)) << methodName(m) << " mip " << mip;
+            }
+        }
+    }
+}

@@ -8,8 +8,8 @@ function(burnish_embed)
   add_custom_command(
     OUTPUT "${out}"
     COMMAND ${CMAKE_COMMAND} -DIN=${ARG_FILE} -DOUT=${out} -DSYMBOL=${ARG_SYMBOL}
-            -P "${PROJECT_SOURCE_DIR}/cmake/BurnishEmbedRun.cmake"
-    DEPENDS "${ARG_FILE}" "${PROJECT_SOURCE_DIR}/cmake/BurnishEmbedRun.cmake"
+            -P "${PROJECT_SOURCE_DIR}/core/cmake/BurnishEmbedRun.cmake"
+    DEPENDS "${ARG_FILE}" "${PROJECT_SOURCE_DIR}/core/cmake/BurnishEmbedRun.cmake"
     COMMENT "Embedding ${ARG_FILE}"
     VERBATIM)
   target_sources(${ARG_TARGET} PRIVATE "${out}")

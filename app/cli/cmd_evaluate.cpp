@@ -22,6 +22,7 @@ struct EvaluateCliOptions {
     int lastMip = 4;
     double viewAngle = 30.0;
     std::vector<std::string> methods;
+    std::vector<std::string> kernels{"box"};
     std::string out = "burnish-evaluate";
     bool errorMaps = false;
     int bakeRuns = 3;
@@ -34,7 +35,8 @@ struct EvaluateCliOptions {
 int runEvaluate(const EvaluateCliOptions& o) {
     auto map = loadNormalMap(o.input, toNormalMapOptions(o.normalMap));
     if (!map) return fail(map.error());
-    for (const auto& w : map->diagnostics.warnings) std::fprintf(stderr, "burnish: warning: %s\n", w.c_str());
+    for (const auto& w : map->diagnostics.warnings)
+        std::fprintf(stderr, "burnish: warning: %s\n", w.c_str());
 
     EvaluationReportOptions options;
     options.inputName = std::filesystem::path(o.input).filename().string();
@@ -54,6 +56,12 @@ int runEvaluate(const EvaluateCliOptions& o) {
             options.evaluate.methods.push_back(*m);
         }
     }
+
+    options.evaluate.kernels.clear();
+    for (const auto& k : o.kernels)
+        options.evaluate.kernels.push_back(k == "tent"       ? FilterKernel::Tent
+                                           : k == "gaussian" ? FilterKernel::Gaussian
+                                                             : FilterKernel::Box);
 
     ProgressBar bar("evaluating");
     auto report = buildEvaluationReport(*map, options, [&](double f) { bar.update(f); });
@@ -78,7 +86,8 @@ const CommandRegistration registration{
         sub->add_option("input", o->input, "Tangent-space normal map (PNG, TGA, JPEG, EXR, TIFF, DDS).")
             ->required()
             ->type_name("IN");
-        sub->add_option("--power", o->powers, "Base Blinn-Phong power(s) s of the ground truth (default 512).")
+        sub->add_option("--power", o->powers,
+                        "Base Blinn-Phong power(s) s of the ground truth (default 512).")
             ->check(CLI::Range(1e-3, 1e9))
             ->type_name("S");
         sub->add_option("--first-mip", o->firstMip, "First mip level evaluated (default 1).")
@@ -86,18 +95,27 @@ const CommandRegistration registration{
         sub->add_option("--last-mip", o->lastMip,
                         "Last mip level evaluated (default 4; limited to the map's last level).")
             ->check(CLI::Range(0, 30));
-        sub->add_option("--view-angle", o->viewAngle, "View angle from the macro normal in degrees (default 30).")
+        sub->add_option("--view-angle", o->viewAngle,
+                        "View angle from the macro normal in degrees (default 30).")
             ->check(CLI::Range(0.0, 89.0));
         sub->add_option("--methods", o->methods,
                         "Methods to evaluate, comma separated (default all: naive, toksvig, toksvig-map, "
                         "variance-to-gloss, lean, clean, vmf).")
             ->delimiter(',')
             ->type_name("LIST");
+        sub->add_option("--kernels", o->kernels,
+                        "Footprint moments the methods read, comma separated: box (the definition, default), "
+                        "tent, gaussian (the filtered moments a bake stores, reported beside box).")
+            ->delimiter(',')
+            ->check(CLI::IsMember({"box", "tent", "gaussian"}))
+            ->type_name("LIST");
         sub->add_option("--out", o->out, "Folder for the report files (default burnish-evaluate).")
             ->type_name("DIR");
-        sub->add_flag("--error-maps", o->errorMaps,
-                      "Also write per-texel relative error maps as EXR (errors/<method>-s<power>-mip<k>.exr).");
-        sub->add_option("--bake-runs", o->bakeRuns, "Bake timings are the median of this many runs (default 3).")
+        sub->add_flag(
+            "--error-maps", o->errorMaps,
+            "Also write per-texel relative error maps as EXR (errors/<method>-s<power>-mip<k>.exr).");
+        sub->add_option("--bake-runs", o->bakeRuns,
+                        "Bake timings are the median of this many runs (default 3).")
             ->check(CLI::Range(1, 100));
         sub->add_option("--border", o->border, "Texture borders: wrap (tiling, default) or clamp.")
             ->check(CLI::IsMember({"wrap", "clamp"}));

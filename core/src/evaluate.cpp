@@ -7,12 +7,15 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 namespace burnish {
 
 namespace {
 
-double radians(double deg) { return deg * kPi<double> / 180.0; }
+double radians(double deg) {
+    return deg * kPi<double> / 180.0;
+}
 
 struct Accumulator {
     double absError = 0.0;
@@ -33,7 +36,8 @@ std::vector<DirectionPair> evaluationDirections(const EvaluateOptions& options) 
         const int count = thetaDeg == 0.0 ? 1 : std::max(options.azimuths, 1);
         for (int j = 0; j < count; ++j) {
             const double phi = 2.0 * kPi<double> * j / count;
-            const glm::dvec3 h(std::sin(thetaH) * std::cos(phi), std::sin(thetaH) * std::sin(phi), std::cos(thetaH));
+            const glm::dvec3 h(std::sin(thetaH) * std::cos(phi), std::sin(thetaH) * std::sin(phi),
+                               std::cos(thetaH));
             const glm::dvec3 l = 2.0 * glm::dot(v, h) * h - v;
             if (l.z < minLz) continue;
             pairs.push_back({glm::normalize(l), v, h});
@@ -50,7 +54,8 @@ static double truthOfNormal(const glm::dvec3& n, double s, const DirectionPair& 
     return blinnPhongNdf(glm::dot(n, d.h), s) * std::max(0.0, glm::dot(n, d.l));
 }
 
-double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s, const DirectionPair& d) {
+double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s,
+                        const DirectionPair& d) {
     const PyramidLevel& l = pyramid.level(mip);
     double sum = 0.0;
     for (int j = l.yStart[size_t(y)]; j < l.yStart[size_t(y) + 1]; ++j)
@@ -65,7 +70,8 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
     if (map.texelCount() == 0) return Error{"the normal map is empty"};
     if (options.basePowers.empty()) return Error{"no base power given"};
     for (double s : options.basePowers)
-        if (!(s > 0.0) || !(s <= kMaxPower)) return Error{"base power " + std::to_string(s) + " is outside (0, 1e9]"};
+        if (!(s > 0.0) || !(s <= kMaxPower))
+            return Error{"base power " + std::to_string(s) + " is outside (0, 1e9]"};
     if (options.methods.empty()) return Error{"no method given"};
     if (!(options.viewAngleDeg >= 0.0 && options.viewAngleDeg < 90.0))
         return Error{"view angle must lie in [0, 90) degrees"};
@@ -77,13 +83,23 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
     const NormalPyramid pyramid = NormalPyramid::build(borrowed, {options.border, FilterKernel::Box});
     const int lastLevel = pyramid.levelCount() - 1;
     if (options.firstMip < 0 || options.firstMip > lastLevel || options.lastMip < options.firstMip)
-        return Error{"mip range " + std::to_string(options.firstMip) + ".." + std::to_string(options.lastMip) +
-                     " does not fit a " + std::to_string(map.width) + "x" + std::to_string(map.height) +
-                     " map (levels 0.." + std::to_string(lastLevel) + ")"};
+        return Error{"mip range " + std::to_string(options.firstMip) + ".." +
+                     std::to_string(options.lastMip) + " does not fit a " + std::to_string(map.width) + "x" +
+                     std::to_string(map.height) + " map (levels 0.." + std::to_string(lastLevel) + ")"};
     const int firstMip = options.firstMip;
     const int lastMip = std::min(options.lastMip, lastLevel);
     const int mipCount = lastMip - firstMip + 1;
-    const size_t methodCount = options.methods.size();
+    if (options.kernels.empty()) return Error{"no footprint kernel given"};
+    // Variants: every method with every kernel, kernel-major; variant v is methods[v % M] with
+    // kernels[v / M]. Box variants read the footprint's own moments (the definition); others read
+    // the kernel-filtered moments a bake would store, reported beside them.
+    const size_t methodCount = options.methods.size() * options.kernels.size();
+    auto variantMethod = [&](size_t v) { return options.methods[v % options.methods.size()]; };
+    auto variantKernel = [&](size_t v) { return options.kernels[v / options.methods.size()]; };
+    std::vector<std::optional<NormalPyramid>> filtered(options.kernels.size());
+    for (size_t i = 0; i < options.kernels.size(); ++i)
+        if (options.kernels[i] != FilterKernel::Box)
+            filtered[i].emplace(NormalPyramid::build(borrowed, {options.border, options.kernels[i]}));
 
     EvaluationResult result;
     result.directions = directions;
@@ -99,16 +115,20 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
     double stepsDone = 0.0;
     for (double s : options.basePowers) {
         // Lobes of every method at every evaluated mip.
-        std::vector<std::vector<std::vector<TexelLobe>>> lobes(methodCount, std::vector<std::vector<TexelLobe>>(size_t(mipCount)));
+        std::vector<std::vector<std::vector<TexelLobe>>> lobes(
+            methodCount, std::vector<std::vector<TexelLobe>>(size_t(mipCount)));
         for (size_t m = 0; m < methodCount; ++m)
             for (int k = firstMip; k <= lastMip; ++k) {
                 const PyramidLevel& level = pyramid.level(k);
                 auto& out = lobes[m][size_t(k - firstMip)];
                 out.resize(size_t(level.width) * size_t(level.height));
+                const auto& kernelPyramid = filtered[m / options.methods.size()];
                 tbb::parallel_for(0, level.height, [&](int y) {
                     for (int x = 0; x < level.width; ++x)
-                        out[size_t(y) * size_t(level.width) + size_t(x)] =
-                            methodLobe(options.methods[m], pyramid.boxMoments(k, x, y), s, options.params);
+                        out[size_t(y) * size_t(level.width) + size_t(x)] = methodLobe(
+                            variantMethod(m),
+                            kernelPyramid ? kernelPyramid->moments(k, x, y) : pyramid.boxMoments(k, x, y), s,
+                            options.params);
                 });
             }
 
@@ -122,7 +142,8 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             for (int k = firstMip; k <= lastMip; ++k) {
                 const size_t n = sums[size_t(k)].size();
                 texelTruth[size_t(k - firstMip)].assign(n, 0.0);
-                for (size_t m = 0; m < methodCount; ++m) texelAbs[m][size_t(k - firstMip)].assign(n, 0.0);
+                for (size_t m = 0; m < methodCount; ++m)
+                    texelAbs[m][size_t(k - firstMip)].assign(n, 0.0);
             }
         }
 
@@ -184,11 +205,11 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                 // Σ GT > 0 whenever a direction has its light above the horizon and a normal faces
                 // it; a truth of exactly 0 (all normals facing away) reports zero error and energy 1.
                 const bool lit = a.truth > 0.0;
-                result.errors.push_back({options.methods[m], s, k, lit ? a.absError / a.truth : 0.0,
-                                         lit ? a.method / a.truth : 1.0});
+                result.errors.push_back({variantMethod(m), s, k, lit ? a.absError / a.truth : 0.0,
+                                         lit ? a.method / a.truth : 1.0, variantKernel(m)});
                 if (options.errorMaps) {
                     const PyramidLevel& level = pyramid.level(k);
-                    ErrorMap em{options.methods[m], s, k, level.width, level.height, {}};
+                    ErrorMap em{variantMethod(m), s, k, level.width, level.height, {}, variantKernel(m)};
                     const auto& absSum = texelAbs[m][size_t(k - firstMip)];
                     const auto& truthSum = texelTruth[size_t(k - firstMip)];
                     em.relativeError.resize(absSum.size());

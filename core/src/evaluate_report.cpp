@@ -31,8 +31,8 @@ double median(std::vector<double> v) {
 constexpr size_t kCostTexels = 1 << 16;
 constexpr int kCostRepetitions = 5;
 
-double measureShadingNs(const NormalPyramid& pyramid, int mip, Method method, double s, const EvaluateOptions& options,
-                        const std::vector<DirectionPair>& directions) {
+double measureShadingNs(const NormalPyramid& pyramid, int mip, Method method, double s,
+                        const EvaluateOptions& options, const std::vector<DirectionPair>& directions) {
     const PyramidLevel& level = pyramid.level(mip);
     std::vector<TexelLobe> lobes;
     for (int y = 0; y < level.height && lobes.size() < kCostTexels; ++y)
@@ -44,12 +44,20 @@ double measureShadingNs(const NormalPyramid& pyramid, int mip, Method method, do
         const auto start = Clock::now();
         double sum = 0.0;
         for (const auto& d : directions)
-            for (const auto& lobe : lobes) sum += methodValue(lobe, d);
+            for (const auto& lobe : lobes)
+                sum += methodValue(lobe, d);
         const double ns = std::chrono::duration<double, std::nano>(Clock::now() - start).count();
         sink = sink + sum;
         times.push_back(ns / double(lobes.size() * directions.size()));
     }
     return median(times);
+}
+
+// "lean", or "lean (tent)" for a variant evaluated with kernel-filtered moments.
+std::string variantLabel(Method method, FilterKernel kernel) {
+    std::string label(methodName(method));
+    if (kernel != FilterKernel::Box) label += " (" + std::string(kernelName(kernel)) + ")";
+    return label;
 }
 
 std::string powerLabel(double s) {
@@ -103,7 +111,8 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
     report.machine = machineInfo();
 
     const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
-    const NormalPyramid pyramid = NormalPyramid::build(borrowed, {options.evaluate.border, FilterKernel::Box});
+    const NormalPyramid pyramid =
+        NormalPyramid::build(borrowed, {options.evaluate.border, FilterKernel::Box});
     const double s = options.evaluate.basePowers.front();
     const size_t methodCount = options.evaluate.methods.size();
     for (size_t i = 0; i < methodCount; ++i) {
@@ -125,8 +134,8 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
             if (!baked) return Error{baked.error()};
         }
         cost.bakeSeconds = median(runs);
-        cost.nsPerLobe =
-            measureShadingNs(pyramid, report.result.firstMip, method, s, options.evaluate, report.result.directions);
+        cost.nsPerLobe = measureShadingNs(pyramid, report.result.firstMip, method, s, options.evaluate,
+                                          report.result.directions);
         report.costs.push_back(cost);
         if (progress) progress(0.8 + 0.2 * double(i + 1) / double(methodCount));
     }
@@ -136,47 +145,54 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
 std::string evaluationMarkdown(const EvaluationReport& r) {
     std::ostringstream md;
     md << "# Burnish evaluation: " << (r.input.empty() ? std::string("normal map") : r.input) << "\n\n";
-    md << r.width << "x" << r.height << " texels; mips " << r.result.firstMip << ".." << r.result.lastMip << "; view "
-       << formatNumber(r.options.viewAngleDeg) << " deg from the macro normal; " << r.result.directions.size()
-       << " light/view pairs (half vectors at";
-    for (double a : r.options.halfAnglesDeg) md << " " << formatNumber(a);
+    md << r.width << "x" << r.height << " texels; mips " << r.result.firstMip << ".." << r.result.lastMip
+       << "; view " << formatNumber(r.options.viewAngleDeg) << " deg from the macro normal; "
+       << r.result.directions.size() << " light/view pairs (half vectors at";
+    for (double a : r.options.halfAnglesDeg)
+        md << " " << formatNumber(a);
     md << " deg x " << r.options.azimuths << " azimuths, lights within " << formatNumber(r.options.horizonDeg)
        << " deg of the horizon dropped).\n\n";
     md << "Ground truth: for mip k, the mean over the texel's footprint of finest texels of "
           "D_s(n_i.h) max(0, n_i.l), D_s the normalized Blinn-Phong NDF of the base power s. "
           "Each method: its own NDF times max(0, n.l) with its normal, from box-footprint moments. "
-          "Relative L1 = sum|M - GT| / sum GT; energy = sum M / sum GT (1 is exact).\n\n";
+          "Relative L1 = sum|M - GT| / sum GT; energy = sum M / sum GT (1 is exact). "
+          "Rows marked (tent) or (gaussian) use the kernel-filtered moments a bake stores instead of the "
+          "footprint's own, against the same ground truth.\n\n";
 
     for (double s : r.options.basePowers) {
         md << "## Base power " << powerLabel(s) << "\n\n";
         std::vector<std::string> header{"method"};
-        for (int k = r.result.firstMip; k <= r.result.lastMip; ++k) header.push_back("mip " + std::to_string(k));
+        for (int k = r.result.firstMip; k <= r.result.lastMip; ++k)
+            header.push_back("mip " + std::to_string(k));
         std::vector<Align> align(header.size(), Align::Right);
         align[0] = Align::Left;
         MarkdownTable errors(header, align);
         MarkdownTable energy(header, align);
-        for (Method m : r.options.methods) {
-            std::vector<std::string> e{std::string(methodName(m))}, en{std::string(methodName(m))};
-            for (int k = r.result.firstMip; k <= r.result.lastMip; ++k)
-                for (const auto& x : r.result.errors)
-                    if (x.method == m && x.basePower == s && x.mip == k) {
-                        e.push_back(formatNumber(x.relativeL1));
-                        en.push_back(formatNumber(x.energyRatio));
-                    }
-            errors.addRow(e);
-            energy.addRow(en);
-        }
-        md << "Relative L1 error against the ground truth:\n\n" << errors.render() << "\nEnergy ratio:\n\n"
+        for (FilterKernel kernel : r.options.kernels)
+            for (Method m : r.options.methods) {
+                std::vector<std::string> e{variantLabel(m, kernel)}, en{variantLabel(m, kernel)};
+                for (int k = r.result.firstMip; k <= r.result.lastMip; ++k)
+                    for (const auto& x : r.result.errors)
+                        if (x.method == m && x.kernel == kernel && x.basePower == s && x.mip == k) {
+                            e.push_back(formatNumber(x.relativeL1));
+                            en.push_back(formatNumber(x.energyRatio));
+                        }
+                errors.addRow(e);
+                energy.addRow(en);
+            }
+        md << "Relative L1 error against the ground truth:\n\n"
+           << errors.render() << "\nEnergy ratio:\n\n"
            << energy.render() << "\n";
     }
 
     md << "## Cost\n\n";
-    MarkdownTable cost({"method", "bake (s, median of " + std::to_string(r.bakeRuns) + ")", "shading (ns/lobe)",
-                        "fetches", "bytes/texel", "storage"},
+    MarkdownTable cost({"method", "bake (s, median of " + std::to_string(r.bakeRuns) + ")",
+                        "shading (ns/lobe)", "fetches", "bytes/texel", "storage"},
                        {Align::Left, Align::Right, Align::Right, Align::Right, Align::Right, Align::Left});
     for (const auto& c : r.costs)
-        cost.addRow({std::string(methodName(c.method)), formatNumber(c.bakeSeconds), formatNumber(c.nsPerLobe),
-                     std::to_string(c.storage.textureFetches), formatNumber(c.storage.bytesPerTexel), c.storage.layout});
+        cost.addRow({std::string(methodName(c.method)), formatNumber(c.bakeSeconds),
+                     formatNumber(c.nsPerLobe), std::to_string(c.storage.textureFetches),
+                     formatNumber(c.storage.bytesPerTexel), c.storage.layout});
     md << cost.render() << "\n";
     md << "Bake: in-memory, pyramid included, to mip " << r.result.lastMip
        << ". Shading: the method's lobe evaluated in double on one CPU core (a CPU proxy for its shader's "
@@ -184,7 +200,8 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
        << r.machine.cpuModel << " (" << r.machine.logicalCpus << " threads), " << r.machine.compiler
        << "; evaluation took " << formatNumber(r.result.seconds) << " s.\n\n";
     md << "Methods:\n\n";
-    for (Method m : r.options.methods) md << "- `" << methodName(m) << "`: " << methodDescription(m) << "\n";
+    for (Method m : r.options.methods)
+        md << "- `" << methodName(m) << "`: " << methodDescription(m) << "\n";
     return md.str();
 }
 
@@ -204,6 +221,7 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
     j["errors"] = nlohmann::json::array();
     for (const auto& e : r.result.errors)
         j["errors"].push_back({{"method", methodName(e.method)},
+                               {"kernel", kernelName(e.kernel)},
                                {"base_power", e.basePower},
                                {"mip", e.mip},
                                {"relative_l1", jsonNumber(e.relativeL1)},
@@ -217,49 +235,57 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
                               {"texture_fetches", c.storage.textureFetches},
                               {"bytes_per_texel", c.storage.bytesPerTexel},
                               {"storage", c.storage.layout}});
-    j["machine"] = {{"cpu", r.machine.cpuModel}, {"threads", r.machine.logicalCpus}, {"compiler", r.machine.compiler}};
+    j["machine"] = {
+        {"cpu", r.machine.cpuModel}, {"threads", r.machine.logicalCpus}, {"compiler", r.machine.compiler}};
     return j;
 }
 
 PlotSpec evaluationErrorPerMipPlot(const EvaluationReport& r) {
     PlotSpec spec;
-    spec.title = "Error against the ground truth per mip" + (r.input.empty() ? std::string() : " - " + r.input);
-    spec.x = {"mip level", AxisScale::Linear, double(r.result.firstMip) - 0.25, double(r.result.lastMip) + 0.25};
+    spec.title =
+        "Error against the ground truth per mip" + (r.input.empty() ? std::string() : " - " + r.input);
+    spec.x = {"mip level", AxisScale::Linear, double(r.result.firstMip) - 0.25,
+              double(r.result.lastMip) + 0.25};
     spec.y = {"relative L1 error", AxisScale::Log, std::nullopt, std::nullopt};
     size_t colour = 0;
     for (double s : r.options.basePowers)
-        for (Method m : r.options.methods) {
-            PlotSeries series;
-            series.name = std::string(methodName(m)) + (r.options.basePowers.size() > 1 ? " s=" + powerLabel(s) : "");
-            series.color = plotPalette(colour++);
-            series.line = true;
-            for (const auto& e : r.result.errors)
-                if (e.method == m && e.basePower == s) {
-                    series.x.push_back(e.mip);
-                    series.y.push_back(e.relativeL1);
-                }
-            spec.series.push_back(std::move(series));
-        }
+        for (FilterKernel kernel : r.options.kernels)
+            for (Method m : r.options.methods) {
+                PlotSeries series;
+                series.name =
+                    variantLabel(m, kernel) + (r.options.basePowers.size() > 1 ? " s=" + powerLabel(s) : "");
+                series.color = plotPalette(colour++);
+                series.line = true;
+                for (const auto& e : r.result.errors)
+                    if (e.method == m && e.kernel == kernel && e.basePower == s) {
+                        series.x.push_back(e.mip);
+                        series.y.push_back(e.relativeL1);
+                    }
+                spec.series.push_back(std::move(series));
+            }
     return spec;
 }
 
 PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& r) {
     PlotSpec spec;
     const double s = r.options.basePowers.front();
-    spec.title = "Error at mip " + std::to_string(r.result.lastMip) + " against shading cost (s=" + powerLabel(s) + ")";
+    spec.title = "Error at mip " + std::to_string(r.result.lastMip) +
+                 " against shading cost (s=" + powerLabel(s) + ")";
     spec.x = {"shading cost (ns per lobe evaluation, CPU)", AxisScale::Log, std::nullopt, std::nullopt};
     spec.y = {"relative L1 error", AxisScale::Log, std::nullopt, std::nullopt};
     std::vector<ParetoPoint> points;
     std::vector<std::string> names;
     for (const auto& c : r.costs)
         for (const auto& e : r.result.errors)
-            if (e.method == c.method && e.basePower == s && e.mip == r.result.lastMip) {
+            if (e.method == c.method && e.kernel == FilterKernel::Box && e.basePower == s &&
+                e.mip == r.result.lastMip) {
                 points.push_back({"methods", c.nsPerLobe, e.relativeL1});
                 names.emplace_back(methodName(c.method));
             }
     const auto front = paretoFront(points);
     PlotSeries all{"methods", {}, {}, {0.2f, 0.3f, 0.7f}, false, 2, MarkerShape::Square, 9, {}};
-    PlotSeries pareto{"Pareto front", {}, {}, {0.85f, 0.2f, 0.15f}, true, 2, MarkerShape::HollowSquare, 15, {}};
+    PlotSeries pareto{
+        "Pareto front", {}, {}, {0.85f, 0.2f, 0.15f}, true, 2, MarkerShape::HollowSquare, 15, {}};
     std::vector<std::pair<double, double>> frontPoints;
     for (size_t i = 0; i < points.size(); ++i) {
         all.x.push_back(points[i].cost);
@@ -277,14 +303,16 @@ PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& r) {
 }
 
 Status writeFloatExr(const fs::path& path, int width, int height, const std::vector<float>& values) {
-    if (values.size() != size_t(width) * size_t(height)) return Error{"error map size does not match its extent"};
+    if (values.size() != size_t(width) * size_t(height))
+        return Error{"error map size does not match its extent"};
     const fs::path tmp = temporaryPathFor(path);
     auto out = OIIO::ImageOutput::create(path.string()); // plugin chosen by the real name
     if (!out) return Error{"cannot write '" + path.string() + "': " + OIIO::geterror()};
     OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
     spec.channelnames = {"Y"};
     spec.attribute("compression", "zip");
-    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, values.data()) || !out->close()) {
+    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, values.data()) ||
+        !out->close()) {
         std::error_code ec;
         fs::remove(tmp, ec);
         return Error{"cannot write '" + path.string() + "': " + out->geterror()};
@@ -298,15 +326,20 @@ Status writeEvaluationReport(const EvaluationReport& r, const fs::path& dir) {
     if (ec) return Error{"cannot create folder '" + dir.string() + "': " + ec.message()};
     if (auto st = writeFileAtomic(dir / "evaluate.md", evaluationMarkdown(r)); !st) return st;
     if (auto st = writeFileAtomic(dir / "evaluate.json", evaluationJson(r).dump(2) + "\n"); !st) return st;
-    if (auto st = savePlotPng(evaluationErrorPerMipPlot(r), dir / "evaluate-error-per-mip.png"); !st) return st;
-    if (auto st = savePlotPng(evaluationErrorVsCostPlot(r), dir / "evaluate-error-vs-cost.png"); !st) return st;
+    if (auto st = savePlotPng(evaluationErrorPerMipPlot(r), dir / "evaluate-error-per-mip.png"); !st)
+        return st;
+    if (auto st = savePlotPng(evaluationErrorVsCostPlot(r), dir / "evaluate-error-vs-cost.png"); !st)
+        return st;
     if (!r.result.maps.empty()) {
         fs::create_directories(dir / "errors", ec);
         if (ec) return Error{"cannot create folder '" + (dir / "errors").string() + "': " + ec.message()};
         for (const auto& m : r.result.maps) {
-            const std::string name = std::string(methodName(m.method)) + "-s" + powerLabel(m.basePower) + "-mip" +
-                                     std::to_string(m.mip) + ".exr";
-            if (auto st = writeFloatExr(dir / "errors" / name, m.width, m.height, m.relativeError); !st) return st;
+            const std::string kernel =
+                m.kernel == FilterKernel::Box ? "" : "-" + std::string(kernelName(m.kernel));
+            const std::string name = std::string(methodName(m.method)) + kernel + "-s" +
+                                     powerLabel(m.basePower) + "-mip" + std::to_string(m.mip) + ".exr";
+            if (auto st = writeFloatExr(dir / "errors" / name, m.width, m.height, m.relativeError); !st)
+                return st;
         }
     }
     return {};

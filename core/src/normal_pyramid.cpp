@@ -85,6 +85,18 @@ std::vector<int> childStarts(int childSize, int parentSize) {
 
 } // namespace
 
+std::string_view kernelName(FilterKernel kernel) {
+    switch (kernel) {
+    case FilterKernel::Box:
+        return "box";
+    case FilterKernel::Tent:
+        return "tent";
+    case FilterKernel::Gaussian:
+        return "gaussian";
+    }
+    return "box";
+}
+
 int borderIndex(int i, int size, BorderMode border) {
     if (border == BorderMode::Clamp) return std::clamp(i, 0, size - 1);
     const int m = i % size;

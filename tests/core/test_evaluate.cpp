@@ -182,3 +182,33 @@ TEST(Evaluate, RealSampleNaiveIsWorstAndGrowsWithMip) {
         }
     }
 }
+
+TEST(Evaluate, OtherKernelsAreReportedBesideTheBoxDefinition) {
+    const NormalMap map = makeNormalMap(16, 16, gaussianSlopes(256, 0.2, 21));
+    EvaluateOptions options;
+    options.methods = {Method::Toksvig, Method::Lean};
+    options.lastMip = 2;
+    auto boxOnly = evaluateMethods(map, options);
+    options.kernels = {FilterKernel::Box, FilterKernel::Tent};
+    auto both = evaluateMethods(map, options);
+    ASSERT_TRUE(boxOnly.ok() && both.ok());
+    ASSERT_EQ(both->errors.size(), 2 * boxOnly->errors.size());
+    size_t tent = 0;
+    for (const auto& e : both->errors) {
+        if (e.kernel == FilterKernel::Tent) {
+            ++tent;
+            continue;
+        }
+        // The box rows are the definition: unchanged by asking for other kernels too.
+        bool found = false;
+        for (const auto& b : boxOnly->errors)
+            if (b.method == e.method && b.mip == e.mip) {
+                EXPECT_EQ(b.relativeL1, e.relativeL1);
+                found = true;
+            }
+        EXPECT_TRUE(found);
+    }
+    EXPECT_EQ(tent, boxOnly->errors.size());
+    // Tent moments mix neighbouring footprints, so they differ from the box rows.
+    EXPECT_NE(both->errors.front().relativeL1, both->errors.back().relativeL1);
+}

@@ -32,6 +32,9 @@ struct EvaluateOptions {
     int azimuths = 8;
     double horizonDeg = 3.0;
     std::vector<Method> methods = allMethods();
+    /// Footprint moments each method is evaluated with: Box is the definition above; Tent and
+    /// Gaussian use the kernel-filtered moments a bake stores, and are reported beside it.
+    std::vector<FilterKernel> kernels{FilterKernel::Box};
     MethodParams params;
     BorderMode border = BorderMode::Wrap;
     /// Keep per-texel error maps (relative L1 per texel: Σ_dir|M − GT| / Σ_dir GT).
@@ -54,6 +57,7 @@ struct MipError {
     int mip;
     double relativeL1;  // Σ|M − GT| / Σ GT over texels and directions
     double energyRatio; // Σ M / Σ GT
+    FilterKernel kernel = FilterKernel::Box;
 };
 
 struct ErrorMap {
@@ -63,7 +67,9 @@ struct ErrorMap {
     int width;
     int height;
     std::vector<float> relativeError; // per texel, row-major
+    FilterKernel kernel = FilterKernel::Box;
 };
+
 
 struct EvaluationResult {
     std::vector<MipError> errors;

@@ -21,6 +21,7 @@
 #include <array>
 #include <functional>
 #include <memory>
+#include <string_view>
 #include <vector>
 
 namespace burnish {
@@ -62,6 +63,9 @@ enum class BorderMode { Wrap, Clamp };
 /// hardware bilinear filter the shader will apply (Hill 2011; Baker & Hill 2012, "Baking
 /// Variance": tent [Lazarov 2011] or Gaussian). Gaussian: 5×5, σ = 1 texel of the level.
 enum class FilterKernel { Box, Tent, Gaussian };
+
+/// "box", "tent" or "gaussian".
+std::string_view kernelName(FilterKernel kernel);
 
 /// The separable weights of a kernel: taps −radius..radius, summing to 1.
 struct KernelTaps {

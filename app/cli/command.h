@@ -21,7 +21,9 @@ struct CommandEntry {
 std::vector<CommandEntry>& commandRegistry();
 
 struct CommandRegistration {
-    CommandRegistration(int order, CommandSetup setup) { commandRegistry().push_back({order, std::move(setup)}); }
+    CommandRegistration(int order, CommandSetup setup) {
+        commandRegistry().push_back({order, std::move(setup)});
+    }
 };
 
 /// Prints "burnish: error: <message>" as one line on stderr and returns the exit code for it (1).

@@ -17,20 +17,24 @@ void addNormalMapOptions(CLI::App* sub, NormalMapCliOptions& options) {
                     "used), rgb, or rg (rebuild z from RG, e.g. BC5 maps saved as RGB).")
         ->check(CLI::IsMember({"auto", "rgb", "rg"}))
         ->type_name("LAYOUT");
-    sub->add_option("--encoding", options.encoding,
-                    "How stored values map to [-1,1]: auto (integer formats and non-negative float images: 2v-1; "
-                    "float images with negative values: as stored), unsigned, or signed.")
+    sub->add_option(
+           "--encoding", options.encoding,
+           "How stored values map to [-1,1]: auto (integer formats and non-negative float images: 2v-1; "
+           "float images with negative values: as stored), unsigned, or signed.")
         ->check(CLI::IsMember({"auto", "unsigned", "signed"}))
         ->type_name("ENC");
-    sub->add_flag("--allow-implausible", options.allowImplausible,
-                  "Read an image that does not look like a tangent-space normal map (many texels facing down, "
-                  "vector lengths far from 1) with a warning instead of an error.");
+    sub->add_flag(
+        "--allow-implausible", options.allowImplausible,
+        "Read an image that does not look like a tangent-space normal map (many texels facing down, "
+        "vector lengths far from 1) with a warning instead of an error.");
 }
 
 NormalMapOptions toNormalMapOptions(const NormalMapCliOptions& options) {
     NormalMapOptions out;
     out.green = options.green == "directx" ? GreenConvention::DirectX : GreenConvention::OpenGL;
-    out.layout = options.layout == "rgb" ? NormalLayout::Rgb : options.layout == "rg" ? NormalLayout::Rg : NormalLayout::Auto;
+    out.layout = options.layout == "rgb"  ? NormalLayout::Rgb
+                 : options.layout == "rg" ? NormalLayout::Rg
+                                          : NormalLayout::Auto;
     out.encoding = options.encoding == "signed"     ? NormalValueEncoding::Signed
                    : options.encoding == "unsigned" ? NormalValueEncoding::Unsigned
                                                     : NormalValueEncoding::Auto;
@@ -42,7 +46,9 @@ ProgressBar::ProgressBar(std::string label)
     : m_label(std::move(label))
     , m_enabled(::isatty(STDERR_FILENO) == 1) {}
 
-ProgressBar::~ProgressBar() { finish(); }
+ProgressBar::~ProgressBar() {
+    finish();
+}
 
 void ProgressBar::update(double fraction) {
     if (!m_enabled) return;

@@ -28,13 +28,15 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
 
     auto& registry = commandRegistry();
-    std::sort(registry.begin(), registry.end(), [](const auto& a, const auto& b) { return a.order < b.order; });
+    std::sort(registry.begin(), registry.end(),
+              [](const auto& a, const auto& b) { return a.order < b.order; });
     std::vector<std::pair<CLI::App*, std::function<int()>>> runners;
     for (const auto& entry : registry) {
         const size_t before = app.get_subcommands({}).size();
         auto run = entry.setup(app);
         const auto subs = app.get_subcommands({});
-        for (size_t i = before; i < subs.size(); ++i) runners.emplace_back(subs[i], run);
+        for (size_t i = before; i < subs.size(); ++i)
+            runners.emplace_back(subs[i], run);
     }
 
     try {

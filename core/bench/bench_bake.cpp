@@ -39,7 +39,8 @@ const NormalMap& benchMap(int size, std::string& label) {
     if (source) {
         for (int y = 0; y < size; ++y)
             for (int x = 0; x < size; ++x)
-                normals[size_t(y) * size_t(size) + size_t(x)] = source->at(x % source->width, y % source->height);
+                normals[size_t(y) * size_t(size) + size_t(x)] =
+                    source->at(x % source->width, y % source->height);
         labels[size] = std::string("tiled ") + path;
     } else {
         // Bumps at several scales plus noise: rough at every mip, like a real map.
@@ -48,8 +49,10 @@ const NormalMap& benchMap(int size, std::string& label) {
         for (int y = 0; y < size; ++y)
             for (int x = 0; x < size; ++x) {
                 const float u = float(x), v = float(y);
-                const float dx = 0.3f * std::sin(u * 0.05f) + 0.1f * std::sin(u * 0.7f + v * 0.3f) + noise(rng);
-                const float dy = 0.3f * std::cos(v * 0.04f) + 0.1f * std::sin(v * 0.9f - u * 0.2f) + noise(rng);
+                const float dx =
+                    0.3f * std::sin(u * 0.05f) + 0.1f * std::sin(u * 0.7f + v * 0.3f) + noise(rng);
+                const float dy =
+                    0.3f * std::cos(v * 0.04f) + 0.1f * std::sin(v * 0.9f - u * 0.2f) + noise(rng);
                 normals[size_t(y) * size_t(size) + size_t(x)] = glm::normalize(glm::vec3(dx, dy, 1.0f));
             }
         labels[size] = "synthetic";
@@ -68,7 +71,8 @@ void BM_Bake(benchmark::State& state) {
         benchmark::DoNotOptimize(out);
     }
     state.SetLabel(std::string(methodName(options.method)) + ", " + label);
-    state.counters["Mtexels/s"] = benchmark::Counter(double(map.texelCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["Mtexels/s"] =
+        benchmark::Counter(double(map.texelCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_Bake)->DenseRange(0, 6)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
 

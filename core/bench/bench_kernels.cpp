@@ -48,4 +48,3 @@ const bool kRegistered = [] {
 }();
 
 } // namespace
-

@@ -11,12 +11,18 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
+double seconds(Clock::time_point since) {
+    return std::chrono::duration<double>(Clock::now() - since).count();
+}
 
-float unit(double v) { return float(std::clamp(v, 0.0, 1.0)); }
+float unit(double v) {
+    return float(std::clamp(v, 0.0, 1.0));
+}
 
 // Smallest power of two >= x (and >= 2^-4), so stored ranges are exact binary scales.
-double binaryScale(double x) { return std::exp2(std::ceil(std::log2(std::max(x, 1.0 / 16.0)))); }
+double binaryScale(double x) {
+    return std::exp2(std::ceil(std::log2(std::max(x, 1.0 / 16.0))));
+}
 
 // Per level, the authored base variance 1/s averaged over each texel's footprint and then
 // filtered with the pyramid's kernel: variances (not powers or gloss values) are what average
@@ -24,7 +30,8 @@ double binaryScale(double x) { return std::exp2(std::ceil(std::log2(std::max(x, 
 // operate correctly").
 class BaseVariancePyramid {
 public:
-    BaseVariancePyramid(const NormalPyramid& pyramid, const std::vector<float>& gloss, const GlossEncoding& encoding)
+    BaseVariancePyramid(const NormalPyramid& pyramid, const std::vector<float>& gloss,
+                        const GlossEncoding& encoding)
         : m_pyramid(pyramid) {
         const int levels = pyramid.levelCount();
         m_levels.resize(size_t(levels));
@@ -60,7 +67,8 @@ public:
             for (int i = -taps.radius; i <= taps.radius; ++i) {
                 const int xi = borderIndex(x + i, level.width, m_pyramid.options().border);
                 const int yj = borderIndex(y + j, level.height, m_pyramid.options().border);
-                const double w = taps.w[i + taps.radius] * taps.w[j + taps.radius] * m_pyramid.footprintCount(k, xi, yj);
+                const double w =
+                    taps.w[i + taps.radius] * taps.w[j + taps.radius] * m_pyramid.footprintCount(k, xi, yj);
                 sum += w * m_levels[size_t(k)][size_t(yj) * size_t(level.width) + size_t(xi)];
                 weight += w;
             }
@@ -102,7 +110,8 @@ Result<std::vector<float>> glossFromImage(const Image& image, int width, int hei
     std::vector<float> gloss(image.texelCount());
     for (size_t i = 0; i < gloss.size(); ++i) {
         const float v = image.pixels[i * size_t(image.channels)];
-        if (!std::isfinite(v)) return Error{"gloss map has a NaN or infinite texel at index " + std::to_string(i)};
+        if (!std::isfinite(v))
+            return Error{"gloss map has a NaN or infinite texel at index " + std::to_string(i)};
         gloss[i] = std::clamp(v, 0.0f, 1.0f);
     }
     return gloss;
@@ -114,8 +123,8 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
         return Error{"base power must lie in (0, 1e9]"};
     if (options.authoredGloss) {
         if (options.authoredGloss->size() != map.texelCount())
-            return Error{"authored gloss has " + std::to_string(options.authoredGloss->size()) + " texels, the normal map " +
-                         std::to_string(map.texelCount())};
+            return Error{"authored gloss has " + std::to_string(options.authoredGloss->size()) +
+                         " texels, the normal map " + std::to_string(map.texelCount())};
         for (float g : *options.authoredGloss)
             if (!std::isfinite(g)) return Error{"authored gloss has a NaN or infinite texel"};
     }
@@ -130,7 +139,8 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     out.stats.pyramidSeconds = seconds(start);
     start = Clock::now();
 
-    const int levels = options.mipCount > 0 ? std::min(options.mipCount, pyramid.levelCount()) : pyramid.levelCount();
+    const int levels =
+        options.mipCount > 0 ? std::min(options.mipCount, pyramid.levelCount()) : pyramid.levelCount();
     out.stats.mipCount = levels;
     const Method method = options.method;
     const bool slopeMethod = method == Method::Lean || method == Method::Clean;
@@ -149,41 +159,49 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
         };
         for (int k = 0; k < levels; ++k)
             for (int y = 0; y < pyramid.level(k).height; ++y)
-                for (int x = 0; x < pyramid.level(k).width; ++x) visit(pyramid.boxMoments(k, x, y));
+                for (int x = 0; x < pyramid.level(k).width; ++x)
+                    visit(pyramid.boxMoments(k, x, y));
         double minPower = options.basePower;
         if (options.authoredGloss)
-            for (float g : *options.authoredGloss) minPower = std::min(minPower, options.encoding.power(g));
+            for (float g : *options.authoredGloss)
+                minPower = std::min(minPower, options.encoding.power(g));
         sB = binaryScale(maxB);
         sM = binaryScale(maxM + 1.0 / std::max(minPower, 1e-6));
     }
 
     // The textures each method stores.
     out.textures.push_back(makeTexture("normal",
-                                       unnormalized ? "unnormalized mean normal Na (its length carries the variance)"
-                                                    : "renormalized mean normal",
+                                       unnormalized
+                                           ? "unnormalized mean normal Na (its length carries the variance)"
+                                           : "renormalized mean normal",
                                        normalDecode()));
     if (!slopeMethod)
-        out.textures.push_back(makeTexture("gloss",
-                                           std::string(adjustedGloss ? "adjusted gloss, " : "authored gloss, ") +
-                                               options.encoding.formula(),
-                                           {{"gloss", 1.0, 0.0}}));
+        out.textures.push_back(makeTexture(
+            "gloss",
+            std::string(adjustedGloss ? "adjusted gloss, " : "authored gloss, ") + options.encoding.formula(),
+            {{"gloss", 1.0, 0.0}}));
     if (method == Method::ToksvigMap)
         out.textures.push_back(makeTexture("toksvig",
-                                           "Toksvig factor f_t for power " + std::to_string(options.params.toksvigMapPower) +
+                                           "Toksvig factor f_t for power " +
+                                               std::to_string(options.params.toksvigMapPower) +
                                                "; convert with ft /= lerp(s/fixed_s, 1, ft)",
                                            {{"toksvig", 1.0, 0.0}}));
     if (method == Method::Lean) {
-        out.textures.push_back(makeTexture("lean-b", "LEAN slope mean B", {{"B.x", 2 * sB, -sB}, {"B.y", 2 * sB, -sB}}, true));
+        out.textures.push_back(
+            makeTexture("lean-b", "LEAN slope mean B", {{"B.x", 2 * sB, -sB}, {"B.y", 2 * sB, -sB}}, true));
         out.textures.push_back(makeTexture("lean-m", "LEAN second moments M with 1/s on the diagonal",
-                                           {{"M.xx", sM, 0.0}, {"M.yy", sM, 0.0}, {"M.xy", 2 * sM, -sM}}, true));
-        out.textures.push_back(makeTexture("lean-gloss",
-                                           "compact LEAN: log2(1/Sigma_x)/13, log2(1/Sigma_y)/13, correlation (rho+1)/2",
-                                           {{"gloss.x", 1.0, 0.0}, {"gloss.y", 1.0, 0.0}, {"rho", 2.0, -1.0}}));
+                                           {{"M.xx", sM, 0.0}, {"M.yy", sM, 0.0}, {"M.xy", 2 * sM, -sM}},
+                                           true));
+        out.textures.push_back(makeTexture(
+            "lean-gloss", "compact LEAN: log2(1/Sigma_x)/13, log2(1/Sigma_y)/13, correlation (rho+1)/2",
+            {{"gloss.x", 1.0, 0.0}, {"gloss.y", 1.0, 0.0}, {"rho", 2.0, -1.0}}));
     }
     if (method == Method::Clean)
         out.textures.push_back(makeTexture("clean", "CLEAN: B and (M.xx + M.yy)/2 with 1/s added",
-                                           {{"B.x", 2 * sB, -sB}, {"B.y", 2 * sB, -sB}, {"M.avg", sM, 0.0}}, true));
-    for (auto& tex : out.textures) tex.mips.resize(size_t(levels));
+                                           {{"B.x", 2 * sB, -sB}, {"B.y", 2 * sB, -sB}, {"M.avg", sM, 0.0}},
+                                           true));
+    for (auto& tex : out.textures)
+        tex.mips.resize(size_t(levels));
 
     enum class Role { Normal, Gloss, Toksvig, LeanB, LeanM, LeanGloss, Clean };
     std::vector<Role> roles;
@@ -204,7 +222,8 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
             mip.height = level.height;
             mip.texels.resize(size_t(level.width) * size_t(level.height) * size_t(tex.channels));
         }
-        std::vector<size_t> lowRow(static_cast<size_t>(level.height), 0), highRow(static_cast<size_t>(level.height), 0);
+        std::vector<size_t> lowRow(static_cast<size_t>(level.height), 0),
+            highRow(static_cast<size_t>(level.height), 0);
         // Each row is produced from its filtered moments as they stream out of the pyramid.
         pyramid.forEachMomentRow(k, [&](int y, const NormalMoments* row) {
             for (int x = 0; x < level.width; ++x) {
@@ -218,7 +237,8 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                     switch (roles[r]) {
                     case Role::Normal: {
                         const glm::vec3 n = unnormalized ? m.mean : m.meanDirection();
-                        for (int c = 0; c < 3; ++c) px[c] = unit(0.5 * double(n[c]) + 0.5);
+                        for (int c = 0; c < 3; ++c)
+                            px[c] = unit(0.5 * double(n[c]) + 0.5);
                         break;
                     }
                     case Role::Gloss: {

@@ -28,8 +28,8 @@ double addVarianceToPower(double s, double sigma2) {
 Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& options) {
     if (detail.texelCount() == 0) return Error{"the detail normal map is empty"};
     if (options.fadeStartMip < 0 || options.fadeEndMip < options.fadeStartMip)
-        return Error{"detail fade mips must satisfy 0 <= start <= end (got " + std::to_string(options.fadeStartMip) +
-                     ".." + std::to_string(options.fadeEndMip) + ")"};
+        return Error{"detail fade mips must satisfy 0 <= start <= end (got " +
+                     std::to_string(options.fadeStartMip) + ".." + std::to_string(options.fadeEndMip) + ")"};
     const std::shared_ptr<const NormalMap> borrowed(&detail, [](const NormalMap*) {});
     const NormalPyramid pyramid = NormalPyramid::build(borrowed, options.pyramid);
     const int levels = pyramid.levelCount();
@@ -62,7 +62,8 @@ Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& opti
                 variance[size_t(k)][t] = float((1.0 - fade) * v + fade * out.constantVariance);
             }
         });
-        for (float v : variance[size_t(k)]) maxVariance = std::max(maxVariance, double(v));
+        for (float v : variance[size_t(k)])
+            maxVariance = std::max(maxVariance, double(v));
     }
     const double scale = std::exp2(std::ceil(std::log2(std::max(maxVariance, 1.0 / 1024.0))));
 
@@ -72,7 +73,8 @@ Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& opti
                       "1/s' = 1/s + variance; constant variance beyond the fade: " +
                       std::to_string(out.constantVariance);
     tex.channels = 4;
-    tex.decode = {{"detail.x", 2.0, -1.0}, {"detail.y", 2.0, -1.0}, {"zero", 1.0, 0.0}, {"variance", scale, 0.0}};
+    tex.decode = {
+        {"detail.x", 2.0, -1.0}, {"detail.y", 2.0, -1.0}, {"zero", 1.0, 0.0}, {"variance", scale, 0.0}};
     tex.needsHighPrecision = false;
     tex.mips.resize(size_t(levels));
     for (int k = 0; k < levels; ++k) {

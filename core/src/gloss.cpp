@@ -10,12 +10,16 @@ namespace burnish {
 namespace {
 
 // NaN-safe clamp of a stored channel value to [0, 1] (NaN becomes 0).
-double clampUnit(double v) { return v > 0.0 ? std::min(v, 1.0) : 0.0; }
+double clampUnit(double v) {
+    return v > 0.0 ? std::min(v, 1.0) : 0.0;
+}
 
 // Smallest GGX alpha / Beckmann m: the roughness of kMaxPower under α² = 2/(n+2).
 const double kMinAlpha = std::sqrt(2.0 / (kMaxPower + 2.0));
 
-double powerFromAlpha(double alpha) { return powerFromGgxAlpha(std::max(alpha, kMinAlpha)); }
+double powerFromAlpha(double alpha) {
+    return powerFromGgxAlpha(std::max(alpha, kMinAlpha));
+}
 
 bool parseDouble(std::string_view text, double& out) {
     const char* first = text.data();
@@ -34,7 +38,8 @@ GlossEncoding::GlossEncoding(GlossKind kind, double nMin, double nMax, std::stri
     , m_formula(std::move(formula)) {}
 
 GlossEncoding GlossEncoding::blackOps() {
-    return GlossEncoding(GlossKind::LogPower, 1.0, 8192.0, "blackops", "n = 8192^g = 2^(13g), n in [1, 8192]");
+    return GlossEncoding(GlossKind::LogPower, 1.0, 8192.0, "blackops",
+                         "n = 8192^g = 2^(13g), n in [1, 8192]");
 }
 
 GlossEncoding GlossEncoding::exp2Range() {
@@ -43,8 +48,8 @@ GlossEncoding GlossEncoding::exp2Range() {
 
 Result<GlossEncoding> GlossEncoding::logRange(double nMin, double nMax) {
     if (!(nMin > 0.0) || !(nMax > nMin) || !(nMax <= kMaxPower))
-        return Error{"gloss range must satisfy 0 < n_min < n_max <= 1e9 (got [" + std::to_string(nMin) + ", " +
-                     std::to_string(nMax) + "])"};
+        return Error{"gloss range must satisfy 0 < n_min < n_max <= 1e9 (got [" + std::to_string(nMin) +
+                     ", " + std::to_string(nMax) + "])"};
     char buf[128];
     std::snprintf(buf, sizeof buf, "log:%g:%g", nMin, nMax);
     std::string name = buf;
@@ -92,7 +97,8 @@ Result<GlossEncoding> GlossEncoding::fromName(std::string_view name) {
         return Error{"gloss encoding '" + std::string(name) + "' is not of the form log:NMIN:NMAX"};
     }
     std::string known;
-    for (const auto& n : presetNames()) known += (known.empty() ? "" : ", ") + n;
+    for (const auto& n : presetNames())
+        known += (known.empty() ? "" : ", ") + n;
     return Error{"unknown gloss encoding '" + std::string(name) + "' (known: " + known + ", log:NMIN:NMAX)"};
 }
 
@@ -128,8 +134,12 @@ double GlossEncoding::value(double n) const {
     return 0.0;
 }
 
-double GlossEncoding::minPower() const { return m_kind == GlossKind::LogPower ? m_nMin : power(increasesWithPower() ? 0.0 : 1.0); }
-double GlossEncoding::maxPower() const { return m_kind == GlossKind::LogPower ? m_nMax : power(increasesWithPower() ? 1.0 : 0.0); }
+double GlossEncoding::minPower() const {
+    return m_kind == GlossKind::LogPower ? m_nMin : power(increasesWithPower() ? 0.0 : 1.0);
+}
+double GlossEncoding::maxPower() const {
+    return m_kind == GlossKind::LogPower ? m_nMax : power(increasesWithPower() ? 1.0 : 0.0);
+}
 
 bool GlossEncoding::increasesWithPower() const {
     return m_kind == GlossKind::LogPower || m_kind == GlossKind::Smoothness;
@@ -177,7 +187,9 @@ double toksvigFactor(double lenNa, double s) {
     return denom > 0.0 ? lenNa / denom : 1.0;
 }
 
-double toksvigPower(double lenNa, double s) { return std::clamp(toksvigFactor(lenNa, s) * clampPower(s), 0.0, clampPower(s)); }
+double toksvigPower(double lenNa, double s) {
+    return std::clamp(toksvigFactor(lenNa, s) * clampPower(s), 0.0, clampPower(s));
+}
 
 double convertToksvigFactor(double ft, double fixedS, double s) {
     ft = ft > 0.0 ? std::min(ft, 1.0) : 0.0;
@@ -192,13 +204,16 @@ double encodeLogVariance(double sigma2) {
     return clampUnit(std::log2(1.0 / sigma2) / 13.0);
 }
 
-double decodeLogVariance(double g) { return std::exp2(-13.0 * clampUnit(g)); }
+double decodeLogVariance(double g) {
+    return std::exp2(-13.0 * clampUnit(g));
+}
 
 double varianceToGloss(double g, double v, const GlossEncoding& encoding) {
     const double n = encoding.power(g);
     v = v > 0.0 ? std::min(v, 1.0) : 0.0; // projected variance 1 − (n_i·n̄)² lies in [0, 1]
     const double vSum = v + 1.0 / (n + 1.0);
-    const double vClamped = std::clamp(vSum, 1.0 / (encoding.maxPower() + 1.0), 1.0 / (encoding.minPower() + 1.0));
+    const double vClamped =
+        std::clamp(vSum, 1.0 / (encoding.maxPower() + 1.0), 1.0 / (encoding.minPower() + 1.0));
     return encoding.value(1.0 / vClamped - 1.0);
 }
 

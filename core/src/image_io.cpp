@@ -30,11 +30,13 @@ Result<Image> readImage(const fs::path& path) {
     if (spec.width > kMaxImageSide || spec.height > kMaxImageSide ||
         static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height) > kMaxImageTexels)
         return Error{"image '" + path.string() + "' is " + std::to_string(spec.width) + "x" +
-                     std::to_string(spec.height) + ", larger than Burnish accepts (65536 on a side, 2^30 texels)"};
+                     std::to_string(spec.height) +
+                     ", larger than Burnish accepts (65536 on a side, 2^30 texels)"};
     if (spec.nchannels > 4)
         return Error{"image '" + path.string() + "' has " + std::to_string(spec.nchannels) +
                      " channels; Burnish reads 1 to 4"};
-    if (spec.depth > 1) return Error{"image '" + path.string() + "' is a volume texture; Burnish reads 2D images"};
+    if (spec.depth > 1)
+        return Error{"image '" + path.string() + "' is a volume texture; Burnish reads 2D images"};
 
     Image image;
     image.width = spec.width;

@@ -19,12 +19,18 @@ struct MethodInfo {
 
 const MethodInfo kMethods[] = {
     {Method::Naive, "naive", "renormalized mean normal, base power unchanged (the too-shiny baseline)"},
-    {Method::Toksvig, "toksvig", "run-time Toksvig: p = s|Na|/(|Na| + s(1-|Na|)) from the unnormalized mean normal"},
-    {Method::ToksvigMap, "toksvig-map", "baked 8-bit Toksvig factor for a fixed power, converted to s at run time"},
-    {Method::VarianceToGloss, "variance-to-gloss", "projected variance added to gloss as 1/(n+1): p = 1/(v + 1/(s+1)) - 1"},
-    {Method::Lean, "lean", "slope-space Gaussian, Sigma = M - BB^T + I/s about the normal of slope B (5 values)"},
-    {Method::Clean, "clean", "isotropic slope-space Gaussian, variance ((Mxx+Myy) - |B|^2)/2 + 1/s (3 values)"},
-    {Method::Vmf, "vmf", "von Mises-Fisher: kappa = (3r - r^3)/(1 - r^2), 1/p = 1/s + 1/kappa (Filament/Godot/Unity form)"},
+    {Method::Toksvig, "toksvig",
+     "run-time Toksvig: p = s|Na|/(|Na| + s(1-|Na|)) from the unnormalized mean normal"},
+    {Method::ToksvigMap, "toksvig-map",
+     "baked 8-bit Toksvig factor for a fixed power, converted to s at run time"},
+    {Method::VarianceToGloss, "variance-to-gloss",
+     "projected variance added to gloss as 1/(n+1): p = 1/(v + 1/(s+1)) - 1"},
+    {Method::Lean, "lean",
+     "slope-space Gaussian, Sigma = M - BB^T + I/s about the normal of slope B (5 values)"},
+    {Method::Clean, "clean",
+     "isotropic slope-space Gaussian, variance ((Mxx+Myy) - |B|^2)/2 + 1/s (3 values)"},
+    {Method::Vmf, "vmf",
+     "von Mises-Fisher: kappa = (3r - r^3)/(1 - r^2), 1/p = 1/s + 1/kappa (Filament/Godot/Unity form)"},
 };
 
 const MethodInfo& info(Method method) {
@@ -45,20 +51,26 @@ glm::vec3 normalOfSlope(const glm::dvec2& b) {
 const std::vector<Method>& allMethods() {
     static const std::vector<Method> methods = [] {
         std::vector<Method> v;
-        for (const auto& m : kMethods) v.push_back(m.method);
+        for (const auto& m : kMethods)
+            v.push_back(m.method);
         return v;
     }();
     return methods;
 }
 
-std::string_view methodName(Method method) { return info(method).name; }
-std::string_view methodDescription(Method method) { return info(method).description; }
+std::string_view methodName(Method method) {
+    return info(method).name;
+}
+std::string_view methodDescription(Method method) {
+    return info(method).description;
+}
 
 Result<Method> methodFromName(std::string_view name) {
     for (const auto& m : kMethods)
         if (m.name == name) return m.method;
     std::string known;
-    for (const auto& m : kMethods) known += (known.empty() ? "" : ", ") + std::string(m.name);
+    for (const auto& m : kMethods)
+        known += (known.empty() ? "" : ", ") + std::string(m.name);
     return Error{"unknown method '" + std::string(name) + "' (known: " + known + ")"};
 }
 
@@ -106,7 +118,8 @@ TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, cons
             const double sigma2 = 0.5 * (double(moments.slopeCov[0]) + double(moments.slopeCov[1])) + invS;
             lobe.slopeCov = {sigma2, sigma2, 0.0};
         }
-        lobe.power = powerFromVariance(0.5 * (lobe.slopeCov[0] + lobe.slopeCov[1]), VarianceConvention::InversePower);
+        lobe.power =
+            powerFromVariance(0.5 * (lobe.slopeCov[0] + lobe.slopeCov[1]), VarianceConvention::InversePower);
         break;
     }
     case Method::Vmf: {

@@ -22,14 +22,16 @@ std::string percent(size_t count, size_t total) {
 bool anyNegative(const Image& image, int channels) {
     for (size_t i = 0; i < image.texelCount(); ++i)
         for (int c = 0; c < channels; ++c)
-            if (image.pixels[i * static_cast<size_t>(image.channels) + static_cast<size_t>(c)] < -1e-6f) return true;
+            if (image.pixels[i * static_cast<size_t>(image.channels) + static_cast<size_t>(c)] < -1e-6f)
+                return true;
     return false;
 }
 
 bool channelConstant(const Image& image, int channel) {
     const float first = image.pixels[static_cast<size_t>(channel)];
     for (size_t i = 0; i < image.texelCount(); ++i)
-        if (image.pixels[i * static_cast<size_t>(image.channels) + static_cast<size_t>(channel)] != first) return false;
+        if (image.pixels[i * static_cast<size_t>(image.channels) + static_cast<size_t>(channel)] != first)
+            return false;
     return true;
 }
 
@@ -37,7 +39,8 @@ bool channelConstant(const Image& image, int channel) {
 
 Result<NormalMap> decodeNormalMap(const Image& image, const NormalMapOptions& options) {
     const std::string name = image.source.path.empty() ? std::string("image") : "'" + image.source.path + "'";
-    if (image.width <= 0 || image.height <= 0 || image.texelCount() == 0) return Error{name + " has no pixels"};
+    if (image.width <= 0 || image.height <= 0 || image.texelCount() == 0)
+        return Error{name + " has no pixels"};
     if (image.channels < 2)
         return Error{name + " has " + std::to_string(image.channels) +
                      " channel; a normal map needs 2 (RG) to 4 (RGBA) — is this a height or gloss map?"};
@@ -65,7 +68,8 @@ Result<NormalMap> decodeNormalMap(const Image& image, const NormalMapOptions& op
 
     const int used = rg ? 2 : 3;
     bool isSigned = options.encoding == NormalValueEncoding::Signed;
-    if (options.encoding == NormalValueEncoding::Auto) isSigned = image.source.isFloat && anyNegative(image, used);
+    if (options.encoding == NormalValueEncoding::Auto)
+        isSigned = image.source.isFloat && anyNegative(image, used);
     diag.signedValues = isSigned;
 
     map.normals.resize(image.texelCount());
@@ -124,11 +128,13 @@ Result<NormalMap> decodeNormalMap(const Image& image, const NormalMapOptions& op
     if (static_cast<double>(diag.negativeZTexels) > kMaxNegativeZFraction * static_cast<double>(valid))
         implausible = percent(diag.negativeZTexels, valid) +
                       " of texels point below the surface (z < 0); tangent-space normal maps face +z";
-    else if (!rg && static_cast<double>(diag.offLengthTexels) > kMaxOffLengthFraction * static_cast<double>(valid)) {
+    else if (!rg &&
+             static_cast<double>(diag.offLengthTexels) > kMaxOffLengthFraction * static_cast<double>(valid)) {
         char buf[64];
         std::snprintf(buf, sizeof buf, "%.3f", diag.meanStoredLength);
         implausible = percent(diag.offLengthTexels, valid) +
-                      " of texels store vectors whose length is off 1 by more than 25% (mean length " + buf + ")";
+                      " of texels store vectors whose length is off 1 by more than 25% (mean length " + buf +
+                      ")";
     }
     if (!implausible.empty()) {
         const std::string what = name + " does not look like a tangent-space normal map: " + implausible;

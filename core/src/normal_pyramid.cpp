@@ -65,11 +65,14 @@ struct RawMoments {
         out.mean = glm::vec3(float(mx), float(my), float(mz));
         out.slope = glm::vec2(float(bx), float(by));
         // Variances are clamped at 0 against rounding; covariances are left signed.
-        out.cov = {float(std::max(0.0, v[4] * inv - mx * mx)), float(std::max(0.0, v[5] * inv - my * my)),
-                   float(std::max(0.0, v[6] * inv - mz * mz)), float(v[7] * inv - mx * my),
-                   float(v[8] * inv - mx * mz), float(v[9] * inv - my * mz)};
-        out.slopeCov = {float(std::max(0.0, v[12] * inv - bx * bx)), float(std::max(0.0, v[13] * inv - by * by)),
-                        float(v[14] * inv - bx * by)};
+        out.cov = {float(std::max(0.0, v[4] * inv - mx * mx)),
+                   float(std::max(0.0, v[5] * inv - my * my)),
+                   float(std::max(0.0, v[6] * inv - mz * mz)),
+                   float(v[7] * inv - mx * my),
+                   float(v[8] * inv - mx * mz),
+                   float(v[9] * inv - my * mz)};
+        out.slopeCov = {float(std::max(0.0, v[12] * inv - bx * bx)),
+                        float(std::max(0.0, v[13] * inv - by * by)), float(v[14] * inv - bx * by)};
         return out;
     }
 };
@@ -119,7 +122,9 @@ KernelTaps kernelTaps(FilterKernel kernel) {
     return {0, {1, 0, 0, 0, 0}};
 }
 
-float NormalMoments::lengthNa() const { return std::min(glm::length(mean), 1.0f); }
+float NormalMoments::lengthNa() const {
+    return std::min(glm::length(mean), 1.0f);
+}
 
 glm::vec3 NormalMoments::meanDirection() const {
     const float len = glm::length(mean);
@@ -129,13 +134,15 @@ glm::vec3 NormalMoments::meanDirection() const {
 float NormalMoments::projectedVariance() const {
     const glm::vec3 n = meanDirection();
     const double trace = double(cov[0]) + double(cov[1]) + double(cov[2]);
-    const double nCn = double(n.x) * n.x * cov[0] + double(n.y) * n.y * cov[1] + double(n.z) * n.z * cov[2] +
-                       2.0 * (double(n.x) * n.y * cov[3] + double(n.x) * n.z * cov[4] + double(n.y) * n.z * cov[5]);
+    const double nCn =
+        double(n.x) * n.x * cov[0] + double(n.y) * n.y * cov[1] + double(n.z) * n.z * cov[2] +
+        2.0 * (double(n.x) * n.y * cov[3] + double(n.x) * n.z * cov[4] + double(n.y) * n.z * cov[5]);
     return float(std::clamp(trace - nCn, 0.0, 1.0));
 }
 
 std::array<float, 3> NormalMoments::slopeSecondMoments() const {
-    return {slopeCov[0] + slope.x * slope.x, slopeCov[1] + slope.y * slope.y, slopeCov[2] + slope.x * slope.y};
+    return {slopeCov[0] + slope.x * slope.x, slopeCov[1] + slope.y * slope.y,
+            slopeCov[2] + slope.x * slope.y};
 }
 
 NormalMoments NormalMoments::ofNormal(const glm::vec3& n) {
@@ -148,7 +155,8 @@ NormalMoments NormalMoments::ofNormal(const glm::vec3& n) {
 
 NormalMoments combineMoments(const NormalMoments* moments, const double* weights, size_t count) {
     RawMoments raw;
-    for (size_t i = 0; i < count; ++i) raw.add(moments[i], weights[i]);
+    for (size_t i = 0; i < count; ++i)
+        raw.add(moments[i], weights[i]);
     return raw.toMoments();
 }
 
@@ -177,8 +185,10 @@ NormalPyramid NormalPyramid::build(std::shared_ptr<const NormalMap> map, const P
         const auto cy = childStarts(child.height, parent.height);
         parent.xStart.resize(size_t(parent.width) + 1);
         parent.yStart.resize(size_t(parent.height) + 1);
-        for (int x = 0; x <= parent.width; ++x) parent.xStart[size_t(x)] = child.xStart[size_t(cx[size_t(x)])];
-        for (int y = 0; y <= parent.height; ++y) parent.yStart[size_t(y)] = child.yStart[size_t(cy[size_t(y)])];
+        for (int x = 0; x <= parent.width; ++x)
+            parent.xStart[size_t(x)] = child.xStart[size_t(cx[size_t(x)])];
+        for (int y = 0; y <= parent.height; ++y)
+            parent.yStart[size_t(y)] = child.yStart[size_t(cy[size_t(y)])];
         parent.xChild = cx;
         parent.yChild = cy;
         parent.box.resize(size_t(parent.width) * size_t(parent.height));
@@ -222,12 +232,14 @@ NormalMoments NormalPyramid::moments(int k, int x, int y) const {
         for (int i = -taps.radius; i <= taps.radius; ++i) {
             const int xi = borderIndex(x + i, l.width, m_options.border);
             const int yj = borderIndex(y + j, l.height, m_options.border);
-            raw.add(boxMoments(k, xi, yj), taps.w[i + taps.radius] * taps.w[j + taps.radius] * footprintCount(k, xi, yj));
+            raw.add(boxMoments(k, xi, yj),
+                    taps.w[i + taps.radius] * taps.w[j + taps.radius] * footprintCount(k, xi, yj));
         }
     return raw.toMoments();
 }
 
-void NormalPyramid::forEachMomentRow(int k, const std::function<void(int y, const NormalMoments* row)>& fn) const {
+void NormalPyramid::forEachMomentRow(int k,
+                                     const std::function<void(int y, const NormalMoments* row)>& fn) const {
     const PyramidLevel& l = level(k);
     const int width = l.width;
     const KernelTaps taps = kernelTaps(m_options.kernel);
@@ -240,7 +252,8 @@ void NormalPyramid::forEachMomentRow(int k, const std::function<void(int y, cons
         std::vector<NormalMoments> out(static_cast<size_t>(width));
         if (taps.radius == 0) {
             for (int y = y0; y < y1; ++y) {
-                for (int x = 0; x < width; ++x) out[size_t(x)] = boxMoments(k, x, y);
+                for (int x = 0; x < width; ++x)
+                    out[size_t(x)] = boxMoments(k, x, y);
                 fn(y, out.data());
             }
             return;
@@ -266,7 +279,8 @@ void NormalPyramid::forEachMomentRow(int k, const std::function<void(int y, cons
                 for (int i = -r; i <= r; ++i) {
                     const RawMoments& s = single[size_t(borderIndex(x + i, width, m_options.border))];
                     const double w = taps.w[i + r];
-                    for (int c = 0; c < 15; ++c) sum.v[c] += w * s.v[c];
+                    for (int c = 0; c < 15; ++c)
+                        sum.v[c] += w * s.v[c];
                 }
                 h[x] = sum;
             }
@@ -277,7 +291,8 @@ void NormalPyramid::forEachMomentRow(int k, const std::function<void(int y, cons
                 for (int j = -r; j <= r; ++j) {
                     const RawMoments& h = horizontal[size_t(y - y0 + r + j) * size_t(width) + size_t(x)];
                     const double w = taps.w[j + r];
-                    for (int c = 0; c < 15; ++c) sum.v[c] += w * h.v[c];
+                    for (int c = 0; c < 15; ++c)
+                        sum.v[c] += w * h.v[c];
                 }
                 out[size_t(x)] = sum.toMoments();
             }

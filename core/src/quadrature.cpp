@@ -17,7 +17,8 @@ namespace {
 std::vector<double> lobeBreakpoints(double width, double thetaMax) {
     std::vector<double> points{0.0};
     width = std::clamp(width, 1e-9, thetaMax);
-    for (double t = width / 4.0; t < thetaMax; t *= 2.0) points.push_back(t);
+    for (double t = width / 4.0; t < thetaMax; t *= 2.0)
+        points.push_back(t);
     points.push_back(thetaMax);
     return points;
 }
@@ -26,7 +27,8 @@ double integrateTheta(const std::function<double(double)>& f, double width, doub
     const auto points = lobeBreakpoints(width, thetaMax);
     double sum = 0.0;
     for (size_t i = 0; i + 1 < points.size(); ++i)
-        sum += integrate([&](double t) { return f(std::cos(t)) * std::sin(t); }, points[i], points[i + 1], tol);
+        sum +=
+            integrate([&](double t) { return f(std::cos(t)) * std::sin(t); }, points[i], points[i + 1], tol);
     return 2.0 * kPi<double> * sum;
 }
 

@@ -18,7 +18,6 @@ namespace {
 using burnish::test::lineCount;
 using burnish::test::runBurnish;
 
-
 // A 32×32 bumpy map written as 8-bit PNG.
 std::string writeBumpyMap(const burnish::test::TempDir& dir) {
     std::mt19937 rng(4);
@@ -46,7 +45,8 @@ TEST(CliEvaluate, WritesTheReportAndNaiveIsWorst) {
     const auto out = dir / "report";
     auto r = runBurnish("evaluate " + in + " --out " + out.string() + " --error-maps --bake-runs 1 --json");
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    for (const char* f : {"evaluate.md", "evaluate.json", "evaluate-error-per-mip.png", "evaluate-error-vs-cost.png"})
+    for (const char* f :
+         {"evaluate.md", "evaluate.json", "evaluate-error-per-mip.png", "evaluate-error-vs-cost.png"})
         EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
     EXPECT_TRUE(std::filesystem::exists(out / "errors" / "lean-s512-mip4.exr"));
     const auto j = nlohmann::json::parse(r.out);

@@ -21,7 +21,9 @@ namespace {
 using RunResult = burnish::test::CliResult;
 using burnish::test::runBurnish;
 
-int countLines(const std::string& s) { return burnish::test::lineCount(s); }
+int countLines(const std::string& s) {
+    return burnish::test::lineCount(s);
+}
 
 // The line of `text` that starts (after indentation) with `name` followed by a space.
 std::string lineFor(const std::string& text, const std::string& name) {

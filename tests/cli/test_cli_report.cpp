@@ -1,6 +1,6 @@
 // End to end: `burnish report approximations` run as a process.
-#include <OpenImageIO/imagebuf.h>
 #include "cli_run.h"
+#include <OpenImageIO/imagebuf.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

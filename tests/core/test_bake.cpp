@@ -2,8 +2,8 @@
 
 #include <burnish/core/ndf.h>
 
-#include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
@@ -16,13 +16,15 @@ NormalMap gaussianField(int size, double sigmaX, double sigmaY, unsigned seed) {
     std::mt19937 rng(seed);
     std::normal_distribution<double> gx(0.0, sigmaX), gy(0.0, sigmaY);
     std::vector<glm::vec3> n(static_cast<size_t>(size) * static_cast<size_t>(size));
-    for (auto& v : n) v = glm::vec3(glm::normalize(glm::dvec3(gx(rng), gy(rng), 1.0)));
+    for (auto& v : n)
+        v = glm::vec3(glm::normalize(glm::dvec3(gx(rng), gy(rng), 1.0)));
     return makeNormalMap(size, size, std::move(n));
 }
 
 double decode(const BakedTexture& t, int mip, int x, int y, int c) {
     const auto& m = t.mips[size_t(mip)];
-    const double stored = m.texels[(size_t(y) * size_t(m.width) + size_t(x)) * size_t(t.channels) + size_t(c)];
+    const double stored =
+        m.texels[(size_t(y) * size_t(m.width) + size_t(x)) * size_t(t.channels) + size_t(c)];
     return stored * t.decode[size_t(c)].scale + t.decode[size_t(c)].bias;
 }
 
@@ -30,7 +32,8 @@ double meanGlossPower(const BakeOutput& out, const GlossEncoding& enc, int mip) 
     const BakedTexture* g = out.find("gloss");
     double sum = 0;
     const auto& m = g->mips[size_t(mip)];
-    for (float v : m.texels) sum += enc.power(v);
+    for (float v : m.texels)
+        sum += enc.power(v);
     return sum / double(m.texels.size());
 }
 
@@ -60,7 +63,8 @@ TEST(Bake, EightBitFlatMapBakesToTheBasePower) {
     Image image;
     image.width = image.height = 8;
     image.channels = 3;
-    for (int i = 0; i < 64; ++i) image.pixels.insert(image.pixels.end(), {128 / 255.f, 128 / 255.f, 1.0f});
+    for (int i = 0; i < 64; ++i)
+        image.pixels.insert(image.pixels.end(), {128 / 255.f, 128 / 255.f, 1.0f});
     auto map = decodeNormalMap(image);
     ASSERT_TRUE(map.ok());
     BakeOptions options;
@@ -90,7 +94,8 @@ TEST(Bake, GaussianSlopeFieldBakesItsVariance) {
     const double bx = decode(*B, top, 0, 0, 0), by = decode(*B, top, 0, 0, 1);
     const double varX = decode(*M, top, 0, 0, 0) - 1.0 / 1e4 - bx * bx;
     const double varY = decode(*M, top, 0, 0, 1) - 1.0 / 1e4 - by * by;
-    constexpr double kSampleTolerance = 0.06; // 4096 samples: relative std of a variance ≈ sqrt(2/4096) = 2.2%
+    constexpr double kSampleTolerance =
+        0.06; // 4096 samples: relative std of a variance ≈ sqrt(2/4096) = 2.2%
     EXPECT_NEAR(varX / (sigma * sigma), 1.0, kSampleTolerance);
     EXPECT_NEAR(varY / (sigma * sigma), 1.0, kSampleTolerance);
 
@@ -107,7 +112,8 @@ TEST(Bake, GroovedMapIsAnisotropicOnlyForLean) {
     // Grooves along y: normals tilt in x only (alternating ±0.3 slope by column).
     std::vector<glm::vec3> n;
     for (int y = 0; y < 16; ++y)
-        for (int x = 0; x < 16; ++x) n.push_back(glm::normalize(glm::vec3((x % 2) ? 0.3f : -0.3f, 0.0f, 1.0f)));
+        for (int x = 0; x < 16; ++x)
+            n.push_back(glm::normalize(glm::vec3((x % 2) ? 0.3f : -0.3f, 0.0f, 1.0f)));
     const NormalMap map = makeNormalMap(16, 16, n);
     BakeOptions options;
     options.basePower = 1e4;
@@ -131,9 +137,11 @@ TEST(Bake, GroovedMapIsAnisotropicOnlyForLean) {
 
 TEST(Bake, BimodalCheckerOfTwoTiltsRoughensAndKeepsTheMeanNormal) {
     std::vector<glm::vec3> n;
-    const glm::vec3 a = glm::normalize(glm::vec3(0.4f, 0.1f, 1.0f)), b = glm::normalize(glm::vec3(-0.4f, 0.1f, 1.0f));
+    const glm::vec3 a = glm::normalize(glm::vec3(0.4f, 0.1f, 1.0f)),
+                    b = glm::normalize(glm::vec3(-0.4f, 0.1f, 1.0f));
     for (int y = 0; y < 8; ++y)
-        for (int x = 0; x < 8; ++x) n.push_back(((x + y) % 2) ? a : b);
+        for (int x = 0; x < 8; ++x)
+            n.push_back(((x + y) % 2) ? a : b);
     BakeOptions options;
     options.pyramid.kernel = FilterKernel::Box;
     options.basePower = 2048;
@@ -142,9 +150,11 @@ TEST(Bake, BimodalCheckerOfTwoTiltsRoughensAndKeepsTheMeanNormal) {
     const BakedTexture* normal = out->find("normal");
     // Mean of the two tilts points along (0, 0.1, 1) renormalized.
     const glm::dvec3 expected = glm::normalize(glm::dvec3(a + b));
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(decode(*normal, 1, 0, 0, c), expected[c], 1e-6);
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(decode(*normal, 1, 0, 0, c), expected[c], 1e-6);
     EXPECT_LT(meanGlossPower(*out, options.encoding, 1), 20.0); // ±21.8° tilts: far rougher than 2048
-    EXPECT_NEAR(meanGlossPower(*out, options.encoding, 0) / 2048.0, 1.0, kGlossRoundTrip); // box: mip 0 untouched
+    EXPECT_NEAR(meanGlossPower(*out, options.encoding, 0) / 2048.0, 1.0,
+                kGlossRoundTrip); // box: mip 0 untouched
 }
 
 TEST(Bake, OddSizesNanTexelsAndTwoChannelMapsBake) {
@@ -154,7 +164,8 @@ TEST(Bake, OddSizesNanTexelsAndTwoChannelMapsBake) {
     image.channels = 2;
     std::mt19937 rng(1);
     std::uniform_real_distribution<float> u(0.35f, 0.65f);
-    for (int i = 0; i < 15; ++i) image.pixels.insert(image.pixels.end(), {u(rng), u(rng)});
+    for (int i = 0; i < 15; ++i)
+        image.pixels.insert(image.pixels.end(), {u(rng), u(rng)});
     image.pixels[4] = std::numeric_limits<float>::quiet_NaN();
     auto map = decodeNormalMap(image);
     ASSERT_TRUE(map.ok()) << map.error();
@@ -167,7 +178,8 @@ TEST(Bake, OddSizesNanTexelsAndTwoChannelMapsBake) {
         EXPECT_EQ(out->stats.mipCount, 3); // 3×5 → 1×2 → 1×1
         for (const auto& t : out->textures)
             for (const auto& mip : t.mips)
-                for (float v : mip.texels) EXPECT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << t.role;
+                for (float v : mip.texels)
+                    EXPECT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << t.role;
     }
 }
 
@@ -179,8 +191,8 @@ TEST(Bake, AuthoredGlossIsAveragedAsVariance) {
     options.method = Method::Naive;
     options.pyramid.kernel = FilterKernel::Box;
     const auto& enc = options.encoding;
-    options.authoredGloss = std::vector<float>{float(enc.value(8192)), float(enc.value(8)), float(enc.value(8)),
-                                               float(enc.value(8192))};
+    options.authoredGloss = std::vector<float>{float(enc.value(8192)), float(enc.value(8)),
+                                               float(enc.value(8)), float(enc.value(8192))};
     auto out = bake(flat, options);
     ASSERT_TRUE(out.ok());
     EXPECT_NEAR(meanGlossPower(*out, enc, 1), 2.0 / (1.0 / 8192 + 1.0 / 8), 1e-2);

@@ -1,7 +1,7 @@
 #include <burnish/core/detail.h>
 
-#include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
@@ -23,7 +23,8 @@ NormalMap bumpy(int size, float sigma, unsigned seed) {
     std::mt19937 rng(seed);
     std::normal_distribution<float> g(0.0f, sigma);
     std::vector<glm::vec3> n(static_cast<size_t>(size) * static_cast<size_t>(size));
-    for (auto& v : n) v = glm::normalize(glm::vec3(g(rng), g(rng), 1.0f));
+    for (auto& v : n)
+        v = glm::normalize(glm::vec3(g(rng), g(rng), 1.0f));
     return makeNormalMap(size, size, n);
 }
 
@@ -93,7 +94,8 @@ TEST(Detail, FlatDetailAddsNoVariance) {
     ASSERT_TRUE(out.ok());
     EXPECT_EQ(out->constantVariance, 0.0);
     for (const auto& mip : out->texture.mips)
-        for (size_t i = 3; i < mip.texels.size(); i += 4) EXPECT_EQ(mip.texels[i], 0.0f);
+        for (size_t i = 3; i < mip.texels.size(); i += 4)
+            EXPECT_EQ(mip.texels[i], 0.0f);
 }
 
 TEST(Detail, RejectsBadFadeRange) {

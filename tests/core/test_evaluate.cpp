@@ -2,8 +2,8 @@
 
 #include <burnish/core/ndf.h>
 
-#include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
@@ -16,7 +16,8 @@ std::vector<glm::vec3> gaussianSlopes(int count, double sigma, unsigned seed) {
     std::mt19937 rng(seed);
     std::normal_distribution<double> g(0.0, sigma);
     std::vector<glm::vec3> n(static_cast<size_t>(count));
-    for (auto& v : n) v = glm::vec3(glm::normalize(glm::dvec3(g(rng), g(rng), 1.0)));
+    for (auto& v : n)
+        v = glm::vec3(glm::normalize(glm::dvec3(g(rng), g(rng), 1.0)));
     return n;
 }
 
@@ -71,13 +72,16 @@ TEST(Evaluate, MatchesBruteForceSumOnATinyMap) {
                             truth += blinnPhongNdf(glm::dot(n, d.h), 64.0) * std::max(0.0, glm::dot(n, d.l));
                         }
                     truth /= block * block;
-                    EXPECT_NEAR(groundTruthTexel(pyramid, e.mip, x, y, 64.0, d), truth, kSumTolerance * (1 + truth));
-                    const double value = methodValue(methodLobe(e.method, pyramid.boxMoments(e.mip, x, y), 64.0), d);
+                    EXPECT_NEAR(groundTruthTexel(pyramid, e.mip, x, y, 64.0, d), truth,
+                                kSumTolerance * (1 + truth));
+                    const double value =
+                        methodValue(methodLobe(e.method, pyramid.boxMoments(e.mip, x, y), 64.0), d);
                     absSum += std::abs(value - truth);
                     truthSum += truth;
                     methodSum += value;
                 }
-        EXPECT_NEAR(e.relativeL1, absSum / truthSum, kSumTolerance) << methodName(e.method) << " mip " << e.mip;
+        EXPECT_NEAR(e.relativeL1, absSum / truthSum, kSumTolerance)
+            << methodName(e.method) << " mip " << e.mip;
         EXPECT_NEAR(e.energyRatio, methodSum / truthSum, kSumTolerance);
     }
 }
@@ -85,7 +89,8 @@ TEST(Evaluate, MatchesBruteForceSumOnATinyMap) {
 TEST(Evaluate, FlatMapEveryIsotropicMethodIsExact) {
     const NormalMap map = makeNormalMap(16, 16, std::vector<glm::vec3>(256, glm::vec3(0, 0, 1)));
     EvaluateOptions options;
-    options.methods = {Method::Naive, Method::Toksvig, Method::ToksvigMap, Method::VarianceToGloss, Method::Vmf};
+    options.methods = {Method::Naive, Method::Toksvig, Method::ToksvigMap, Method::VarianceToGloss,
+                       Method::Vmf};
     options.basePowers = {256.0};
     auto result = evaluateMethods(map, options);
     ASSERT_TRUE(result.ok()) << result.error();
@@ -114,7 +119,8 @@ TEST(Evaluate, NaiveIsWorstAndGrowsWithMip) {
             if (e.method == m && e.mip == mip) return e.relativeL1;
         return -1.0;
     };
-    for (int mip = 2; mip <= 5; ++mip) EXPECT_GT(error(Method::Naive, mip), error(Method::Naive, mip - 1));
+    for (int mip = 2; mip <= 5; ++mip)
+        EXPECT_GT(error(Method::Naive, mip), error(Method::Naive, mip - 1));
     for (int mip = 1; mip <= 5; ++mip)
         for (Method m : allMethods()) {
             if (m != Method::Naive) {
@@ -134,7 +140,8 @@ TEST(Evaluate, ErrorMapsAverageToTheReportedError) {
     ASSERT_EQ(result->maps.size(), 2u);
     for (const auto& m : result->maps) {
         EXPECT_EQ(m.width, 16 >> m.mip);
-        for (float v : m.relativeError) EXPECT_TRUE(std::isfinite(v) && v >= 0.0f);
+        for (float v : m.relativeError)
+            EXPECT_TRUE(std::isfinite(v) && v >= 0.0f);
     }
 }
 

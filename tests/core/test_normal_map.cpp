@@ -4,8 +4,8 @@
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imageio.h>
-#include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
@@ -106,14 +106,16 @@ TEST(NormalMap, SignedFloatMapsAreDetected) {
 
 TEST(NormalMap, NanTexelsAreReportedAndReplaced) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    auto image = encodeRgb(2, 2, {glm::vec3(0, 0, 1), glm::vec3(0, 0, 1), glm::vec3(0, 0, 1), glm::vec3(0, 0, 1)});
+    auto image =
+        encodeRgb(2, 2, {glm::vec3(0, 0, 1), glm::vec3(0, 0, 1), glm::vec3(0, 0, 1), glm::vec3(0, 0, 1)});
     image.pixels[3] = nan;
     image.pixels[7] = std::numeric_limits<float>::infinity();
     auto map = decodeNormalMap(image);
     ASSERT_TRUE(map.ok()) << map.error();
     EXPECT_EQ(map->diagnostics.nonFiniteTexels, 2u);
     ASSERT_FALSE(map->diagnostics.warnings.empty());
-    for (const auto& n : map->normals) EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z));
+    for (const auto& n : map->normals)
+        EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z));
 }
 
 TEST(NormalMap, RejectsOneChannelImages) {
@@ -127,10 +129,12 @@ TEST(NormalMap, RejectsPhotosAndAcceptsThemOnRequest) {
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     std::vector<float> px(64 * 64 * 3);
-    for (auto& v : px) v = u(rng);
+    for (auto& v : px)
+        v = u(rng);
     auto map = decodeNormalMap(makeImage(64, 64, 3, px));
     ASSERT_FALSE(map.ok());
-    EXPECT_NE(map.error().find("does not look like a tangent-space normal map"), std::string::npos) << map.error();
+    EXPECT_NE(map.error().find("does not look like a tangent-space normal map"), std::string::npos)
+        << map.error();
 
     NormalMapOptions options;
     options.allowImplausible = true;
@@ -141,7 +145,8 @@ TEST(NormalMap, RejectsPhotosAndAcceptsThemOnRequest) {
 
 TEST(NormalMap, RejectsMidGreyHeightMapsStoredAsRgb) {
     std::vector<float> px(16 * 16 * 3, 0.5f);
-    for (size_t i = 0; i < px.size(); i += 3) px[i] = px[i + 1] = px[i + 2] = 0.3f + 0.001f * float(i % 50);
+    for (size_t i = 0; i < px.size(); i += 3)
+        px[i] = px[i + 1] = px[i + 2] = 0.3f + 0.001f * float(i % 50);
     EXPECT_FALSE(decodeNormalMap(makeImage(16, 16, 3, px)).ok());
 }
 
@@ -149,7 +154,8 @@ TEST(NormalMap, EightBitFlatMapDecodesToOneDirection) {
     // (128, 128, 255) is the flat normal of 8-bit maps: it is not exactly +z, but every texel
     // must decode to the same unit vector (no spread, hence no false roughness).
     std::vector<float> px;
-    for (int i = 0; i < 16; ++i) px.insert(px.end(), {128.0f / 255.0f, 128.0f / 255.0f, 1.0f});
+    for (int i = 0; i < 16; ++i)
+        px.insert(px.end(), {128.0f / 255.0f, 128.0f / 255.0f, 1.0f});
     auto map = decodeNormalMap(makeImage(4, 4, 3, px));
     ASSERT_TRUE(map.ok());
     for (const auto& n : map->normals) {
@@ -167,12 +173,13 @@ TEST(ImageIo, ReadsFormatsAndSizes) {
         int w, h;
     };
     // Odd sizes and 1×1 included; each format round-trips the flat normal.
-    const Case cases[] = {{"a.png", OIIO::TypeDesc::UINT8, 3, 5},   {"b.png", OIIO::TypeDesc::UINT16, 1, 1},
-                          {"c.tga", OIIO::TypeDesc::UINT8, 7, 2},   {"d.exr", OIIO::TypeDesc::HALF, 4, 4},
-                          {"e.tif", OIIO::TypeDesc::FLOAT, 5, 3},   {"f.jpg", OIIO::TypeDesc::UINT8, 8, 8}};
+    const Case cases[] = {{"a.png", OIIO::TypeDesc::UINT8, 3, 5}, {"b.png", OIIO::TypeDesc::UINT16, 1, 1},
+                          {"c.tga", OIIO::TypeDesc::UINT8, 7, 2}, {"d.exr", OIIO::TypeDesc::HALF, 4, 4},
+                          {"e.tif", OIIO::TypeDesc::FLOAT, 5, 3}, {"f.jpg", OIIO::TypeDesc::UINT8, 8, 8}};
     for (const auto& c : cases) {
         std::vector<float> px;
-        for (int i = 0; i < c.w * c.h; ++i) px.insert(px.end(), {0.5f, 0.5f, 1.0f});
+        for (int i = 0; i < c.w * c.h; ++i)
+            px.insert(px.end(), {0.5f, 0.5f, 1.0f});
         ASSERT_TRUE(writeImage(dir / c.name, c.w, c.h, 3, c.type, px)) << c.name;
         auto map = loadNormalMap(dir / c.name);
         ASSERT_TRUE(map.ok()) << c.name << ": " << map.error();

@@ -1,7 +1,7 @@
 #include <burnish/core/normal_pyramid.h>
 
-#include <gtest/gtest.h>
 #include <glm/geometric.hpp>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
@@ -13,13 +13,16 @@ namespace {
 // Moments are stored in float: relative accuracy of a few float ulps of the combined values.
 constexpr double kMomentTolerance = 2e-6;
 
-std::shared_ptr<const NormalMap> shared(NormalMap map) { return std::make_shared<const NormalMap>(std::move(map)); }
+std::shared_ptr<const NormalMap> shared(NormalMap map) {
+    return std::make_shared<const NormalMap>(std::move(map));
+}
 
 std::vector<glm::vec3> randomNormals(int count, float spread, unsigned seed) {
     std::mt19937 rng(seed);
     std::normal_distribution<float> g(0.0f, spread);
     std::vector<glm::vec3> n(static_cast<size_t>(count));
-    for (auto& v : n) v = glm::normalize(glm::vec3(g(rng), g(rng), 1.0f));
+    for (auto& v : n)
+        v = glm::normalize(glm::vec3(g(rng), g(rng), 1.0f));
     return n;
 }
 
@@ -38,7 +41,8 @@ Direct direct(const NormalMap& map, int x0, int x1, int y0, int y1) {
         for (int x = x0; x < x1; ++x) {
             const glm::dvec3 n = map.at(x, y);
             d.mean += n;
-            const glm::dvec2 b(n.x / std::max(n.z, double(kMinSlopeZ)), n.y / std::max(n.z, double(kMinSlopeZ)));
+            const glm::dvec2 b(n.x / std::max(n.z, double(kMinSlopeZ)),
+                               n.y / std::max(n.z, double(kMinSlopeZ)));
             d.slope += b;
             d.m[0] += b.x * b.x;
             d.m[1] += b.y * b.y;
@@ -47,7 +51,8 @@ Direct direct(const NormalMap& map, int x0, int x1, int y0, int y1) {
         }
     d.mean /= count;
     d.slope /= count;
-    for (double& v : d.m) v /= count;
+    for (double& v : d.m)
+        v /= count;
     const glm::dvec3 nHat = glm::normalize(d.mean);
     for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
@@ -71,7 +76,8 @@ TEST(NormalPyramid, LevelSizesFollowTheMipRule) {
     for (int k = 0; k < pyramid.levelCount(); ++k) {
         int total = 0;
         for (int y = 0; y < pyramid.level(k).height; ++y)
-            for (int x = 0; x < pyramid.level(k).width; ++x) total += pyramid.footprintCount(k, x, y);
+            for (int x = 0; x < pyramid.level(k).width; ++x)
+                total += pyramid.footprintCount(k, x, y);
         EXPECT_EQ(total, 15) << "level " << k;
     }
 }
@@ -92,10 +98,12 @@ TEST(NormalPyramid, BoxMomentsMatchDirectSumsOverAlignedBlocks) {
             for (int x = 0; x < pyramid.level(k).width; x += 3) {
                 const Direct d = direct(*map, x * block, (x + 1) * block, y * block, (y + 1) * block);
                 const NormalMoments m = pyramid.boxMoments(k, x, y);
-                for (int i = 0; i < 3; ++i) EXPECT_NEAR(m.mean[i], d.mean[i], kMomentTolerance);
+                for (int i = 0; i < 3; ++i)
+                    EXPECT_NEAR(m.mean[i], d.mean[i], kMomentTolerance);
                 EXPECT_NEAR(m.projectedVariance(), d.projectedVariance, kMomentTolerance);
                 const auto M = m.slopeSecondMoments();
-                for (int i = 0; i < 3; ++i) EXPECT_NEAR(M[size_t(i)], d.m[i], kMomentTolerance * 10);
+                for (int i = 0; i < 3; ++i)
+                    EXPECT_NEAR(M[size_t(i)], d.m[i], kMomentTolerance * 10);
                 EXPECT_NEAR(m.slope.x, d.slope.x, kMomentTolerance);
             }
     }
@@ -112,9 +120,10 @@ TEST(NormalPyramid, NonPowerOfTwoFootprintsAreExact) {
         const auto& l = pyramid.level(k);
         for (int y = 0; y < l.height; ++y)
             for (int x = 0; x < l.width; ++x) {
-                const Direct dd = direct(*map, l.xStart[size_t(x)], l.xStart[size_t(x) + 1], l.yStart[size_t(y)],
-                                         l.yStart[size_t(y) + 1]);
-                EXPECT_NEAR(pyramid.boxMoments(k, x, y).projectedVariance(), dd.projectedVariance, kMomentTolerance);
+                const Direct dd = direct(*map, l.xStart[size_t(x)], l.xStart[size_t(x) + 1],
+                                         l.yStart[size_t(y)], l.yStart[size_t(y) + 1]);
+                EXPECT_NEAR(pyramid.boxMoments(k, x, y).projectedVariance(), dd.projectedVariance,
+                            kMomentTolerance);
             }
     }
 }
@@ -124,16 +133,19 @@ TEST(NormalPyramid, TinyVarianceSurvivesBesideAUnitMean) {
     // resolution of 1 − (n·n̄)² computed naively (~1e-7). Central moments keep it.
     const float a = 5e-5f;
     std::vector<glm::vec3> n;
-    for (int i = 0; i < 64; ++i) n.push_back(glm::normalize(glm::vec3((i % 2) ? a : -a, 0.0f, 1.0f)));
-    auto pyramid = NormalPyramid::build(shared(makeNormalMap(8, 8, n)), {BorderMode::Wrap, FilterKernel::Box});
+    for (int i = 0; i < 64; ++i)
+        n.push_back(glm::normalize(glm::vec3((i % 2) ? a : -a, 0.0f, 1.0f)));
+    auto pyramid =
+        NormalPyramid::build(shared(makeNormalMap(8, 8, n)), {BorderMode::Wrap, FilterKernel::Box});
     const float v = pyramid.boxMoments(pyramid.levelCount() - 1, 0, 0).projectedVariance();
     EXPECT_NEAR(v, double(a) * a, 0.05 * double(a) * a);
 }
 
 TEST(NormalPyramid, FlatMapHasZeroVarianceAtEveryLevelAndKernel) {
     for (auto kernel : {FilterKernel::Box, FilterKernel::Tent, FilterKernel::Gaussian}) {
-        auto pyramid = NormalPyramid::build(shared(makeNormalMap(16, 16, std::vector<glm::vec3>(256, glm::vec3(0, 0, 1)))),
-                                            {BorderMode::Wrap, kernel});
+        auto pyramid = NormalPyramid::build(
+            shared(makeNormalMap(16, 16, std::vector<glm::vec3>(256, glm::vec3(0, 0, 1)))),
+            {BorderMode::Wrap, kernel});
         for (int k = 0; k < pyramid.levelCount(); ++k) {
             const NormalMoments m = pyramid.moments(k, 0, 0);
             EXPECT_EQ(m.projectedVariance(), 0.0f);
@@ -151,8 +163,8 @@ TEST(NormalPyramid, TentKernelSpreadsVarianceToNeighboursAndWrapMatters) {
     auto clamp = NormalPyramid::build(mapPtr, {BorderMode::Clamp, FilterKernel::Tent});
     auto box = NormalPyramid::build(mapPtr, {BorderMode::Wrap, FilterKernel::Box});
     EXPECT_EQ(box.moments(0, 1, 3).projectedVariance(), 0.0f);
-    EXPECT_GT(wrap.moments(0, 1, 3).projectedVariance(), 0.0f); // right neighbour sees it
-    EXPECT_GT(wrap.moments(0, 7, 3).projectedVariance(), 0.0f); // wraps to the right edge
+    EXPECT_GT(wrap.moments(0, 1, 3).projectedVariance(), 0.0f);  // right neighbour sees it
+    EXPECT_GT(wrap.moments(0, 7, 3).projectedVariance(), 0.0f);  // wraps to the right edge
     EXPECT_EQ(clamp.moments(0, 7, 3).projectedVariance(), 0.0f); // clamping does not
 }
 

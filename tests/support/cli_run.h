@@ -22,7 +22,8 @@ struct CliResult {
 /// `text` quoted for /bin/sh.
 inline std::string shellQuote(const std::string& text) {
     std::string q = "'";
-    for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    for (char c : text)
+        q += c == '\'' ? std::string("'\\''") : std::string(1, c);
     return q + "'";
 }
 
@@ -30,15 +31,17 @@ inline std::string shellQuote(const std::string& text) {
 /// through a temporary file that is removed afterwards.
 inline CliResult runBurnish(const std::string& args) {
     static std::atomic<int> counter{0};
-    const auto errPath = std::filesystem::temp_directory_path() /
-                         ("burnish-cli-err-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".txt");
+    const auto errPath =
+        std::filesystem::temp_directory_path() /
+        ("burnish-cli-err-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".txt");
     const std::string command = shellQuote(BURNISH_EXE) + " " + args + " 2>" + shellQuote(errPath.string());
     CliResult result;
     FILE* pipe = ::popen(command.c_str(), "r");
     if (!pipe) return result;
     char buffer[4096];
     size_t n;
-    while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) result.out.append(buffer, n);
+    while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
+        result.out.append(buffer, n);
     const int status = ::pclose(pipe);
     result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     std::ifstream err(errPath);
@@ -53,7 +56,8 @@ inline CliResult runBurnish(const std::string& args) {
 /// Number of '\n'-terminated lines.
 inline int lineCount(const std::string& text) {
     int lines = 0;
-    for (char c : text) lines += c == '\n';
+    for (char c : text)
+        lines += c == '\n';
     return lines;
 }
 

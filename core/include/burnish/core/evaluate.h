@@ -70,7 +70,6 @@ struct ErrorMap {
     FilterKernel kernel = FilterKernel::Box;
 };
 
-
 struct EvaluationResult {
     std::vector<MipError> errors;
     std::vector<ErrorMap> maps;
@@ -82,7 +81,8 @@ struct EvaluationResult {
 
 /// Ground truth of one texel's footprint for one direction pair (the brute-force definition,
 /// used by tests and by evaluateMethods' hierarchical sums).
-double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s, const DirectionPair& d);
+double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s,
+                        const DirectionPair& d);
 
 /// A method's value for one texel and direction.
 double methodValue(const TexelLobe& lobe, const DirectionPair& d);

@@ -25,8 +25,8 @@ MethodStorage methodStorage(Method method);
 
 struct MethodCost {
     Method method;
-    double bakeSeconds = 0.0;  // median over the runs of an in-memory bake (pyramid included)
-    double nsPerLobe = 0.0;    // median ns per lobe evaluation (NDF × n·l, double, one core)
+    double bakeSeconds = 0.0; // median over the runs of an in-memory bake (pyramid included)
+    double nsPerLobe = 0.0;   // median ns per lobe evaluation (NDF × n·l, double, one core)
     MethodStorage storage;
 };
 
@@ -64,6 +64,7 @@ PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& report);
 Status writeEvaluationReport(const EvaluationReport& report, const std::filesystem::path& dir);
 
 /// Writes a one-channel float EXR atomically.
-Status writeFloatExr(const std::filesystem::path& path, int width, int height, const std::vector<float>& values);
+Status writeFloatExr(const std::filesystem::path& path, int width, int height,
+                     const std::vector<float>& values);
 
 } // namespace burnish

@@ -7,7 +7,9 @@ namespace burnish {
 
 /// Cosine of the half-angle of the uniform cone of normals whose mean has length lenNa.
 // Baker & Hill 2012, "Rock-Solid Shading": cos θ = 2|Na| − 1
-template <class T> inline T coneCosFromNormalLength(T lenNa) { return T(2) * saturate(lenNa) - T(1); }
+template <class T> inline T coneCosFromNormalLength(T lenNa) {
+    return T(2) * saturate(lenNa) - T(1);
+}
 
 /// Exact mean of max(0, n_i·l) over normals n_i uniform in the cone of half-angle acos(cosCone)
 /// around an axis with axis·l = cosAlpha. This is the integral the diffuse-AA LUT and curve

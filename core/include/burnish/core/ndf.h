@@ -16,15 +16,21 @@ namespace burnish {
 
 /// Blinn-Phong NDF normalization: ∫ D(h)(n·h) dω_h = 1 over the hemisphere.
 // Lazarov 2011, "Physically Based Lighting in Call of Duty: Black Ops": D_P = (n+2)/(2π) (n·h)^n
-template <class T> inline T blinnPhongNdfNorm(T n) { return (clampPower(n) + T(2)) / (T(2) * kPi<T>); }
+template <class T> inline T blinnPhongNdfNorm(T n) {
+    return (clampPower(n) + T(2)) / (T(2) * kPi<T>);
+}
 
 /// Phong lobe (r·v)^n normalization: ∫ K (r·v)^n dω_o = 1 with l = n.
 // Lagarde 2011, "Adopting a physically based shading model": (n+1)/(2π)
-template <class T> inline T phongLobeNorm(T n) { return (clampPower(n) + T(1)) / (T(2) * kPi<T>); }
+template <class T> inline T phongLobeNorm(T n) {
+    return (clampPower(n) + T(1)) / (T(2) * kPi<T>);
+}
 
 /// Phong BRDF (r·v)^n (n·l) normalization: ∫ K (r·v)^n cosθ_o dω_o = 1 with l = n.
 // Lagarde 2011, "Adopting a physically based shading model": (n+2)/(2π)
-template <class T> inline T phongBrdfNorm(T n) { return (clampPower(n) + T(2)) / (T(2) * kPi<T>); }
+template <class T> inline T phongBrdfNorm(T n) {
+    return (clampPower(n) + T(2)) / (T(2) * kPi<T>);
+}
 
 /// Blinn-Phong lobe (n·h)^n normalization: ∫ K (n·h)^n dω_o = 1 with l = n.
 // Lagarde 2011, "Adopting a physically based shading model": (n+2)/(4π(2−2^(−n/2)))
@@ -43,14 +49,18 @@ template <class T> inline T blinnPhongBrdfNorm(T n) {
 
 /// The cheap approximation of blinnPhongBrdfNorm.
 // Akenine-Möller, Haines, Hoffman, "Real-Time Rendering" 3rd ed., via Lagarde 2011: (n+8)/(8π)
-template <class T> inline T blinnPhongBrdfNormApprox(T n) { return (clampPower(n) + T(8)) / (T(8) * kPi<T>); }
+template <class T> inline T blinnPhongBrdfNormApprox(T n) {
+    return (clampPower(n) + T(8)) / (T(8) * kPi<T>);
+}
 
 // ---------------------------------------------------------------------------------------------
 // NDFs. Each integrates to 1 in projected solid angle: ∫ D(h)(n·h) dω_h = 1.
 
 /// Normalized Blinn-Phong NDF.
 // Lazarov 2011: D_P(h) = (n+2)/(2π) (n·h)^n
-template <class T> inline T blinnPhongNdf(T NoH, T n) { return blinnPhongNdfNorm(n) * powCos(NoH, n); }
+template <class T> inline T blinnPhongNdf(T NoH, T n) {
+    return blinnPhongNdfNorm(n) * powCos(NoH, n);
+}
 
 /// Beckmann NDF with RMS slope m (m clamped to at least sqrt(2/(kMaxPower+2))).
 // Lazarov 2011 (after Beckmann 1963): D_B(h) = exp(((n·h)²−1)/(m²(n·h)²)) / (π m² (n·h)⁴)
@@ -86,7 +96,9 @@ template <class T> inline T ggxNdf(T NoH, T alpha) {
 
 /// Lambert diffuse BRDF for unit albedo.
 // Lagarde 2012, "PI or not to PI in game lighting equation": f = c_diff/π
-template <class T> inline T lambertBrdf() { return kInvPi<T>; }
+template <class T> inline T lambertBrdf() {
+    return kInvPi<T>;
+}
 
 /// Radiance reflected from a punctual light in "game light units": the light colour is what a white
 /// Lambert surface facing the light shows, so the π of the Lambert BRDF cancels.
@@ -100,7 +112,9 @@ template <class T> inline T punctualRadiance(T brdf, T lightColor, T NoL) {
 
 /// Beckmann RMS slope matching Blinn-Phong power n.
 // Lazarov 2011: m = sqrt(2/(n+2))
-template <class T> inline T beckmannRoughnessFromPower(T n) { return std::sqrt(T(2) / (clampPower(n) + T(2))); }
+template <class T> inline T beckmannRoughnessFromPower(T n) {
+    return std::sqrt(T(2) / (clampPower(n) + T(2)));
+}
 
 /// Inverse of beckmannRoughnessFromPower: n = 2/m² − 2, clamped to [0, kMaxPower].
 template <class T> inline T powerFromBeckmannRoughness(T m) {
@@ -110,9 +124,13 @@ template <class T> inline T powerFromBeckmannRoughness(T m) {
 
 /// GGX alpha matching Blinn-Phong power n (the usual bridge α² = 2/(n+2), the same as Beckmann's m).
 // Walter et al. 2007; Karis 2013 ("Real Shading in Unreal Engine 4", α = roughness²)
-template <class T> inline T ggxAlphaFromPower(T n) { return beckmannRoughnessFromPower(n); }
+template <class T> inline T ggxAlphaFromPower(T n) {
+    return beckmannRoughnessFromPower(n);
+}
 
 /// Inverse of ggxAlphaFromPower.
-template <class T> inline T powerFromGgxAlpha(T alpha) { return powerFromBeckmannRoughness(alpha); }
+template <class T> inline T powerFromGgxAlpha(T alpha) {
+    return powerFromBeckmannRoughness(alpha);
+}
 
 } // namespace burnish

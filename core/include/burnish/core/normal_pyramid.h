@@ -32,10 +32,10 @@ inline constexpr float kMinSlopeZ = 0.01f;
 
 /// Moments of the finest normals n_i under one footprint.
 struct NormalMoments {
-    glm::vec3 mean{0.0f, 0.0f, 1.0f};    // Na = E[n]
-    std::array<float, 6> cov{};          // E[(n−Na)(n−Na)ᵀ]: xx, yy, zz, xy, xz, yz
-    glm::vec2 slope{0.0f, 0.0f};         // B = E[b], b = (n.x/n.z, n.y/n.z)
-    std::array<float, 3> slopeCov{};     // E[(b−B)(b−B)ᵀ]: xx, yy, xy
+    glm::vec3 mean{0.0f, 0.0f, 1.0f}; // Na = E[n]
+    std::array<float, 6> cov{};       // E[(n−Na)(n−Na)ᵀ]: xx, yy, zz, xy, xz, yz
+    glm::vec2 slope{0.0f, 0.0f};      // B = E[b], b = (n.x/n.z, n.y/n.z)
+    std::array<float, 3> slopeCov{};  // E[(b−B)(b−B)ᵀ]: xx, yy, xy
 
     /// |Na|, in [0, 1].
     float lengthNa() const;

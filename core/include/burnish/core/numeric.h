@@ -24,7 +24,9 @@ inline constexpr double kMinVariance = 1.0 / kMaxPower;
 inline constexpr double kMinCosine = 1e-6;
 
 /// Clamps to [0, 1]; NaN becomes 0, so a NaN cosine can never travel further into a lobe.
-template <class T> constexpr T saturate(T x) { return x > T(0) ? (x < T(1) ? x : T(1)) : T(0); }
+template <class T> constexpr T saturate(T x) {
+    return x > T(0) ? (x < T(1) ? x : T(1)) : T(0);
+}
 
 /// Clamps a power to [0, kMaxPower]; NaN becomes 0.
 template <class T> constexpr T clampPower(T n) {
@@ -42,9 +44,13 @@ template <class T> inline T powCos(T c, T n) {
 }
 
 /// x^p for x in [0, 1] and p >= 0 (Fresnel-style powers), never NaN: 0^0 = 1, 0^p = 0.
-template <class T> inline T powUnit(T x, T p) { return powCos(x, p); }
+template <class T> inline T powUnit(T x, T p) {
+    return powCos(x, p);
+}
 
 /// True when x is neither NaN nor infinite.
-template <class T> constexpr bool isFinite(T x) { return std::isfinite(x); }
+template <class T> constexpr bool isFinite(T x) {
+    return std::isfinite(x);
+}
 
 } // namespace burnish

@@ -15,8 +15,10 @@ struct Error {
 /// Either a value or an Error. Never throws on user input; value() on an error is a programming bug.
 template <class T> class [[nodiscard]] Result {
 public:
-    Result(T value) : m_state(std::move(value)) {}
-    Result(Error error) : m_state(std::move(error)) {}
+    Result(T value)
+        : m_state(std::move(value)) {}
+    Result(Error error)
+        : m_state(std::move(error)) {}
 
     bool ok() const { return std::holds_alternative<T>(m_state); }
     explicit operator bool() const { return ok(); }
@@ -41,7 +43,9 @@ private:
 class [[nodiscard]] Status {
 public:
     Status() = default;
-    Status(Error error) : m_error(std::move(error.message)), m_failed(true) {}
+    Status(Error error)
+        : m_error(std::move(error.message))
+        , m_failed(true) {}
     static Status success() { return {}; }
 
     bool ok() const { return !m_failed; }

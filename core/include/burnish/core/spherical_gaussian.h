@@ -18,7 +18,8 @@ inline constexpr double kSgOffsetLimit = 0.75;
 /// Spherical-Gaussian approximation of the cosine-power lobe c^n (c = n·h for Blinn-Phong,
 /// c = r·l for Phong): exp((n + x)(c − 1)), 0 for c <= 0 like the exact lobe (the exact lobe is
 /// always multiplied by a clamped n·l, so the terminator stays at zero).
-// Lagarde 2012 (after Wang et al. 2009, "All-Frequency Rendering with Dynamic, Spatially-Varying Reflectance")
+// Lagarde 2012 (after Wang et al. 2009, "All-Frequency Rendering with Dynamic, Spatially-Varying
+// Reflectance")
 template <class T> inline T sgLobe(T c, T n, T x) {
     if (!(c > T(0))) return T(0);
     const T k = clampPower(n) + x;
@@ -48,7 +49,7 @@ public:
     const std::vector<double>& offsets() const { return m_offsets; }
 
 private:
-    std::vector<double> m_powers;  // ascending
+    std::vector<double> m_powers; // ascending
     std::vector<double> m_offsets;
 };
 

@@ -9,7 +9,9 @@ namespace burnish {
 
 /// No visibility term: G = (n·l)(n·v), V = 1.
 // Lazarov 2011
-template <class T> inline T visibilityNone() { return T(1); }
+template <class T> inline T visibilityNone() {
+    return T(1);
+}
 
 /// Kelemen–Szirmay-Kalos approximation of the Cook–Torrance visibility.
 // Lazarov 2011 (after Kelemen & Szirmay-Kalos 2001): V = 4/((v+l)·(v+l)) = 1/(v·h)²

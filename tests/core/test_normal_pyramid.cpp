@@ -177,3 +177,32 @@ TEST(NormalPyramid, ToksvigRelationHoldsForNarrowSpreads) {
     const double toksvig = 2.0 * (1.0 - m.lengthNa()) / m.lengthNa();
     EXPECT_NEAR(toksvig / m.projectedVariance(), 1.0, 0.02);
 }
+
+TEST(NormalPyramid, RowStreamingMatchesPerTexelFiltering) {
+    // forEachMomentRow (separable, blocked, parallel) must give the moments of moments(k, x, y)
+    // (the direct 2D weighted sum), for every kernel, border and level, odd sizes included.
+    // Both sum in double and store float: agreement to a few float ulps.
+    constexpr double kRowTolerance = 1e-6;
+    auto map = shared(makeNormalMap(37, 21, randomNormals(37 * 21, 0.3f, 12)));
+    for (auto kernel : {FilterKernel::Box, FilterKernel::Tent, FilterKernel::Gaussian})
+        for (auto border : {BorderMode::Wrap, BorderMode::Clamp}) {
+            const auto pyramid = NormalPyramid::build(map, {border, kernel});
+            for (int k = 0; k < pyramid.levelCount(); ++k) {
+                std::vector<int> rowsSeen(size_t(pyramid.level(k).height), 0);
+                pyramid.forEachMomentRow(k, [&](int y, const NormalMoments* row) {
+                    ++rowsSeen[size_t(y)];
+                    for (int x = 0; x < pyramid.level(k).width; ++x) {
+                        const NormalMoments d = pyramid.moments(k, x, y);
+                        for (int i = 0; i < 3; ++i)
+                            EXPECT_NEAR(row[x].mean[i], d.mean[i], kRowTolerance);
+                        EXPECT_NEAR(row[x].projectedVariance(), d.projectedVariance(), kRowTolerance);
+                        for (int i = 0; i < 3; ++i)
+                            EXPECT_NEAR(row[x].slopeSecondMoments()[size_t(i)],
+                                        d.slopeSecondMoments()[size_t(i)], kRowTolerance * 10);
+                    }
+                });
+                for (int seen : rowsSeen)
+                    EXPECT_EQ(seen, 1); // every row exactly once
+            }
+        }
+}

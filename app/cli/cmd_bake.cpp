@@ -2,6 +2,7 @@
 // into an engine preset's textures with full mip chains, plus bake.json. One job from the
 // options, or many from a manifest.
 #include "command.h"
+#include "common.h"
 
 #include <burnish/core/atomic_file.h>
 #include <burnish/core/bake.h>
@@ -184,38 +185,12 @@ Result<Job> resolve(const JobSpec& spec) {
 }
 
 /// A one-line progress bar on stderr, drawn only when stderr is a terminal.
-class Progress {
-public:
-    Progress()
-        : m_enabled(::isatty(STDERR_FILENO) == 1) {}
-    void show(const std::string& label, const char* stage, int step, int steps) {
-        if (!m_enabled) return;
-        constexpr int kWidth = 24;
-        const int filled = steps > 0 ? kWidth * step / steps : kWidth;
-        std::fprintf(stderr, "\r%-32.32s %-8s [%s%s]", label.c_str(), stage,
-                     std::string(size_t(filled), '#').c_str(),
-                     std::string(size_t(kWidth - filled), '.').c_str());
-        std::fflush(stderr);
-        m_drawn = true;
-    }
-    void clear() {
-        if (!m_enabled || !m_drawn) return;
-        std::fprintf(stderr, "\r%78s\r", "");
-        std::fflush(stderr);
-        m_drawn = false;
-    }
-    ~Progress() { clear(); }
-
-private:
-    bool m_enabled;
-    bool m_drawn = false;
-};
-
-Result<Json> runJob(const Job& job, Progress& progress, const std::string& label, bool report) {
+Result<Json> runJob(const Job& job, ProgressBar& progress, const std::string& label, bool report) {
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
     constexpr int kSteps = 3;
-    progress.show(label, "reading", 0, kSteps);
+    progress.setLabel(label);
+    progress.update(0.0, "reading");
     const auto map = loadNormalMap(job.spec.input, job.normalMap);
     if (!map) return Error{map.error()};
 
@@ -228,11 +203,11 @@ Result<Json> runJob(const Job& job, Progress& progress, const std::string& label
         options.authoredGloss = std::move(gloss.value());
     }
 
-    progress.show(label, "baking", 1, kSteps);
+    progress.update(double(1) / kSteps, "baking");
     const auto baked = bake(*map, options);
     if (!baked) return Error{baked.error()};
 
-    progress.show(label, "writing", 2, kSteps);
+    progress.update(double(2) / kSteps, "writing");
     std::error_code ec;
     fs::create_directories(job.spec.out, ec);
     if (ec) return Error{"cannot create output folder '" + job.spec.out + "': " + ec.message()};
@@ -269,7 +244,7 @@ Result<Json> runJob(const Job& job, Progress& progress, const std::string& label
         if (message.rfind("refusing to overwrite", 0) == 0) message += " (use --force to replace the set)";
         return Error{message};
     }
-    progress.show(label, "done", kSteps, kSteps);
+    progress.update(double(kSteps) / kSteps, "done");
 
     Json files = Json::array();
     for (const auto& f : exported->files)
@@ -295,7 +270,7 @@ Result<Json> runJob(const Job& job, Progress& progress, const std::string& label
     if (report) {
         // The ground-truth report for the same map, power and border: how far each method is from
         // the truth per mip, next to its cost (burnish evaluate, written into <out>/report).
-        progress.show(label, "evaluating", kSteps, kSteps);
+        progress.update(double(kSteps) / kSteps, "evaluating");
         EvaluationReportOptions evaluation;
         evaluation.inputName = fs::path(job.spec.input).filename().string();
         evaluation.evaluate.basePowers = {options.basePower};
@@ -518,14 +493,14 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                                 : job.error());
             jobs.push_back(std::move(job.value()));
         }
-        Progress progress;
+        ProgressBar progress;
         Json summaries = Json::array();
         for (size_t i = 0; i < jobs.size(); ++i) {
             const std::string name = fs::path(jobs[i].spec.input).filename().string();
             const std::string label =
                 jobs.size() > 1 ? fmt::format("[{}/{}] {}", i + 1, jobs.size(), name) : name;
             auto summary = runJob(jobs[i], progress, label, *report);
-            progress.clear();
+            progress.finish();
             if (!summary)
                 return fail(jobs.size() > 1 || !manifest->empty()
                                 ? "manifest job " + std::to_string(i + 1) + " (" + jobs[i].spec.input +

@@ -50,23 +50,30 @@ ProgressBar::~ProgressBar() {
     finish();
 }
 
-void ProgressBar::update(double fraction) {
+void ProgressBar::setLabel(std::string label) {
+    m_label = std::move(label);
+}
+
+void ProgressBar::update(double fraction, const std::string& stage) {
     if (!m_enabled) return;
     const int percent = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 100.0);
-    if (percent == m_lastPercent) return;
+    if (percent == m_lastPercent && stage == m_stage) return;
     m_lastPercent = percent;
-    constexpr int kWidth = 30;
+    m_stage = stage;
+    constexpr int kWidth = 24;
     const int filled = percent * kWidth / 100;
-    std::fprintf(stderr, "\r%s [%.*s%*s] %3d%%", m_label.c_str(), filled, "##############################",
-                 kWidth - filled, "", percent);
+    std::fprintf(stderr, "\r%-32.32s %-10s [%s%s] %3d%%", m_label.c_str(), m_stage.c_str(),
+                 std::string(size_t(filled), '#').c_str(), std::string(size_t(kWidth - filled), '.').c_str(),
+                 percent);
     std::fflush(stderr);
 }
 
 void ProgressBar::finish() {
     if (!m_enabled || m_lastPercent < 0) return;
-    std::fprintf(stderr, "\r%*s\r", int(m_label.size()) + 40, "");
+    std::fprintf(stderr, "\r%80s\r", "");
     std::fflush(stderr);
     m_lastPercent = -1;
+    m_stage.clear();
 }
 
 } // namespace burnish::cli

@@ -21,16 +21,21 @@ void addNormalMapOptions(CLI::App* sub, NormalMapCliOptions& options);
 /// The core options (the CLI11 checks have already restricted the names).
 NormalMapOptions toNormalMapOptions(const NormalMapCliOptions& options);
 
-/// A one-line progress bar on stderr, drawn only when stderr is a terminal.
+/// A one-line progress bar on stderr, drawn only when stderr is a terminal:
+/// "<label> <stage> [#####.....]  50%".
 class ProgressBar {
 public:
-    explicit ProgressBar(std::string label);
+    explicit ProgressBar(std::string label = {});
     ~ProgressBar();
-    void update(double fraction);
+    void setLabel(std::string label);
+    /// Redraws when the percentage or the stage changed.
+    void update(double fraction, const std::string& stage = {});
+    /// Clears the line.
     void finish();
 
 private:
     std::string m_label;
+    std::string m_stage;
     bool m_enabled = false;
     int m_lastPercent = -1;
 };

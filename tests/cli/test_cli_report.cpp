@@ -1,6 +1,8 @@
 // End to end: `burnish report approximations` run as a process.
 #include "cli_run.h"
+
 #include <OpenImageIO/imagebuf.h>
+#include <burnish/core/atomic_file.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -27,11 +29,10 @@ struct RunResult {
     std::string err;
 };
 
+// A file the command wrote ("" when it is missing, which the test's assertions then report).
 std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
+    auto text = burnish::readFile(p);
+    return text ? text.value() : std::string();
 }
 
 /// Lines of a Markdown table body: "| <number> | ...".

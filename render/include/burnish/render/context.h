@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace burnish::render {
 
@@ -38,12 +39,21 @@ public:
 
     virtual ContextKind kind() const = 0;
     /// Makes the context current on the calling thread. Fails with a message when it cannot.
+    /// Contexts of different kinds may live in one process; call makeCurrent() when switching, as
+    /// it also points libepoxy's dispatch at the right library (epoxy alone cannot resolve GL under
+    /// OSMesa). One thread at a time.
     virtual Status makeCurrent() = 0;
-    /// "EGL surfaceless, OpenGL 4.5 (Core Profile) Mesa 22.3.6, llvmpipe (LLVM 15.0.6, 256 bits)".
+    /// "EGL surfaceless, OpenGL 4.5 (Core Profile) Mesa 22.3.6, llvmpipe (LLVM 15.0.6, 256 bits)"
+    /// ("EGL device 0, ..." on NVIDIA's headless EGL). Taken when the context was created (for the
+    /// host's, at the last successful makeCurrent()), so it needs no current context.
     std::string description() const;
 
 protected:
     GlContext() = default;
+    void setDescription(std::string description) { m_description = std::move(description); }
+
+private:
+    std::string m_description;
 };
 
 /// Creates a headless context, current on the calling thread. When none can be made the error

@@ -34,12 +34,21 @@ public:
     unsigned id() const { return m_fbo; }
     /// Binds for drawing and sets the viewport to the whole target.
     void bind() const;
-    /// RGBA floats, row 0 at the top (already flipped from GL's bottom-up order).
+    /// RGBA floats, row 0 at the top (already flipped from GL's bottom-up order). Resolves an
+    /// MSAA target first. The caller's framebuffer bindings are kept.
     std::vector<float> readRgbaFloat() const;
-    /// RGBA bytes, row 0 at the top.
+    /// RGBA bytes, row 0 at the top (float targets are clamped to [0, 1] and rounded by GL).
     std::vector<std::uint8_t> readRgba8() const;
+    /// MSAA only: averages the samples into the single-sample colour texture (a blit). No-op otherwise.
+    void resolve() const;
+    /// The colour as a texture to sample in a later pass (nearest filtering, clamped): the target
+    /// itself, or for an MSAA target its resolve texture, current after resolve().
+    unsigned colorTexture() const;
+    int samples() const { return m_samples; }
 
 private:
+    void release();
+
     int m_width = 0;
     int m_height = 0;
     ColorFormat m_format = ColorFormat::Rgba8;
@@ -60,7 +69,10 @@ enum class TextureFilter {
 struct TextureLevel {
     int width = 0;
     int height = 0;
-    std::vector<float> texels; // row-major, `channels` floats per texel, row 0 at the top of the image
+    /// Row-major, `channels` floats per texel, row 0 at the top of the image. The top row is
+    /// uploaded at v = 1 (GL's first row is v = 0), so an image drawn with UVs whose v points up
+    /// (OBJ, the generated meshes, fullscreen.vert's vUv) reads back upright.
+    std::vector<float> texels;
 };
 
 /// A 2D texture of 1–4 float channels, uploaded as R/RG/RGB/RGBA 32F (or 16F when `half`).

@@ -46,7 +46,9 @@ Result<MeshData> loadObj(const std::filesystem::path& path);
 /// Gram–Schmidt against the normal); degenerate UV triangles fall back to any orthonormal tangent.
 void generateTangents(MeshData& mesh);
 
-/// The mesh uploaded to a VAO (attribute 0 position, 1 normal, 2 tangent, 3 uv).
+/// The mesh uploaded to a VAO (attribute 0 position, 1 normal, 2 tangent, 3 uv; Program binds
+/// vertex inputs named aPosition, aNormal, aTangent, aUv to these locations).
+/// upload() errors: an empty mesh, an index count not a multiple of 3, an index out of range.
 class GpuMesh {
 public:
     GpuMesh() = default;

@@ -1,0 +1,123 @@
+// What each prefiltering method's shader does with its stored values: the GLSL twin of
+// core/include/burnish/core/methods.h, core/src/methods.cpp and the Toksvig functions of gloss.h.
+// Every guard of core is here too: |Na| → 0, zero variance, det Σ → 0, h_z <= 0.
+#include "common_math.glsl"
+#include "brdf_ndf.glsl"
+
+// int(burnish::Method), in the enum's order; chosen with `#if METHOD == METHOD_LEAN`.
+#define METHOD_NAIVE 0
+#define METHOD_TOKSVIG 1
+#define METHOD_TOKSVIG_MAP 2
+#define METHOD_VARIANCE_TO_GLOSS 3
+#define METHOD_LEAN 4
+#define METHOD_CLEAN 5
+#define METHOD_VMF 6
+
+// Base powers below this are treated as this, so 1/s stays finite (methods.cpp).
+const float kMinBasePower = 1e-6;
+
+// The base power as methodLobe uses it: clamped to [kMinBasePower, kMaxPower].
+float methodBasePower(float s) {
+    return max(clampPower(s), kMinBasePower);
+}
+
+// Toksvig 2004 via Baker & Hill 2012: σ² = (1 − |Na|)/|Na|, clamped to [0, 1/kMinVariance]
+float toksvigVariance(float lenNa) {
+    lenNa = saturate(lenNa);
+    if (lenNa <= kMinVariance) return 1.0 / kMinVariance;
+    return min((1.0 - lenNa) / lenNa, 1.0 / kMinVariance);
+}
+
+// Toksvig 2004 via Hill 2011: f_t = |Na| / (|Na| + s(1 − |Na|)); |Na| → 0 gives 0
+float toksvigFactor(float lenNa, float s) {
+    lenNa = saturate(lenNa);
+    s = clampPower(s);
+    float denom = lenNa + s * (1.0 - lenNa);
+    // denom is 0 only for |Na| = 0 and s = 0: a power of 0 stays 0.
+    return denom > 0.0 ? lenNa / denom : 1.0;
+}
+
+// f_t·s, never below 0 nor above s.
+float toksvigPower(float lenNa, float s) {
+    return clamp(toksvigFactor(lenNa, s) * clampPower(s), 0.0, clampPower(s));
+}
+
+// Hill 2011, "Specular Showdown in the Wild West": ft /= lerp(s/fixed_s, 1, ft)
+float convertToksvigFactor(float ft, float fixedS, float s) {
+    ft = saturate(ft);
+    fixedS = max(clampPower(fixedS), kMinVariance); // keeps s/fixed_s finite
+    float ratio = clampPower(s) / fixedS;
+    float denom = ratio + (1.0 - ratio) * ft;
+    return denom > 0.0 ? min(ft / denom, 1.0) : 1.0;
+}
+
+// Hill 2011: the baked Toksvig map's factor ft (for fixedS) converted to s; p = ft'·s
+float toksvigMapPower(float ft, float fixedS, float s) {
+    s = methodBasePower(s);
+    return convertToksvigFactor(ft, fixedS, s) * s;
+}
+
+// Lazarov 2011: p = 1/(v + 1/(s+1)) − 1, for the projected variance v (zero variance keeps s)
+float varianceToGlossPower(float v, float s) {
+    s = methodBasePower(s);
+    return clampPower(1.0 / (v + 1.0 / (s + 1.0)) - 1.0);
+}
+
+// Banerjee et al. 2005, "Clustering on the Unit Hypersphere using von Mises-Fisher Distributions":
+// κ ≈ (3r − r³)/(1 − r²), clamped to [0, kMaxPower]
+float vmfKappa(float r) {
+    r = saturate(r);
+    float oneMinusR2 = (1.0 - r) * (1.0 + r);
+    // r = 1 (all normals equal) is the limit κ → ∞: the lobe keeps the base power.
+    if (!(oneMinusR2 > 0.0)) return kMaxPower;
+    return clamp(r * (3.0 - r * r) / oneMinusR2, 0.0, kMaxPower);
+}
+
+// Han et al. 2007, "Frequency Domain Normal Map Filtering": 1/p = 1/s + 1/κ
+float vmfPower(float lenNa, float s) {
+    s = methodBasePower(s);
+    float kappa = vmfKappa(lenNa);
+    return kappa > 0.0 ? clampPower(1.0 / (1.0 / s + 1.0 / kappa)) : 0.0;
+}
+
+// Olano & Baker 2010, "LEAN Mapping": Σ = M − BBᵀ + I/s, as vec3(xx, yy, xy). M − BBᵀ is a
+// covariance, so its diagonal is clamped at 0: stored (16-bit) B and M can put it slightly below.
+vec3 leanCovariance(vec2 B, vec3 M, float s) {
+    float invS = 1.0 / methodBasePower(s);
+    return vec3(max(M.x - B.x * B.x, 0.0) + invS, max(M.y - B.y * B.y, 0.0) + invS, M.z - B.x * B.y);
+}
+
+// Baker 2011, "Spectacular Specular: LEAN and CLEAN Specular Highlights": σ² = (M_xx + M_yy)/2 −
+// |B|²/2 + 1/s, from the stored mean second moment mIso = (M_xx + M_yy)/2 (clamped at 0 like LEAN's).
+float cleanVariance(vec2 B, float mIso, float s) {
+    return max(mIso - 0.5 * dot(B, B), 0.0) + 1.0 / methodBasePower(s);
+}
+
+// The normal whose slope is B: normalize(B.x, B.y, 1).
+vec3 normalOfSlope(vec2 B) {
+    return normalize(vec3(B, 1.0));
+}
+
+// Olano & Baker 2010, "LEAN Mapping": exp(−½ dᵀΣ⁻¹d)/(2π√detΣ) / h_z⁴ with d = h.xy/h.z − B
+float slopeGaussianNdf(vec3 h, vec2 mean, vec3 cov) {
+    if (!(h.z > 0.0)) return 0.0;
+    float det = cov.x * cov.y - cov.z * cov.z;
+    // A positive definite Σ has det > 0; a singular or broken one gives no lobe (as core).
+    if (!(det > 0.0)) return 0.0;
+    // kMinCosine bounds 1/h_z at 1e6: below it h_z⁴ underflows float to 0 (0/0 = NaN); there the
+    // Gaussian of any Σ a method produces (|B| <= 100, Σ <= 1e6) is exp(−1e6)-small, 0 in core too.
+    float hz = max(h.z, kMinCosine);
+    float dx = h.x / hz - mean.x;
+    float dy = h.y / hz - mean.y;
+    float e = (dx * dx * cov.y + dy * dy * cov.x - 2.0 * dx * dy * cov.z) / det;
+    // In log form, so neither exp(−e/2) nor 1/h_z⁴ alone can overflow or underflow to 0·∞;
+    // 80 keeps exp finite; below −104 exp underflows even float denormals, and a NaN logD (an
+    // infinite e) fails the comparison, so both give 0.
+    float logD = -0.5 * e - log(2.0 * kPi * sqrt(det)) - 4.0 * log(hz);
+    return logD > -104.0 ? exp(min(logD, 80.0)) : 0.0;
+}
+
+// The isotropic methods' NDF (methodNdf for a lobe with power p about normal): (p+2)/(2π)(n̄·h)^p
+float isotropicLobeNdf(vec3 normal, float power, vec3 h) {
+    return blinnPhongNdf(dot(normal, h), power);
+}

@@ -1,0 +1,82 @@
+// The scene renderer: draws a Scene's material the way an engine would (one program per feature
+// set, the method's baked textures), the supersampled ground truth beside it, and debug views.
+// Everything here needs the OpenGL context the Renderer was created in to be current.
+#pragma once
+
+#include <burnish/core/result.h>
+#include <burnish/render/features.h>
+#include <burnish/render/program.h>
+#include <burnish/render/scene.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace burnish::render {
+
+/// Where render() draws: a framebuffer object id (0 = the default framebuffer) and its size.
+struct RenderTarget {
+    unsigned framebuffer = 0;
+    int width = 0;
+    int height = 0;
+};
+
+enum class ImageKind {
+    Hdr,     // linear radiance before exposure and tonemapping (RGBA32F)
+    Display, // after exposure and tonemapping, sRGB-encoded, in [0, 1] (read from RGBA8)
+};
+
+class Renderer {
+public:
+    /// Creates the renderer in the current context (which must be OpenGL 3.3 core or later).
+    static Result<std::unique_ptr<Renderer>> create();
+    ~Renderer();
+    Renderer(const Renderer&) = delete;
+    Renderer& operator=(const Renderer&) = delete;
+
+    /// Takes a scene: bakes with core's bake() only what changed (keyed by the normal map's
+    /// identity, the gloss map's, the method, its parameters, the base power and the encoding),
+    /// uploads the textures, loads the mesh if it changed, and compiles or fetches the program.
+    /// Errors: a bake failure, an unreadable OBJ, a shader that does not compile.
+    Status setScene(const Scene& scene);
+    const Scene& scene() const;
+
+    /// Draws the current scene into `target` (HDR pass, then the tonemap pass into the target).
+    Status render(const RenderTarget& target);
+    /// Draws into an off-screen target of the given size and reads it back: RGBA floats, row 0 at
+    /// the top. Errors: a size outside 1..GL_MAX_RENDERBUFFER_SIZE, no scene.
+    Result<std::vector<float>> renderToImage(int width, int height, ImageKind kind = ImageKind::Hdr);
+    /// The ground truth of the texts' "render big, downsample", done as `samplesPerPixel` jittered
+    /// passes (sub-pixel projection offsets from the Halton (2, 3) sequence) with the finest mip and
+    /// the base power, added up in RGBA32F and divided by the count. Errors as renderToImage, and a
+    /// sample count outside 1..4096.
+    Result<std::vector<float>> renderReference(int width, int height, int samplesPerPixel,
+                                               ImageKind kind = ImageKind::Hdr);
+
+    /// Compiles the material as the ubershader (every feature in, switched by uniforms) instead of
+    /// the scene's specialized program: only to measure against. Takes effect at the next setScene.
+    void setUseUbershader(bool on);
+
+    /// Wall time of the last render()/renderToImage() draw, GPU work included (glFinish), in ms.
+    double lastFrameMs() const;
+    /// The current program's feature set and explain() text.
+    const FeatureSet& features() const;
+    std::string explainProgram();
+    /// The current material program (null before the first successful setScene).
+    const Program* program() const;
+    /// Number of bakes done so far (a cache hit does not count).
+    int bakeCount() const;
+    ProgramCache& programCache();
+
+    struct Impl;
+
+private:
+    Renderer();
+    std::unique_ptr<Impl> m_impl;
+};
+
+/// The i-th point (i >= 1) of the Halton sequence in base 2 and 3, in [0, 1)²: the sub-pixel
+/// offsets of the reference.
+void haltonPoint(int index, float& x, float& y);
+
+} // namespace burnish::render

@@ -1,0 +1,120 @@
+// What the renderer draws: a mesh seen by an orbit camera, lit by a directional light, point
+// lights and an optional constant ambient, with one material (specular colour, gloss, normal maps,
+// prefiltering method and BRDF terms). Plain data: the renderer derives its FeatureSet from it and
+// bakes only what changed.
+#pragma once
+
+#include <burnish/core/gloss.h>
+#include <burnish/core/methods.h>
+#include <burnish/core/normal_map.h>
+#include <burnish/core/result.h>
+#include <burnish/render/features.h>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include <filesystem>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+namespace burnish::render {
+
+/// An orbit camera around `target`: yaw about +y (0 looks along −z from +z), pitch above the
+/// horizon, both in degrees; `distance` from the target pushes the object away to show
+/// minification; vertical field of view in degrees.
+struct OrbitCamera {
+    float yawDegrees = 30.0f;
+    float pitchDegrees = 20.0f;
+    float distance = 3.0f;
+    float fovDegrees = 40.0f;
+    glm::vec3 target{0.0f};
+
+    glm::vec3 position() const;
+    glm::mat4 view() const;
+    /// Perspective projection for the aspect ratio; near and far planes bracket a scene of radius
+    /// `sceneRadius` around the target.
+    glm::mat4 projection(float aspect, float sceneRadius) const;
+};
+
+struct DirectionalLight {
+    glm::vec3 direction{0.4f, 0.7f, 0.6f}; // towards the light; normalized when used
+    glm::vec3 color{1.0f};                 // linear
+    float intensity = 1.0f; // in the π light units: a white Lambert facing it shows `intensity`
+};
+
+struct PointLight {
+    glm::vec3 position{0.0f, 2.0f, 2.0f};
+    glm::vec3 color{1.0f};
+    float intensity = 4.0f; // radiance scale at distance 1 (inverse-square falloff)
+};
+
+/// A specular colour texture: linear F0, RGB floats, row-major, top row first.
+struct SpecularColorMap {
+    int width = 0;
+    int height = 0;
+    std::vector<float> rgb;
+};
+
+struct MaterialSettings {
+    glm::vec3 specularColor{0.04f}; // linear F0
+    /// Metal: no diffuse (the "pure metal" shader); the specular colour carries the colour.
+    bool metal = false;
+    glm::vec3 albedo{0.5f}; // linear diffuse albedo (ignored for metals)
+    /// Authored Blinn-Phong power where there is no gloss map (the base power s of the methods).
+    double basePower = 1024.0;
+    /// Encoding of the gloss map and of every baked gloss texture.
+    GlossEncoding glossEncoding = GlossEncoding::blackOps();
+    Method method = Method::VarianceToGloss;
+    MethodParams methodParams;
+    /// The tangent-space normal map, or none (a flat surface with the base power).
+    std::shared_ptr<const NormalMap> normalMap;
+    /// An optional detail normal map, tiled `detailUvScale` times over the base map.
+    std::shared_ptr<const NormalMap> detailMap;
+    float detailUvScale = 4.0f;
+    /// An optional authored gloss map (in glossEncoding), one value per texel of the normal map.
+    std::shared_ptr<const std::vector<float>> glossMap;
+    /// An optional specular colour texture (replaces specularColor).
+    std::shared_ptr<const SpecularColorMap> specularMap;
+    /// Texture tiling on top of the mesh's UV repeat.
+    float uvScale = 1.0f;
+    NdfTerm ndf = NdfTerm::BlinnPhong;
+    FresnelTerm fresnel = FresnelTerm::Schlick;
+    VisibilityTerm visibility = VisibilityTerm::None;
+    bool diffuseAa = false;
+    SpecularAa specularAa = SpecularAa::None;
+
+    /// Sets the base power from a gloss value in glossEncoding (clamped to [0, 1]).
+    void setGloss(double gloss) { basePower = glossEncoding.power(gloss); }
+};
+
+/// The linear F0 of a calibrated material of core's table (materials.h), by name (case-insensitive);
+/// a range gives its middle. Errors: an unknown name.
+Result<glm::vec3> calibratedSpecularColor(std::string_view name);
+
+struct Scene {
+    MeshKind mesh = MeshKind::Sphere;
+    std::filesystem::path objPath; // for MeshKind::Obj
+    OrbitCamera camera;
+    DirectionalLight light;
+    std::vector<PointLight> pointLights; // at most kMaxPointLights are drawn
+    EnvironmentKind environment = EnvironmentKind::Off;
+    glm::vec3 ambient{0.03f}; // constant radiance for EnvironmentKind::ConstantAmbient
+    /// Exposure in stops, applied in the tonemap pass.
+    float exposure = 0.0f;
+    MaterialSettings material;
+    DebugView debugView = DebugView::None;
+    /// Samples per pixel of the reference the error heatmap compares with.
+    int heatmapReferenceSamples = 16;
+    /// Absolute difference of linear luminance (HDR, before exposure) at the top of the heatmap's ramp.
+    float heatmapFullScale = 0.5f;
+
+    /// The studio's opening scene: the hammered sample normal map (core's makeSampleNormalMap) of
+    /// `mapSize`² on the sphere, a dielectric of F0 0.04, variance-to-gloss at power 1024.
+    static Scene sample(int mapSize = 256);
+
+    /// The feature set the renderer compiles for this scene.
+    FeatureSet features() const;
+};
+
+} // namespace burnish::render

@@ -1,0 +1,606 @@
+#include <burnish/render/renderer.h>
+
+#include <burnish/core/bake.h>
+#include <burnish/core/detail.h>
+#include <burnish/render/gpu_resources.h>
+#include <burnish/render/mesh.h>
+
+#include <epoxy/gl.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <optional>
+
+namespace burnish::render {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Texture units of material.frag's samplers.
+enum TextureUnit : int {
+    kUnitNormal = 0,
+    kUnitGloss = 1,
+    kUnitToksvig = 2,
+    kUnitLeanB = 3,
+    kUnitLeanM = 4,
+    kUnitClean = 5,
+    kUnitDetail = 6,
+    kUnitSpecular = 7,
+};
+
+// Largest reference sample count: 4096 passes already take minutes on a software rasterizer.
+constexpr int kMaxReferenceSamples = 4096;
+
+// An RGBA32F off-screen target of the given size (with depth for the material pass), kept between
+// frames and recreated only when the size changes; its colour texture feeds the next pass.
+Status ensureTarget(std::optional<Framebuffer>& target, int width, int height, bool depth) {
+    if (target && target->width() == width && target->height() == height) return {};
+    target.reset();
+    auto created = Framebuffer::create(width, height, ColorFormat::Rgba32f, depth);
+    if (!created) return Error{created.error()};
+    target.emplace(std::move(created).value());
+    return {};
+}
+
+// A baked texture on the GPU with its per-channel decode (stored·scale + bias).
+struct GpuBaked {
+    Texture2D texture;
+    glm::vec4 scale{1.0f};
+    glm::vec4 bias{0.0f};
+};
+
+Result<GpuBaked> uploadBaked(const BakedTexture& baked) {
+    std::vector<TextureLevel> levels;
+    levels.reserve(baked.mips.size());
+    for (const auto& mip : baked.mips)
+        levels.push_back(TextureLevel{mip.width, mip.height, mip.texels});
+    // Hardware trilinear filtering over the baked chain is what the methods were baked for.
+    auto texture = Texture2D::create(levels, baked.channels, TextureFilter::LinearMipLinear, true);
+    if (!texture) return Error{"uploading the '" + baked.role + "' texture: " + texture.error()};
+    GpuBaked out{std::move(texture).value()};
+    for (size_t c = 0; c < baked.decode.size() && c < 4; ++c) {
+        out.scale[int(c)] = float(baked.decode[c].scale);
+        out.bias[int(c)] = float(baked.decode[c].bias);
+    }
+    return out;
+}
+
+// What a bake depends on; shared_ptrs keep the identities alive so an address is never reused.
+struct BakeKey {
+    std::shared_ptr<const NormalMap> normalMap;
+    std::shared_ptr<const std::vector<float>> glossMap;
+    Method method = Method::Naive;
+    double toksvigMapPower = 0.0;
+    double basePower = 0.0;
+    std::string encoding;
+
+    bool operator==(const BakeKey& o) const {
+        return normalMap == o.normalMap && glossMap == o.glossMap && method == o.method &&
+               toksvigMapPower == o.toksvigMapPower && basePower == o.basePower && encoding == o.encoding;
+    }
+};
+
+int glossKindIndex(const GlossEncoding& encoding) {
+    return int(encoding.kind());
+}
+
+} // namespace
+
+void haltonPoint(int index, float& x, float& y) {
+    auto radicalInverse = [](int i, int base) {
+        double f = 1.0, r = 0.0;
+        for (; i > 0; i /= base) {
+            f /= base;
+            r += f * (i % base);
+        }
+        return float(r);
+    };
+    x = radicalInverse(std::max(index, 0), 2);
+    y = radicalInverse(std::max(index, 0), 3);
+}
+
+struct Renderer::Impl {
+    Scene scene;
+    bool hasScene = false;
+    bool useUbershader = false;
+    FeatureSet features;
+    const Program* program = nullptr;
+    const Program* accumulate = nullptr;
+    const Program* heatmap = nullptr;
+    const Program* tonemap = nullptr;
+    ProgramCache programs;
+    std::unique_ptr<FullscreenTriangle> fullscreen;
+
+    // Mesh.
+    std::optional<GpuMesh> mesh;
+    MeshKind meshKind = MeshKind::Sphere;
+    std::filesystem::path meshPath;
+    float meshRadius = 1.0f;
+
+    // Method bake.
+    std::optional<BakeKey> bakeKey;
+    std::map<std::string, GpuBaked> baked;
+    int bakes = 0;
+    // The reference's finest normals and authored gloss, level 0 only.
+    std::shared_ptr<const NormalMap> finestFor;
+    std::shared_ptr<const std::vector<float>> finestGlossFor;
+    std::optional<Texture2D> finestNormal;
+    std::optional<Texture2D> finestGloss;
+    // Detail and specular maps.
+    std::shared_ptr<const NormalMap> detailFor;
+    std::optional<GpuBaked> detail;
+    std::shared_ptr<const SpecularColorMap> specularFor;
+    std::optional<Texture2D> specular;
+
+    std::optional<Framebuffer> hdr;
+    std::optional<Framebuffer> accumulation;
+    std::optional<Framebuffer> heatmapReference;
+    bool heatmapReferenceValid = false;
+    double lastMs = 0.0;
+
+    Status prepareMesh();
+    Status prepareBake();
+    Status prepareMaps();
+    Result<const Program*> materialProgram(const FeatureSet& f);
+    void setMaterialUniforms(const Program& p, const FeatureSet& f, int width, int height,
+                             glm::vec2 jitterNdc, bool reference);
+    Status drawMaterial(const FeatureSet& f, const Program& p, int width, int height, glm::vec2 jitterNdc,
+                        bool reference);
+    Status accumulateReference(int width, int height, int samples);
+    Status displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView);
+    Status drawHdr(int width, int height);
+};
+
+Status Renderer::Impl::prepareMesh() {
+    if (mesh && meshKind == scene.mesh && (scene.mesh != MeshKind::Obj || meshPath == scene.objPath))
+        return {};
+    MeshData data;
+    switch (scene.mesh) {
+    case MeshKind::Sphere:
+        data = makeSphere();
+        break;
+    case MeshKind::Plane:
+        data = makePlane();
+        break;
+    case MeshKind::Torus:
+        data = makeTorus();
+        break;
+    case MeshKind::Obj: {
+        auto loaded = loadObj(scene.objPath);
+        if (!loaded) return Error{loaded.error()};
+        data = std::move(loaded).value();
+        break;
+    }
+    }
+    auto uploaded = GpuMesh::upload(data);
+    if (!uploaded) return Error{"uploading the mesh: " + uploaded.error()};
+    mesh.emplace(std::move(uploaded).value());
+    meshKind = scene.mesh;
+    meshPath = scene.objPath;
+    meshRadius = std::max(glm::length(data.boundsMin), glm::length(data.boundsMax));
+    return {};
+}
+
+Status Renderer::Impl::prepareBake() {
+    const MaterialSettings& m = scene.material;
+    if (!m.normalMap || m.normalMap->texelCount() == 0) {
+        baked.clear();
+        bakeKey.reset();
+        return {};
+    }
+    BakeKey key{m.normalMap,           m.glossMap, m.method, m.methodParams.toksvigMapPower, m.basePower,
+                m.glossEncoding.name()};
+    if (!(bakeKey && *bakeKey == key)) {
+        BakeOptions options;
+        options.method = m.method;
+        options.encoding = m.glossEncoding;
+        options.basePower = m.basePower;
+        options.params = m.methodParams;
+        if (m.glossMap) options.authoredGloss = *m.glossMap;
+        auto out = bake(*m.normalMap, options);
+        if (!out) return Error{"bake: " + out.error()};
+        ++bakes;
+        baked.clear();
+        bakeKey.reset();
+        for (const BakedTexture& t : out->textures) {
+            // The compact LEAN gloss is for export only: the shader reads B and M.
+            if (t.role == "lean-gloss") continue;
+            auto gpu = uploadBaked(t);
+            if (!gpu) return Error{gpu.error()};
+            baked.emplace(t.role, std::move(gpu).value());
+        }
+        bakeKey = key;
+    }
+    // The reference's finest level: the normals and authored gloss as given, unfiltered.
+    if (finestFor != m.normalMap) {
+        TextureLevel level{m.normalMap->width, m.normalMap->height, {}};
+        level.texels.reserve(m.normalMap->texelCount() * 3);
+        for (const glm::vec3& n : m.normalMap->normals)
+            level.texels.insert(level.texels.end(), {n.x, n.y, n.z});
+        auto tex = Texture2D::create({level}, 3, TextureFilter::Linear, true);
+        if (!tex) return Error{"uploading the finest normals: " + tex.error()};
+        finestNormal.emplace(std::move(tex).value());
+        finestFor = m.normalMap;
+    }
+    if (finestGlossFor != m.glossMap) {
+        finestGloss.reset();
+        if (m.glossMap) {
+            if (m.glossMap->size() != m.normalMap->texelCount())
+                return Error{"the gloss map has " + std::to_string(m.glossMap->size()) +
+                             " texels, the normal map " + std::to_string(m.normalMap->texelCount())};
+            auto tex = Texture2D::create({TextureLevel{m.normalMap->width, m.normalMap->height, *m.glossMap}},
+                                         1, TextureFilter::Linear, true);
+            if (!tex) return Error{"uploading the gloss map: " + tex.error()};
+            finestGloss.emplace(std::move(tex).value());
+        }
+        finestGlossFor = m.glossMap;
+    }
+    return {};
+}
+
+Status Renderer::Impl::prepareMaps() {
+    const MaterialSettings& m = scene.material;
+    if (m.detailMap && m.detailMap->texelCount() > 0 && detailFor != m.detailMap) {
+        auto out = bakeDetail(*m.detailMap);
+        if (!out) return Error{"detail bake: " + out.error()};
+        auto gpu = uploadBaked(out->texture);
+        if (!gpu) return Error{gpu.error()};
+        detail.emplace(std::move(gpu).value());
+        detailFor = m.detailMap;
+    }
+    if (m.specularMap && m.specularMap->width > 0 && specularFor != m.specularMap) {
+        const SpecularColorMap& s = *m.specularMap;
+        if (s.rgb.size() != size_t(s.width) * size_t(s.height) * 3)
+            return Error{"the specular colour map has " + std::to_string(s.rgb.size()) + " values for " +
+                         std::to_string(s.width) + "x" + std::to_string(s.height) + " RGB texels"};
+        auto tex = Texture2D::create({TextureLevel{s.width, s.height, s.rgb}}, 3,
+                                     TextureFilter::LinearMipLinear, true);
+        if (!tex) return Error{"uploading the specular colour map: " + tex.error()};
+        specular.emplace(std::move(tex).value());
+        specularFor = m.specularMap;
+    }
+    return {};
+}
+
+Result<const Program*> Renderer::Impl::materialProgram(const FeatureSet& f) {
+    // The reference is always specialized: the ubershader has no reference mode.
+    if (useUbershader && !f.referenceMode)
+        return programs.get("material.vert", "material.frag", ubershaderDefines());
+    return programs.get("material.vert", "material.frag", defines(f));
+}
+
+void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, int width, int height,
+                                         glm::vec2 jitterNdc, bool reference) {
+    const MaterialSettings& m = scene.material;
+    const float aspect = float(width) / float(height);
+    const glm::mat4 viewProjection = scene.camera.projection(aspect, meshRadius) * scene.camera.view();
+    p.set("uModel", glm::mat4(1.0f));
+    p.set("uNormalMatrix", glm::mat3(1.0f));
+    p.set("uViewProjection", viewProjection);
+    p.set("uJitterNdc", jitterNdc);
+    p.set("uUvScale", m.uvScale);
+    p.set("uCameraPosition", scene.camera.position());
+    const glm::vec3 toLight = glm::length(scene.light.direction) > 0.0f
+                                  ? glm::normalize(scene.light.direction)
+                                  : glm::vec3(0.0f, 1.0f, 0.0f);
+    p.set("uLightDirection", toLight);
+    p.set("uLightColor", scene.light.color * scene.light.intensity);
+    const int lights = std::min(int(scene.pointLights.size()), kMaxPointLights);
+    for (int i = 0; i < lights; ++i) {
+        const std::string index = "[" + std::to_string(i) + "]";
+        p.set(("uPointLightPosition" + index).c_str(), scene.pointLights[size_t(i)].position);
+        p.set(("uPointLightColor" + index).c_str(),
+              scene.pointLights[size_t(i)].color * scene.pointLights[size_t(i)].intensity);
+    }
+    p.set("uAmbient", scene.ambient);
+    p.set("uSpecularColor", m.specularColor);
+    p.set("uAlbedo", m.albedo);
+    p.set("uBasePower", float(clampPower(m.basePower)));
+    p.set("uGlossKind", glossKindIndex(m.glossEncoding));
+    p.set("uGlossMinPower", float(m.glossEncoding.minPower()));
+    p.set("uGlossMaxPower", float(m.glossEncoding.maxPower()));
+    p.set("uToksvigFixedPower", float(m.methodParams.toksvigMapPower));
+    p.set("uDetailUvScale", m.detailUvScale);
+    if (m.normalMap)
+        p.set("uNormalMapSize", glm::vec2(float(m.normalMap->width), float(m.normalMap->height)));
+
+    auto bindBaked = [&](const char* role, int unit, const char* sampler, const char* scale, const char* bias,
+                         int channels) {
+        const auto it = baked.find(role);
+        if (it == baked.end()) return;
+        it->second.texture.bind(unit);
+        p.set(sampler, unit);
+        if (channels == 2) {
+            p.set(scale, glm::vec2(it->second.scale));
+            p.set(bias, glm::vec2(it->second.bias));
+        } else if (channels == 3) {
+            p.set(scale, glm::vec3(it->second.scale));
+            p.set(bias, glm::vec3(it->second.bias));
+        }
+    };
+    if (reference) {
+        // The finest normals are stored signed: no decode.
+        if (finestNormal) {
+            finestNormal->bind(kUnitNormal);
+            p.set("uNormalMap", int(kUnitNormal));
+            p.set("uNormalScale", glm::vec3(1.0f));
+            p.set("uNormalBias", glm::vec3(0.0f));
+        }
+        if (finestGloss) {
+            finestGloss->bind(kUnitGloss);
+            p.set("uGlossMap", int(kUnitGloss));
+        }
+    } else {
+        bindBaked("normal", kUnitNormal, "uNormalMap", "uNormalScale", "uNormalBias", 3);
+        bindBaked("gloss", kUnitGloss, "uGlossMap", "", "", 1);
+        bindBaked("toksvig", kUnitToksvig, "uToksvigMap", "", "", 1);
+        bindBaked("lean-b", kUnitLeanB, "uLeanB", "uLeanBScale", "uLeanBBias", 2);
+        bindBaked("lean-m", kUnitLeanM, "uLeanM", "uLeanMScale", "uLeanMBias", 3);
+        bindBaked("clean", kUnitClean, "uClean", "uCleanScale", "uCleanBias", 3);
+    }
+    if (detail && f.detailMap) {
+        detail->texture.bind(kUnitDetail);
+        p.set("uDetailMap", int(kUnitDetail));
+        p.set("uDetailScale", detail->scale);
+        p.set("uDetailBias", detail->bias);
+    }
+    if (specular && f.specularTexture) {
+        specular->bind(kUnitSpecular);
+        p.set("uSpecularMap", int(kUnitSpecular));
+    }
+    // The ubershader's switches (ignored by specialized programs, which have no such uniforms).
+    p.set("uMethod", int(f.method));
+    p.set("uNdf", int(f.ndf));
+    p.set("uFresnel", int(f.fresnel));
+    p.set("uVisibility", int(f.visibility));
+    p.set("uSpecularAa", int(f.specularAa));
+    p.set("uDebugView", int(f.debugView));
+    p.set("uPointLightCount", f.pointLights);
+    p.set("uHasAmbient", int(f.environment == EnvironmentKind::ConstantAmbient));
+    p.set("uHasNormalMap", int(f.normalMap));
+    p.set("uHasDetailMap", int(f.detailMap));
+    p.set("uHasGlossMap", int(f.glossMap));
+    p.set("uHasSpecularMap", int(f.specularTexture));
+    p.set("uHasDiffuse", int(!f.metalOnly));
+    p.set("uHasDiffuseAa", int(f.diffuseAa));
+}
+
+Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int width, int height,
+                                    glm::vec2 jitterNdc, bool reference) {
+    if (auto s = ensureTarget(hdr, width, height, true); !s) return s;
+    hdr->bind();
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    // Both faces: the plane is seen from either side and OBJ winding is not trusted.
+    glDisable(GL_CULL_FACE);
+    glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    p.use();
+    setMaterialUniforms(p, f, width, height, jitterNdc, reference);
+    mesh->draw();
+    glDisable(GL_DEPTH_TEST);
+    return {};
+}
+
+Status Renderer::Impl::accumulateReference(int width, int height, int samples) {
+    FeatureSet f = features;
+    f.referenceMode = true;
+    f.debugView = DebugView::None;
+    auto reference = materialProgram(f);
+    if (!reference) return Error{reference.error()};
+    if (auto s = ensureTarget(accumulation, width, height, false); !s) return s;
+    accumulation->bind();
+    glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    for (int i = 0; i < samples; ++i) {
+        float jx = 0.0f, jy = 0.0f;
+        // Halton from index 1 (index 0 is the corner (0, 0)); centred on the pixel centre.
+        haltonPoint(i + 1, jx, jy);
+        // A pixel is 2/size wide in normalized device coordinates.
+        const glm::vec2 jitterNdc((jx - 0.5f) * 2.0f / float(width), (jy - 0.5f) * 2.0f / float(height));
+        if (auto s = drawMaterial(f, **reference, width, height, jitterNdc, true); !s) return s;
+        accumulation->bind();
+        glEnable(GL_BLEND);
+        glBlendFunc(GL_ONE, GL_ONE);
+        glBlendEquation(GL_FUNC_ADD);
+        accumulate->use();
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D, hdr->colorTexture());
+        accumulate->set("uSource", 0);
+        accumulate->set("uWeight", 1.0f / float(samples));
+        fullscreen->draw();
+        glDisable(GL_BLEND);
+    }
+    return {};
+}
+
+Status Renderer::Impl::drawHdr(int width, int height) {
+    if (!hasScene || !program) return Error{"no scene to render"};
+    if (auto s = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false); !s) return s;
+    return {};
+}
+
+Status Renderer::Impl::displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView) {
+    glBindFramebuffer(GL_FRAMEBUFFER, target.framebuffer);
+    glViewport(0, 0, target.width, target.height);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_BLEND);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, source.colorTexture());
+    if (dataView) {
+        accumulate->use();
+        accumulate->set("uSource", 0);
+        accumulate->set("uWeight", 1.0f);
+    } else {
+        tonemap->use();
+        tonemap->set("uHdr", 0);
+        // tonemap.frag takes the linear scale 2^EV.
+        tonemap->set("uExposure", std::exp2(scene.exposure));
+    }
+    fullscreen->draw();
+    return {};
+}
+
+Renderer::Renderer()
+    : m_impl(std::make_unique<Impl>()) {}
+
+Renderer::~Renderer() = default;
+
+Result<std::unique_ptr<Renderer>> Renderer::create() {
+    std::unique_ptr<Renderer> r(new Renderer());
+    Impl& impl = *r->m_impl;
+    auto accumulate = impl.programs.get("fullscreen.vert", "accumulate.frag", {});
+    if (!accumulate) return Error{accumulate.error()};
+    auto heatmap = impl.programs.get("fullscreen.vert", "heatmap.frag", {});
+    if (!heatmap) return Error{heatmap.error()};
+    auto tonemap = impl.programs.get("fullscreen.vert", "tonemap.frag", {});
+    if (!tonemap) return Error{tonemap.error()};
+    impl.accumulate = *accumulate;
+    impl.heatmap = *heatmap;
+    impl.tonemap = *tonemap;
+    impl.fullscreen = std::make_unique<FullscreenTriangle>();
+    return r;
+}
+
+Status Renderer::setScene(const Scene& scene) {
+    Impl& impl = *m_impl;
+    // On failure the previous scene stays the one drawn.
+    Scene previous = std::move(impl.scene);
+    impl.scene = scene;
+    impl.heatmapReferenceValid = false;
+    auto fail = [&](Status status) {
+        impl.scene = std::move(previous);
+        return status;
+    };
+    if (auto s = impl.prepareMesh(); !s) return fail(s);
+    if (auto s = impl.prepareBake(); !s) return fail(s);
+    if (auto s = impl.prepareMaps(); !s) return fail(s);
+    const FeatureSet f = scene.features();
+    auto program = impl.materialProgram(f);
+    if (!program) return fail(Error{program.error()});
+    impl.features = f;
+    impl.program = *program;
+    impl.hasScene = true;
+    return {};
+}
+
+void Renderer::setUseUbershader(bool on) {
+    m_impl->useUbershader = on;
+}
+
+const Scene& Renderer::scene() const {
+    return m_impl->scene;
+}
+
+Status Renderer::render(const RenderTarget& target) {
+    Impl& impl = *m_impl;
+    if (!impl.hasScene) return Error{"no scene to render"};
+    const auto start = Clock::now();
+    if (auto s = impl.drawHdr(target.width, target.height); !s) return s;
+    const DebugView view = impl.features.debugView;
+    if (view == DebugView::ErrorHeatmap) {
+        // The reference reuses the HDR target, so it is accumulated first (and cached until the
+        // scene or the size changes), copied aside, and the method's image drawn again after it.
+        const int samples = std::clamp(impl.scene.heatmapReferenceSamples, 1, kMaxReferenceSamples);
+        if (!impl.heatmapReferenceValid || impl.heatmapReference->width() != target.width ||
+            impl.heatmapReference->height() != target.height) {
+            if (auto s = impl.accumulateReference(target.width, target.height, samples); !s) return s;
+            if (auto s = ensureTarget(impl.heatmapReference, target.width, target.height, false); !s)
+                return s;
+            impl.heatmapReference->bind();
+            glActiveTexture(GL_TEXTURE0);
+            glBindTexture(GL_TEXTURE_2D, impl.accumulation->colorTexture());
+            impl.accumulate->use();
+            impl.accumulate->set("uSource", 0);
+            impl.accumulate->set("uWeight", 1.0f);
+            impl.fullscreen->draw();
+            impl.heatmapReferenceValid = true;
+            if (auto s = impl.drawHdr(target.width, target.height); !s) return s;
+        }
+        glBindFramebuffer(GL_FRAMEBUFFER, target.framebuffer);
+        glViewport(0, 0, target.width, target.height);
+        glDisable(GL_DEPTH_TEST);
+        glDisable(GL_BLEND);
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D, impl.hdr->colorTexture());
+        glActiveTexture(GL_TEXTURE1);
+        glBindTexture(GL_TEXTURE_2D, impl.heatmapReference->colorTexture());
+        impl.heatmap->use();
+        impl.heatmap->set("uCurrent", 0);
+        impl.heatmap->set("uReference", 1);
+        impl.heatmap->set("uFullScale", impl.scene.heatmapFullScale);
+        impl.fullscreen->draw();
+        glActiveTexture(GL_TEXTURE0);
+    } else {
+        const bool dataView = view == DebugView::Power || view == DebugView::Normals ||
+                              view == DebugView::MipLevel || view == DebugView::Variance;
+        if (auto s = impl.displayPass(target, *impl.hdr, dataView); !s) return s;
+    }
+    glFinish();
+    impl.lastMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return {};
+}
+
+Result<std::vector<float>> Renderer::renderToImage(int width, int height, ImageKind kind) {
+    Impl& impl = *m_impl;
+    if (!impl.hasScene) return Error{"no scene to render"};
+    if (kind == ImageKind::Display || impl.features.debugView == DebugView::ErrorHeatmap) {
+        auto fb = Framebuffer::create(width, height, ColorFormat::Rgba8, false);
+        if (!fb) return Error{fb.error()};
+        if (auto s = render(RenderTarget{fb->id(), width, height}); !s) return Error{s.error()};
+        return fb->readRgbaFloat();
+    }
+    const auto start = Clock::now();
+    if (auto s = impl.drawHdr(width, height); !s) return Error{s.error()};
+    glFinish();
+    impl.lastMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return impl.hdr->readRgbaFloat();
+}
+
+Result<std::vector<float>> Renderer::renderReference(int width, int height, int samplesPerPixel,
+                                                     ImageKind kind) {
+    Impl& impl = *m_impl;
+    if (!impl.hasScene) return Error{"no scene to render"};
+    if (samplesPerPixel < 1 || samplesPerPixel > kMaxReferenceSamples)
+        return Error{"reference samples per pixel must lie in 1.." + std::to_string(kMaxReferenceSamples)};
+    if (auto s = impl.accumulateReference(width, height, samplesPerPixel); !s) return Error{s.error()};
+    if (kind == ImageKind::Hdr) return impl.accumulation->readRgbaFloat();
+    auto fb = Framebuffer::create(width, height, ColorFormat::Rgba8, false);
+    if (!fb) return Error{fb.error()};
+    if (auto s = impl.displayPass(RenderTarget{fb->id(), width, height}, *impl.accumulation, false); !s)
+        return Error{s.error()};
+    return fb->readRgbaFloat();
+}
+
+double Renderer::lastFrameMs() const {
+    return m_impl->lastMs;
+}
+
+const FeatureSet& Renderer::features() const {
+    return m_impl->features;
+}
+
+std::string Renderer::explainProgram() {
+    if (!m_impl->program) return "no program (no scene set)\n";
+    return explain(m_impl->features, *m_impl->program);
+}
+
+const Program* Renderer::program() const {
+    return m_impl->program;
+}
+
+int Renderer::bakeCount() const {
+    return m_impl->bakes;
+}
+
+ProgramCache& Renderer::programCache() {
+    return m_impl->programs;
+}
+
+} // namespace burnish::render

@@ -1,11 +1,13 @@
-// `burnish bake`: a normal map (and an optional authored gloss map) through a prefiltering method
-// into an engine preset's textures with full mip chains, plus bake.json. One job from the
-// options, or many from a manifest.
+// `burnish bake`: a normal map (and an optional authored gloss map and detail normal map) through
+// a prefiltering method into an engine preset's textures with their mip chains, plus bake.json.
+// One job from the options, or many from a manifest; or, with --ninja, a Ninja build file that
+// runs the manifest's jobs one `burnish bake` each.
 #include "command.h"
 #include "common.h"
 
 #include <burnish/core/atomic_file.h>
 #include <burnish/core/bake.h>
+#include <burnish/core/detail.h>
 #include <burnish/core/evaluate_report.h>
 #include <burnish/core/export.h>
 #include <burnish/core/image.h>
@@ -15,9 +17,11 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <charconv>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <unistd.h>
@@ -45,6 +49,9 @@ struct JobSpec {
     std::optional<std::string> green;
     std::optional<std::string> layout;
     std::optional<double> metallic;
+    std::optional<int> mips;
+    std::optional<std::string> detail;
+    std::optional<std::string> detailFade; // "START:END", in the detail map's mips
     bool force = false;
     bool allowImplausible = false;
     bool allowEightBit = false;
@@ -58,6 +65,7 @@ struct Job {
     BakeOptions bake;
     NormalMapOptions normalMap;
     ExportOptions exportOptions;
+    DetailOptions detail; // used when spec.detail is set
 };
 
 template <class T>
@@ -176,6 +184,30 @@ Result<Job> resolve(const JobSpec& spec) {
         if (!l) return Error{l.error()};
         job.normalMap.layout = *l;
     }
+    if (spec.mips) {
+        if (*spec.mips < 1) return Error{fmt::format("--mips {} must be at least 1", *spec.mips)};
+        job.bake.mipCount = *spec.mips;
+    }
+    if (spec.detailFade && !spec.detail) return Error{"--detail-fade needs a detail map (--detail FILE)"};
+    if (spec.detail) {
+        if (spec.detail->empty()) return Error{"--detail: no file given"};
+        job.detail.pyramid = job.bake.pyramid;
+        job.detail.mipCount = job.bake.mipCount;
+        if (spec.detailFade) {
+            const std::string& f = *spec.detailFade;
+            const auto colon = f.find(':');
+            int start = -1, end = -1;
+            const bool ok =
+                colon != std::string::npos &&
+                std::from_chars(f.data(), f.data() + colon, start).ptr == f.data() + colon &&
+                std::from_chars(f.data() + colon + 1, f.data() + f.size(), end).ptr == f.data() + f.size();
+            if (!ok || start < 0 || end < start)
+                return Error{"--detail-fade '" + f +
+                             "' must be START:END mips with 0 <= START <= END (e.g. 3:6)"};
+            job.detail.fadeStartMip = start;
+            job.detail.fadeEndMip = end;
+        }
+    }
     job.normalMap.allowImplausible = spec.allowImplausible;
     job.exportOptions.allowEightBit = spec.allowEightBit;
     job.exportOptions.overwrite = spec.force ? Overwrite::Allow : Overwrite::Refuse;
@@ -204,8 +236,34 @@ Result<Json> runJob(const Job& job, ProgressBar& progress, const std::string& la
     }
 
     progress.update(double(1) / kSteps, "baking");
-    const auto baked = bake(*map, options);
+    auto baked = bake(*map, options);
     if (!baked) return Error{baked.error()};
+    // What the summary should point out: a --mips beyond a chain, a fade beyond the detail's levels.
+    Json notes = Json::array();
+    if (job.spec.mips && *job.spec.mips > baked->stats.mipCount)
+        notes.push_back(fmt::format("--mips {} exceeds the {}-level chain of a {}x{} map: {} levels written",
+                                    *job.spec.mips, baked->stats.mipCount, map->width, map->height,
+                                    baked->stats.mipCount));
+
+    std::optional<DetailRecord> detailRecord;
+    if (job.spec.detail) {
+        const auto detailMap = loadNormalMap(*job.spec.detail, job.normalMap);
+        if (!detailMap) return Error{"--detail: " + detailMap.error()};
+        auto detail = bakeDetail(*detailMap, job.detail);
+        if (!detail) return Error{"--detail '" + *job.spec.detail + "': " + detail.error()};
+        const int levels = int(detail->texture.mips.size());
+        if (job.spec.mips && *job.spec.mips > levels)
+            notes.push_back(fmt::format("--mips {} exceeds the {}-level chain of the {}x{} detail map: {} "
+                                        "detail levels written",
+                                        *job.spec.mips, levels, detailMap->width, detailMap->height, levels));
+        if (job.detail.fadeEndMip >= levels)
+            notes.push_back(fmt::format("the detail fade ends at mip {}, beyond the detail map's {} stored "
+                                        "levels: its last level is not fully faded to the constant variance",
+                                        job.detail.fadeEndMip, levels));
+        detailRecord = DetailRecord{*job.spec.detail, detail->constantVariance, job.detail.fadeStartMip,
+                                    job.detail.fadeEndMip};
+        baked.value().textures.push_back(std::move(detail.value().texture));
+    }
 
     progress.update(double(2) / kSteps, "writing");
     std::error_code ec;
@@ -215,6 +273,7 @@ Result<Json> runJob(const Job& job, ProgressBar& progress, const std::string& la
     BakeRecord record;
     record.inputs = {{"normalMap", job.spec.input},
                      {"glossMap", job.spec.gloss ? Json(*job.spec.gloss) : Json(nullptr)},
+                     {"detailMap", job.spec.detail ? Json(*job.spec.detail) : Json(nullptr)},
                      {"width", map->width},
                      {"height", map->height},
                      {"source",
@@ -234,9 +293,12 @@ Result<Json> runJob(const Job& job, ProgressBar& progress, const std::string& la
         {"border", job.spec.border.value_or("wrap")},
         {"green", job.spec.green.value_or("opengl")},
         {"layout", job.spec.layout.value_or("auto")},
+        {"mips", job.spec.mips ? Json(*job.spec.mips) : Json(nullptr)},
         {"allow8bit", job.spec.allowEightBit},
         {"allowImplausible", job.spec.allowImplausible}};
+    if (detailRecord) record.options["detailFade"] = {detailRecord->fadeStartMip, detailRecord->fadeEndMip};
     record.diagnostics = map->diagnostics;
+    record.detail = detailRecord;
 
     const auto exported = exportBake(*baked, job.preset, job.exportOptions, job.spec.out, record);
     if (!exported) {
@@ -260,12 +322,18 @@ Result<Json> runJob(const Job& job, ProgressBar& progress, const std::string& la
                     {"width", map->width},
                     {"height", map->height},
                     {"mipCount", baked->stats.mipCount},
+                    {"mipsRequested", job.spec.mips ? Json(*job.spec.mips) : Json(nullptr)},
+                    {"notes", notes},
                     {"glossClampedLow", baked->stats.glossClampedLow},
                     {"glossClampedHigh", baked->stats.glossClampedHigh},
                     {"pyramidSeconds", baked->stats.pyramidSeconds},
                     {"methodSeconds", baked->stats.methodSeconds},
                     {"seconds", std::chrono::duration<double>(Clock::now() - start).count()},
                     {"warnings", map->diagnostics.warnings}};
+    if (detailRecord)
+        summary["detail"] = {{"file", exported->manifest["detail"]["file"]},
+                             {"constantVariance", detailRecord->constantVariance},
+                             {"fade", {detailRecord->fadeStartMip, detailRecord->fadeEndMip}}};
 
     if (report) {
         // The ground-truth report for the same map, power and border: how far each method is from
@@ -276,15 +344,18 @@ Result<Json> runJob(const Job& job, ProgressBar& progress, const std::string& la
         evaluation.evaluate.basePowers = {options.basePower};
         evaluation.evaluate.border = options.pyramid.border;
         evaluation.evaluate.params = options.params;
+        if (options.authoredGloss) {
+            // The ground truth with each texel's authored power, decoded as the bake decodes it.
+            std::vector<double> powers(options.authoredGloss->size());
+            for (size_t i = 0; i < powers.size(); ++i)
+                powers[i] = options.encoding.power((*options.authoredGloss)[i]);
+            evaluation.evaluate.texelPowers = std::move(powers);
+        }
         auto built = buildEvaluationReport(*map, evaluation);
         if (!built) return Error{"--report: " + built.error()};
         const fs::path dir = fs::path(job.spec.out) / "report";
         if (auto st = writeEvaluationReport(*built, dir); !st) return Error{"--report: " + st.error()};
         summary["report"] = (dir / "evaluate.md").string();
-        if (options.authoredGloss)
-            summary["warnings"].push_back(
-                "--report evaluates the base power " + std::to_string(options.basePower) +
-                " everywhere; the ground truth does not use the authored gloss map");
     }
     return summary;
 }
@@ -369,6 +440,15 @@ Result<std::vector<JobSpec>> readManifest(const std::string& path, const JobSpec
                 s = optStr(spec.layout);
             else if (key == "metallic")
                 s = num(spec.metallic);
+            else if (key == "mips") {
+                if (!value.is_number_integer())
+                    s = Error{at + ": 'mips' must be an integer"};
+                else
+                    spec.mips = value.get<int>();
+            } else if (key == "detail")
+                s = optStr(spec.detail);
+            else if (key == "detail-fade")
+                s = optStr(spec.detailFade);
             else if (key == "force")
                 s = flag(spec.force);
             else if (key == "allow-implausible")
@@ -379,18 +459,192 @@ Result<std::vector<JobSpec>> readManifest(const std::string& path, const JobSpec
                 s = Error{at + ": unknown field '" + key +
                           "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
                           "border, "
-                          "green, layout, metallic, force, allow-implausible, allow-8bit)"};
+                          "green, layout, metallic, mips, detail, detail-fade, force, allow-implausible, "
+                          "allow-8bit)"};
             if (!s) return Error{s.error()};
         }
         if (j.contains("input")) spec.input = rebase(spec.input);
         if (j.contains("out")) spec.out = rebase(spec.out);
         if (j.contains("gloss") && spec.gloss) spec.gloss = rebase(*spec.gloss);
+        if (j.contains("detail") && spec.detail) spec.detail = rebase(*spec.detail);
         if (j.contains("preset") && spec.preset.size() > 5 &&
             spec.preset.substr(spec.preset.size() - 5) == ".json")
             spec.preset = rebase(spec.preset);
         jobs.push_back(std::move(spec));
     }
     return jobs;
+}
+
+// --- Ninja build files --------------------------------------------------------------------------
+
+std::string absolutePath(const std::string& p) {
+    return fs::absolute(fs::path(p)).lexically_normal().string();
+}
+
+/// `text` quoted for /bin/sh (ninja runs commands through sh -c).
+std::string shellQuote(const std::string& text) {
+    std::string q = "'";
+    for (char c : text)
+        q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+/// A path in a ninja build line: '$', ' ' and ':' are escaped with '$'; a newline cannot be written.
+Result<std::string> ninjaPath(const std::string& p) {
+    std::string out;
+    for (char c : p) {
+        if (c == '\n' || c == '\r')
+            return Error{"path '" + p + "' holds a line break, which Ninja cannot express"};
+        if (c == '$' || c == ' ' || c == ':') out += '$';
+        out += c;
+    }
+    return out;
+}
+
+/// The whole-job `burnish bake` command line: every option spelled out, paths absolute, --force so a
+/// rebuild replaces the outputs of the previous one.
+std::vector<std::string> jobCommand(const std::string& exe, const Job& job, bool report) {
+    const JobSpec& s = job.spec;
+    std::vector<std::string> args{
+        exe,
+        "bake",
+        absolutePath(s.input),
+        "--out",
+        absolutePath(s.out),
+        "--preset",
+        s.preset,
+        "--method",
+        std::string(methodName(job.method)),
+        "--power",
+        fmt::format("{}", job.bake.basePower),
+        "--format",
+        std::string(exportFormatName(job.exportOptions.format.value_or(job.preset.format))),
+        "--kernel",
+        s.kernel.value_or("tent"),
+        "--border",
+        s.border.value_or("wrap"),
+        "--green",
+        s.green.value_or("opengl"),
+        "--layout",
+        s.layout.value_or("auto"),
+        "--force"};
+    // Options whose absence means "each file's own choice" or "none" stay absent.
+    if (s.gloss) args.insert(args.end(), {"--gloss", absolutePath(*s.gloss)});
+    if (job.exportOptions.compression)
+        args.insert(args.end(),
+                    {"--compression", std::string(ddsCompressionName(*job.exportOptions.compression))});
+    if (s.metallic) args.insert(args.end(), {"--metallic", fmt::format("{}", *s.metallic)});
+    if (s.mips) args.insert(args.end(), {"--mips", std::to_string(*s.mips)});
+    if (s.detail)
+        args.insert(args.end(), {"--detail", absolutePath(*s.detail), "--detail-fade",
+                                 fmt::format("{}:{}", job.detail.fadeStartMip, job.detail.fadeEndMip)});
+    if (s.allowImplausible) args.emplace_back("--allow-implausible");
+    if (s.allowEightBit) args.emplace_back("--allow-8bit");
+    if (report) args.emplace_back("--report");
+    return args;
+}
+
+struct NinjaJob {
+    std::vector<std::string> outputs; // absolute
+    std::vector<std::string> inputs;  // absolute
+    std::string command;
+    std::string description;
+};
+
+/// What one job reads and writes, without baking: the input's extent from its file, the file
+/// names from export's plan.
+Result<NinjaJob> planNinjaJob(const std::string& exe, const Job& job, const std::string& manifest,
+                              bool report) {
+    const auto image = readImage(job.spec.input);
+    if (!image) return Error{image.error()};
+    auto shape = bakeShape(job.bake, image->width, image->height);
+    if (!shape) return Error{shape.error()};
+    BakeRecord record;
+    if (job.spec.detail) {
+        const auto detailImage = readImage(*job.spec.detail);
+        if (!detailImage) return Error{"--detail: " + detailImage.error()};
+        auto detail = detailShape(detailImage->width, detailImage->height, job.detail);
+        if (!detail) return Error{"--detail: " + detail.error()};
+        shape.value().textures.push_back(std::move(detail.value()));
+        record.detail = DetailRecord{*job.spec.detail, 0.0, job.detail.fadeStartMip, job.detail.fadeEndMip};
+    }
+    const auto plan = planExport(*shape, job.preset, job.exportOptions, record);
+    if (!plan) return Error{plan.error()};
+
+    NinjaJob nj;
+    const fs::path out = absolutePath(job.spec.out);
+    for (const auto& f : plan->files)
+        for (const auto& p : f.paths)
+            nj.outputs.push_back((out / p).string());
+    nj.outputs.push_back((out / plan->manifestPath).string());
+    if (report)
+        for (const char* f :
+             {"evaluate.md", "evaluate.json", "evaluate-error-per-mip.png", "evaluate-error-vs-cost.png"})
+            nj.outputs.push_back((out / "report" / f).string());
+    nj.inputs.push_back(absolutePath(job.spec.input));
+    if (job.spec.gloss) nj.inputs.push_back(absolutePath(*job.spec.gloss));
+    if (job.spec.detail) nj.inputs.push_back(absolutePath(*job.spec.detail));
+    if (job.preset.origin != "built-in") nj.inputs.push_back(absolutePath(job.preset.origin));
+    nj.inputs.push_back(absolutePath(manifest));
+    for (const auto& a : jobCommand(exe, job, report))
+        nj.command += (nj.command.empty() ? "" : " ") + shellQuote(a);
+    nj.description = "burnish bake " + fs::path(job.spec.input).filename().string() + " -> " + out.string();
+    return nj;
+}
+
+/// A Ninja build file with one build statement per job (written atomically).
+Result<Json> writeNinja(const std::vector<Job>& jobs, const std::string& manifest, const std::string& path,
+                        bool report) {
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (ec) return Error{"--ninja: cannot find the running burnish binary (/proc/self/exe): " + ec.message()};
+
+    // Only '$' needs escaping in a variable's value (ninja expands it); commands hold no newline.
+    auto value = [](const std::string& v) {
+        std::string out;
+        for (char c : v)
+            out += c == '$' ? std::string("$$") : std::string(1, c);
+        return out;
+    };
+    std::string text = "# Generated by `burnish bake --manifest " + fs::path(manifest).filename().string() +
+                       " --ninja`: one `burnish bake` per job.\n"
+                       "# Run with `ninja -f " +
+                       fs::path(path).filename().string() +
+                       " -j N`; a job reruns when one of its inputs (maps, preset file, manifest) "
+                       "changed.\n"
+                       "ninja_required_version = 1.3\n\n"
+                       "rule burnish_bake\n"
+                       "  command = $cmd\n"
+                       "  description = $desc\n"
+                       "  restat = 1\n";
+    std::map<std::string, size_t> owner; // output -> job number, to refuse two jobs writing one file
+    Json outputs = Json::array();
+    for (size_t i = 0; i < jobs.size(); ++i) {
+        const std::string at = "manifest job " + std::to_string(i + 1) + " (" + jobs[i].spec.input + "): ";
+        auto nj = planNinjaJob(exe.string(), jobs[i], manifest, report);
+        if (!nj) return Error{at + nj.error()};
+        std::string line = "\nbuild";
+        for (const auto& o : nj->outputs) {
+            const auto [it, fresh] = owner.emplace(o, i + 1);
+            if (!fresh)
+                return Error{at + "writes '" + o + "', which job " + std::to_string(it->second) +
+                             " writes too"};
+            const auto e = ninjaPath(o);
+            if (!e) return Error{at + e.error()};
+            line += " " + *e;
+            outputs.push_back(o);
+        }
+        line += ": burnish_bake";
+        for (const auto& in : nj->inputs) {
+            const auto e = ninjaPath(in);
+            if (!e) return Error{at + e.error()};
+            line += " " + *e;
+        }
+        text += line + "\n  cmd = " + value(nj->command) + "\n  desc = " + value(nj->description) + "\n";
+    }
+    if (const Status s = writeFileAtomic(path, text, Overwrite::Allow); !s)
+        return Error{"--ninja: " + s.error()};
+    return Json{{"ninja", path}, {"jobs", jobs.size()}, {"outputs", outputs}};
 }
 
 std::string helpFooter() {
@@ -422,7 +676,12 @@ std::string helpFooter() {
         "options given "
         "on the\n  command line are every job's defaults. All jobs are checked before the first runs.\n"
         "\nEach output folder gets bake.json: every file's channels and decode rule (value = stored*scale + "
-        "bias).\n";
+        "bias).\n"
+        "--detail FILE adds <stem>_detail.<ext> ([x, y, 0, variance], its own mip chain) to every preset, "
+        "and\n"
+        "  bake.json's \"detail\" entry gives the constant variance a shader adds beyond the fade.\n"
+        "--ninja FILE (with --manifest) writes a Ninja build file instead of baking: `ninja -f FILE -j N`\n"
+        "  bakes the jobs in parallel and reruns only those whose inputs changed.\n";
     return text;
 }
 
@@ -435,6 +694,7 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     auto manifest = std::make_shared<std::string>();
     auto json = std::make_shared<bool>(false);
     auto report = std::make_shared<bool>(false);
+    auto ninja = std::make_shared<std::string>();
 
     cmd->add_option("input", spec->input, "Tangent-space normal map (PNG, TGA, EXR, TIFF, DDS, ...)");
     cmd->add_option("--preset", spec->preset, "Engine preset: a name listed below, or a preset FILE.json");
@@ -459,19 +719,31 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                     "Input channels holding the normal: auto (default), rgb, rg (z rebuilt)");
     cmd->add_option("--metallic", spec->metallic,
                     "Metalness in [0, 1] for presets with a metallic channel (gltf, unity)");
+    cmd->add_option("--mips", spec->mips,
+                    "Mip levels written, N >= 1 (default all, down to 1x1; more than the chain holds is "
+                    "clamped, with a note in the --json summary)");
+    cmd->add_option("--detail", spec->detail,
+                    "Detail normal map: baked into <stem>_detail.<ext> ([x, y, 0, variance], its own mips), "
+                    "its constant variance into bake.json");
+    cmd->add_option("--detail-fade", spec->detailFade,
+                    "START:END mips of the detail map over which its normal fades to flat and its variance "
+                    "to the constant (default 3:6)");
     cmd->add_flag("--force", spec->force, "Replace existing output files (still atomically, as a set)");
     cmd->add_flag("--allow-implausible", spec->allowImplausible,
                   "Bake an input that does not look like a tangent-space normal map");
     cmd->add_flag("--allow-8bit", spec->allowEightBit, "Store LEAN/CLEAN moments in 8-bit formats anyway");
     cmd->add_flag("--json", *json, "Print a machine-readable summary on stdout");
     cmd->add_option("--manifest", *manifest, "JSON file listing many jobs, run in order");
+    cmd->add_option("--ninja", *ninja,
+                    "With --manifest: write a Ninja build file (one `burnish bake` per job) instead of "
+                    "baking");
     cmd->add_flag("--report", *report,
                   "Also measure every method against the ground truth for this map and power (as burnish "
                   "evaluate, mips 1-4) and write the report into <out>/report/");
     // Built lazily: listing the presets parses them, which other subcommands need not pay for.
     cmd->footer([] { return helpFooter(); });
 
-    return [spec, manifest, json, report]() -> int {
+    return [spec, manifest, json, report, ninja]() -> int {
         if (!builtinPresetErrors().empty()) return fail(builtinPresetErrors().front());
         std::vector<JobSpec> specs;
         if (!manifest->empty()) {
@@ -480,6 +752,8 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
             if (!read) return fail(read.error());
             specs = std::move(read.value());
         } else {
+            if (!ninja->empty())
+                return fail("--ninja needs --manifest FILE (the jobs to write build statements for)");
             if (spec->input.empty()) return fail("no input normal map given (see 'burnish bake --help')");
             specs.push_back(*spec);
         }
@@ -492,6 +766,16 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                                 ? "manifest job " + std::to_string(i + 1) + ": " + job.error()
                                 : job.error());
             jobs.push_back(std::move(job.value()));
+        }
+        if (!ninja->empty()) {
+            const auto written = writeNinja(jobs, *manifest, *ninja, *report);
+            if (!written) return fail(written.error());
+            if (*json)
+                std::printf("%s\n", written->dump(2).c_str());
+            else
+                std::printf("%s: %zu build statements, %zu outputs; run ninja -f %s\n", ninja->c_str(),
+                            jobs.size(), (*written)["outputs"].size(), ninja->c_str());
+            return 0;
         }
         ProgressBar progress;
         Json summaries = Json::array();
@@ -513,6 +797,8 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                             jobs[i].spec.input.c_str(), jobs[i].spec.out.c_str(), jobs[i].preset.name.c_str(),
                             std::string(methodName(jobs[i].method)).c_str(), (*summary)["files"].size(),
                             (*summary)["mipCount"].get<int>(), (*summary)["seconds"].get<double>());
+                for (const auto& n : (*summary)["notes"])
+                    std::printf("  note: %s\n", n.get<std::string>().c_str());
             }
             summaries.push_back(std::move(summary.value()));
         }

@@ -3,7 +3,10 @@
 #include "command.h"
 #include "common.h"
 
+#include <burnish/core/bake.h>
 #include <burnish/core/evaluate_report.h>
+#include <burnish/core/gloss.h>
+#include <burnish/core/image.h>
 
 #include <nlohmann/json.hpp>
 
@@ -18,6 +21,9 @@ namespace {
 struct EvaluateCliOptions {
     std::string input;
     std::vector<double> powers{512.0};
+    bool powerGiven = false;
+    std::string gloss;
+    std::string glossEncoding = "blackops";
     int firstMip = 1;
     int lastMip = 4;
     double viewAngle = 30.0;
@@ -39,6 +45,20 @@ int runEvaluate(const EvaluateCliOptions& o) {
         std::fprintf(stderr, "burnish: warning: %s\n", w.c_str());
 
     EvaluationReportOptions options;
+    if (!o.gloss.empty()) {
+        if (o.powerGiven)
+            return fail("give --power or --gloss, not both (the gloss map sets every texel's power)");
+        const auto encoding = GlossEncoding::fromName(o.glossEncoding);
+        if (!encoding) return fail("--gloss-encoding: " + encoding.error());
+        const auto image = readImage(o.gloss);
+        if (!image) return fail("--gloss: " + image.error());
+        const auto gloss = glossFromImage(*image, map->width, map->height);
+        if (!gloss) return fail("--gloss '" + o.gloss + "': " + gloss.error());
+        std::vector<double> powers(gloss->size());
+        for (size_t i = 0; i < powers.size(); ++i)
+            powers[i] = encoding->power((*gloss)[i]);
+        options.evaluate.texelPowers = std::move(powers);
+    }
     options.inputName = std::filesystem::path(o.input).filename().string();
     options.bakeRuns = o.bakeRuns;
     options.evaluate.basePowers = o.powers;
@@ -89,7 +109,17 @@ const CommandRegistration registration{
         sub->add_option("--power", o->powers,
                         "Base Blinn-Phong power(s) s of the ground truth (default 512).")
             ->check(CLI::Range(1e-3, 1e9))
-            ->type_name("S");
+            ->type_name("S")
+            ->each([o](const std::string&) { o->powerGiven = true; });
+        sub->add_option("--gloss", o->gloss,
+                        "Authored gloss map (first channel, the normal map's size): the ground truth uses "
+                        "each texel's own power, the methods the block's power as the bake does "
+                        "(1/s averaged). Replaces --power.")
+            ->type_name("FILE");
+        sub->add_option("--gloss-encoding", o->glossEncoding,
+                        "Encoding of the --gloss map: blackops (default, 8192^g), exp2, ggx-roughness, "
+                        "ggx-alpha, beckmann, smoothness or log:NMIN:NMAX.")
+            ->type_name("NAME");
         sub->add_option("--first-mip", o->firstMip, "First mip level evaluated (default 1).")
             ->check(CLI::Range(0, 30));
         sub->add_option("--last-mip", o->lastMip,

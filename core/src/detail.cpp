@@ -1,5 +1,6 @@
 #include <burnish/core/detail.h>
 
+#include <burnish/core/export.h>
 #include <burnish/core/gloss.h>
 
 #include <glm/geometric.hpp>
@@ -30,6 +31,9 @@ Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& opti
     if (options.fadeStartMip < 0 || options.fadeEndMip < options.fadeStartMip)
         return Error{"detail fade mips must satisfy 0 <= start <= end (got " +
                      std::to_string(options.fadeStartMip) + ".." + std::to_string(options.fadeEndMip) + ")"};
+    if (options.mipCount < 0)
+        return Error{"detail mip count must be 0 (all) or positive (got " + std::to_string(options.mipCount) +
+                     ")"};
     const std::shared_ptr<const NormalMap> borrowed(&detail, [](const NormalMap*) {});
     const NormalPyramid pyramid = NormalPyramid::build(borrowed, options.pyramid);
     const int levels = pyramid.levelCount();
@@ -76,8 +80,10 @@ Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& opti
     tex.decode = {
         {"detail.x", 2.0, -1.0}, {"detail.y", 2.0, -1.0}, {"zero", 1.0, 0.0}, {"variance", scale, 0.0}};
     tex.needsHighPrecision = false;
-    tex.mips.resize(size_t(levels));
-    for (int k = 0; k < levels; ++k) {
+    // Every level above shaped the variance scale, so a short chain is a prefix of the full one.
+    const int stored = options.mipCount > 0 ? std::min(options.mipCount, levels) : levels;
+    tex.mips.resize(size_t(stored));
+    for (int k = 0; k < stored; ++k) {
         TextureMip& mip = tex.mips[size_t(k)];
         mip.width = pyramid.level(k).width;
         mip.height = pyramid.level(k).height;
@@ -90,6 +96,22 @@ Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& opti
         }
     }
     return out;
+}
+
+Result<BakedTexture> detailShape(int width, int height, const DetailOptions& options) {
+    if (width < 1 || height < 1) return Error{"a detail map needs at least 1x1 texels"};
+    DetailOptions flat = options;
+    flat.mipCount = 0;
+    auto shape = bakeDetail(makeNormalMap(1, 1, {glm::vec3(0.0f, 0.0f, 1.0f)}), flat);
+    if (!shape) return Error{shape.error()};
+    const auto sizes = mipChainSizes(width, height, options.mipCount);
+    BakedTexture tex = std::move(shape.value().texture);
+    tex.mips.assign(sizes.size(), TextureMip{});
+    for (size_t k = 0; k < sizes.size(); ++k) {
+        tex.mips[k].width = sizes[k].first;
+        tex.mips[k].height = sizes[k].second;
+    }
+    return tex;
 }
 
 } // namespace burnish

@@ -1,5 +1,6 @@
 #include <burnish/core/evaluate.h>
 
+#include <burnish/core/gloss.h>
 #include <burnish/core/ndf.h>
 
 #include <glm/geometric.hpp>
@@ -21,6 +22,59 @@ struct Accumulator {
     double absError = 0.0;
     double method = 0.0;
     double truth = 0.0;
+};
+
+// The authored variance 1/s_i averaged over every footprint of every level (hierarchically: a
+// level's sum is its children's), and the power each method gets from it — bake.cpp's
+// BaseVariancePyramid, so the evaluation measures the textures the bake writes.
+// Baker & Hill 2012, "Rock-Solid Shading": "storing power as 1/s will cause MIP filter to operate correctly"
+class AuthoredPowers {
+public:
+    AuthoredPowers(const NormalPyramid& pyramid, const std::vector<double>& texelPowers, int lastMip)
+        : m_pyramid(pyramid) {
+        m_sums.resize(size_t(lastMip) + 1);
+        m_sums[0].resize(texelPowers.size());
+        for (size_t i = 0; i < texelPowers.size(); ++i)
+            m_sums[0][i] = varianceFromPower(texelPowers[i], VarianceConvention::InversePower);
+        for (int k = 1; k <= lastMip; ++k) {
+            const PyramidLevel& level = pyramid.level(k);
+            const PyramidLevel& child = pyramid.level(k - 1);
+            auto& out = m_sums[size_t(k)];
+            out.resize(size_t(level.width) * size_t(level.height));
+            for (int y = 0; y < level.height; ++y)
+                for (int x = 0; x < level.width; ++x) {
+                    double sum = 0.0;
+                    for (int j = level.yChild[size_t(y)]; j < level.yChild[size_t(y) + 1]; ++j)
+                        for (int i = level.xChild[size_t(x)]; i < level.xChild[size_t(x) + 1]; ++i)
+                            sum += m_sums[size_t(k - 1)][size_t(j) * size_t(child.width) + size_t(i)];
+                    out[size_t(y) * size_t(level.width) + size_t(x)] = sum;
+                }
+        }
+    }
+
+    /// The power of texel (x, y) of level k: the footprint's mean variance, with the kernel's taps
+    /// over the neighbours weighted by their footprint counts (Box: the footprint alone).
+    double power(int k, int x, int y, FilterKernel kernel) const {
+        const KernelTaps taps = kernelTaps(kernel);
+        const PyramidLevel& level = m_pyramid.level(k);
+        const BorderMode border = m_pyramid.options().border;
+        double sum = 0.0, weight = 0.0;
+        for (int j = -taps.radius; j <= taps.radius; ++j)
+            for (int i = -taps.radius; i <= taps.radius; ++i) {
+                const int xi = borderIndex(x + i, level.width, border);
+                const int yj = borderIndex(y + j, level.height, border);
+                const double count = m_pyramid.footprintCount(k, xi, yj);
+                const double w = taps.w[i + taps.radius] * taps.w[j + taps.radius];
+                // Σ over the footprint = count × its mean: weight w·count on the mean, as bake.cpp.
+                sum += w * m_sums[size_t(k)][size_t(yj) * size_t(level.width) + size_t(xi)];
+                weight += w * count;
+            }
+        return powerFromVariance(sum / weight, VarianceConvention::InversePower);
+    }
+
+private:
+    const NormalPyramid& m_pyramid;
+    std::vector<std::vector<double>> m_sums; // per level, Σ 1/s_i over each footprint
 };
 
 } // namespace
@@ -54,6 +108,18 @@ static double truthOfNormal(const glm::dvec3& n, double s, const DirectionPair& 
     return blinnPhongNdf(glm::dot(n, d.h), s) * std::max(0.0, glm::dot(n, d.l));
 }
 
+double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,
+                        const std::vector<double>& texelPowers, const DirectionPair& d) {
+    const PyramidLevel& l = pyramid.level(mip);
+    const int width = pyramid.finest().width;
+    double sum = 0.0;
+    for (int j = l.yStart[size_t(y)]; j < l.yStart[size_t(y) + 1]; ++j)
+        for (int i = l.xStart[size_t(x)]; i < l.xStart[size_t(x) + 1]; ++i)
+            sum += truthOfNormal(glm::dvec3(pyramid.finest().at(i, j)),
+                                 texelPowers[size_t(j) * size_t(width) + size_t(i)], d);
+    return sum / pyramid.footprintCount(mip, x, y);
+}
+
 double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s,
                         const DirectionPair& d) {
     const PyramidLevel& l = pyramid.level(mip);
@@ -68,8 +134,23 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                                          const std::function<void(double)>& progress) {
     const auto start = std::chrono::steady_clock::now();
     if (map.texelCount() == 0) return Error{"the normal map is empty"};
-    if (options.basePowers.empty()) return Error{"no base power given"};
-    for (double s : options.basePowers)
+    const std::vector<double>* texelPowers = options.texelPowers ? &*options.texelPowers : nullptr;
+    std::vector<double> basePowers = options.basePowers;
+    if (texelPowers) {
+        if (texelPowers->size() != map.texelCount())
+            return Error{"authored powers hold " + std::to_string(texelPowers->size()) + " texels, the map " +
+                         std::to_string(map.texelCount())};
+        double sum = 0.0;
+        for (double s : *texelPowers) {
+            if (!(s > 0.0) || !(s <= kMaxPower))
+                return Error{"an authored power " + std::to_string(s) + " is outside (0, 1e9]"};
+            sum += s;
+        }
+        // One pass, labelled with the mean authored power.
+        basePowers = {sum / double(texelPowers->size())};
+    }
+    if (basePowers.empty()) return Error{"no base power given"};
+    for (double s : basePowers)
         if (!(s > 0.0) || !(s <= kMaxPower))
             return Error{"base power " + std::to_string(s) + " is outside (0, 1e9]"};
     if (options.methods.empty()) return Error{"no method given"};
@@ -105,15 +186,18 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
     result.directions = directions;
     result.firstMip = firstMip;
     result.lastMip = lastMip;
+    result.basePowers = basePowers;
+    std::optional<AuthoredPowers> authored;
+    if (texelPowers) authored.emplace(pyramid, *texelPowers, lastMip);
 
     // Hierarchical sums of the per-texel truth: level k = Σ of its children at level k−1.
     std::vector<std::vector<double>> sums(size_t(lastMip) + 1);
     for (int k = 0; k <= lastMip; ++k)
         sums[size_t(k)].resize(size_t(pyramid.level(k).width) * size_t(pyramid.level(k).height));
 
-    const double totalSteps = double(options.basePowers.size() * directions.size());
+    const double totalSteps = double(basePowers.size() * directions.size());
     double stepsDone = 0.0;
-    for (double s : options.basePowers) {
+    for (double s : basePowers) {
         // Lobes of every method at every evaluated mip.
         std::vector<std::vector<std::vector<TexelLobe>>> lobes(
             methodCount, std::vector<std::vector<TexelLobe>>(size_t(mipCount)));
@@ -127,8 +211,8 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                     for (int x = 0; x < level.width; ++x)
                         out[size_t(y) * size_t(level.width) + size_t(x)] = methodLobe(
                             variantMethod(m),
-                            kernelPyramid ? kernelPyramid->moments(k, x, y) : pyramid.boxMoments(k, x, y), s,
-                            options.params);
+                            kernelPyramid ? kernelPyramid->moments(k, x, y) : pyramid.boxMoments(k, x, y),
+                            authored ? authored->power(k, x, y, variantKernel(m)) : s, options.params);
                 });
             }
 
@@ -151,8 +235,9 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             const PyramidLevel& l0 = pyramid.level(0);
             tbb::parallel_for(0, l0.height, [&](int y) {
                 for (int x = 0; x < l0.width; ++x)
-                    sums[0][size_t(y) * size_t(l0.width) + size_t(x)] =
-                        truthOfNormal(glm::dvec3(map.at(x, y)), s, d);
+                    sums[0][size_t(y) * size_t(l0.width) + size_t(x)] = truthOfNormal(
+                        glm::dvec3(map.at(x, y)),
+                        texelPowers ? (*texelPowers)[size_t(y) * size_t(l0.width) + size_t(x)] : s, d);
             });
             for (int k = 1; k <= lastMip; ++k) {
                 const PyramidLevel& level = pyramid.level(k);

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 namespace burnish {
@@ -107,13 +108,24 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
     report.height = map.height;
     report.options = options.evaluate;
     report.result = std::move(*evaluated);
+    // With an authored gloss map the results carry one label power (the map's mean).
+    report.options.basePowers = report.result.basePowers;
     report.bakeRuns = options.bakeRuns;
     report.machine = machineInfo();
 
     const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
     const NormalPyramid pyramid =
         NormalPyramid::build(borrowed, {options.evaluate.border, FilterKernel::Box});
-    const double s = options.evaluate.basePowers.front();
+    const double s = report.options.basePowers.front();
+    // The bake timed with the authored gloss map too (its variance pyramid costs time), stored in
+    // the bake's default encoding.
+    std::optional<std::vector<float>> authoredGloss;
+    if (options.evaluate.texelPowers) {
+        const GlossEncoding encoding = BakeOptions{}.encoding;
+        authoredGloss.emplace();
+        for (double p : *options.evaluate.texelPowers)
+            authoredGloss->push_back(float(encoding.value(p)));
+    }
     const size_t methodCount = options.evaluate.methods.size();
     for (size_t i = 0; i < methodCount; ++i) {
         const Method method = options.evaluate.methods[i];
@@ -126,6 +138,7 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
         bakeOptions.params = options.evaluate.params;
         bakeOptions.pyramid = {options.evaluate.border, FilterKernel::Box};
         bakeOptions.mipCount = report.result.lastMip + 1;
+        bakeOptions.authoredGloss = authoredGloss;
         std::vector<double> runs;
         for (int r = 0; r < options.bakeRuns; ++r) {
             const auto start = Clock::now();
@@ -152,6 +165,14 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
         md << " " << formatNumber(a);
     md << " deg x " << r.options.azimuths << " azimuths, lights within " << formatNumber(r.options.horizonDeg)
        << " deg of the horizon dropped).\n\n";
+    if (r.options.texelPowers) {
+        const auto& p = *r.options.texelPowers;
+        const auto [lo, hi] = std::minmax_element(p.begin(), p.end());
+        md << "Authored gloss map: every finest texel has its own power s_i (" << formatNumber(*lo) << " to "
+           << formatNumber(*hi) << ", mean " << formatNumber(r.options.basePowers.front())
+           << ", the label of the tables below). The ground truth uses D_{s_i} per texel; every method "
+              "gets the block's power as the bake does, s = 1/mean(1/s_i) (variance averaged).\n\n";
+    }
     md << "Ground truth: for mip k, the mean over the texel's footprint of finest texels of "
           "D_s(n_i.h) max(0, n_i.l), D_s the normalized Blinn-Phong NDF of the base power s. "
           "Each method: its own NDF times max(0, n.l) with its normal, from box-footprint moments. "
@@ -217,6 +238,14 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
     j["horizon_deg"] = r.options.horizonDeg;
     j["directions"] = r.result.directions.size();
     j["base_powers"] = r.options.basePowers;
+    if (r.options.texelPowers) {
+        const auto& p = *r.options.texelPowers;
+        const auto [lo, hi] = std::minmax_element(p.begin(), p.end());
+        j["authored_gloss"] = {{"min_power", *lo},
+                               {"max_power", *hi},
+                               {"mean_power", r.options.basePowers.front()},
+                               {"method_power", "1/mean(1/s_i) over the footprint, as the bake"}};
+    }
     j["evaluation_seconds"] = jsonNumber(r.result.seconds);
     j["errors"] = nlohmann::json::array();
     for (const auto& e : r.result.errors)

@@ -33,7 +33,8 @@ struct Plan {
 // Channels whose sign follows the green convention: flipping y negates them. Each decodes
 // symmetrically (bias = −scale/2), so the negated value is stored as 1 − v.
 bool flipsWithGreen(const std::string& channel) {
-    return channel == "normal.y" || channel == "B.y" || channel == "M.xy" || channel == "rho";
+    return channel == "normal.y" || channel == "B.y" || channel == "M.xy" || channel == "rho" ||
+           channel == "detail.y";
 }
 
 std::string storageName(ExportFormat format, std::optional<DdsCompression> compression) {
@@ -90,8 +91,12 @@ Json decodeJson(const ExportedChannel& c, int index) {
     return j;
 }
 
+// The file a bake's detail texture goes to, beside the preset's own: every channel as baked.
+constexpr const char* kDetailFileName = "detail";
+
+/// `pack`: also pack every level's values (exportBake); planExport needs only the names.
 Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
-                      const BakeRecord& record) {
+                      const BakeRecord& record, bool pack) {
     const ExportFormat format = options.format.value_or(preset.format);
     if (options.compression && format != ExportFormat::Dds)
         return Error{"a DDS compression was given but the format is " +
@@ -118,14 +123,51 @@ Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const Export
         parameters[name] = value;
     }
 
+    // The preset's files, plus the detail file when the bake holds a detail texture.
+    std::vector<PresetFile> fileList = preset.files;
+    const BakedTexture* detail = bake.find("detail");
+    if (detail && !record.detail)
+        return Error{"the bake holds a detail texture but the record has no detail entry"};
+    if (!detail && record.detail)
+        return Error{"the record names a detail map but the bake holds no detail texture"};
+    if (detail) {
+        for (const auto& f : preset.files)
+            if (f.name == kDetailFileName)
+                return Error{"preset '" + preset.name +
+                             "' has a file named 'detail' of its own, which the detail map's file would "
+                             "replace"};
+        PresetFile f;
+        f.name = kDetailFileName;
+        f.description = detail->description;
+        for (const auto& d : detail->decode) {
+            PresetChannel ch;
+            ch.kind = PresetChannel::Kind::Baked;
+            ch.role = detail->role;
+            ch.channel = d.name;
+            f.channels.push_back(std::move(ch));
+        }
+        // Four channels: only bc3 and rgba8 hold them; rgba8 keeps the normal's x and y exact to
+        // 8 bits where BC1's 5:6:5 endpoints would not.
+        f.dds = DdsCompression::Rgba8;
+        fileList.push_back(std::move(f));
+    }
+
     Plan plan;
     const bool flipGreen = preset.green == GreenConvention::DirectX;
     const std::string ext(exportFormatExtension(format));
-    for (const auto& file : preset.files) {
+    for (const auto& file : fileList) {
         PlannedFile pf;
         pf.info.name = file.name;
         pf.info.format = format;
         if (format == ExportFormat::Dds) pf.info.compression = options.compression.value_or(file.dds);
+        const bool isDetailFile = detail && &file == &fileList.back();
+        if (isDetailFile && pf.info.compression && file.channels.size() > 2 &&
+            (*pf.info.compression == DdsCompression::Bc4 || *pf.info.compression == DdsCompression::Bc5)) {
+            pf.info.notes.push_back("the detail map's four channels do not fit " +
+                                    std::string(ddsCompressionName(*pf.info.compression)) +
+                                    ": stored as rgba8");
+            pf.info.compression = DdsCompression::Rgba8;
+        }
 
         // Resolve every channel to a baked texture channel, a constant or a parameter value.
         struct Source {
@@ -216,41 +258,57 @@ Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const Export
         pf.info.storedChannels = storedChannelCount(format, pf.info.compression, pf.channels);
         pf.info.storage = storageName(format, pf.info.compression);
 
-        // Pack every level.
-        const BakedTexture* any = nullptr;
-        for (const auto& t : bake.textures)
-            if (!t.mips.empty()) any = any ? any : &t;
-        if (!any) return Error{"the bake holds no texture levels"};
-        const size_t levels = any->mips.size();
+        // The file's mip chain is its textures' own (the detail map tiles at its resolution); a
+        // file of constants and parameters only takes the bake's main chain.
+        const BakedTexture* chain = nullptr;
         for (const auto& s : sources)
-            if (s.texture && s.texture->mips.size() != levels)
-                return Error{"the bake's textures have different mip counts"};
-        pf.mips.resize(levels);
-        for (size_t k = 0; k < levels; ++k) {
-            const int w = any->mips[k].width;
-            const int h = any->mips[k].height;
-            const size_t n = size_t(w) * size_t(h);
-            auto& mip = pf.mips[k];
-            mip.width = w;
-            mip.height = h;
-            mip.texels.resize(n * size_t(pf.channels));
-            for (size_t c = 0; c < sources.size(); ++c) {
-                const Source& s = sources[c];
-                if (!s.texture) {
-                    for (size_t t = 0; t < n; ++t)
-                        mip.texels[t * sources.size() + c] = s.value;
-                    continue;
-                }
-                const TextureMip& in = s.texture->mips[k];
-                if (in.width != w || in.height != h)
-                    return Error{"the bake's textures have different mip sizes"};
-                const size_t tc = size_t(s.texture->channels);
-                for (size_t t = 0; t < n; ++t) {
-                    const float v = std::clamp(in.texels[t * tc + size_t(s.index)], 0.0f, 1.0f);
-                    mip.texels[t * sources.size() + c] = s.flip ? 1.0f - v : v;
+            if (s.texture && !chain) chain = s.texture;
+        for (const auto& t : bake.textures)
+            if (!chain && t.role != "detail" && !t.mips.empty()) chain = &t;
+        if (!chain || chain->mips.empty()) return Error{"the bake holds no texture levels"};
+        const size_t levels = chain->mips.size();
+        for (const auto& s : sources) {
+            if (!s.texture) continue;
+            bool same = s.texture->mips.size() == levels;
+            for (size_t k = 0; same && k < levels; ++k)
+                same = s.texture->mips[k].width == chain->mips[k].width &&
+                       s.texture->mips[k].height == chain->mips[k].height;
+            if (!same)
+                return Error{"file '" + file.name + "' packs textures with different mip chains ('" +
+                             chain->role + "' and '" + s.texture->role + "')"};
+        }
+        for (size_t k = 0; k < levels; ++k)
+            pf.info.mipSizes.emplace_back(chain->mips[k].width, chain->mips[k].height);
+
+        // Pack every level.
+        if (pack) {
+            pf.mips.resize(levels);
+            for (size_t k = 0; k < levels; ++k) {
+                const int w = chain->mips[k].width;
+                const int h = chain->mips[k].height;
+                const size_t n = size_t(w) * size_t(h);
+                auto& mip = pf.mips[k];
+                mip.width = w;
+                mip.height = h;
+                mip.texels.resize(n * size_t(pf.channels));
+                for (size_t c = 0; c < sources.size(); ++c) {
+                    const Source& s = sources[c];
+                    if (!s.texture) {
+                        for (size_t t = 0; t < n; ++t)
+                            mip.texels[t * sources.size() + c] = s.value;
+                        continue;
+                    }
+                    const TextureMip& in = s.texture->mips[k];
+                    const size_t tc = size_t(s.texture->channels);
+                    if (in.texels.size() != n * tc)
+                        return Error{"the bake's '" + s.texture->role + "' texture has no values at mip " +
+                                     std::to_string(k)};
+                    for (size_t t = 0; t < n; ++t) {
+                        const float v = std::clamp(in.texels[t * tc + size_t(s.index)], 0.0f, 1.0f);
+                        mip.texels[t * sources.size() + c] = s.flip ? 1.0f - v : v;
+                    }
                 }
             }
-            pf.info.mipSizes.emplace_back(w, h);
         }
 
         const std::string base = options.stem + "_" + file.name;
@@ -308,6 +366,18 @@ Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const Export
         result.files.push_back(pf.info);
     }
     m["files"] = files;
+    if (record.detail) {
+        // The detail file is the last one planned.
+        const ExportedFile& df = result.files.back();
+        m["detail"] = {{"file", df.paths.front()},
+                       {"input", record.detail->input},
+                       {"constantVariance", record.detail->constantVariance},
+                       {"fade", {record.detail->fadeStartMip, record.detail->fadeEndMip}},
+                       {"mipCount", df.mipSizes.size()},
+                       {"rule",
+                        "blend the detail normal with reoriented normal mapping; 1/s' = 1/s + variance, "
+                        "with constantVariance where the detail map is no longer sampled"}};
+    }
     m["stats"] = {{"mipCount", bake.stats.mipCount},
                   {"glossClampedLow", bake.stats.glossClampedLow},
                   {"glossClampedHigh", bake.stats.glossClampedHigh}};
@@ -472,16 +542,50 @@ Json diagnosticsJson(const NormalMapDiagnostics& d) {
                 {"signedValues", d.signedValues}};
 }
 
+std::vector<std::pair<int, int>> mipChainSizes(int width, int height, int mipCount) {
+    std::vector<std::pair<int, int>> sizes;
+    if (width < 1 || height < 1) return sizes;
+    sizes.emplace_back(width, height);
+    // The pyramid's rule (normal_pyramid.h): halve rounding down, at least 1, down to 1×1.
+    while ((sizes.back().first > 1 || sizes.back().second > 1) &&
+           (mipCount <= 0 || int(sizes.size()) < mipCount))
+        sizes.emplace_back(std::max(1, sizes.back().first / 2), std::max(1, sizes.back().second / 2));
+    return sizes;
+}
+
+Result<BakeOutput> bakeShape(const BakeOptions& options, int width, int height) {
+    if (width < 1 || height < 1) return Error{"a bake needs a map of at least 1x1 texels"};
+    // A 1×1 flat map gives the method's roles, channels and decode rules (as presets.cpp's
+    // methodRoles does), without the cost of the real map.
+    BakeOptions flat = options;
+    flat.authoredGloss.reset();
+    flat.mipCount = 0;
+    auto baked = bake(makeNormalMap(1, 1, {glm::vec3(0.0f, 0.0f, 1.0f)}), flat);
+    if (!baked) return Error{baked.error()};
+    BakeOutput shape = std::move(baked.value());
+    const auto sizes = mipChainSizes(width, height, options.mipCount);
+    for (auto& t : shape.textures) {
+        t.mips.assign(sizes.size(), TextureMip{});
+        for (size_t k = 0; k < sizes.size(); ++k) {
+            t.mips[k].width = sizes[k].first;
+            t.mips[k].height = sizes[k].second;
+        }
+    }
+    shape.stats = {};
+    shape.stats.mipCount = int(sizes.size());
+    return shape;
+}
+
 Result<ExportResult> planExport(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const BakeRecord& record) {
-    auto plan = makePlan(bake, preset, options, record);
+    auto plan = makePlan(bake, preset, options, record, false);
     if (!plan) return Error{plan.error()};
     return std::move(plan.value().result);
 }
 
 Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const fs::path& outDir, const BakeRecord& record) {
-    auto planned = makePlan(bake, preset, options, record);
+    auto planned = makePlan(bake, preset, options, record, true);
     if (!planned) return Error{planned.error()};
     Plan& plan = planned.value();
 

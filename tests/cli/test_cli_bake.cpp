@@ -1,5 +1,7 @@
 // End to end: `burnish bake` run as a process on a small synthetic normal map written by the test.
 #include <burnish/core/atomic_file.h>
+#include <burnish/core/gloss.h>
+#include <burnish/core/normal_map.h>
 #include <burnish/core/presets.h>
 
 #include "temp_dir.h"
@@ -7,6 +9,7 @@
 #include "cli_run.h"
 #include <OpenImageIO/imageio.h>
 
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -281,14 +284,263 @@ TEST(CliBake, BadManifestEntryFailsBeforeAnythingIsWritten) {
     EXPECT_NE(r.err.find("unknown field 'metalic'"), std::string::npos) << r.err;
 }
 
+// Every level of a file as OpenImageIO decodes it (float values, bit-exact for float storage).
+std::vector<std::vector<float>> readLevels(const fs::path& path) {
+    std::vector<std::vector<float>> levels;
+    // The fourth channel is data (variance, gloss): read it unassociated, as an engine does.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path.string(), &config);
+    if (!in) return levels;
+    for (int k = 0; in->seek_subimage(0, k); ++k) {
+        const OIIO::ImageSpec& s = in->spec();
+        std::vector<float> v(size_t(s.width) * size_t(s.height) * size_t(s.nchannels));
+        if (!in->read_image(0, k, 0, s.nchannels, OIIO::TypeDesc::FLOAT, v.data())) break;
+        levels.push_back(std::move(v));
+    }
+    return levels;
+}
+
+// The bytes after a DDS file's header (magic + 124-byte header, + 20 for a DX10 extension).
+std::string ddsPayload(const std::string& bytes) {
+    constexpr size_t kHeader = 4 + 124;
+    constexpr size_t kFourCcOffset = 84;
+    constexpr size_t kDx10Header = 20;
+    if (bytes.size() < kHeader) return {};
+    const bool dx10 = bytes.compare(kFourCcOffset, 4, "DX10") == 0;
+    return bytes.substr(kHeader + (dx10 ? kDx10Header : 0));
+}
+
+TEST(CliBake, MipsWritesTheFirstLevelsOfAFullBake) {
+    TempDir dir;
+    writeNormalMap(dir / "bumps.png");
+    constexpr int kShort = 3;
+    // png16: one file per level; exr-half: one MIP-mapped file; dds: the chain in one file (bc5, bc4).
+    for (const char* format : {"png16", "exr-half", "dds"}) {
+        SCOPED_TRACE(format);
+        const std::string common =
+            "bake " + quote((dir / "bumps.png").string()) + " --preset godot --format " + format + " --out ";
+        const fs::path full = dir / (std::string(format) + "-full");
+        const fs::path part = dir / (std::string(format) + "-3");
+        ASSERT_EQ(runBurnish(common + quote(full.string())).exitCode, 0);
+        const auto r = runBurnish(common + quote(part.string()) + " --mips " + std::to_string(kShort));
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        const auto manifest = nlohmann::json::parse(burnish::readFile(part / "bake.json").value());
+        EXPECT_EQ(manifest["stats"]["mipCount"], kShort);
+        EXPECT_EQ(manifest["options"]["mips"], kShort);
+        for (const auto& file : manifest["files"]) {
+            const std::string name = file["name"];
+            EXPECT_EQ(file["mips"].size(), size_t(kShort)) << name;
+            const auto& paths = file["paths"];
+            if (std::string(format) == "png16") {
+                ASSERT_EQ(paths.size(), size_t(kShort)) << name;
+                for (const auto& p : paths) // level k of the short bake is level k of the full one
+                    EXPECT_EQ(burnish::readFile(part / p.get<std::string>()).value(),
+                              burnish::readFile(full / p.get<std::string>()).value())
+                        << p;
+                EXPECT_TRUE(fs::exists(full / ("bumps_" + name + "_mip3.png")));
+                EXPECT_FALSE(fs::exists(part / ("bumps_" + name + "_mip3.png")));
+                continue;
+            }
+            ASSERT_EQ(paths.size(), 1u);
+            const std::string file0 = paths[0];
+            const auto shortLevels = readLevels(part / file0);
+            const auto fullLevels = readLevels(full / file0);
+            ASSERT_EQ(shortLevels.size(), size_t(kShort)) << file0;
+            ASSERT_EQ(fullLevels.size(), size_t(kMipCount)) << file0;
+            for (int k = 0; k < kShort; ++k)
+                EXPECT_EQ(shortLevels[size_t(k)], fullLevels[size_t(k)]) << file0 << " level " << k;
+            if (std::string(format) == "dds") {
+                // Same compressed blocks: the short file's data is a prefix of the full file's.
+                const std::string a = ddsPayload(burnish::readFile(part / file0).value());
+                const std::string b = ddsPayload(burnish::readFile(full / file0).value());
+                ASSERT_FALSE(a.empty());
+                ASSERT_LT(a.size(), b.size());
+                EXPECT_EQ(a, b.substr(0, a.size())) << file0;
+            }
+        }
+    }
+}
+
+TEST(CliBake, MipsBeyondTheChainAreClampedWithANote) {
+    TempDir dir;
+    writeNormalMap(dir / "bumps.png");
+    const std::string base = "bake " + quote((dir / "bumps.png").string()) + " --preset godot --out ";
+    const auto r = runBurnish(base + quote((dir / "o").string()) + " --mips 40 --json");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto job = nlohmann::json::parse(r.out)["jobs"][0];
+    EXPECT_EQ(job["mipCount"], kMipCount);
+    EXPECT_EQ(job["mipsRequested"], 40);
+    ASSERT_EQ(job["notes"].size(), 1u);
+    EXPECT_NE(job["notes"][0].get<std::string>().find("--mips 40 exceeds the 6-level chain"),
+              std::string::npos)
+        << job["notes"];
+
+    const auto zero = runBurnish(base + quote((dir / "z").string()) + " --mips 0");
+    EXPECT_NE(zero.exitCode, 0);
+    EXPECT_EQ(countLines(zero.err), 1) << zero.err;
+    EXPECT_NE(zero.err.find("--mips 0 must be at least 1"), std::string::npos) << zero.err;
+}
+
+// Grooves along x: columns alternate between slopes +kGrooveSlope and -kGrooveSlope (8-bit RGB).
+constexpr float kGrooveSlope = 0.5f;
+void writeGrooves(const fs::path& path, int size) {
+    std::vector<unsigned char> pixels(size_t(size) * size_t(size) * 3);
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const float nx = x % 2 ? kGrooveSlope : -kGrooveSlope;
+            const float len = std::sqrt(nx * nx + 1.0f);
+            const float n[3] = {nx / len, 0.0f, 1.0f / len};
+            for (int c = 0; c < 3; ++c)
+                pixels[(size_t(y) * size_t(size) + size_t(x)) * 3 + size_t(c)] =
+                    static_cast<unsigned char>(std::lround((0.5f * n[c] + 0.5f) * 255.0f));
+        }
+    auto out = OIIO::ImageOutput::create(path.string());
+    ASSERT_TRUE(out);
+    ASSERT_TRUE(out->open(path.string(), OIIO::ImageSpec(size, size, 3, OIIO::TypeDesc::UINT8)));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, pixels.data()));
+    ASSERT_TRUE(out->close());
+}
+
+TEST(CliBake, DetailMapIsAnExtraFileOfEveryPreset) {
+    TempDir dir;
+    writeNormalMap(dir / "bumps.png");
+    constexpr int kDetailSize = 16; // tiles at its own resolution: 16x16 .. 1x1
+    constexpr int kDetailLevels = 5;
+    writeGrooves(dir / "grooves.png", kDetailSize);
+    // The constant variance is Toksvig's (1 - |Na|)/|Na| of the whole decoded map's mean normal.
+    const auto decodedGrooves = burnish::loadNormalMap(dir / "grooves.png");
+    ASSERT_TRUE(decodedGrooves) << decodedGrooves.error();
+    glm::dvec3 sum(0.0);
+    for (int y = 0; y < kDetailSize; ++y)
+        for (int x = 0; x < kDetailSize; ++x)
+            sum += glm::dvec3(decodedGrooves->at(x, y));
+    const double expectedVariance =
+        burnish::toksvigVariance(glm::length(sum) / double(kDetailSize * kDetailSize));
+    // Float moments against this double sum.
+    constexpr double kMomentRounding = 1e-6;
+    // Analytically |Na| = 1/sqrt(1 + slope^2) (x cancels), so the variance is sqrt(1 + slope^2) - 1;
+    // 8-bit storage of the grooves moves it by 2.0% (measured): 3% keeps the bake honest.
+    const double analyticVariance = std::sqrt(1.0 + double(kGrooveSlope) * kGrooveSlope) - 1.0;
+    constexpr double kEightBitRelative = 0.03;
+    EXPECT_NEAR(expectedVariance, analyticVariance, kEightBitRelative * analyticVariance);
+    for (const auto& preset : burnish::builtinPresets()) {
+        SCOPED_TRACE(preset.name);
+        const fs::path out = dir / preset.name;
+        const auto r = runBurnish("bake " + quote((dir / "bumps.png").string()) + " --preset " + preset.name +
+                                  " --detail " + quote((dir / "grooves.png").string()) +
+                                  " --detail-fade 1:3 --json --out " + quote(out.string()));
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        const std::string ext(burnish::exportFormatExtension(preset.format));
+        const auto bakeJson = nlohmann::json::parse(burnish::readFile(out / "bake.json").value());
+        const auto& detail = bakeJson["detail"];
+        EXPECT_EQ(detail["file"], "bumps_detail." + ext);
+        EXPECT_EQ(detail["fade"], nlohmann::json({1, 3}));
+        EXPECT_NEAR(detail["constantVariance"].get<double>(), expectedVariance, kMomentRounding);
+        EXPECT_EQ(bakeJson["inputs"]["detailMap"], (dir / "grooves.png").string());
+        const auto& files = bakeJson["files"];
+        ASSERT_EQ(files.size(), preset.files.size() + 1);
+        const auto& df = files.back();
+        EXPECT_EQ(df["name"], "detail");
+        EXPECT_EQ(df["mips"].size(), size_t(kDetailLevels)); // its own chain, not the 32x32 map's 6
+        EXPECT_EQ(df["mips"][0], nlohmann::json({kDetailSize, kDetailSize}));
+        EXPECT_EQ(files[0]["mips"].size(), size_t(kMipCount));
+        for (const auto& p : df["paths"])
+            EXPECT_TRUE(fs::exists(out / p.get<std::string>())) << p;
+        const auto summary = nlohmann::json::parse(r.out)["jobs"][0];
+        EXPECT_EQ(summary["detail"]["constantVariance"], detail["constantVariance"]);
+    }
+
+    // The stored detail: mip 0 keeps the grooves' slopes; from the fade end (mip 3) on, the normal
+    // is flat and the variance the constant. Read from 16-bit PNGs of the godot (OpenGL) preset, box
+    // kernel (the tent would average each groove with its neighbours already at mip 0).
+    const fs::path out = dir / "png16";
+    ASSERT_EQ(runBurnish("bake " + quote((dir / "bumps.png").string()) +
+                         " --preset godot --format png16 --kernel box --detail " +
+                         quote((dir / "grooves.png").string()) + " --detail-fade 1:3 --out " +
+                         quote(out.string()))
+                  .exitCode,
+              0);
+    const auto bakeJson = nlohmann::json::parse(burnish::readFile(out / "bake.json").value());
+    const auto& channels = bakeJson["files"].back()["channels"];
+    auto decoded = [&](const std::vector<float>& texels, size_t t, int c) {
+        return texels[t * 4 + size_t(c)] * channels[size_t(c)]["scale"].get<double>() +
+               channels[size_t(c)]["bias"].get<double>();
+    };
+    // 16-bit storage: half a code of the [-1, 1] (scale 2) or variance range.
+    const double kUint16Tolerance = 0.5 / 65535.0 * 2.0 + 1e-6;
+    const double kEightBitSlope = 1.0 / 255.0; // the groove normals themselves were stored in 8 bits
+    const auto mip0 = readLevels(out / "bumps_detail.png");
+    ASSERT_EQ(mip0.size(), 1u);
+    const double nx = double(kGrooveSlope) / std::sqrt(1.0 + double(kGrooveSlope) * kGrooveSlope);
+    EXPECT_NEAR(std::abs(decoded(mip0[0], 0, 0)), nx, kEightBitSlope + kUint16Tolerance);
+    const auto mip3 = readLevels(out / "bumps_detail_mip3.png");
+    ASSERT_EQ(mip3.size(), 1u);
+    const double constant = bakeJson["detail"]["constantVariance"];
+    for (size_t t = 0; t < 4; ++t) { // 2x2 at mip 3
+        EXPECT_NEAR(decoded(mip3[0], t, 0), 0.0, kUint16Tolerance);
+        EXPECT_NEAR(decoded(mip3[0], t, 1), 0.0, kUint16Tolerance);
+        EXPECT_NEAR(decoded(mip3[0], t, 3), constant, kUint16Tolerance * channels[3]["scale"].get<double>());
+    }
+}
+
+TEST(CliBake, BadDetailOptionsAreOneLine) {
+    TempDir dir;
+    writeNormalMap(dir / "bumps.png");
+    writeGrooves(dir / "grooves.png", 8);
+    const std::string base = "bake " + quote((dir / "bumps.png").string()) + " --preset godot --out " +
+                             quote((dir / "o").string()) + " ";
+    for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+             {"--detail-fade 1:2", "--detail-fade needs a detail map"},
+             {"--detail " + quote((dir / "grooves.png").string()) + " --detail-fade 5:2",
+              "0 <= START <= END"},
+             {"--detail " + quote((dir / "grooves.png").string()) + " --detail-fade x", "must be START:END"},
+             {"--detail " + quote((dir / "missing.png").string()), "missing.png"}}) {
+        SCOPED_TRACE(args);
+        const auto r = runBurnish(base + args);
+        EXPECT_NE(r.exitCode, 0);
+        EXPECT_EQ(countLines(r.err), 1) << r.err;
+        EXPECT_NE(r.err.find(expected), std::string::npos) << r.err;
+    }
+    EXPECT_TRUE(listFolder(dir / "o").empty());
+}
+
+TEST(CliBake, ReportWithAGlossMapUsesItsPowers) {
+    TempDir dir;
+    writeNormalMap(dir / "bumps.png");
+    // A constant gloss of 0.5 in blackops' 8192^g: every texel's power is 8192^0.5.
+    {
+        std::vector<float> gloss(32 * 32, 0.5f);
+        auto out = OIIO::ImageOutput::create((dir / "gloss.exr").string());
+        ASSERT_TRUE(out);
+        ASSERT_TRUE(
+            out->open((dir / "gloss.exr").string(), OIIO::ImageSpec(32, 32, 1, OIIO::TypeDesc::FLOAT)));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, gloss.data()));
+        ASSERT_TRUE(out->close());
+    }
+    const auto r = runBurnish("bake " + quote((dir / "bumps.png").string()) + " --preset blackops --gloss " +
+                              quote((dir / "gloss.exr").string()) + " --report --json --out " +
+                              quote((dir / "o").string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(nlohmann::json::parse(r.out)["jobs"][0]["warnings"].empty()) << r.out;
+    const auto evaluation =
+        nlohmann::json::parse(burnish::readFile(dir / "o" / "report" / "evaluate.json").value());
+    // Powers decoded from float storage: 8192^0.5 to double rounding.
+    constexpr double kPowerTolerance = 1e-9;
+    EXPECT_NEAR(evaluation["authored_gloss"]["mean_power"].get<double>(), std::sqrt(8192.0),
+                kPowerTolerance * std::sqrt(8192.0));
+    EXPECT_NEAR(evaluation["base_powers"][0].get<double>(), std::sqrt(8192.0),
+                kPowerTolerance * std::sqrt(8192.0));
+}
+
 TEST(CliBake, HelpListsPresetsMethodsAndFormats) {
     const auto r = runBurnish("bake --help");
     EXPECT_EQ(r.exitCode, 0);
     for (const auto& name : burnish::builtinPresetNames())
         EXPECT_NE(r.out.find(name), std::string::npos) << name;
-    for (const char* word :
-         {"variance-to-gloss", "vmf", "exr-half", "tiff-float", "bc5", "--manifest", "--allow-8bit",
-          "--green", "--layout", "--kernel", "--border", "--compression", "--gloss", "--power"})
+    for (const char* word : {"variance-to-gloss", "vmf", "exr-half", "tiff-float", "bc5", "--manifest",
+                             "--allow-8bit", "--green", "--layout", "--kernel", "--border", "--compression",
+                             "--gloss", "--power", "--mips", "--detail", "--detail-fade", "--ninja"})
         EXPECT_NE(r.out.find(word), std::string::npos) << word;
 }
 

@@ -83,3 +83,54 @@ TEST(CliEvaluate, BadInputGivesOneLine) {
     EXPECT_NE(badMip.exitCode, 0);
     EXPECT_EQ(lineCount(badMip.err), 1) << badMip.err;
 }
+
+namespace {
+
+// A one-channel float EXR of `value` everywhere, 32×32 like the bumpy map.
+std::string writeConstantGloss(const burnish::test::TempDir& dir, float value) {
+    const auto path = (dir / "gloss.exr").string();
+    std::vector<float> px(32 * 32, value);
+    auto out = OIIO::ImageOutput::create(path);
+    out->open(path, OIIO::ImageSpec(32, 32, 1, OIIO::TypeDesc::FLOAT));
+    out->write_image(OIIO::TypeDesc::FLOAT, px.data());
+    out->close();
+    return path;
+}
+
+} // namespace
+
+TEST(CliEvaluate, ConstantGlossMapEqualsItsPower) {
+    burnish::test::TempDir dir;
+    const std::string in = writeBumpyMap(dir);
+    // exp2: n = exp2(10g + 1), so g = 0.5 is exactly 64, in float storage too.
+    const std::string gloss = writeConstantGloss(dir, 0.5f);
+    const std::string common =
+        "evaluate " + in + " --bake-runs 1 --json --methods naive,variance-to-gloss,lean";
+    auto withPower = runBurnish(common + " --power 64 --out " + (dir / "a").string());
+    auto withGloss =
+        runBurnish(common + " --gloss " + gloss + " --gloss-encoding exp2 --out " + (dir / "b").string());
+    ASSERT_EQ(withPower.exitCode, 0) << withPower.err;
+    ASSERT_EQ(withGloss.exitCode, 0) << withGloss.err;
+    const auto a = nlohmann::json::parse(withPower.out);
+    const auto b = nlohmann::json::parse(withGloss.out);
+    EXPECT_EQ(b["base_powers"][0], 64.0);
+    ASSERT_EQ(a["errors"].size(), b["errors"].size());
+    // Per-texel sums of identical powers: the same numbers up to double rounding of the mean 1/s.
+    constexpr double kSameNumbers = 1e-12;
+    for (size_t i = 0; i < a["errors"].size(); ++i) {
+        EXPECT_EQ(a["errors"][i]["method"], b["errors"][i]["method"]);
+        EXPECT_NEAR(a["errors"][i]["relative_l1"].get<double>(), b["errors"][i]["relative_l1"].get<double>(),
+                    kSameNumbers)
+            << a["errors"][i].dump();
+        EXPECT_NEAR(a["errors"][i]["energy_ratio"].get<double>(),
+                    b["errors"][i]["energy_ratio"].get<double>(), kSameNumbers)
+            << a["errors"][i].dump();
+    }
+    EXPECT_TRUE(b.contains("authored_gloss"));
+    EXPECT_FALSE(a.contains("authored_gloss"));
+
+    auto both = runBurnish(common + " --power 64 --gloss " + gloss + " --out " + (dir / "c").string());
+    EXPECT_NE(both.exitCode, 0);
+    EXPECT_EQ(lineCount(both.err), 1) << both.err;
+    EXPECT_NE(both.err.find("--power or --gloss"), std::string::npos) << both.err;
+}

@@ -105,3 +105,44 @@ TEST(Detail, RejectsBadFadeRange) {
     options.fadeEndMip = 2;
     EXPECT_FALSE(bakeDetail(flat, options).ok());
 }
+
+TEST(Detail, ShortChainIsAPrefixOfTheFullOne) {
+    const NormalMap map = bumpy(32, 0.3f, 7);
+    DetailOptions options;
+    auto full = bakeDetail(map, options);
+    options.mipCount = 3;
+    auto part = bakeDetail(map, options);
+    ASSERT_TRUE(full.ok() && part.ok());
+    ASSERT_EQ(full->texture.mips.size(), 6u);
+    ASSERT_EQ(part->texture.mips.size(), 3u);
+    EXPECT_EQ(part->constantVariance, full->constantVariance);
+    EXPECT_EQ(part->texture.decode[3].scale, full->texture.decode[3].scale); // same variance scale
+    for (size_t k = 0; k < 3; ++k)
+        EXPECT_EQ(part->texture.mips[k].texels, full->texture.mips[k].texels) << "mip " << k;
+    // More levels than the chain holds: the whole chain.
+    options.mipCount = 40;
+    EXPECT_EQ(bakeDetail(map, options)->texture.mips.size(), 6u);
+    options.mipCount = -1;
+    EXPECT_FALSE(bakeDetail(map, options).ok());
+}
+
+TEST(Detail, ShapeHasTheBakesRolesChannelsAndSizes) {
+    const NormalMap map = makeNormalMap(12, 5, std::vector<glm::vec3>(60, glm::vec3(0, 0, 1)));
+    DetailOptions options;
+    options.mipCount = 3;
+    auto baked = bakeDetail(map, options);
+    auto shape = detailShape(12, 5, options);
+    ASSERT_TRUE(baked.ok() && shape.ok());
+    EXPECT_EQ(shape->role, baked->texture.role);
+    EXPECT_EQ(shape->channels, baked->texture.channels);
+    ASSERT_EQ(shape->decode.size(), baked->texture.decode.size());
+    for (size_t c = 0; c < shape->decode.size(); ++c)
+        EXPECT_EQ(shape->decode[c].name, baked->texture.decode[c].name);
+    ASSERT_EQ(shape->mips.size(), baked->texture.mips.size()); // 12x5, 6x2, 3x1
+    for (size_t k = 0; k < shape->mips.size(); ++k) {
+        EXPECT_EQ(shape->mips[k].width, baked->texture.mips[k].width) << k;
+        EXPECT_EQ(shape->mips[k].height, baked->texture.mips[k].height) << k;
+        EXPECT_TRUE(shape->mips[k].texels.empty());
+    }
+    EXPECT_FALSE(detailShape(0, 4).ok());
+}

@@ -4,6 +4,7 @@
 #include <burnish/core/export.h>
 
 #include <burnish/core/atomic_file.h>
+#include <burnish/core/detail.h>
 
 #include "temp_dir.h"
 
@@ -604,6 +605,126 @@ TEST(Export, BakeJsonDescribesEveryFile) {
     EXPECT_EQ(j["files"][0]["mips"].size(), size_t(b.stats.mipCount));
     // The file on disk is the manifest the call returned.
     EXPECT_EQ(j, r->manifest);
+}
+
+// A detail map rides along with any preset: its own file and chain, its record in bake.json.
+TEST(Export, DetailFileHasItsOwnChainAndRecord) {
+    const Preset p = preset("godot");
+    BakeOutput b = bakeWith(smoothMap(40, 24), p.method, p); // 6 levels
+    auto detail = bakeDetail(smoothMap(16, 16));             // 5 levels: 16x16 .. 1x1
+    ASSERT_TRUE(detail) << detail.error();
+    const BakedTexture detailTexture = detail->texture;
+    b.textures.push_back(detailTexture);
+    BakeRecord record;
+    record.detail = DetailRecord{"d.png", detail->constantVariance, 2, 4};
+    ExportOptions o;
+    o.stem = "m";
+    o.format = ExportFormat::Png16;
+    TempDir dir;
+    const auto r = exportBake(b, p, o, dir.path(), record);
+    ASSERT_TRUE(r) << r.error();
+    const ExportedFile& f = r->files.back();
+    EXPECT_EQ(f.name, "detail");
+    ASSERT_EQ(f.paths.size(), 5u);
+    EXPECT_EQ(f.paths[0], "m_detail.png");
+    EXPECT_EQ(f.paths[4], "m_detail_mip4.png");
+    EXPECT_EQ(f.mipSizes.front(), std::make_pair(16, 16));
+    EXPECT_EQ(r->files.front().mipSizes.size(), 6u); // the preset's files keep the map's chain
+    const auto& j = r->manifest["detail"];
+    EXPECT_EQ(j["file"], "m_detail.png");
+    EXPECT_EQ(j["input"], "d.png");
+    EXPECT_EQ(j["constantVariance"], detail->constantVariance);
+    EXPECT_EQ(j["fade"], nlohmann::json({2, 4}));
+    // Every level reads back as baked (16-bit storage).
+    const auto mips = readExported(dir.path(), f);
+    ASSERT_EQ(mips.size(), 5u);
+    for (size_t k = 0; k < mips.size(); ++k) {
+        ASSERT_EQ(mips[k].values.size(), detailTexture.mips[k].texels.size()) << k;
+        for (size_t i = 0; i < mips[k].values.size(); ++i)
+            EXPECT_NEAR(mips[k].values[i], detailTexture.mips[k].texels[i], kUint16Tolerance)
+                << k << " " << i;
+    }
+
+    // The record and the texture come together.
+    EXPECT_FALSE(planExport(b, p, o, BakeRecord{}));
+    BakeOutput without = bakeWith(smoothMap(40, 24), p.method, p);
+    EXPECT_FALSE(planExport(without, p, o, record));
+}
+
+TEST(Export, DetailFlipsWithDirectXAndKeepsFourChannelsInDds) {
+    const Preset p = preset("unreal"); // DirectX green
+    BakeOutput b = bakeWith(smoothMap(32, 32), p.method, p);
+    auto detail = bakeDetail(smoothMap(8, 8));
+    ASSERT_TRUE(detail);
+    b.textures.push_back(detail->texture);
+    BakeRecord record;
+    record.detail = DetailRecord{"d.png", detail->constantVariance, 3, 6};
+    ExportOptions o;
+    o.format = ExportFormat::Dds;
+    o.compression = DdsCompression::Bc4; // the preset's one-channel files; the detail cannot take it
+    o.stem = "m";
+    auto r = planExport(b, p, o, record);
+    // unreal's normal has three channels, which bc4 cannot hold: use the preset's own compressions.
+    ASSERT_FALSE(r);
+    o.compression.reset();
+    TempDir dir;
+    r = exportBake(b, p, o, dir.path(), record);
+    ASSERT_TRUE(r) << r.error();
+    const ExportedFile& f = r->files.back();
+    EXPECT_EQ(f.compression, DdsCompression::Rgba8);
+    const auto mips = readMips(dir / f.paths[0]);
+    ASSERT_EQ(mips.size(), 4u); // 8x8 .. 1x1
+    // y is stored flipped (1 - v), x as is, to 8 bits.
+    const auto& baked = detail->texture.mips[0].texels;
+    for (size_t t = 0; t < 64; ++t) {
+        EXPECT_NEAR(mips[0].values[t * 4 + 0], baked[t * 4 + 0], kUint8Tolerance);
+        EXPECT_NEAR(mips[0].values[t * 4 + 1], 1.0 - baked[t * 4 + 1], kUint8Tolerance);
+    }
+    // A compression that cannot hold four channels falls back to rgba8 for the detail file, with a
+    // note: toksvig-map's files all fit bc5 (a normal whose z it drops, R/G gloss and factor).
+    const Preset tm = preset("toksvig-map");
+    BakeOutput t = bakeWith(smoothMap(32, 32), tm.method, tm);
+    t.textures.push_back(detail->texture);
+    o.compression = DdsCompression::Bc5;
+    const auto bc5 = planExport(t, tm, o, record);
+    ASSERT_TRUE(bc5) << bc5.error();
+    EXPECT_EQ(bc5->files.front().compression, DdsCompression::Bc5);
+    EXPECT_EQ(bc5->files.back().compression, DdsCompression::Rgba8);
+    ASSERT_EQ(bc5->files.back().notes.size(), 1u);
+    EXPECT_NE(bc5->files.back().notes[0].find("stored as rgba8"), std::string::npos);
+}
+
+// planExport of a bake's shape names exactly the files a real export writes.
+TEST(Export, ShapePlansTheFilesOfTheRealBake) {
+    const NormalMap map = smoothMap(40, 24);
+    for (const char* name : {"godot", "lean", "unity"})
+        for (ExportFormat format : {ExportFormat::Png8, ExportFormat::ExrHalf, ExportFormat::Dds}) {
+            SCOPED_TRACE(std::string(name) + " " + std::string(exportFormatName(format)));
+            const Preset p = preset(name);
+            BakeOptions options;
+            options.method = p.method;
+            options.encoding = p.encoding;
+            options.mipCount = 4;
+            auto real = bake(map, options);
+            auto shape = bakeShape(options, map.width, map.height);
+            ASSERT_TRUE(real && shape);
+            ExportOptions o;
+            o.format = format;
+            o.allowEightBit = true;
+            const auto a = planExport(*real, p, o);
+            const auto b = planExport(*shape, p, o);
+            ASSERT_EQ(bool(a), bool(b)) << (a ? b.error() : a.error());
+            if (!a) continue; // e.g. lean's three-channel M in dds: refused for both
+            ASSERT_EQ(a->files.size(), b->files.size());
+            for (size_t i = 0; i < a->files.size(); ++i) {
+                EXPECT_EQ(a->files[i].paths, b->files[i].paths);
+                EXPECT_EQ(a->files[i].mipSizes, b->files[i].mipSizes);
+            }
+        }
+    EXPECT_EQ(mipChainSizes(40, 24),
+              (std::vector<std::pair<int, int>>{{40, 24}, {20, 12}, {10, 6}, {5, 3}, {2, 1}, {1, 1}}));
+    EXPECT_EQ(mipChainSizes(40, 24, 2).size(), 2u);
+    EXPECT_TRUE(mipChainSizes(0, 4).empty());
 }
 
 } // namespace

@@ -28,6 +28,9 @@ struct DetailOptions {
     /// variance to the map's constant total variance; from fadeEndMip on both are constant.
     int fadeStartMip = 3;
     int fadeEndMip = 6;
+    /// Levels stored (0 = all, down to 1×1; more than the chain holds stores the whole chain).
+    /// A short chain is the first levels of the full one, value for value.
+    int mipCount = 0;
 };
 
 struct DetailBake {
@@ -39,7 +42,12 @@ struct DetailBake {
     double constantVariance = 0.0;
 };
 
-/// Bakes the detail texture; fails on bad fade mips (start > end or negative).
+/// Bakes the detail texture; fails on bad fade mips (start > end or negative) or a negative mip count.
 Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& options = {});
+
+/// The detail texture of a width×height detail map without its texels (role, channels, decode
+/// names and mip sizes; the variance scale is a flat map's): what export's planExport needs to
+/// name the detail file before anything is baked.
+Result<BakedTexture> detailShape(int width, int height, const DetailOptions& options = {});
 
 } // namespace burnish

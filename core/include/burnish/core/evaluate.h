@@ -9,6 +9,15 @@
 // Directions: the view at `viewAngle` from the macro normal (azimuth 0); half vectors at the
 // polar angles `halfAngles` and `azimuths` evenly spaced azimuths (one at 0); pairs whose light
 // is within `horizon` of the horizon are dropped.
+//
+// Authored gloss (texelPowers): each finest texel has its own power s_i, and
+//   GT = mean over the footprint of D_{s_i}(n_i·h)·max(0, n_i·l).
+// Every method gets the block's power the way the bake (bake.cpp) feeds it to every method:
+// 1/s averaged over the footprint, s = 1/mean(1/s_i) (Baker & Hill 2012: "storing power as 1/s
+// will cause MIP filter to operate correctly"), with the kernel applied for tent/Gaussian
+// variants. The harmonic mean keeps the spread of a mixture of lobes, not its peak: on a flat map
+// the peak D(1) ∝ s + 2 of a mixture is that of the arithmetic mean power, so no single lobe
+// matches a mixture of very different powers (test_evaluate.cpp measures both).
 #pragma once
 
 #include <burnish/core/methods.h>
@@ -19,6 +28,7 @@
 #include <glm/vec3.hpp>
 
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace burnish {
@@ -39,6 +49,10 @@ struct EvaluateOptions {
     BorderMode border = BorderMode::Wrap;
     /// Keep per-texel error maps (relative L1 per texel: Σ_dir|M − GT| / Σ_dir GT).
     bool errorMaps = false;
+    /// Authored power per finest texel (row-major, the map's texel count, each in (0, 1e9]). When
+    /// set, it replaces basePowers: the evaluation runs once, and results carry the arithmetic
+    /// mean of the powers as their basePower label.
+    std::optional<std::vector<double>> texelPowers;
 };
 
 /// One light/view pair in tangent space.
@@ -77,6 +91,8 @@ struct EvaluationResult {
     int firstMip = 0;
     int lastMip = 0;
     double seconds = 0.0;
+    /// The powers the results are labelled with: options.basePowers, or with texelPowers their mean.
+    std::vector<double> basePowers;
 };
 
 /// Ground truth of one texel's footprint for one direction pair (the brute-force definition,
@@ -84,11 +100,16 @@ struct EvaluationResult {
 double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s,
                         const DirectionPair& d);
 
+/// The same with each finest texel's own power (texelPowers, row-major over the finest level).
+double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,
+                        const std::vector<double>& texelPowers, const DirectionPair& d);
+
 /// A method's value for one texel and direction.
 double methodValue(const TexelLobe& lobe, const DirectionPair& d);
 
 /// Errors of every requested method, power and mip. Fails on bad options (no directions left,
-/// empty power list, non-positive power, mip range outside the map). `progress` (if set) is
+/// empty power list, non-positive power, mip range outside the map, texelPowers of the wrong size
+/// or with a power outside (0, 1e9]). `progress` (if set) is
 /// called with the fraction done.
 Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOptions& options,
                                          const std::function<void(double)>& progress = {});

@@ -11,6 +11,9 @@
 //   dds                   one file with the whole chain (NVIDIA Texture Tools 2.0)
 //   png8, png16, tga      one file per level: <stem>_<name>.<ext> for level 0 and
 //                         <stem>_<name>_mip<k>.<ext> for level k >= 1 (these formats hold no mips)
+// Each file has the mip chain of the textures it packs: a bake's "detail" texture (detail.h) tiles
+// at its own resolution and is written, with every preset, as the extra file <stem>_detail.<ext>
+// with its own chain (DDS: rgba8 unless the compression asked for holds four channels: bc3).
 #pragma once
 
 #include <burnish/core/atomic_file.h>
@@ -42,12 +45,23 @@ struct ExportOptions {
     Overwrite overwrite = Overwrite::Refuse;
 };
 
+/// bake.json's "detail" entry: what a shader needs beside the detail file.
+struct DetailRecord {
+    std::string input; // the detail normal map the texture was baked from
+    /// The detail map's whole variance, added (1/s' = 1/s + σ²) where the map is no longer sampled.
+    double constantVariance = 0.0;
+    int fadeStartMip = 3;
+    int fadeEndMip = 6;
+};
+
 /// What bake.json records besides the files: the caller's description of the inputs and
 /// settings (free-form JSON objects) and what the normal-map decoder saw.
 struct BakeRecord {
     nlohmann::json inputs = nlohmann::json::object();
     nlohmann::json options = nlohmann::json::object();
     std::optional<NormalMapDiagnostics> diagnostics;
+    /// Required when the bake holds a "detail" texture, and only then.
+    std::optional<DetailRecord> detail;
 };
 
 /// One stored channel of an exported file.
@@ -80,11 +94,13 @@ struct ExportResult {
     std::vector<std::filesystem::path> written;
 };
 
-/// The file set of an export without writing anything: packing, format and precision checks.
-/// Errors: a method whose roles the preset does not store, an unknown or out-of-range
-/// parameter, a compression that cannot hold a file's channels, a Toksvig normal (its length is
-/// the variance) in a block-compressed or two-channel file, a high-precision texture in an
-/// 8-bit format without allowEightBit.
+/// The file set of an export without writing anything: names, format and precision checks (no
+/// texel is read, so a bakeShape() is enough). Errors: a method whose roles the preset does not
+/// store, an unknown or out-of-range parameter, a compression that cannot hold a file's channels,
+/// a Toksvig normal (its length is the variance) in a block-compressed or two-channel file, a
+/// high-precision texture in an 8-bit format without allowEightBit, textures of one file with
+/// different mip chains, a detail texture without its DetailRecord (or a record without the
+/// texture), a preset that has a file named "detail" of its own.
 Result<ExportResult> planExport(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const BakeRecord& record = {});
 
@@ -94,6 +110,15 @@ Result<ExportResult> planExport(const BakeOutput& bake, const Preset& preset, co
 /// removed again unless they replaced an existing file.
 Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const std::filesystem::path& outDir, const BakeRecord& record = {});
+
+/// The level sizes of a bake of a width×height map: level k+1 is ⌊w/2⌋×⌊h/2⌋ (at least 1), down to
+/// 1×1, at most `mipCount` levels (0 = all). Empty for an empty extent.
+std::vector<std::pair<int, int>> mipChainSizes(int width, int height, int mipCount = 0);
+
+/// The textures a bake with `options` of a width×height map holds — roles, channels, decode
+/// rules and mip sizes — without their texels (and with decode scales of a flat map): what
+/// planExport needs to name a job's files before anything is baked. Errors as bake()'s.
+Result<BakeOutput> bakeShape(const BakeOptions& options, int width, int height);
 
 /// The decoder's diagnostics as JSON (as bake.json records them).
 nlohmann::json diagnosticsJson(const NormalMapDiagnostics& diagnostics);

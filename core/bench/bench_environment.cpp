@@ -1,0 +1,75 @@
+// Environment prefiltering: a 2048×1024 equirect (BURNISH_BENCH_ENV, or the procedural studio) to
+// 256² faces with the full mip chain; counters give its error against the brute-force reference and
+// the FIS taps that match the prefiltered map within 2%. Peak memory: run under /usr/bin/time -v.
+#include <burnish/core/env_sampling.h>
+#include <burnish/core/environment.h>
+
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+
+namespace {
+
+using namespace burnish;
+
+const Image& sourceImage() {
+    static const Image image = [] {
+        if (const char* path = std::getenv("BURNISH_BENCH_ENV")) {
+            auto loaded = readImage(path);
+            if (loaded) return std::move(loaded.value());
+        }
+        return proceduralStudioEquirect(2048, 1024);
+    }();
+    return image;
+}
+
+void BM_EquirectToCube256(benchmark::State& state) {
+    const Image& image = sourceImage();
+    for (auto _ : state) {
+        auto cube = equirectToCube(image, 256);
+        benchmark::DoNotOptimize(cube);
+    }
+}
+BENCHMARK(BM_EquirectToCube256)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Prefilter256FullChain(benchmark::State& state) {
+    const auto source = equirectToCube(sourceImage(), 256);
+    if (!source) {
+        state.SkipWithError(source.error().c_str());
+        return;
+    }
+    PrefilterOptions o;
+    o.lobe = state.range(0) == 0 ? LobeModel::Phong : LobeModel::BlinnPhong;
+    Result<PrefilteredEnvironment> p = Error{"not run"};
+    for (auto _ : state) {
+        p = prefilterRadiance(source->cube, o);
+        benchmark::DoNotOptimize(p);
+    }
+    if (!p) {
+        state.SkipWithError(p.error().c_str());
+        return;
+    }
+    // Error against brute force over 32 directions per mip (outside the timed loop).
+    const auto c = compareWithReference(*p, source->cube, 32, 64);
+    if (c) {
+        double worst = 0.0, worstLookup = 0.0;
+        unsigned taps = 0;
+        for (const MipError& row : c->mips) {
+            worst = std::max(worst, row.relativeRms);
+            worstLookup = std::max(worstLookup, row.lookupRelativeRms);
+            state.counters["mip" + std::to_string(row.mip) + "_relRms"] = row.relativeRms;
+            state.counters["mip" + std::to_string(row.mip) + "_fisTaps"] = row.fisSamplesToMatch;
+            taps = std::max(taps, row.fisSamplesToMatch);
+        }
+        state.counters["worstRelRms"] = worst;
+        state.counters["worstLookupRelRms"] = worstLookup;
+    }
+}
+BENCHMARK(BM_Prefilter256FullChain)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+} // namespace

@@ -3,7 +3,7 @@
 # all mips, written as PNG16, against OpenImageIO's `maketx` building a mip-mapped texture of the
 # same PNG — both measured in one run, with their ratio and peak memory (/usr/bin/time -v).
 #
-#   core/bench/bake_vs_maketx.sh [NORMAL_MAP] [BUILD_DIR]
+#   [REPEATS=3] core/bench/bake_vs_maketx.sh [NORMAL_MAP] [BUILD_DIR]
 #
 # NORMAL_MAP (default: ../shared/data/normal-maps/trak-brick1_nm.png) is tiled to 4096².
 set -euo pipefail
@@ -28,11 +28,18 @@ done
 oiiotool "$cur" --cut 4096x4096+0+0 -o "$work/map.png"
 echo "input: $src tiled to $(oiiotool --info "$work/map.png" | sed -E 's/^[^:]*: *//')"
 
-measure() { # label, command...: prints "label seconds peakKiB"
+# REPEATS (default 3): each command runs that many times and its median time is kept, so a
+# machine shared with other jobs gives steadier figures.
+repeats="${REPEATS:-3}"
+measure() { # label, command...: prints "label median-seconds cpu-seconds peakKiB"
   local label="$1"; shift
-  /usr/bin/time -f "%e %M" -o "$work/time.txt" "$@" >/dev/null 2>"$work/err.txt" || { cat "$work/err.txt" >&2; exit 1; }
-  read -r secs kib < "$work/time.txt"
-  printf '%-28s %8.2f s %10d KiB peak\n' "$label" "$secs" "$kib"
+  : > "$work/runs.txt"
+  for _ in $(seq "$repeats"); do
+    /usr/bin/time -f "%e %U %S %M" -o "$work/time.txt" "$@" >/dev/null 2>"$work/err.txt" || { cat "$work/err.txt" >&2; exit 1; }
+    cat "$work/time.txt" >> "$work/runs.txt"
+  done
+  read -r secs cpu kib < <(sort -g "$work/runs.txt" | awk '{r[NR]=$0} END {split(r[int((NR+1)/2)], f, " "); print f[1], f[2]+f[3], f[4]}')
+  printf '%-28s %8.2f s (median of %d) %8.2f s cpu %10d KiB peak\n' "$label" "$secs" "$repeats" "$cpu" "$kib"
   echo "$secs" > "$work/$label.secs"
 }
 

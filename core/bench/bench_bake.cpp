@@ -1,6 +1,7 @@
 // Benchmarks of the bake and the ground-truth evaluation (figures, not pass/fail):
 //   BM_Bake/<method>   in-memory bake of a 4096² normal map, all mips (pyramid included)
 //   BM_Pyramid         the normal pyramid alone, 4096²
+//   BM_MomentRows/<k>  the tent-filtered moment rows of level k alone (forEachMomentRow), 4096²
 //   BM_Evaluate        `burnish evaluate`'s core on a 1024² map, mips 1-4, one power, all methods
 // The map is BURNISH_BENCH_NORMAL_MAP (any normal map, tiled to the size) when set, else a
 // deterministic synthetic bumpy map. Run: build/core/burnish_bench --benchmark_filter='Bake|Pyramid|Evaluate'
@@ -87,6 +88,23 @@ void BM_Pyramid(benchmark::State& state) {
     state.SetLabel(label);
 }
 BENCHMARK(BM_Pyramid)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
+
+void BM_MomentRows(benchmark::State& state) {
+    std::string label;
+    const NormalMap& map = benchMap(4096, label);
+    const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
+    const auto pyramid = NormalPyramid::build(borrowed);
+    const int k = int(state.range(0));
+    for (auto _ : state) {
+        std::vector<float> sink(size_t(pyramid.level(k).height));
+        pyramid.forEachMomentRow(k, [&](int y, const NormalMoments* row) {
+            sink[size_t(y)] = row[0].cov[0] + row[pyramid.level(k).width - 1].slopeCov[2];
+        });
+        benchmark::DoNotOptimize(sink);
+    }
+    state.SetLabel(label);
+}
+BENCHMARK(BM_MomentRows)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
 
 void BM_Evaluate(benchmark::State& state) {
     std::string label;

@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -32,7 +33,8 @@ class BaseVariancePyramid {
 public:
     BaseVariancePyramid(const NormalPyramid& pyramid, const std::vector<float>& gloss,
                         const GlossEncoding& encoding)
-        : m_pyramid(pyramid) {
+        : m_pyramid(pyramid)
+        , m_taps(kernelTaps(pyramid.options().kernel)) {
         const int levels = pyramid.levelCount();
         m_levels.resize(size_t(levels));
         const PyramidLevel& l0 = pyramid.level(0);
@@ -60,7 +62,7 @@ public:
 
     /// Base power at a texel of level k, with the pyramid's kernel applied.
     double power(int k, int x, int y) const {
-        const KernelTaps taps = kernelTaps(m_pyramid.options().kernel);
+        const KernelTaps& taps = m_taps;
         const PyramidLevel& level = m_pyramid.level(k);
         double sum = 0.0, weight = 0.0;
         for (int j = -taps.radius; j <= taps.radius; ++j)
@@ -77,6 +79,7 @@ public:
 
 private:
     const NormalPyramid& m_pyramid;
+    KernelTaps m_taps; // looked up once: the Gaussian's weights cost two exp() each
     std::vector<std::vector<double>> m_levels;
 };
 
@@ -152,15 +155,26 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     double sB = 1.0, sM = 1.0;
     if (slopeMethod) {
         double maxB = 0.0, maxM = 0.0;
-        auto visit = [&](const NormalMoments& m) {
-            const auto M = m.slopeSecondMoments();
-            maxB = std::max({maxB, std::abs(double(m.slope.x)), std::abs(double(m.slope.y))});
-            maxM = std::max({maxM, double(M[0]), double(M[1])});
-        };
-        for (int k = 0; k < levels; ++k)
-            for (int y = 0; y < pyramid.level(k).height; ++y)
-                for (int x = 0; x < pyramid.level(k).width; ++x)
-                    visit(pyramid.boxMoments(k, x, y));
+        // Row maxima in parallel, then their maximum: max is exact, so any order gives the same.
+        for (int k = 0; k < levels; ++k) {
+            const PyramidLevel& level = pyramid.level(k);
+            std::vector<double> rowB(size_t(level.height), 0.0), rowM(size_t(level.height), 0.0);
+            tbb::parallel_for(0, level.height, [&](int y) {
+                double b = 0.0, mm = 0.0;
+                for (int x = 0; x < level.width; ++x) {
+                    const NormalMoments m = pyramid.boxMoments(k, x, y);
+                    const auto M = m.slopeSecondMoments();
+                    b = std::max({b, std::abs(double(m.slope.x)), std::abs(double(m.slope.y))});
+                    mm = std::max({mm, double(M[0]), double(M[1])});
+                }
+                rowB[size_t(y)] = b;
+                rowM[size_t(y)] = mm;
+            });
+            for (int y = 0; y < level.height; ++y) {
+                maxB = std::max(maxB, rowB[size_t(y)]);
+                maxM = std::max(maxM, rowM[size_t(y)]);
+            }
+        }
         double minPower = options.basePower;
         if (options.authoredGloss)
             for (float g : *options.authoredGloss)
@@ -214,8 +228,20 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                         : tex.role == "clean"   ? Role::Clean
                                                 : Role::LeanGloss);
 
+    const bool needsLobe =
+        adjustedGloss || std::find(roles.begin(), roles.end(), Role::LeanGloss) != roles.end();
+    // Without a gloss map the stored gloss of the non-adjusting methods is the base power's at
+    // every texel: encoded once, with its clamp counts added per texel below.
+    const bool constantGloss = !adjustedGloss && !base;
+    const double glossMinPower = options.encoding.minPower(), glossMaxPower = options.encoding.maxPower();
+    const float baseGloss = unit(options.encoding.value(options.basePower));
     for (int k = 0; k < levels; ++k) {
         const PyramidLevel& level = pyramid.level(k);
+        if (constantGloss && std::find(roles.begin(), roles.end(), Role::Gloss) != roles.end()) {
+            const size_t texels = size_t(level.width) * size_t(level.height);
+            if (options.basePower < glossMinPower) out.stats.glossClampedLow += texels;
+            if (options.basePower > glossMaxPower) out.stats.glossClampedHigh += texels;
+        }
         for (auto& tex : out.textures) {
             auto& mip = tex.mips[size_t(k)];
             mip.width = level.width;
@@ -230,7 +256,9 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                 const size_t t = size_t(y) * size_t(level.width) + size_t(x);
                 const NormalMoments& m = row[x];
                 const double s = base ? base->power(k, x, y) : options.basePower;
-                const TexelLobe lobe = methodLobe(method, m, s, options.params);
+                // Only the adjusted gloss and compact LEAN read the lobe; the other roles store
+                // moments or the base power directly.
+                const TexelLobe lobe = needsLobe ? methodLobe(method, m, s, options.params) : TexelLobe{};
                 for (size_t r = 0; r < roles.size(); ++r) {
                     BakedTexture& tex = out.textures[r];
                     float* px = &tex.mips[size_t(k)].texels[t * size_t(tex.channels)];
@@ -242,9 +270,13 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                         break;
                     }
                     case Role::Gloss: {
+                        if (constantGloss) {
+                            px[0] = baseGloss; // the base power's gloss, encoded once above
+                            break;
+                        }
                         const double p = adjustedGloss ? lobe.power : s;
-                        if (p < options.encoding.minPower()) ++lowRow[size_t(y)];
-                        if (p > options.encoding.maxPower()) ++highRow[size_t(y)];
+                        if (p < glossMinPower) ++lowRow[size_t(y)];
+                        if (p > glossMaxPower) ++highRow[size_t(y)];
                         px[0] = unit(options.encoding.value(p));
                         break;
                     }

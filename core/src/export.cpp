@@ -485,6 +485,13 @@ Status writeOiio(const PlannedFile& file, size_t first, size_t last, const fs::p
     spec.alpha_channel = -1;
     spec.attribute("oiio:UnassociatedAlpha", 1);
     const bool exr = format == ExportFormat::ExrHalf || format == ExportFormat::ExrFloat;
+    if (format == ExportFormat::Png8 || format == ExportFormat::Png16) {
+        // libpng's default adaptive filter choice tries every filter on every row and costs more
+        // than zlib itself (4096² RGB16: 5.1 s); the fixed Sub filter at zlib level 3 writes the same
+        // pixels, losslessly and deterministically, in 0.7 s for files about 4% larger.
+        spec.attribute("png:filter", 16); // PNG_FILTER_SUB
+        spec.attribute("png:compressionLevel", 3);
+    }
     if (mipmapped) {
         // Both plugins take MIP levels only for "Plain Texture" files (what maketx writes).
         spec.attribute("textureformat", "Plain Texture");

@@ -34,6 +34,7 @@ GlossEncoding::GlossEncoding(GlossKind kind, double nMin, double nMax, std::stri
     : m_kind(kind)
     , m_nMin(nMin)
     , m_nMax(nMax)
+    , m_logRange(kind == GlossKind::LogPower ? std::log(nMax / nMin) : 0.0)
     , m_name(std::move(name))
     , m_formula(std::move(formula)) {}
 
@@ -122,7 +123,7 @@ double GlossEncoding::value(double n) const {
     n = std::clamp(clampPower(n), minPower(), maxPower());
     switch (m_kind) {
     case GlossKind::LogPower:
-        return clampUnit(std::log(n / m_nMin) / std::log(m_nMax / m_nMin));
+        return clampUnit(std::log(n / m_nMin) / m_logRange);
     case GlossKind::GgxRoughness:
         return clampUnit(std::sqrt(ggxAlphaFromPower(n)));
     case GlossKind::GgxAlpha:

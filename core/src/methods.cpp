@@ -85,8 +85,10 @@ double vmfKappa(double r) {
 TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, const MethodParams& params) {
     s = std::max(clampPower(s), kMinBasePower);
     TexelLobe lobe;
-    lobe.normal = moments.meanDirection();
-    const double lenNa = moments.lengthNa();
+    const bool slopeMethod = method == Method::Lean || method == Method::Clean;
+    // The slope methods take their normal from B (below) and never read |Na|: skip the square roots.
+    if (!slopeMethod) lobe.normal = moments.meanDirection();
+    const double lenNa = slopeMethod ? 1.0 : double(moments.lengthNa());
     switch (method) {
     case Method::Naive:
         lobe.power = s;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace burnish {
 
@@ -84,6 +85,182 @@ std::vector<int> childStarts(int childSize, int parentSize) {
     for (int x = 0; x <= parentSize; ++x)
         starts[size_t(x)] = static_cast<int>((static_cast<long long>(x) * childSize) / parentSize);
     return starts;
+}
+
+// The row filter: kernel-weighted moments of every texel of a row, from 2·radius + 1 rows of box
+// moments. Sums are taken about the centre texel's own mean normal and slope (shifted, "central"
+// sums: d = n_i − n_c), so the float sums hold the spread between neighbours, not 1 + spread:
+// a variance of 1e-9 between normals of length 1 keeps float's relative precision instead of
+// drowning in 1 − 1e-9. cov = Σw(C_i + d dᵀ)/W − d̄ d̄ᵀ then subtracts terms of the variance's
+// own size. Every texel's arithmetic is the same whatever the blocking or thread count.
+constexpr int kMaxTapRadius = 2; // the Gaussian's 5 taps
+
+// One row of box moments as structure-of-arrays floats, padded by the tap radius on both sides
+// (border-mapped) and by a SIMD width at the end, so the filter loads 4 texels at a time.
+struct SoaRow {
+    // 0–2 mean, 3–4 slope; levels above the finest also 5 weight (footprint count), 6–11 cov
+    // (xx yy zz xy xz yz), 12–14 slope cov (xx yy xy).
+    static constexpr int kFinestChannels = 5;
+    static constexpr int kChannels = 15;
+    std::vector<float> c[kChannels];
+    int width = 0;
+    int radius = 0;
+
+    void resize(int w, int r, bool withCov) {
+        width = w;
+        radius = r;
+        // 4 lanes past the last texel: the last SIMD group reads up to 3 texels beyond it.
+        const size_t padded = size_t(w) + 2 * size_t(r) + 4;
+        for (int i = 0; i < (withCov ? kChannels : kFinestChannels); ++i)
+            c[i].assign(padded, 0.0f);
+        // Lanes past the row see weight 1 and zero moments: finite, and discarded.
+        if (withCov) std::fill(c[5].begin(), c[5].end(), 1.0f);
+    }
+
+    void fillFinest(const NormalMap& map, int y, BorderMode border) {
+        for (int p = 0; p < width + 2 * radius; ++p) {
+            const glm::vec3& n = map.at(borderIndex(p - radius, width, border), y);
+            // The slope in double, rounded once: b = n.xy / max(n.z, kMinSlopeZ) as RawMoments has it.
+            const double zs = std::max(double(n.z), double(kMinSlopeZ));
+            c[0][size_t(p)] = n.x;
+            c[1][size_t(p)] = n.y;
+            c[2][size_t(p)] = n.z;
+            c[3][size_t(p)] = float(double(n.x) / zs);
+            c[4][size_t(p)] = float(double(n.y) / zs);
+        }
+    }
+
+    void fillLevel(const NormalPyramid& pyramid, int k, int y, BorderMode border) {
+        const PyramidLevel& l = pyramid.level(k);
+        for (int p = 0; p < width + 2 * radius; ++p) {
+            const int x = borderIndex(p - radius, width, border);
+            const NormalMoments& m = l.box[size_t(y) * size_t(width) + size_t(x)];
+            const size_t i = size_t(p);
+            c[0][i] = m.mean.x;
+            c[1][i] = m.mean.y;
+            c[2][i] = m.mean.z;
+            c[3][i] = m.slope.x;
+            c[4][i] = m.slope.y;
+            c[5][i] = float(pyramid.footprintCount(k, x, y));
+            for (int j = 0; j < 6; ++j)
+                c[6 + j][i] = m.cov[size_t(j)];
+            for (int j = 0; j < 3; ++j)
+                c[12 + j][i] = m.slopeCov[size_t(j)];
+        }
+    }
+};
+
+// Four floats in one SSE register (GCC/Clang vector extension; element-wise IEEE arithmetic, so
+// the results equal the scalar ones lane by lane).
+using Float4 = float __attribute__((vector_size(16)));
+
+Float4 load4(const float* p) {
+    Float4 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+
+Float4 splat4(float f) {
+    return Float4{f, f, f, f};
+}
+
+// max(v, 0) lane by lane; a NaN lane gives 0.
+Float4 max04(Float4 v) {
+    return v > 0.0f ? v : Float4{};
+}
+
+void filterRow(const SoaRow* const* rows, const KernelTaps& taps, int width, bool withCov,
+               NormalMoments* out) {
+    const int r = taps.radius;
+    const int n = 2 * r + 1;
+    float w[2 * kMaxTapRadius + 1][2 * kMaxTapRadius + 1];
+    float wSum = 0.0f;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            w[j][i] = float(taps.w[j] * taps.w[i]);
+            wSum += w[j][i];
+        }
+    const SoaRow& centre = *rows[r];
+    for (int x0 = 0; x0 < width; x0 += 4) {
+        const size_t o = size_t(x0) + size_t(r); // padded index of texel x0
+        const Float4 rx = load4(&centre.c[0][o]), ry = load4(&centre.c[1][o]), rz = load4(&centre.c[2][o]);
+        const Float4 qx = load4(&centre.c[3][o]), qy = load4(&centre.c[4][o]);
+        // Normals: W, S1 = Σw d, S2 = Σw (C + d dᵀ) with d = mean − r.
+        Float4 W = splat4(wSum), s1x{}, s1y{}, s1z{}, sxx{}, syy{}, szz{}, sxy{}, sxz{}, syz{};
+        if (withCov) W = Float4{};
+        for (int j = 0; j < n; ++j) {
+            const SoaRow& row = *rows[j];
+            for (int i = 0; i < n; ++i) {
+                const size_t p = size_t(x0) + size_t(i);
+                Float4 wc = splat4(w[j][i]);
+                if (withCov) {
+                    wc *= load4(&row.c[5][p]);
+                    W += wc;
+                    sxx += wc * load4(&row.c[6][p]);
+                    syy += wc * load4(&row.c[7][p]);
+                    szz += wc * load4(&row.c[8][p]);
+                    sxy += wc * load4(&row.c[9][p]);
+                    sxz += wc * load4(&row.c[10][p]);
+                    syz += wc * load4(&row.c[11][p]);
+                }
+                const Float4 dx = load4(&row.c[0][p]) - rx, dy = load4(&row.c[1][p]) - ry,
+                             dz = load4(&row.c[2][p]) - rz;
+                const Float4 wdx = wc * dx, wdy = wc * dy, wdz = wc * dz;
+                s1x += wdx;
+                s1y += wdy;
+                s1z += wdz;
+                sxx += wdx * dx;
+                syy += wdy * dy;
+                szz += wdz * dz;
+                sxy += wdx * dy;
+                sxz += wdx * dz;
+                syz += wdy * dz;
+            }
+        }
+        // Slopes: T1 = Σw e, T2 = Σw (C_b + e eᵀ) with e = slope − q.
+        Float4 t1x{}, t1y{}, txx{}, tyy{}, txy{};
+        for (int j = 0; j < n; ++j) {
+            const SoaRow& row = *rows[j];
+            for (int i = 0; i < n; ++i) {
+                const size_t p = size_t(x0) + size_t(i);
+                Float4 wc = splat4(w[j][i]);
+                if (withCov) {
+                    wc *= load4(&row.c[5][p]);
+                    txx += wc * load4(&row.c[12][p]);
+                    tyy += wc * load4(&row.c[13][p]);
+                    txy += wc * load4(&row.c[14][p]);
+                }
+                const Float4 ex = load4(&row.c[3][p]) - qx, ey = load4(&row.c[4][p]) - qy;
+                const Float4 wex = wc * ex, wey = wc * ey;
+                t1x += wex;
+                t1y += wey;
+                txx += wex * ex;
+                tyy += wey * ey;
+                txy += wex * ey;
+            }
+        }
+        // W > 0: every weight and footprint count is positive.
+        const Float4 inv = 1.0f / W;
+        const Float4 mx = s1x * inv, my = s1y * inv, mz = s1z * inv, bx = t1x * inv, by = t1y * inv;
+        const Float4 mean[3] = {rx + mx, ry + my, rz + mz};
+        const Float4 slope[2] = {qx + bx, qy + by};
+        // Variances are clamped at 0 against rounding; covariances are left signed.
+        const Float4 cov[6] = {max04(sxx * inv - mx * mx), max04(syy * inv - my * my),
+                               max04(szz * inv - mz * mz), sxy * inv - mx * my,
+                               sxz * inv - mx * mz,        syz * inv - my * mz};
+        const Float4 slopeCov[3] = {max04(txx * inv - bx * bx), max04(tyy * inv - by * by),
+                                    txy * inv - bx * by};
+        const int lanes = std::min(4, width - x0);
+        for (int lane = 0; lane < lanes; ++lane) {
+            NormalMoments& m = out[x0 + lane];
+            m.mean = glm::vec3(mean[0][lane], mean[1][lane], mean[2][lane]);
+            m.slope = glm::vec2(slope[0][lane], slope[1][lane]);
+            for (int c = 0; c < 6; ++c)
+                m.cov[size_t(c)] = cov[c][lane];
+            for (int c = 0; c < 3; ++c)
+                m.slopeCov[size_t(c)] = slopeCov[c][lane];
+        }
+    }
 }
 
 } // namespace
@@ -243,8 +420,10 @@ void NormalPyramid::forEachMomentRow(int k,
     const PyramidLevel& l = level(k);
     const int width = l.width;
     const KernelTaps taps = kernelTaps(m_options.kernel);
-    // Blocks of rows: each block filters its rows plus a halo of `radius` rows horizontally once.
-    constexpr int kBlockRows = 16;
+    const BorderMode border = m_options.border;
+    // Blocks of rows: each block converts its rows plus a halo of `radius` rows once, into a
+    // rolling window of 2·radius + 1 rows, so the halo costs 2·radius/kBlockRows of the work.
+    constexpr int kBlockRows = 32;
     const int blocks = (l.height + kBlockRows - 1) / kBlockRows;
     tbb::parallel_for(0, blocks, [&](int block) {
         const int y0 = block * kBlockRows;
@@ -259,43 +438,28 @@ void NormalPyramid::forEachMomentRow(int k,
             return;
         }
         const int r = taps.radius;
-        const int rows = (y1 - y0) + 2 * r;
-        // Horizontally filtered raw sums of rows y0−r .. y1+r−1 (border-mapped).
-        std::vector<RawMoments> horizontal(size_t(rows) * size_t(width));
-        std::vector<RawMoments> single(static_cast<size_t>(width));
-        for (int j = 0; j < rows; ++j) {
-            const int yy = borderIndex(y0 - r + j, l.height, m_options.border);
-            for (int x = 0; x < width; ++x) {
-                RawMoments m;
-                if (k == 0)
-                    m.addNormal(m_map->at(x, yy), 1.0);
-                else
-                    m.add(l.box[size_t(yy) * size_t(width) + size_t(x)], double(footprintCount(k, x, yy)));
-                single[size_t(x)] = m;
-            }
-            RawMoments* h = &horizontal[size_t(j) * size_t(width)];
-            for (int x = 0; x < width; ++x) {
-                RawMoments sum;
-                for (int i = -r; i <= r; ++i) {
-                    const RawMoments& s = single[size_t(borderIndex(x + i, width, m_options.border))];
-                    const double w = taps.w[i + r];
-                    for (int c = 0; c < 15; ++c)
-                        sum.v[c] += w * s.v[c];
-                }
-                h[x] = sum;
-            }
-        }
+        const int window = 2 * r + 1;
+        const bool finest = k == 0;
+        std::vector<SoaRow> rows(static_cast<size_t>(window));
+        for (auto& row : rows)
+            row.resize(width, r, !finest);
+        auto fill = [&](int yy) {
+            // Row yy (border-mapped) of the level goes to slot (yy + window) mod window; yy >= −r.
+            SoaRow& row = rows[size_t((yy + window) % window)];
+            const int ym = borderIndex(yy, l.height, border);
+            if (finest)
+                row.fillFinest(*m_map, ym, border);
+            else
+                row.fillLevel(*this, k, ym, border);
+        };
+        for (int yy = y0 - r; yy < y0 + r; ++yy)
+            fill(yy);
         for (int y = y0; y < y1; ++y) {
-            for (int x = 0; x < width; ++x) {
-                RawMoments sum;
-                for (int j = -r; j <= r; ++j) {
-                    const RawMoments& h = horizontal[size_t(y - y0 + r + j) * size_t(width) + size_t(x)];
-                    const double w = taps.w[j + r];
-                    for (int c = 0; c < 15; ++c)
-                        sum.v[c] += w * h.v[c];
-                }
-                out[size_t(x)] = sum.toMoments();
-            }
+            fill(y + r);
+            const SoaRow* inputs[2 * kMaxTapRadius + 1] = {};
+            for (int j = 0; j < window; ++j)
+                inputs[j] = &rows[size_t((y - r + j + window) % window)];
+            filterRow(inputs, taps, width, !finest, out.data());
             fn(y, out.data());
         }
     });

@@ -141,6 +141,30 @@ TEST(NormalPyramid, TinyVarianceSurvivesBesideAUnitMean) {
     EXPECT_NEAR(v, double(a) * a, 0.05 * double(a) * a);
 }
 
+TEST(NormalPyramid, RowFilterKeepsTinyVariancesBesideATiltedMean) {
+    // forEachMomentRow sums in float about each texel's own normal; a tent-filtered variance of
+    // ~1e-9 next to |Na| = 1 (tilted 0.5 rad, so no component is 0) must keep ~1e-6 relative
+    // accuracy against the double-precision per-texel path. A float sum of raw moments would
+    // lose it entirely (float resolves 1 − 1e-9 as 1).
+    constexpr double kTinyRelativeTolerance = 1e-4;
+    std::mt19937 rng(7);
+    std::normal_distribution<double> g(0.0, 3e-5);
+    std::vector<glm::vec3> n(64 * 32);
+    for (auto& v : n)
+        v = glm::vec3(glm::normalize(glm::dvec3(std::sin(0.5) + g(rng), g(rng), std::cos(0.5))));
+    const auto pyramid =
+        NormalPyramid::build(shared(makeNormalMap(64, 32, n)), {BorderMode::Wrap, FilterKernel::Tent});
+    pyramid.forEachMomentRow(0, [&](int y, const NormalMoments* row) {
+        for (int x = 0; x < 64; ++x) {
+            const NormalMoments d = pyramid.moments(0, x, y);
+            ASSERT_GT(d.projectedVariance(), 1e-10f);
+            EXPECT_NEAR(row[x].projectedVariance(), d.projectedVariance(),
+                        kTinyRelativeTolerance * d.projectedVariance());
+            EXPECT_NEAR(row[x].slopeCov[0], d.slopeCov[0], kTinyRelativeTolerance * d.slopeCov[0]);
+        }
+    });
+}
+
 TEST(NormalPyramid, FlatMapHasZeroVarianceAtEveryLevelAndKernel) {
     for (auto kernel : {FilterKernel::Box, FilterKernel::Tent, FilterKernel::Gaussian}) {
         auto pyramid = NormalPyramid::build(

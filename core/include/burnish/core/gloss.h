@@ -69,6 +69,7 @@ private:
     GlossKind m_kind;
     double m_nMin;
     double m_nMax;
+    double m_logRange; // log(nMax/nMin), computed once: value() runs per texel in the bake
     std::string m_name;
     std::string m_formula;
 };

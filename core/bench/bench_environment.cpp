@@ -72,4 +72,27 @@ BENCHMARK(BM_Prefilter256FullChain)
     ->UseRealTime()
     ->Iterations(1);
 
+// What the studio does on the fly: the procedural studio at face size range(0) (64 or 128), the full
+// chain with the default options, Phong (range(1) = 0) or Blinn-Phong (1). The cube is built once.
+void BM_PrefilterStudio(benchmark::State& state) {
+    const auto source = proceduralStudioEnvironment(int(state.range(0)));
+    if (!source) {
+        state.SkipWithError(source.error().c_str());
+        return;
+    }
+    PrefilterOptions o;
+    o.lobe = state.range(1) == 0 ? LobeModel::Phong : LobeModel::BlinnPhong;
+    for (auto _ : state) {
+        auto p = prefilterRadiance(*source, o);
+        benchmark::DoNotOptimize(p);
+    }
+}
+BENCHMARK(BM_PrefilterStudio)
+    ->Args({64, 0})
+    ->Args({64, 1})
+    ->Args({128, 0})
+    ->Args({128, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 } // namespace

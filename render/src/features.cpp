@@ -32,9 +32,12 @@ const char* const kVisibilityDefines[] = {"VISIBILITY_NONE",           "VISIBILI
                                           "VISIBILITY_SMITH_BECKMANN", "VISIBILITY_SMITH_GGX_CORRELATED"};
 const char* const kSpecularAaDefines[] = {"SPECULAR_AA_NONE", "SPECULAR_AA_KAPLANYAN_VALIENT",
                                           "SPECULAR_AA_TOKUYOSHI_KAPLANYAN"};
-const char* const kDebugDefines[] = {"DEBUG_NONE",          "DEBUG_LIGHTING_ONLY", "DEBUG_DIFFUSE_ONLY",
-                                     "DEBUG_SPECULAR_ONLY", "DEBUG_POWER",         "DEBUG_NORMALS",
-                                     "DEBUG_MIP_LEVEL",     "DEBUG_VARIANCE",      "DEBUG_ERROR_HEATMAP"};
+// In EnvironmentKind's order; material.frag includes env_lighting.glsl only for the last two.
+const char* const kEnvironmentDefines[] = {"ENVIRONMENT_OFF", "ENVIRONMENT_CONSTANT_AMBIENT",
+                                           "ENVIRONMENT_PREFILTERED", "ENVIRONMENT_FIS"};
+const char* const kDebugDefines[] = {
+    "DEBUG_NONE",    "DEBUG_LIGHTING_ONLY", "DEBUG_DIFFUSE_ONLY", "DEBUG_SPECULAR_ONLY", "DEBUG_POWER",
+    "DEBUG_NORMALS", "DEBUG_MIP_LEVEL",     "DEBUG_VARIANCE",     "DEBUG_ERROR_HEATMAP", "DEBUG_UV"};
 
 const char* methodDefine(Method method) {
     for (const auto& [name, m] : kMethodDefines)
@@ -53,6 +56,7 @@ void addConstantTables(ShaderDefines& out) {
     addConstants(out, kVisibilityDefines);
     addConstants(out, kSpecularAaDefines);
     addConstants(out, kDebugDefines);
+    addConstants(out, kEnvironmentDefines);
 }
 
 void flag(ShaderDefines& out, const char* name, bool on) {
@@ -79,6 +83,8 @@ std::string glTypeName(GLenum type) {
         return "mat4";
     case GL_SAMPLER_2D:
         return "sampler2D";
+    case GL_SAMPLER_CUBE:
+        return "samplerCube";
     default:
         return "type 0x" + [&] {
             std::ostringstream s;
@@ -105,7 +111,17 @@ std::string_view meshKindName(MeshKind kind) {
 }
 
 std::string_view environmentName(EnvironmentKind kind) {
-    return kind == EnvironmentKind::ConstantAmbient ? "constant ambient" : "off";
+    switch (kind) {
+    case EnvironmentKind::Off:
+        return "off";
+    case EnvironmentKind::ConstantAmbient:
+        return "constant ambient";
+    case EnvironmentKind::Prefiltered:
+        return "prefiltered";
+    case EnvironmentKind::FilteredImportanceSampling:
+        return "filtered importance sampling";
+    }
+    return "off";
 }
 
 std::string_view ndfTermName(NdfTerm term) {
@@ -184,6 +200,8 @@ std::string_view debugViewName(DebugView view) {
         return "variance";
     case DebugView::ErrorHeatmap:
         return "error-heatmap";
+    case DebugView::Uv:
+        return "uv";
     }
     return "none";
 }
@@ -199,6 +217,7 @@ ShaderDefines defines(const FeatureSet& f) {
     out.emplace_back("SPECULAR_AA",
                      kSpecularAaDefines[int(f.referenceMode ? SpecularAa::None : f.specularAa)]);
     out.emplace_back("DEBUG_VIEW", kDebugDefines[int(f.debugView)]);
+    out.emplace_back("ENVIRONMENT", kEnvironmentDefines[int(f.environment)]);
     const int lights = std::clamp(f.pointLights, 0, kMaxPointLights);
     if (lights > 0) out.emplace_back("POINT_LIGHTS", std::to_string(lights));
     flag(out, "HAS_AMBIENT", f.environment == EnvironmentKind::ConstantAmbient);

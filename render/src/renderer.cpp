@@ -2,6 +2,9 @@
 
 #include <burnish/core/bake.h>
 #include <burnish/core/detail.h>
+#include <burnish/core/env_sampling.h>
+#include <burnish/core/sh.h>
+#include <burnish/render/cubemap.h>
 #include <burnish/render/gpu_resources.h>
 #include <burnish/render/mesh.h>
 
@@ -12,6 +15,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <optional>
 
@@ -31,6 +35,7 @@ enum TextureUnit : int {
     kUnitClean = 5,
     kUnitDetail = 6,
     kUnitSpecular = 7,
+    kUnitEnvironment = 8,
 };
 
 // Largest reference sample count: 4096 passes already take minutes on a software rasterizer.
@@ -89,6 +94,53 @@ int glossKindIndex(const GlossEncoding& encoding) {
     return int(encoding.kind());
 }
 
+// What an environment's source cube depends on; the shared_ptr keeps a Cube source's identity alive.
+struct EnvironmentSourceKey {
+    EnvironmentSourceKind kind = EnvironmentSourceKind::ProceduralStudio;
+    std::filesystem::path path;
+    std::shared_ptr<const CubeMap> cube;
+    int faceSize = 0;
+
+    bool operator==(const EnvironmentSourceKey&) const = default;
+};
+
+EnvironmentSourceKey environmentSourceKey(const EnvironmentMap& e) {
+    EnvironmentSourceKey key{e.source, {}, {}, e.faceSize};
+    if (e.source == EnvironmentSourceKind::File) key.path = e.path;
+    if (e.source == EnvironmentSourceKind::Cube) {
+        key.cube = e.cube;
+        key.faceSize = 0; // the cube sets its own size
+    }
+    return key;
+}
+
+// What the prefiltered cube depends on beyond its source: the lobe and the power per mip.
+std::string prefilterKey(const EnvironmentMap& e, const GlossEncoding& encoding) {
+    auto exact = [](double v) {
+        char text[32];
+        std::snprintf(text, sizeof(text), "%.17g", v); // round-trips a double: equal keys, equal values
+        return std::string(text);
+    };
+    std::string key = std::string(lobeModelName(e.lobe)) + "/cut:" + exact(e.lobeCutoff) + "/";
+    if (e.mipsFollowGloss) return key + "encoding:" + encoding.name();
+    return key + "drop:" + exact(e.topPower) + ":" + exact(e.powerDrop);
+}
+
+// Radiance above this would let the SH sums and the shader's float arithmetic overflow; it is 10^4
+// times a bright sun (1e5). NaN and negative texels carry no light.
+constexpr float kMaxSourceRadiance = 1e9f;
+
+void sanitizeRadiance(CubeMap& cube) {
+    for (CubeLevel& level : cube.levels)
+        for (auto& face : level.faces)
+            for (float& v : face)
+                v = v > 0.0f ? std::min(v, kMaxSourceRadiance) : 0.0f;
+}
+
+bool usesEnvironmentMap(EnvironmentKind kind) {
+    return kind == EnvironmentKind::Prefiltered || kind == EnvironmentKind::FilteredImportanceSampling;
+}
+
 } // namespace
 
 void haltonPoint(int index, float& x, float& y) {
@@ -137,6 +189,17 @@ struct Renderer::Impl {
     std::shared_ptr<const SpecularColorMap> specularFor;
     std::optional<Texture2D> specular;
 
+    // Environment: the source cube (level 0) and its SH9, the prefiltered cube (PMREM) and the
+    // box-filtered chain FIS reads, each remade only when what it depends on changes.
+    std::optional<EnvironmentSourceKey> envSourceKey;
+    CubeMap envSource;
+    Sh9 envSh;
+    std::string envPrefilterKey;
+    std::optional<CubeMapTexture> envPrefiltered;
+    std::optional<CubeMapTexture> envChain;
+    int prefilters = 0;
+    double lastEnvironmentMs = 0.0;
+
     std::optional<Framebuffer> hdr;
     std::optional<Framebuffer> accumulation;
     std::optional<Framebuffer> heatmapReference;
@@ -146,6 +209,8 @@ struct Renderer::Impl {
     Status prepareMesh();
     Status prepareBake();
     Status prepareMaps();
+    Status prepareEnvironment(EnvironmentKind kind);
+    void setEnvironmentUniforms(const Program& p, const FeatureSet& f);
     Result<const Program*> materialProgram(const FeatureSet& f);
     void setMaterialUniforms(const Program& p, const FeatureSet& f, int width, int height,
                              glm::vec2 jitterNdc, bool reference);
@@ -267,6 +332,100 @@ Status Renderer::Impl::prepareMaps() {
     return {};
 }
 
+Status Renderer::Impl::prepareEnvironment(EnvironmentKind kind) {
+    if (!usesEnvironmentMap(kind)) return {};
+    const EnvironmentMap& e = scene.environmentMap;
+    const auto start = Clock::now();
+    const EnvironmentSourceKey key = environmentSourceKey(e);
+    if (!(envSourceKey && *envSourceKey == key)) {
+        CubeMap source;
+        switch (e.source) {
+        case EnvironmentSourceKind::ProceduralStudio: {
+            auto studio = proceduralStudioEnvironment(e.faceSize);
+            if (!studio) return Error{"environment: " + studio.error()};
+            source = std::move(studio).value();
+            break;
+        }
+        case EnvironmentSourceKind::File: {
+            auto loaded = loadEquirectEnvironment(e.path, e.faceSize);
+            if (!loaded) return Error{"environment '" + e.path.string() + "': " + loaded.error()};
+            source = std::move(loaded->cube);
+            break;
+        }
+        case EnvironmentSourceKind::Cube:
+            if (!e.cube || e.cube->levels.empty() || !isPowerOfTwo(e.cube->faceSize()))
+                return Error{"environment: the cube is empty or its face size is not a power of two"};
+            source.levels.push_back(e.cube->levels[0]);
+            break;
+        }
+        sanitizeRadiance(source);
+        envSource = std::move(source);
+        envSh = projectSh9(envSource);
+        envSourceKey = key;
+        envPrefilterKey.clear();
+        envPrefiltered.reset();
+        envChain.reset();
+    }
+    if (kind == EnvironmentKind::Prefiltered) {
+        const std::string pkey = prefilterKey(e, scene.material.glossEncoding);
+        if (!envPrefiltered || envPrefilterKey != pkey) {
+            PrefilterOptions options;
+            options.lobe = e.lobe;
+            options.topPower = e.topPower;
+            options.powerDrop = e.powerDrop;
+            options.lobeCutoff = e.lobeCutoff;
+            if (e.mipsFollowGloss) options.encoding = scene.material.glossEncoding;
+            auto filtered = prefilterRadiance(envSource, options);
+            if (!filtered) return Error{"environment prefilter: " + filtered.error()};
+            auto texture = CubeMapTexture::create(filtered->radiance);
+            if (!texture) return Error{"environment: " + texture.error()};
+            envPrefiltered.emplace(std::move(texture).value());
+            envPrefilterKey = pkey;
+            ++prefilters;
+        }
+    } else if (!envChain) {
+        CubeMap chain = envSource;
+        buildBoxMips(chain);
+        auto texture = CubeMapTexture::create(chain);
+        if (!texture) return Error{"environment: " + texture.error()};
+        envChain.emplace(std::move(texture).value());
+    }
+    lastEnvironmentMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return {};
+}
+
+void Renderer::Impl::setEnvironmentUniforms(const Program& p, const FeatureSet& f) {
+    // Always: an unset samplerCube stays on unit 0 beside the normal map's sampler2D, and two sampler
+    // types on one unit fail the draw (the ubershader declares it even without an environment).
+    p.set("uEnvironment", int(kUnitEnvironment));
+    p.set("uEnvironmentKind", int(f.environment));
+    if (!usesEnvironmentMap(f.environment)) return;
+    const CubeMapTexture* cube = f.environment == EnvironmentKind::Prefiltered
+                                     ? (envPrefiltered ? &*envPrefiltered : nullptr)
+                                     : (envChain ? &*envChain : nullptr);
+    if (!cube) return;
+    const EnvironmentMap& e = scene.environmentMap;
+    const MaterialSettings& m = scene.material;
+    cube->bind(kUnitEnvironment);
+    p.set("uEnvironmentMips", float(cube->mipCount()));
+    p.set("uEnvironmentFaceSize", float(cube->faceSize()));
+    // World → environment: the inverse of turning the environment by +rotation about +y.
+    p.set("uEnvironmentRotation", glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(-e.rotationDegrees),
+                                                        glm::vec3(0.0f, 1.0f, 0.0f))));
+    // Negative or non-finite intensities would put negative or NaN radiance into the image.
+    p.set("uEnvironmentIntensity", std::isfinite(e.intensity) ? std::max(e.intensity, 0.0f) : 0.0f);
+    for (size_t k = 0; k < envSh.coefficients.size(); ++k)
+        p.set(("uEnvironmentSh[" + std::to_string(k) + "]").c_str(), glm::vec3(envSh.coefficients[k]));
+    p.set("uEnvironmentLobe", int(e.lobe));
+    p.set("uEnvironmentMipRule", e.mipsFollowGloss ? 1 : 0);
+    p.set("uEnvironmentTopPower", float(e.topPower));
+    p.set("uEnvironmentPowerDrop", float(e.powerDrop));
+    p.set("uEnvironmentGlossKind", glossKindIndex(m.glossEncoding));
+    p.set("uEnvironmentGlossMinPower", float(m.glossEncoding.minPower()));
+    p.set("uEnvironmentGlossMaxPower", float(m.glossEncoding.maxPower()));
+    p.set("uEnvironmentSamples", std::clamp(e.fisSamples, 1, int(kMaxFisSamples)));
+}
+
 Result<const Program*> Renderer::Impl::materialProgram(const FeatureSet& f) {
     // The reference is always specialized: the ubershader has no reference mode.
     if (useUbershader && !f.referenceMode)
@@ -368,6 +527,7 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
     p.set("uHasSpecularMap", int(f.specularTexture));
     p.set("uHasDiffuse", int(!f.metalOnly));
     p.set("uHasDiffuseAa", int(f.diffuseAa));
+    setEnvironmentUniforms(p, f);
 }
 
 Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int width, int height,
@@ -426,9 +586,24 @@ Status Renderer::Impl::drawHdr(int width, int height) {
     return {};
 }
 
-Status Renderer::Impl::displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView) {
+namespace {
+
+// Binds the target for its final pass, with its scissor rectangle when it has one.
+void bindTarget(const RenderTarget& target) {
     glBindFramebuffer(GL_FRAMEBUFFER, target.framebuffer);
     glViewport(0, 0, target.width, target.height);
+    if (target.hasScissor()) {
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(target.scissorX, target.scissorY, target.scissorWidth, target.scissorHeight);
+    } else {
+        glDisable(GL_SCISSOR_TEST);
+    }
+}
+
+} // namespace
+
+Status Renderer::Impl::displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView) {
+    bindTarget(target);
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_BLEND);
     glActiveTexture(GL_TEXTURE0);
@@ -444,6 +619,7 @@ Status Renderer::Impl::displayPass(const RenderTarget& target, const Framebuffer
         tonemap->set("uExposure", std::exp2(scene.exposure));
     }
     fullscreen->draw();
+    glDisable(GL_SCISSOR_TEST);
     return {};
 }
 
@@ -482,6 +658,7 @@ Status Renderer::setScene(const Scene& scene) {
     if (auto s = impl.prepareBake(); !s) return fail(s);
     if (auto s = impl.prepareMaps(); !s) return fail(s);
     const FeatureSet f = scene.features();
+    if (auto s = impl.prepareEnvironment(f.environment); !s) return fail(s);
     auto program = impl.materialProgram(f);
     if (!program) return fail(Error{program.error()});
     impl.features = f;
@@ -502,6 +679,8 @@ Status Renderer::render(const RenderTarget& target) {
     Impl& impl = *m_impl;
     if (!impl.hasScene) return Error{"no scene to render"};
     const auto start = Clock::now();
+    // A host context (the studio's) may leave a scissor on: the off-screen passes draw everything.
+    glDisable(GL_SCISSOR_TEST);
     if (auto s = impl.drawHdr(target.width, target.height); !s) return s;
     const DebugView view = impl.features.debugView;
     if (view == DebugView::ErrorHeatmap) {
@@ -523,8 +702,7 @@ Status Renderer::render(const RenderTarget& target) {
             impl.heatmapReferenceValid = true;
             if (auto s = impl.drawHdr(target.width, target.height); !s) return s;
         }
-        glBindFramebuffer(GL_FRAMEBUFFER, target.framebuffer);
-        glViewport(0, 0, target.width, target.height);
+        bindTarget(target);
         glDisable(GL_DEPTH_TEST);
         glDisable(GL_BLEND);
         glActiveTexture(GL_TEXTURE0);
@@ -536,10 +714,12 @@ Status Renderer::render(const RenderTarget& target) {
         impl.heatmap->set("uReference", 1);
         impl.heatmap->set("uFullScale", impl.scene.heatmapFullScale);
         impl.fullscreen->draw();
+        glDisable(GL_SCISSOR_TEST);
         glActiveTexture(GL_TEXTURE0);
     } else {
         const bool dataView = view == DebugView::Power || view == DebugView::Normals ||
-                              view == DebugView::MipLevel || view == DebugView::Variance;
+                              view == DebugView::MipLevel || view == DebugView::Variance ||
+                              view == DebugView::Uv;
         if (auto s = impl.displayPass(target, *impl.hdr, dataView); !s) return s;
     }
     glFinish();
@@ -578,6 +758,20 @@ Result<std::vector<float>> Renderer::renderReference(int width, int height, int 
     return fb->readRgbaFloat();
 }
 
+Status Renderer::renderReference(const RenderTarget& target, int samplesPerPixel) {
+    Impl& impl = *m_impl;
+    if (!impl.hasScene) return Error{"no scene to render"};
+    if (samplesPerPixel < 1 || samplesPerPixel > kMaxReferenceSamples)
+        return Error{"reference samples per pixel must lie in 1.." + std::to_string(kMaxReferenceSamples)};
+    const auto start = Clock::now();
+    glDisable(GL_SCISSOR_TEST);
+    if (auto s = impl.accumulateReference(target.width, target.height, samplesPerPixel); !s) return s;
+    if (auto s = impl.displayPass(target, *impl.accumulation, false); !s) return s;
+    glFinish();
+    impl.lastMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return {};
+}
+
 double Renderer::lastFrameMs() const {
     return m_impl->lastMs;
 }
@@ -597,6 +791,14 @@ const Program* Renderer::program() const {
 
 int Renderer::bakeCount() const {
     return m_impl->bakes;
+}
+
+int Renderer::prefilterCount() const {
+    return m_impl->prefilters;
+}
+
+double Renderer::lastEnvironmentMs() const {
+    return m_impl->lastEnvironmentMs;
 }
 
 ProgramCache& Renderer::programCache() {

@@ -24,6 +24,7 @@
 #define VISIBILITY (-1)
 #define SPECULAR_AA (-1)
 #define DEBUG_VIEW (-1)
+#define ENVIRONMENT (-1)
 uniform int uMethod;
 uniform int uNdf;
 uniform int uFresnel;
@@ -38,12 +39,14 @@ uniform bool uHasGlossMap;
 uniform bool uHasSpecularMap;
 uniform bool uHasDiffuse;
 uniform bool uHasDiffuseAa;
+uniform int uEnvironmentKind; // int(EnvironmentKind)
 #define IS_METHOD(m) (uMethod == (m))
 #define IS_NDF(m) (uNdf == (m))
 #define IS_FRESNEL(m) (uFresnel == (m))
 #define IS_VISIBILITY(m) (uVisibility == (m))
 #define IS_SPECULAR_AA(m) (uSpecularAa == (m))
 #define IS_DEBUG(m) (uDebugView == (m))
+#define IS_ENVIRONMENT(m) (uEnvironmentKind == (m))
 #define UBER_ON(flag) (flag)
 #else
 #define IS_METHOD(m) (METHOD == (m))
@@ -52,7 +55,14 @@ uniform bool uHasDiffuseAa;
 #define IS_VISIBILITY(m) (VISIBILITY == (m))
 #define IS_SPECULAR_AA(m) (SPECULAR_AA == (m))
 #define IS_DEBUG(m) (DEBUG_VIEW == (m))
+#define IS_ENVIRONMENT(m) (ENVIRONMENT == (m))
 #define UBER_ON(flag) true
+#endif
+
+// The environment's code, uniforms and sampler exist only in the programs that light with it.
+#if ENVIRONMENT == ENVIRONMENT_PREFILTERED || ENVIRONMENT == ENVIRONMENT_FIS || UBERSHADER
+#define HAS_ENVIRONMENT_MAP 1
+#include "env_lighting.glsl"
 #endif
 
 in vec3 vWorldPosition;
@@ -446,6 +456,40 @@ void main() {
 #endif
     }
 #endif
+#if defined(HAS_ENVIRONMENT_MAP)
+    if (IS_ENVIRONMENT(ENVIRONMENT_PREFILTERED) || IS_ENVIRONMENT(ENVIRONMENT_FIS)) {
+        // Lazarov 2011: the environment's specular is F_glossy × the lobe's mean radiance about R
+        // (the value a prefiltered map stores), FRESNEL_NONE keeping F0 as for the lights.
+        float NoV = saturate(dot(N, V));
+        vec3 Fenv = IS_FRESNEL(FRESNEL_NONE) ? F0 : fresnelGlossy(F0, NoV, environmentFresnelGloss(lobe.power));
+        vec3 Ls;
+        if (IS_ENVIRONMENT(ENVIRONMENT_FIS)) {
+            SpecularLobe sl;
+            sl.power = lobe.power;
+            sl.mean = lobe.B;
+            sl.cov = lobe.cov;
+            vec3 Tf, Bf;
+            if (lobe.slope) {
+                // The slope Gaussian lives in the surface's tangent frame about the geometric normal.
+                sl.distribution = SAMPLE_LEAN;
+                Ls = environmentFis(Ng, V, T, Bt, sl);
+            } else {
+                sl.distribution = IS_NDF(NDF_BECKMANN) ? SAMPLE_BECKMANN
+                                  : IS_NDF(NDF_GGX)    ? SAMPLE_GGX
+                                                       : SAMPLE_BLINN_PHONG;
+                tangentFrame(N, Tf, Bf);
+                Ls = environmentFis(N, V, Tf, Bf, sl);
+            }
+        } else {
+            Ls = environmentPrefiltered(reflect(-V, N), lobe.power);
+        }
+        sh.specular += Fenv * Ls;
+#if defined(HAS_DIFFUSE)
+        // Lagarde 2012: the diffuse shows albedo·E/π of the SH irradiance; the specular's share is not diffused.
+        if (UBER_ON(uHasDiffuse)) sh.diffuse += albedo * (vec3(1.0) - Fenv) * environmentDiffuse(N);
+#endif
+    }
+#endif
 
     vec3 color = sh.diffuse + sh.specular;
     if (IS_DEBUG(DEBUG_DIFFUSE_ONLY)) color = sh.diffuse;
@@ -453,6 +497,9 @@ void main() {
     // log2 of the power over the log2 of kMaxPower's decade range (≈ 30), grey.
     if (IS_DEBUG(DEBUG_POWER)) color = vec3(saturate(log2(max(lobe.power, 1.0)) / log2(kMaxPower)));
     if (IS_DEBUG(DEBUG_NORMALS)) color = N * 0.5 + 0.5;
+    // The wrapped texture coordinate the texel lookups use, and b = 1 where the object covers the pixel
+    // (the cleared background is 0): the studio's picking reads this back unclamped.
+    if (IS_DEBUG(DEBUG_UV)) color = vec3(fract(vUv), 1.0);
     if (IS_DEBUG(DEBUG_VARIANCE)) {
         // Variance 1/p from kMinVariance (1e-9) to 1, as a ramp over its nine decades.
         float v = lobe.slope ? 0.5 * (lobe.cov.x + lobe.cov.y) : 1.0 / max(lobe.power, kMinVariance);

@@ -15,7 +15,10 @@ namespace burnish::render {
 class Program;
 
 enum class MeshKind { Sphere, Plane, Torus, Obj };
-enum class EnvironmentKind { Off, ConstantAmbient };
+/// The environment's lighting: none, a constant radiance, the prefiltered radiance cube with SH9
+/// irradiance (the mip read from the lobe's power), or filtered importance sampling of the
+/// box-filtered source chain at shading time (Scene::environmentMap.fisSamples taps) with SH9 irradiance.
+enum class EnvironmentKind { Off, ConstantAmbient, Prefiltered, FilteredImportanceSampling };
 enum class NdfTerm { BlinnPhong, Beckmann, Ggx };
 /// Fresnel terms of core/fresnel.h: None uses F0 unchanged.
 enum class FresnelTerm { None, Schlick, SchlickSg, SchlickSgQuadratic };
@@ -32,6 +35,7 @@ enum class DebugView {
     MipLevel,     // the level of detail the hardware picks for the normal map, colour ramp
     Variance,     // the lobe's variance 1/p, log scale
     ErrorHeatmap, // |this − supersampled reference| as a colour ramp (a second pass)
+    Uv,           // the texture coordinate fract(uv) in rg and 1 in b (covered), unclamped: for picking
 };
 
 /// Largest number of point lights a program holds.

@@ -19,6 +19,15 @@ struct RenderTarget {
     unsigned framebuffer = 0;
     int width = 0;
     int height = 0;
+    /// Optional scissor rectangle in pixels (x, y from the bottom-left, as glScissor): only these
+    /// pixels of the target are written, the image is still framed for the whole target (an A/B
+    /// split draws two scenes into one target). A width or height of 0 writes the whole target.
+    int scissorX = 0;
+    int scissorY = 0;
+    int scissorWidth = 0;
+    int scissorHeight = 0;
+
+    bool hasScissor() const { return scissorWidth > 0 && scissorHeight > 0; }
 };
 
 enum class ImageKind {
@@ -52,6 +61,9 @@ public:
     /// sample count outside 1..4096.
     Result<std::vector<float>> renderReference(int width, int height, int samplesPerPixel,
                                                ImageKind kind = ImageKind::Hdr);
+    /// The same reference, exposed and tonemapped into `target` (its scissor respected). Errors as
+    /// above.
+    Status renderReference(const RenderTarget& target, int samplesPerPixel);
 
     /// Compiles the material as the ubershader (every feature in, switched by uniforms) instead of
     /// the scene's specialized program: only to measure against. Takes effect at the next setScene.
@@ -66,6 +78,12 @@ public:
     const Program* program() const;
     /// Number of bakes done so far (a cache hit does not count).
     int bakeCount() const;
+    /// Number of environment prefilters done so far: setScene prefilters again only when the source
+    /// (kind, path or cube, face size), the lobe model or the power per mip changes.
+    int prefilterCount() const;
+    /// Wall time setScene spent on the environment (loading, SH, prefiltering, upload; near 0 on a
+    /// cache hit), in ms.
+    double lastEnvironmentMs() const;
     ProgramCache& programCache();
 
     struct Impl;

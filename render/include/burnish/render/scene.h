@@ -4,6 +4,7 @@
 // bakes only what changed.
 #pragma once
 
+#include <burnish/core/environment.h>
 #include <burnish/core/gloss.h>
 #include <burnish/core/methods.h>
 #include <burnish/core/normal_map.h>
@@ -88,6 +89,40 @@ struct MaterialSettings {
     void setGloss(double gloss) { basePower = glossEncoding.power(gloss); }
 };
 
+/// Where an environment's radiance comes from.
+enum class EnvironmentSourceKind {
+    ProceduralStudio, // core's proceduralStudioEnvironment
+    File,             // an equirectangular HDR (EXR, HDR, float TIFF) read by loadEquirectEnvironment
+    Cube,             // a cube already in memory (level 0 is used)
+};
+
+/// The environment of EnvironmentKind::Prefiltered and ::FilteredImportanceSampling.
+struct EnvironmentMap {
+    EnvironmentSourceKind source = EnvironmentSourceKind::ProceduralStudio;
+    std::filesystem::path path;          // for File
+    std::shared_ptr<const CubeMap> cube; // for Cube (its identity is the cache key)
+    /// Face size of the cube made from the procedural studio or a file (a power of two).
+    int faceSize = 64;
+    /// Rotation of the environment about +y, in degrees (a feature at azimuth φ moves to φ + rotation).
+    float rotationDegrees = 0.0f;
+    /// Radiance scale (linear).
+    float intensity = 1.0f;
+    /// The lobe each prefiltered mip is filtered with (core's LobeModel); Blinn-Phong matches the
+    /// material's Blinn-Phong power at normal incidence, Phong is read with a quarter of the power.
+    LobeModel lobe = LobeModel::BlinnPhong;
+    /// The power per mip: the material's gloss encoding (Lazarov: the mip is chosen from gloss), or
+    /// topPower·powerDrop^m (Lagarde's Cubemapgen setting).
+    bool mipsFollowGloss = true;
+    double topPower = 2048.0;
+    double powerDrop = 0.25;
+    /// PrefilterOptions::lobeCutoff: the lobe is cut where it falls below this fraction of its peak.
+    /// 1e-3 leaves about 0.1% of the lobe's energy out (invisible) and prefilters a third faster than
+    /// core's default of 1e-5.
+    double lobeCutoff = 1e-3;
+    /// Taps per pixel of EnvironmentKind::FilteredImportanceSampling (1..kMaxFisSamples).
+    int fisSamples = 64;
+};
+
 /// The linear F0 of a calibrated material of core's table (materials.h), by name (case-insensitive);
 /// a range gives its middle. Errors: an unknown name.
 Result<glm::vec3> calibratedSpecularColor(std::string_view name);
@@ -99,7 +134,8 @@ struct Scene {
     DirectionalLight light;
     std::vector<PointLight> pointLights; // at most kMaxPointLights are drawn
     EnvironmentKind environment = EnvironmentKind::Off;
-    glm::vec3 ambient{0.03f}; // constant radiance for EnvironmentKind::ConstantAmbient
+    glm::vec3 ambient{0.03f};      // constant radiance for EnvironmentKind::ConstantAmbient
+    EnvironmentMap environmentMap; // for EnvironmentKind::Prefiltered and ::FilteredImportanceSampling
     /// Exposure in stops, applied in the tonemap pass.
     float exposure = 0.0f;
     MaterialSettings material;

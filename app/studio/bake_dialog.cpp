@@ -1,0 +1,255 @@
+#include "bake_dialog.h"
+
+#include <QCheckBox>
+#include <QComboBox>
+#include <QCoreApplication>
+#include <QDialogButtonBox>
+#include <QFileDialog>
+#include <QFormLayout>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QLineEdit>
+#include <QPointer>
+#include <QProgressDialog>
+#include <QPushButton>
+#include <QSettings>
+#include <QSpinBox>
+#include <QThread>
+#include <QVBoxLayout>
+
+namespace burnish::studio {
+
+namespace {
+
+QString qs(std::string_view s) {
+    return QString::fromUtf8(s.data(), int(s.size()));
+}
+
+// Progress bar resolution: per mille of the job.
+constexpr int kProgressSteps = 1000;
+
+} // namespace
+
+BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc) {
+    const MaterialSettings& s = doc.settings();
+    BakeJobSpec spec;
+    spec.input = s.normalMapPath.isEmpty() ? std::string(kSampleInputPrefix) + kSampleName
+                                           : s.normalMapPath.toStdString();
+    spec.out = s.exportSettings.outputFolder.toStdString();
+    spec.preset = s.preset.toStdString();
+    spec.method = std::string(methodName(s.method));
+    if (s.glossMapPath.isEmpty())
+        spec.power = doc.power();
+    else
+        spec.gloss = s.glossMapPath.toStdString();
+    if (!s.exportSettings.format.isEmpty()) spec.format = s.exportSettings.format.toStdString();
+    if (!s.exportSettings.compression.isEmpty())
+        spec.compression = s.exportSettings.compression.toStdString();
+    if (s.exportSettings.mips > 0) spec.mips = s.exportSettings.mips;
+    if (!s.detailMapPath.isEmpty()) spec.detail = s.detailMapPath.toStdString();
+    if (doc.preset().findParameter("metallic"))
+        spec.metallic = s.materialClass == MaterialClass::Metal ? 1.0 : 0.0;
+    spec.force = s.exportSettings.overwrite;
+    return spec;
+}
+
+BakeRunner::BakeRunner(QObject* parent)
+    : QObject(parent)
+    , m_cancel(std::make_shared<std::atomic<bool>>(false)) {}
+
+BakeRunner::~BakeRunner() {
+    // A running job stops at its next stage and reports into a QPointer that is null by then.
+    m_cancel->store(true);
+}
+
+void BakeRunner::start(const BakeJobSpec& spec) {
+    auto job = resolveBakeJob(spec);
+    if (!job) {
+        emit finished(false, QString::fromStdString(job.error()));
+        return;
+    }
+    m_cancel = std::make_shared<std::atomic<bool>>(false);
+    m_running = true;
+    QPointer<BakeRunner> self(this);
+    auto cancel = m_cancel;
+    QThread* worker = QThread::create([self, cancel, job = std::move(job.value())] {
+        auto result = runBakeJob(job, [&](double fraction, std::string_view stage) {
+            const QString text = qs(stage);
+            QMetaObject::invokeMethod(
+                QCoreApplication::instance(),
+                [self, fraction, text] {
+                    if (self) emit self->progress(fraction, text);
+                },
+                Qt::QueuedConnection);
+            return !cancel->load();
+        });
+        const bool ok = result.ok();
+        const QString message =
+            ok ? QString::fromStdString(result->summary.dump(2)) : QString::fromStdString(result.error());
+        QMetaObject::invokeMethod(
+            QCoreApplication::instance(),
+            [self, ok, message] {
+                if (!self) return;
+                self->m_running = false;
+                emit self->finished(ok, message);
+            },
+            Qt::QueuedConnection);
+    });
+    connect(worker, &QThread::finished, worker, &QObject::deleteLater);
+    worker->start();
+}
+
+BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
+    : QDialog(parent)
+    , m_doc(doc)
+    , m_runner(new BakeRunner(this)) {
+    setWindowTitle("Bake & Export Textures");
+    m_preset = new QComboBox(this);
+    for (const auto& p : builtinPresets())
+        m_preset->addItem(QString::fromStdString(p.name + " — " + p.title), QString::fromStdString(p.name));
+    m_method = new QComboBox(this);
+    m_format = new QComboBox(this);
+    m_format->addItem("preset default", QString());
+    for (ExportFormat f : allExportFormats())
+        m_format->addItem(qs(exportFormatName(f)), qs(exportFormatName(f)));
+    m_compression = new QComboBox(this);
+    m_compression->addItem("per file (preset)", QString());
+    for (DdsCompression c : allDdsCompressions())
+        m_compression->addItem(qs(ddsCompressionName(c)), qs(ddsCompressionName(c)));
+    m_mips = new QSpinBox(this);
+    m_mips->setRange(0, 32); // 32 levels cover a 2^31-texel side: more than any image holds
+    m_mips->setSpecialValueText("all, down to 1×1");
+    m_output = new QLineEdit(this);
+    m_output->setPlaceholderText("output folder");
+    auto* browseButton = new QPushButton("Browse…", this);
+    m_overwrite = new QCheckBox("Replace an existing set (still all-or-nothing)", this);
+    m_result = new QLabel(this);
+    m_result->setWordWrap(true);
+    m_result->setTextInteractionFlags(Qt::TextSelectableByMouse);
+    m_result->setMinimumHeight(48);
+
+    auto* form = new QFormLayout;
+    form->addRow("Preset", m_preset);
+    form->addRow("Method", m_method);
+    form->addRow("Format", m_format);
+    form->addRow("DDS compression", m_compression);
+    form->addRow("Mip levels", m_mips);
+    auto* outRow = new QHBoxLayout;
+    outRow->addWidget(m_output, 1);
+    outRow->addWidget(browseButton);
+    form->addRow("Output folder", outRow);
+    form->addRow("", m_overwrite);
+
+    auto* buttons = new QDialogButtonBox(QDialogButtonBox::Close, this);
+    m_bake = buttons->addButton("Bake && Export", QDialogButtonBox::AcceptRole);
+    m_bake->setDefault(true);
+    connect(buttons, &QDialogButtonBox::rejected, this, &QDialog::reject);
+    connect(m_bake, &QPushButton::clicked, this, &BakeDialog::startBake);
+    connect(browseButton, &QPushButton::clicked, this, &BakeDialog::browse);
+
+    auto* layout = new QVBoxLayout(this);
+    layout->addLayout(form);
+    layout->addWidget(m_result);
+    layout->addWidget(buttons);
+    resize(560, 360);
+
+    connect(m_preset, &QComboBox::activated, this, [this](int i) {
+        if (const Status st = m_doc->setPreset(m_preset->itemData(i).toString()); !st)
+            m_result->setText(QString::fromStdString(st.error()));
+    });
+    connect(m_method, &QComboBox::activated, this, [this](int i) {
+        if (const Status st = m_doc->setMethod(Method(m_method->itemData(i).toInt())); !st)
+            m_result->setText(QString::fromStdString(st.error()));
+    });
+    connect(m_format, &QComboBox::currentIndexChanged, this, [this] {
+        const QString f = m_format->currentData().toString();
+        const bool dds = f == "dds" || (f.isEmpty() && m_doc->preset().format == ExportFormat::Dds);
+        m_compression->setEnabled(dds);
+        if (!dds) m_compression->setCurrentIndex(0);
+    });
+    connect(m_doc, &MaterialDocument::changed, this, &BakeDialog::refresh);
+
+    connect(m_runner, &BakeRunner::progress, this, [this](double fraction, const QString& stage) {
+        if (!m_progress) return;
+        m_progress->setValue(int(fraction * kProgressSteps));
+        m_progress->setLabelText("Bake & export: " + stage + "…");
+    });
+    connect(m_runner, &BakeRunner::finished, this, [this](bool ok, const QString& message) {
+        if (m_progress) {
+            m_progress->reset();
+            m_progress->deleteLater();
+            m_progress = nullptr;
+        }
+        m_bake->setEnabled(true);
+        if (ok) {
+            const auto summary = nlohmann::json::parse(message.toStdString());
+            m_result->setText(
+                QString("Wrote %1 files + bake.json to %2 — preset %3, method %4, format %5, %6 mips, "
+                        "%7 s.")
+                    .arg(summary["files"].size())
+                    .arg(QString::fromStdString(summary["out"].get<std::string>()),
+                         QString::fromStdString(summary["preset"].get<std::string>()),
+                         QString::fromStdString(summary["method"].get<std::string>()),
+                         QString::fromStdString(summary["format"].get<std::string>()))
+                    .arg(summary["mipCount"].get<int>())
+                    .arg(summary["seconds"].get<double>(), 0, 'f', 2));
+        } else {
+            m_result->setText("Not exported: " + message);
+        }
+        emit bakeFinished(ok, message);
+    });
+    refresh();
+}
+
+void BakeDialog::refresh() {
+    const MaterialSettings& s = m_doc->settings();
+    m_preset->setCurrentIndex(m_preset->findData(s.preset));
+    m_method->clear();
+    for (Method m : m_doc->availableMethods())
+        m_method->addItem(qs(methodName(m)), int(m));
+    m_method->setCurrentIndex(m_method->findData(int(s.method)));
+    m_format->setCurrentIndex(m_format->findData(s.exportSettings.format));
+    m_compression->setCurrentIndex(std::max(0, m_compression->findData(s.exportSettings.compression)));
+    m_mips->setValue(s.exportSettings.mips);
+    if (!m_output->hasFocus()) m_output->setText(s.exportSettings.outputFolder);
+    m_overwrite->setChecked(s.exportSettings.overwrite);
+}
+
+void BakeDialog::browse() {
+    QSettings settings;
+    const QString start =
+        m_output->text().isEmpty() ? settings.value("folders/export").toString() : m_output->text();
+    const QString dir = QFileDialog::getExistingDirectory(this, "Output folder", start);
+    if (dir.isEmpty()) return;
+    settings.setValue("folders/export", dir);
+    m_output->setText(dir);
+    commitSettings();
+}
+
+void BakeDialog::commitSettings() {
+    ExportSettings e;
+    e.format = m_format->currentData().toString();
+    e.compression = m_compression->isEnabled() ? m_compression->currentData().toString() : QString();
+    e.mips = m_mips->value();
+    e.outputFolder = m_output->text().trimmed();
+    e.overwrite = m_overwrite->isChecked();
+    m_doc->setExportSettings(e);
+}
+
+void BakeDialog::startBake() {
+    commitSettings();
+    if (m_doc->settings().exportSettings.outputFolder.isEmpty()) {
+        m_result->setText("Not exported: choose an output folder first.");
+        emit bakeFinished(false, m_result->text());
+        return;
+    }
+    m_bake->setEnabled(false);
+    m_result->setText("Baking…");
+    m_progress = new QProgressDialog("Bake & export…", "Cancel", 0, kProgressSteps, this);
+    m_progress->setWindowModality(Qt::WindowModal);
+    m_progress->setMinimumDuration(300); // a quick bake finishes without a flashing dialog
+    connect(m_progress, &QProgressDialog::canceled, m_runner, &BakeRunner::cancel);
+    m_runner->start(bakeJobSpecFor(*m_doc));
+}
+
+} // namespace burnish::studio

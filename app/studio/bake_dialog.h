@@ -1,0 +1,88 @@
+// Bake & Export: preset, method, format, compression, mips and output folder for the current
+// document, run through core's shared job (bake_job.h, the same as `burnish bake`) on a worker
+// thread with a progress dialog that can cancel; the result is summarised in the dialog.
+#pragma once
+
+#include "material_document.h"
+
+#include <burnish/core/bake_job.h>
+
+#include <QDialog>
+#include <QObject>
+
+#include <atomic>
+#include <memory>
+
+class QCheckBox;
+class QComboBox;
+class QLabel;
+class QLineEdit;
+class QProgressDialog;
+class QPushButton;
+class QSpinBox;
+
+namespace burnish::studio {
+
+/// The job the document's settings describe (the input file or "sample:hammered", the base power
+/// from the gloss unless a gloss map is set, metallic 1/0 for presets that store it).
+BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc);
+
+/// Runs one job on a worker thread; progress and the result arrive on the GUI thread.
+class BakeRunner : public QObject {
+    Q_OBJECT
+public:
+    explicit BakeRunner(QObject* parent = nullptr);
+    ~BakeRunner() override;
+    /// Starts the job (resolve errors are reported through finished at once).
+    void start(const BakeJobSpec& spec);
+    /// Asks the job to stop before its next stage.
+    void cancel() { m_cancel->store(true); }
+    bool running() const { return m_running; }
+
+signals:
+    void progress(double fraction, const QString& stage);
+    /// ok: the summary JSON text; else the error message ("cancelled" after cancel()).
+    void finished(bool ok, const QString& message);
+
+private:
+    std::shared_ptr<std::atomic<bool>> m_cancel;
+    bool m_running = false;
+};
+
+class BakeDialog : public QDialog {
+    Q_OBJECT
+public:
+    explicit BakeDialog(MaterialDocument* doc, QWidget* parent = nullptr);
+
+    QComboBox* formatCombo() const { return m_format; }
+    QComboBox* compressionCombo() const { return m_compression; }
+    QSpinBox* mipsSpin() const { return m_mips; }
+    QLineEdit* outputEdit() const { return m_output; }
+    QLabel* resultLabel() const { return m_result; }
+    /// The dialog's fields written to the document (one undo step when anything changed).
+    void commitSettings();
+    /// Commits the settings and starts the bake; bakeFinished reports the outcome.
+    void startBake();
+
+signals:
+    void bakeFinished(bool ok, const QString& message);
+
+private:
+    void refresh();
+    void browse();
+
+    MaterialDocument* m_doc;
+    QComboBox* m_preset;
+    QComboBox* m_method;
+    QComboBox* m_format;
+    QComboBox* m_compression;
+    QSpinBox* m_mips;
+    QLineEdit* m_output;
+    QCheckBox* m_overwrite;
+    QLabel* m_result;
+    QPushButton* m_bake;
+    BakeRunner* m_runner;
+    QProgressDialog* m_progress = nullptr;
+};
+
+} // namespace burnish::studio

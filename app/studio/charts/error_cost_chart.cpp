@@ -1,0 +1,409 @@
+#include "charts/error_cost_chart.h"
+
+#include <QChart>
+#include <QChartView>
+#include <QComboBox>
+#include <QCoreApplication>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QLogValueAxis>
+#include <QPointer>
+#include <QPushButton>
+#include <QScatterSeries>
+#include <QSpinBox>
+#include <QThread>
+#include <QTimer>
+#include <QVBoxLayout>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+namespace burnish::studio {
+
+namespace {
+
+// Wait this long after the last edit before evaluating again: a slider drag is one evaluation.
+constexpr int kDebounceMs = 400;
+// Bake timings are not plotted (the cost axis is shading time or storage): one run is enough.
+constexpr int kBakeRuns = 1;
+// Progress reaches the status line at most this often (in fractions of the whole run).
+constexpr double kProgressStep = 0.02;
+
+QString qs(std::string_view s) {
+    return QString::fromUtf8(s.data(), int(s.size()));
+}
+
+QChart* newChart(const QString& title) {
+    auto* chart = new QChart;
+    chart->setTheme(QChart::ChartThemeDark);
+    chart->setBackgroundRoundness(0);
+    chart->setTitle(title);
+    chart->legend()->setAlignment(Qt::AlignRight);
+    return chart;
+}
+
+void setChart(QChartView* view, QChart* chart) {
+    QChart* old = view->chart();
+    view->setChart(chart);
+    delete old;
+}
+
+/// A log axis around [lo, hi] widened to whole decades (at least one), so every point sits inside.
+QLogValueAxis* decadeAxis(const QString& title, double lo, double hi) {
+    auto* a = new QLogValueAxis;
+    a->setTitleText(title);
+    a->setBase(10.0);
+    a->setLabelFormat("%.3g");
+    a->setMinorTickCount(-1);
+    if (!(lo > 0.0) || !(hi >= lo) || !std::isfinite(hi)) {
+        lo = 0.1;
+        hi = 1.0;
+    }
+    double a0 = std::pow(10.0, std::floor(std::log10(lo)));
+    double a1 = std::pow(10.0, std::ceil(std::log10(hi)));
+    if (a1 <= a0) a1 = a0 * 10.0;
+    a->setRange(a0, a1);
+    return a;
+}
+
+void attachAll(QChart* chart, QAbstractAxis* x, QAbstractAxis* y) {
+    chart->addAxis(x, Qt::AlignBottom);
+    chart->addAxis(y, Qt::AlignLeft);
+    for (QAbstractSeries* s : chart->series()) {
+        s->attachAxis(x);
+        s->attachAxis(y);
+    }
+}
+
+} // namespace
+
+ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
+    : QTabWidget(parent)
+    , m_doc(doc) {
+    setObjectName("errorCostChart");
+
+    auto* methods = new QWidget(this);
+    auto* controls = new QHBoxLayout;
+    m_mipSpin = new QSpinBox(methods);
+    m_mipSpin->setObjectName("errorCostMip");
+    m_mipSpin->setPrefix("mip ");
+    m_mipSpin->setRange(1, 4); // the evaluation's default mips; set from the result
+    m_mipSpin->setValue(2);
+    m_costCombo = new QComboBox(methods);
+    m_costCombo->setObjectName("errorCostAxis");
+    m_costCombo->addItem("cost: ns per lobe evaluation (CPU, double)");
+    m_costCombo->addItem("cost: bytes per texel stored");
+    auto* rerun = new QPushButton("Evaluate now", methods);
+    controls->addWidget(m_mipSpin);
+    controls->addWidget(m_costCombo);
+    controls->addStretch(1);
+    controls->addWidget(rerun);
+    m_methodsView = new QChartView(methods);
+    m_methodsView->setRenderHint(QPainter::Antialiasing);
+    m_methodsView->setMinimumSize(420, 280);
+    m_status = new QLabel(methods);
+    m_status->setWordWrap(true);
+    auto* methodsLayout = new QVBoxLayout(methods);
+    methodsLayout->addLayout(controls);
+    methodsLayout->addWidget(m_methodsView, 1);
+    methodsLayout->addWidget(m_status);
+    addTab(methods, "Methods vs ground truth");
+
+    auto* approx = new QWidget(this);
+    m_approxView = new QChartView(approx);
+    m_approxView->setRenderHint(QPainter::Antialiasing);
+    m_approxView->setMinimumSize(420, 280);
+    m_approxStatus =
+        new QLabel("Measures every approximation of core against its exact form (quick mode).", approx);
+    m_approxStatus->setWordWrap(true);
+    m_measureButton = new QPushButton("Measure", approx);
+    auto* approxControls = new QHBoxLayout;
+    approxControls->addWidget(m_approxStatus, 1);
+    approxControls->addWidget(m_measureButton);
+    auto* approxLayout = new QVBoxLayout(approx);
+    approxLayout->addWidget(m_approxView, 1);
+    approxLayout->addLayout(approxControls);
+    addTab(approx, "Approximations");
+
+    m_debounce = new QTimer(this);
+    m_debounce->setSingleShot(true);
+    m_debounce->setInterval(kDebounceMs);
+    connect(m_debounce, &QTimer::timeout, this, [this] {
+        if (isVisible() && evaluationKey() != m_evaluatedKey) evaluateNow();
+    });
+    connect(m_doc, &MaterialDocument::changed, this, &ErrorCostChart::onDocumentChanged);
+    connect(m_doc, &MaterialDocument::mapChanged, this, &ErrorCostChart::onDocumentChanged);
+    connect(m_mipSpin, qOverload<int>(&QSpinBox::valueChanged), this, [this] { showMethods(); });
+    connect(m_costCombo, qOverload<int>(&QComboBox::currentIndexChanged), this, [this](int i) {
+        m_costAxis = i == 0 ? CostAxis::NsPerLobe : CostAxis::BytesPerTexel;
+        showMethods();
+    });
+    connect(rerun, &QPushButton::clicked, this, &ErrorCostChart::evaluateNow);
+    connect(m_measureButton, &QPushButton::clicked, this, &ErrorCostChart::measureApproximationsNow);
+    connect(this, &QTabWidget::currentChanged, this, [this](int tab) {
+        if (tab == 1 && !m_approximations && !m_measuring) measureApproximationsNow();
+    });
+    showMethods();
+    showApproximations();
+}
+
+ErrorCostChart::~ErrorCostChart() = default;
+
+QString ErrorCostChart::evaluationKey() const {
+    return QString("%1 %2").arg(quintptr(m_doc->maps().normal.get())).arg(m_doc->power(), 0, 'g', 17);
+}
+
+void ErrorCostChart::onDocumentChanged() {
+    if (evaluationKey() != m_evaluatedKey) m_debounce->start();
+    showMethods(); // the current method's point is highlighted
+}
+
+void ErrorCostChart::showEvent(QShowEvent* event) {
+    QTabWidget::showEvent(event);
+    if (evaluationKey() != m_evaluatedKey) m_debounce->start();
+}
+
+void ErrorCostChart::evaluateNow() {
+    m_debounce->stop();
+    if (m_evaluating) {
+        m_restartWhenDone = true;
+        return;
+    }
+    m_evaluating = true;
+    m_restartWhenDone = false;
+    m_runningKey = evaluationKey();
+    std::shared_ptr<const NormalMap> map = m_doc->maps().normal;
+    EvaluationReportOptions options;
+    options.evaluate.basePowers = {m_doc->power()};
+    options.evaluate.methods = allMethods();
+    options.bakeRuns = kBakeRuns;
+    options.inputName = m_doc->settings().normalMapPath.isEmpty()
+                            ? std::string(kSampleName)
+                            : m_doc->settings().normalMapPath.toStdString();
+    m_status->setText(QString("evaluating %1 methods on the %2×%3 normal map at power %4…")
+                          .arg(allMethods().size())
+                          .arg(map->width)
+                          .arg(map->height)
+                          .arg(m_doc->power(), 0, 'g', 4));
+    QPointer<ErrorCostChart> self(this);
+    const QString key = m_runningKey;
+    QThread* worker = QThread::create([self, map, options, key] {
+        double lastShown = -1.0;
+        auto progress = [&](double f) {
+            if (f - lastShown < kProgressStep) return;
+            lastShown = f;
+            QMetaObject::invokeMethod(
+                QCoreApplication::instance(),
+                [self, f, key] {
+                    if (self && self->m_evaluating && self->m_runningKey == key)
+                        self->m_status->setText(QString("evaluating… %1%").arg(int(std::lround(100.0 * f))));
+                },
+                Qt::QueuedConnection);
+        };
+        auto built = buildEvaluationReport(*map, options, progress);
+        std::shared_ptr<const EvaluationReport> report;
+        QString error;
+        if (built)
+            report = std::make_shared<const EvaluationReport>(std::move(built.value()));
+        else
+            error = QString::fromStdString(built.error());
+        QMetaObject::invokeMethod(
+            QCoreApplication::instance(),
+            [self, report, error, key] {
+                if (!self) return;
+                self->m_evaluating = false;
+                self->m_report = report;
+                self->m_evaluatedKey = key;
+                if (!report) self->m_status->setText("evaluation failed: " + error);
+                self->showMethods();
+                if (self->m_restartWhenDone || (self->isVisible() && self->evaluationKey() != key))
+                    self->evaluateNow();
+                emit self->methodsUpdated();
+            },
+            Qt::QueuedConnection);
+    });
+    connect(worker, &QThread::finished, worker, &QObject::deleteLater);
+    worker->start();
+}
+
+void ErrorCostChart::measureApproximationsNow() {
+    if (m_measuring) return;
+    m_measuring = true;
+    m_measureButton->setEnabled(false);
+    m_approxStatus->setText("measuring every approximation (quick mode, a few seconds)…");
+    QPointer<ErrorCostChart> self(this);
+    QThread* worker = QThread::create([self] {
+        ApproximationOptions options;
+        options.quick = true;
+        auto measured = measureApproximations(options);
+        std::shared_ptr<const ApproximationReport> report;
+        QString error;
+        if (measured)
+            report = std::make_shared<const ApproximationReport>(std::move(measured.value()));
+        else
+            error = QString::fromStdString(measured.error());
+        QMetaObject::invokeMethod(
+            QCoreApplication::instance(),
+            [self, report, error] {
+                if (!self) return;
+                self->m_measuring = false;
+                self->m_measureButton->setEnabled(true);
+                self->m_approximations = report;
+                if (!report) self->m_approxStatus->setText("measurement failed: " + error);
+                self->showApproximations();
+                emit self->approximationsUpdated();
+            },
+            Qt::QueuedConnection);
+    });
+    connect(worker, &QThread::finished, worker, &QObject::deleteLater);
+    worker->start();
+}
+
+void ErrorCostChart::setMip(int mip) {
+    m_mipSpin->setValue(mip);
+    showMethods();
+}
+
+int ErrorCostChart::mip() const {
+    return m_mipSpin->value();
+}
+
+void ErrorCostChart::setCostAxis(CostAxis axis) {
+    m_costCombo->setCurrentIndex(axis == CostAxis::NsPerLobe ? 0 : 1);
+}
+
+QString ErrorCostChart::statusText() const {
+    return m_status->text();
+}
+
+QScatterSeries* ErrorCostChart::methodSeries(Method method) const {
+    if (!m_methodsView->chart()) return nullptr;
+    for (QAbstractSeries* s : m_methodsView->chart()->series())
+        if (s->objectName() == qs(methodName(method))) return qobject_cast<QScatterSeries*>(s);
+    return nullptr;
+}
+
+QList<QScatterSeries*> ErrorCostChart::approximationSeries() const {
+    QList<QScatterSeries*> out;
+    if (!m_approxView->chart()) return out;
+    for (QAbstractSeries* s : m_approxView->chart()->series())
+        if (auto* scatter = qobject_cast<QScatterSeries*>(s)) out << scatter;
+    return out;
+}
+
+void ErrorCostChart::showMethods() {
+    const bool ns = m_costAxis == CostAxis::NsPerLobe;
+    QChart* chart = newChart(
+        m_report ? QString("Relative L1 error vs ground truth at mip %1 against cost, power %2")
+                       .arg(mip())
+                       .arg(m_report->result.basePowers.empty() ? 0.0 : m_report->result.basePowers.front(),
+                            0, 'g', 4)
+                 : QString("Relative L1 error vs ground truth against cost"));
+    double xLo = std::numeric_limits<double>::infinity(), xHi = 0.0;
+    double yLo = std::numeric_limits<double>::infinity(), yHi = 0.0;
+    if (m_report) {
+        m_mipSpin->blockSignals(true);
+        m_mipSpin->setRange(m_report->result.firstMip, m_report->result.lastMip);
+        m_mipSpin->blockSignals(false);
+        std::map<Method, double> cost;
+        for (const MethodCost& c : m_report->costs)
+            cost[c.method] = ns ? c.nsPerLobe : c.storage.bytesPerTexel;
+        int shown = 0;
+        for (const MipError& e : m_report->result.errors) {
+            if (e.mip != mip() || e.kernel != FilterKernel::Box || !cost.count(e.method)) continue;
+            const double x = cost[e.method];
+            const double y = e.relativeL1;
+            // A log chart cannot place 0 or a non-finite value; core's values are finite, an exact
+            // zero error is not expected from any method but would be left out, not faked.
+            if (!(x > 0.0) || !(y > 0.0) || !std::isfinite(x) || !std::isfinite(y)) continue;
+            auto* s = new QScatterSeries;
+            s->setObjectName(qs(methodName(e.method)));
+            const bool current = e.method == m_doc->settings().method;
+            s->setName(qs(methodName(e.method)) + (current ? " (current)" : ""));
+            s->setMarkerSize(current ? 16.0 : 11.0);
+            s->append(x, y);
+            chart->addSeries(s);
+            xLo = std::min(xLo, x);
+            xHi = std::max(xHi, x);
+            yLo = std::min(yLo, y);
+            yHi = std::max(yHi, y);
+            ++shown;
+        }
+        if (!m_evaluating)
+            m_status->setText(
+                QString("%1 methods on the %2×%3 map \"%4\", base power %5, mip %6 (%7×%8 texels), "
+                        "%9 directions; evaluated in %10 s. Cost: %11.")
+                    .arg(shown)
+                    .arg(m_report->width)
+                    .arg(m_report->height)
+                    .arg(QString::fromStdString(m_report->input))
+                    .arg(m_report->result.basePowers.empty() ? 0.0 : m_report->result.basePowers.front(), 0,
+                         'g', 4)
+                    .arg(mip())
+                    .arg(std::max(1, m_report->width >> mip()))
+                    .arg(std::max(1, m_report->height >> mip()))
+                    .arg(m_report->result.directions.size())
+                    .arg(m_report->result.seconds, 0, 'f', 2)
+                    .arg(ns ? "median ns per lobe evaluation on one CPU core"
+                            : "bytes per texel at mip 0 in the recommended storage"));
+    } else if (!m_evaluating && m_status->text().isEmpty()) {
+        m_status->setText("not evaluated yet: shows when the panel is visible, or press Evaluate now");
+    }
+    attachAll(chart, decadeAxis(ns ? "ns per lobe evaluation" : "bytes per texel", xLo, xHi),
+              decadeAxis("relative L1 error", yLo, yHi));
+    setChart(m_methodsView, chart);
+}
+
+void ErrorCostChart::showApproximations() {
+    QChart* chart = newChart("Approximations: headline error against ns per evaluation (quick mode)");
+    double xLo = std::numeric_limits<double>::infinity(), xHi = 0.0;
+    double yLo = std::numeric_limits<double>::infinity(), yHi = 0.0;
+    int shown = 0, left = 0;
+    if (m_approximations) {
+        std::map<std::string, QScatterSeries*> groups;
+        for (const std::string& g : m_approximations->groups) {
+            auto* s = new QScatterSeries;
+            s->setObjectName(QString::fromStdString(g));
+            s->setName(QString::fromStdString(g));
+            s->setMarkerSize(10.0);
+            groups[g] = s;
+        }
+        for (const ApproximationEntry& e : m_approximations->entries) {
+            const double x = e.approxNs;
+            const double y = e.headlineError();
+            auto it = groups.find(e.group);
+            // Exact reformulations (error 0) and unmeasurable timings have no place on log axes.
+            if (it == groups.end() || !(x > 0.0) || !(y > 0.0) || !std::isfinite(x) || !std::isfinite(y)) {
+                ++left;
+                continue;
+            }
+            it->second->append(x, y);
+            xLo = std::min(xLo, x);
+            xHi = std::max(xHi, x);
+            yLo = std::min(yLo, y);
+            yHi = std::max(yHi, y);
+            ++shown;
+        }
+        for (const std::string& g : m_approximations->groups) {
+            QScatterSeries* s = groups[g];
+            if (s->count() > 0)
+                chart->addSeries(s);
+            else
+                delete s;
+        }
+        m_approxStatus->setText(
+            QString("%1 approximations shown%2; measured in %3 s on %4 (%5).")
+                .arg(shown)
+                .arg(left > 0 ? QString(", %1 with zero error or no timing left out").arg(left) : QString())
+                .arg(m_approximations->seconds, 0, 'f', 1)
+                .arg(QString::fromStdString(m_approximations->cpuModel))
+                .arg(QString::fromStdString(m_approximations->compiler)));
+    }
+    attachAll(chart, decadeAxis("ns per evaluation (float kernel)", xLo, xHi),
+              decadeAxis("headline error (max abs or max rel)", yLo, yHi));
+    setChart(m_approxView, chart);
+}
+
+} // namespace burnish::studio

@@ -1,0 +1,93 @@
+// Error against cost, measured by core in a worker thread so the UI never waits:
+//  - "Methods": each prefiltering method's relative L1 error against the ground truth (evaluate.h)
+//    for the current material's normal map and base power at a chosen mip, against its cost (ns per
+//    lobe evaluation or bytes per texel stored, evaluate_report.h), one point per method;
+//  - "Approximations": the approximations report in its quick mode (approximations.h), each
+//    approximation's headline error against its ns per evaluation, one series per group.
+#pragma once
+
+#include "material_document.h"
+
+#include <burnish/core/approximations.h>
+#include <burnish/core/evaluate_report.h>
+
+#include <QTabWidget>
+
+#include <memory>
+#include <optional>
+
+class QChartView;
+class QComboBox;
+class QLabel;
+class QPushButton;
+class QScatterSeries;
+class QSpinBox;
+class QTimer;
+
+namespace burnish::studio {
+
+class ErrorCostChart : public QTabWidget {
+    Q_OBJECT
+public:
+    enum class CostAxis { NsPerLobe, BytesPerTexel };
+
+    explicit ErrorCostChart(MaterialDocument* doc, QWidget* parent = nullptr);
+    ~ErrorCostChart() override;
+
+    /// Starts the method evaluation for the current document now (a running one finishes first and
+    /// its result is dropped). The chart also does this by itself, debounced, while it is visible.
+    void evaluateNow();
+    /// Starts the quick approximations report (the chart does this when its tab is first shown).
+    void measureApproximationsNow();
+    bool evaluating() const { return m_evaluating; }
+    bool measuring() const { return m_measuring; }
+
+    void setMip(int mip);
+    int mip() const;
+    void setCostAxis(CostAxis axis);
+
+    /// The scatter series of one method (one point when a result is shown), or null.
+    QScatterSeries* methodSeries(Method method) const;
+    /// Every series of the approximations scatter (one per group).
+    QList<QScatterSeries*> approximationSeries() const;
+    /// The last evaluation (null before the first finishes or when it failed).
+    const EvaluationReport* report() const { return m_report.get(); }
+    /// The status line under the methods chart (progress, errors, what was measured).
+    QString statusText() const;
+
+signals:
+    /// A method evaluation finished (successfully or not; statusText() says).
+    void methodsUpdated();
+    /// The approximations report finished.
+    void approximationsUpdated();
+
+protected:
+    void showEvent(QShowEvent* event) override;
+
+private:
+    /// What the evaluation depends on: the normal map's identity, the base power.
+    QString evaluationKey() const;
+    void onDocumentChanged();
+    void showMethods();
+    void showApproximations();
+
+    MaterialDocument* m_doc;
+    QChartView* m_methodsView;
+    QChartView* m_approxView;
+    QSpinBox* m_mipSpin;
+    QComboBox* m_costCombo;
+    QLabel* m_status;
+    QLabel* m_approxStatus;
+    QPushButton* m_measureButton;
+    QTimer* m_debounce;
+    std::shared_ptr<const EvaluationReport> m_report;
+    std::shared_ptr<const ApproximationReport> m_approximations;
+    QString m_evaluatedKey;
+    QString m_runningKey;
+    bool m_evaluating = false;
+    bool m_measuring = false;
+    bool m_restartWhenDone = false;
+    CostAxis m_costAxis = CostAxis::NsPerLobe;
+};
+
+} // namespace burnish::studio

@@ -1,0 +1,64 @@
+// burnish-studio [PROJECT]: the material-authoring studio. Opens PROJECT or the built-in sample.
+// --screenshot FILE renders the main window once the UI has settled, saves it and exits (CI).
+#include "main_window.h"
+#include "studio_app.h"
+#include "texture_pane.h"
+
+#include <QApplication>
+#include <QCommandLineParser>
+#include <QSurfaceFormat>
+#include <QTimer>
+
+#include <cstdio>
+
+int main(int argc, char** argv) {
+    // The 3D viewport's renderer needs OpenGL 3.3 core; every QOpenGLWidget of a window shares one
+    // format, so it is set for the whole application before it starts.
+    QSurfaceFormat format = QSurfaceFormat::defaultFormat();
+    format.setVersion(3, 3);
+    format.setProfile(QSurfaceFormat::CoreProfile);
+    QSurfaceFormat::setDefaultFormat(format);
+    QApplication app(argc, argv);
+    burnish::studio::setUpApplication(app);
+
+    QCommandLineParser parser;
+    parser.setApplicationDescription("Burnish Studio: specular colour and gloss authoring with normal-map "
+                                     "prefiltering.");
+    parser.addHelpOption();
+    parser.addVersionOption();
+    QCommandLineOption screenshot("screenshot", "Save a picture of the main window to FILE and exit.",
+                                  "FILE");
+    parser.addOption(screenshot);
+    parser.addPositionalArgument("project", "A .burnish project to open (default: the built-in sample).",
+                                 "[PROJECT]");
+    parser.process(app);
+    if (parser.positionalArguments().size() > 1) {
+        std::fprintf(stderr, "burnish-studio: give at most one project\n");
+        return 2;
+    }
+
+    burnish::studio::MainWindow window;
+    const bool shooting = parser.isSet(screenshot);
+    if (!parser.positionalArguments().isEmpty()) {
+        if (shooting) {
+            window.showMessage = [](const QString&, const QString& text) {
+                std::fprintf(stderr, "burnish-studio: %s\n", qPrintable(text));
+            };
+        }
+        if (!window.openProject(parser.positionalArguments().first()) && shooting) return 1;
+    }
+    window.show();
+    if (shooting) {
+        const QString file = parser.value(screenshot);
+        // Let layouts, docks and the first paint settle before grabbing.
+        QTimer::singleShot(500, &window, [&window, file] {
+            const bool ok = window.grab().save(file);
+            if (!ok)
+                std::fprintf(stderr, "burnish-studio: cannot write the screenshot '%s'\n", qPrintable(file));
+            QApplication::exit(ok ? 0 : 1);
+        });
+    } else {
+        QTimer::singleShot(0, &window, [&window] { window.offerRecovery(); });
+    }
+    return app.exec();
+}

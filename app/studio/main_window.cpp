@@ -1,0 +1,429 @@
+#include "main_window.h"
+
+#include "bake_dialog.h"
+#include "charts/charts_panel.h"
+#include "environment_panel.h"
+#include "material_panel.h"
+#include "paint_tool.h"
+#include "project.h"
+#include "texture_pane.h"
+#include "viewport_panel.h"
+
+#include <QAction>
+#include <QApplication>
+#include <QCloseEvent>
+#include <QDir>
+#include <QDockWidget>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QLabel>
+#include <QMenuBar>
+#include <QMimeData>
+#include <QScrollArea>
+#include <QSettings>
+#include <QSplitter>
+#include <QStatusBar>
+#include <QTimer>
+#include <QUndoView>
+
+namespace burnish::studio {
+
+namespace {
+
+// Recent projects kept in the File menu: as many as fit a glance.
+constexpr int kMaxRecent = 8;
+// Autosave every two minutes unless the settings say otherwise (Blender's default interval).
+constexpr int kDefaultAutosaveSeconds = 120;
+
+QString qs(std::string_view s) {
+    return QString::fromUtf8(s.data(), int(s.size()));
+}
+
+bool isProjectFile(const QString& path) {
+    return QFileInfo(path).suffix().compare(kProjectSuffix, Qt::CaseInsensitive) == 0;
+}
+
+const QString kProjectFilter = QString("Burnish projects (*.%1);;All files (*)").arg(kProjectSuffix);
+
+} // namespace
+
+MainWindow::MainWindow(QWidget* parent)
+    : QMainWindow(parent)
+    , m_doc(new MaterialDocument(this)) {
+    showMessage = [this](const QString& title, const QString& text) {
+        QMessageBox::warning(this, title, text);
+    };
+    ask = [this](const QString& title, const QString& text, QMessageBox::StandardButtons buttons) {
+        return QMessageBox::question(this, title, text, buttons);
+    };
+    setObjectName("burnishStudioMainWindow");
+    setAcceptDrops(true);
+    setDockNestingEnabled(true);
+
+    m_central = new QSplitter(Qt::Horizontal, this);
+    m_texturePane = new TexturePane(m_doc, m_central);
+    m_central->addWidget(m_texturePane);
+    // The 3D viewport left of the 2D texture view, the larger of the two.
+    auto* viewport = new ViewportPanel(m_doc, m_central);
+    m_central->insertWidget(0, viewport);
+    m_central->setStretchFactor(0, 3);
+    m_central->setStretchFactor(1, 2);
+    setCentralWidget(m_central);
+
+    m_paintTool = new PaintTool(m_doc, m_texturePane->view(), this);
+    m_paintTool->attachViewport(viewport->viewport());
+    m_paintDock = new QDockWidget("Paint", this);
+    m_paintDock->setObjectName("paintDock");
+    m_paintDock->setWidget(m_paintTool);
+    addDockWidget(Qt::LeftDockWidgetArea, m_paintDock);
+
+    m_panel = new MaterialPanel(m_doc, this);
+    auto* scroll = new QScrollArea(this);
+    scroll->setWidget(m_panel);
+    scroll->setWidgetResizable(true);
+    scroll->setFrameShape(QFrame::NoFrame);
+    scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+    m_materialDock = new QDockWidget("Material", this);
+    m_materialDock->setObjectName("materialDock");
+    m_materialDock->setWidget(scroll);
+    m_materialDock->setMinimumWidth(400);
+    addDockWidget(Qt::RightDockWidgetArea, m_materialDock);
+
+    auto* history = new QUndoView(m_doc->undoStack(), this);
+    history->setEmptyLabel("<opened>");
+    m_historyDock = new QDockWidget("History", this);
+    m_historyDock->setObjectName("historyDock");
+    m_historyDock->setWidget(history);
+    addDockWidget(Qt::RightDockWidgetArea, m_historyDock);
+    resizeDocks({m_materialDock, m_historyDock}, {560, 180}, Qt::Vertical);
+
+    // The environment lighting of the viewport, tabbed with the history. The library lists the HDR
+    // files of $BURNISH_ENVIRONMENTS (the repository's shared data folder holds courtyard and studio).
+    auto* environment = new EnvironmentPanel(m_doc, this);
+    environment->setLibraryFolder(qEnvironmentVariable("BURNISH_ENVIRONMENTS"));
+    auto* environmentDock = new QDockWidget("Environment", this);
+    environmentDock->setObjectName("environmentDock");
+    environmentDock->setWidget(environment);
+    addDockWidget(Qt::RightDockWidgetArea, environmentDock);
+    tabifyDockWidget(m_historyDock, environmentDock);
+    m_historyDock->raise();
+
+    // The charts (specular colour, gloss, BRDF plots, error vs cost) under the central pane.
+    auto* charts = new ChartsPanel(m_doc, this);
+    addDockWidget(Qt::BottomDockWidgetArea, charts);
+
+    m_statusPower = new QLabel(this);
+    m_statusGloss = new QLabel(this);
+    m_statusMethod = new QLabel(this);
+    m_statusPreset = new QLabel(this);
+    for (QLabel* l : {m_statusPreset, m_statusMethod, m_statusGloss, m_statusPower}) {
+        l->setContentsMargins(8, 0, 8, 0);
+        statusBar()->addPermanentWidget(l);
+    }
+
+    buildMenus();
+    connect(m_doc, &MaterialDocument::changed, this, &MainWindow::updateStatus);
+    connect(m_doc->undoStack(), &QUndoStack::cleanChanged, this, &MainWindow::updateTitle);
+    connect(m_panel, &MaterialPanel::errorOccurred, this,
+            [this](const QString& title, const QString& text) { showMessage(title, text); });
+
+    m_autosaveTimer = new QTimer(this);
+    connect(m_autosaveTimer, &QTimer::timeout, this, &MainWindow::autosave);
+    resize(1400, 880);
+    restoreSettings();
+    updateStatus();
+    updateTitle();
+}
+
+MainWindow::~MainWindow() = default;
+
+void MainWindow::buildMenus() {
+    QMenu* file = menuBar()->addMenu("&File");
+    file->addAction("&New", QKeySequence::New, this, &MainWindow::newDocument);
+    file->addAction("&Open…", QKeySequence::Open, this, &MainWindow::open);
+    m_recentMenu = file->addMenu("Open &Recent");
+    file->addSeparator();
+    file->addAction("&Save", QKeySequence::Save, this, &MainWindow::save);
+    file->addAction("Save &As…", QKeySequence::SaveAs, this, &MainWindow::saveAs);
+    file->addSeparator();
+    file->addAction("&Export Textures…", QKeySequence(Qt::CTRL | Qt::Key_E), this,
+                    &MainWindow::exportTextures);
+    file->addSeparator();
+    file->addAction("&Quit", QKeySequence::Quit, this, &QWidget::close);
+
+    QMenu* edit = menuBar()->addMenu("&Edit");
+    QAction* undo = m_doc->undoStack()->createUndoAction(this, "&Undo");
+    undo->setShortcut(QKeySequence::Undo);
+    QAction* redo = m_doc->undoStack()->createRedoAction(this, "&Redo");
+    redo->setShortcut(QKeySequence::Redo);
+    edit->addAction(undo);
+    edit->addAction(redo);
+
+    m_viewMenu = menuBar()->addMenu("&View");
+    QAction* material = m_materialDock->toggleViewAction();
+    material->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_1));
+    QAction* history = m_historyDock->toggleViewAction();
+    history->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_2));
+    m_viewMenu->addAction(material);
+    m_viewMenu->addAction(history);
+    if (auto* charts = findChild<ChartsPanel*>("chartsDock")) {
+        QAction* chartsToggle = charts->toggleViewAction();
+        chartsToggle->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_3));
+        m_viewMenu->addAction(chartsToggle);
+    }
+    m_viewMenu->addSeparator();
+    m_viewMenu->addAction("Normal Map", QKeySequence(Qt::Key_1), this,
+                          [this] { m_texturePane->setMode(TextureMode::Normal); });
+    m_viewMenu->addAction("Authored Gloss", QKeySequence(Qt::Key_2), this,
+                          [this] { m_texturePane->setMode(TextureMode::Gloss); });
+    m_viewMenu->addAction("Baked Gloss", QKeySequence(Qt::Key_3), this,
+                          [this] { m_texturePane->setMode(TextureMode::BakedGloss); });
+    m_viewMenu->addAction("Fit Texture", QKeySequence(Qt::Key_F), this,
+                          [this] { m_texturePane->view()->fit(); });
+    updateRecentMenu();
+}
+
+bool MainWindow::isModified() const {
+    return !m_doc->undoStack()->isClean();
+}
+
+BakeDialog* MainWindow::bakeDialog() {
+    if (!m_bakeDialog) m_bakeDialog = new BakeDialog(m_doc, this);
+    return m_bakeDialog;
+}
+
+void MainWindow::updateTitle() {
+    const QString name = m_projectPath.isEmpty() ? "untitled" : QFileInfo(m_projectPath).fileName();
+    setWindowTitle(QString("%1[*] — Burnish Studio").arg(name));
+    setWindowModified(isModified());
+}
+
+void MainWindow::updateStatus() {
+    const MaterialSettings& s = m_doc->settings();
+    m_statusPreset->setText("preset " + s.preset);
+    m_statusMethod->setText("method " + qs(methodName(s.method)));
+    m_statusGloss->setText(QString("gloss %1").arg(s.gloss, 0, 'f', 3));
+    m_statusPower->setText(QString("power %1").arg(m_doc->power(), 0, 'g', 5));
+}
+
+QStringList MainWindow::recentProjects() const {
+    return QSettings().value("recentProjects").toStringList();
+}
+
+void MainWindow::addRecent(const QString& path) {
+    QStringList recent = recentProjects();
+    const QString absolute = QFileInfo(path).absoluteFilePath();
+    recent.removeAll(absolute);
+    recent.prepend(absolute);
+    while (recent.size() > kMaxRecent)
+        recent.removeLast();
+    QSettings().setValue("recentProjects", recent);
+    QSettings().setValue("folders/projects", QFileInfo(absolute).absolutePath());
+    updateRecentMenu();
+}
+
+void MainWindow::updateRecentMenu() {
+    m_recentMenu->clear();
+    const QStringList recent = recentProjects();
+    for (int i = 0; i < recent.size(); ++i) {
+        const QString path = recent[i];
+        QAction* a = m_recentMenu->addAction(QString("&%1 %2").arg(i + 1).arg(QFileInfo(path).fileName()),
+                                             this, [this, path] {
+                                                 if (maybeSave()) openProject(path);
+                                             });
+        a->setToolTip(path);
+        a->setStatusTip(path);
+    }
+    m_recentMenu->setEnabled(!recent.isEmpty());
+}
+
+bool MainWindow::maybeSave() {
+    if (!isModified()) return true;
+    const auto answer = ask("Unsaved changes", "The material has unsaved changes. Save them?",
+                            QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel);
+    if (answer == QMessageBox::Save) return save();
+    return answer == QMessageBox::Discard;
+}
+
+bool MainWindow::newDocument() {
+    if (!maybeSave()) return false;
+    removeAutosave();
+    if (const Status st = m_doc->reset(MaterialDocument::defaultSettings()); !st) {
+        showMessage("New material", QString::fromStdString(st.error()));
+        return false;
+    }
+    m_projectPath.clear();
+    m_autosavedIndex = -1;
+    updateTitle();
+    return true;
+}
+
+void MainWindow::open() {
+    if (!maybeSave()) return;
+    const QString path = QFileDialog::getOpenFileName(
+        this, "Open project", QSettings().value("folders/projects").toString(), kProjectFilter);
+    if (!path.isEmpty()) openProject(path);
+}
+
+bool MainWindow::openProject(const QString& path) {
+    const QString absolute = QFileInfo(path).absoluteFilePath();
+    const auto project = loadProject(absolute);
+    if (!project) {
+        showMessage("Cannot open project", QString::fromStdString(project.error()));
+        return false;
+    }
+    if (const Status st = m_doc->reset(project->settings, project->layers); !st) {
+        showMessage("Cannot open project",
+                    QString("project '%1': %2").arg(absolute, QString::fromStdString(st.error())));
+        return false;
+    }
+    m_projectPath = absolute;
+    m_autosavedIndex = -1;
+    addRecent(absolute);
+    updateTitle();
+    statusBar()->showMessage("Opened " + absolute, 4000);
+    return true;
+}
+
+bool MainWindow::save() {
+    return m_projectPath.isEmpty() ? saveAs() : saveProjectAs(m_projectPath);
+}
+
+bool MainWindow::saveAs() {
+    QString start = m_projectPath;
+    if (start.isEmpty())
+        start = QSettings().value("folders/projects", QDir::homePath()).toString() + "/material." +
+                kProjectSuffix;
+    QString path = QFileDialog::getSaveFileName(this, "Save project", start, kProjectFilter);
+    if (path.isEmpty()) return false;
+    if (QFileInfo(path).suffix().isEmpty()) path += QString(".") + kProjectSuffix;
+    return saveProjectAs(path);
+}
+
+bool MainWindow::saveProjectAs(const QString& path) {
+    const QString absolute = QFileInfo(path).absoluteFilePath();
+    if (const Status st = saveProject(
+            m_doc->settings(), absolute, {},
+            {&m_doc->paintLayer(PaintLayerKind::Gloss), &m_doc->paintLayer(PaintLayerKind::VarianceOffset)});
+        !st) {
+        showMessage("Cannot save project", QString::fromStdString(st.error()));
+        return false;
+    }
+    const QString oldAutosave = autosavePathFor(m_projectPath);
+    m_projectPath = absolute;
+    QFile::remove(oldAutosave);
+    removeAutosave();
+    m_doc->undoStack()->setClean();
+    addRecent(absolute);
+    updateTitle();
+    statusBar()->showMessage("Saved " + absolute, 4000);
+    return true;
+}
+
+bool MainWindow::autosave() {
+    if (!isModified() || m_doc->undoStack()->index() == m_autosavedIndex) return false;
+    QDir().mkpath(autosaveFolder());
+    const QString path = autosavePathFor(m_projectPath);
+    if (const Status st = saveProject(
+            m_doc->settings(), path, m_projectPath,
+            {&m_doc->paintLayer(PaintLayerKind::Gloss), &m_doc->paintLayer(PaintLayerKind::VarianceOffset)});
+        !st) {
+        // Autosave runs unattended: a failure goes to the status bar, not a modal box every interval.
+        statusBar()->showMessage("Autosave failed: " + QString::fromStdString(st.error()), 8000);
+        return false;
+    }
+    m_autosavedIndex = m_doc->undoStack()->index();
+    statusBar()->showMessage("Autosaved", 2000);
+    return true;
+}
+
+void MainWindow::setAutosaveInterval(int seconds) {
+    if (seconds <= 0) {
+        m_autosaveTimer->stop();
+        return;
+    }
+    m_autosaveTimer->start(seconds * 1000);
+}
+
+void MainWindow::removeAutosave() {
+    QFile::remove(autosavePathFor(m_projectPath));
+    m_autosavedIndex = -1;
+}
+
+void MainWindow::offerRecovery() {
+    const auto copy = recoverableAutosave(m_projectPath);
+    if (!copy) return;
+    const QString what =
+        m_projectPath.isEmpty() ? "an unsaved material" : QFileInfo(m_projectPath).fileName();
+    const auto answer = ask("Recover autosave",
+                            QString("An autosave of %1 from %2 is newer than the saved project. Recover it?")
+                                .arg(what, QFileInfo(*copy).lastModified().toString(Qt::TextDate)),
+                            QMessageBox::Yes | QMessageBox::No);
+    if (answer != QMessageBox::Yes) {
+        QFile::remove(*copy);
+        return;
+    }
+    const auto project = loadProject(*copy);
+    if (!project) {
+        showMessage("Cannot recover autosave", QString::fromStdString(project.error()));
+        return;
+    }
+    if (const Status st = m_doc->reset(project->settings, project->layers); !st) {
+        showMessage("Cannot recover autosave", QString::fromStdString(st.error()));
+        return;
+    }
+    // The recovered state is not what the project file holds: it stays unsaved until saved.
+    m_doc->undoStack()->resetClean();
+    updateTitle();
+}
+
+void MainWindow::exportTextures() {
+    BakeDialog* dialog = bakeDialog();
+    dialog->show();
+    dialog->raise();
+    dialog->activateWindow();
+}
+
+void MainWindow::closeEvent(QCloseEvent* event) {
+    if (!maybeSave()) {
+        event->ignore();
+        return;
+    }
+    removeAutosave();
+    saveSettings();
+    event->accept();
+}
+
+void MainWindow::dragEnterEvent(QDragEnterEvent* event) {
+    if (event->mimeData()->hasUrls() && event->mimeData()->urls().first().isLocalFile())
+        event->acceptProposedAction();
+}
+
+void MainWindow::dropEvent(QDropEvent* event) {
+    const QList<QUrl> urls = event->mimeData()->urls();
+    if (urls.isEmpty() || !urls.first().isLocalFile()) return;
+    const QString path = urls.first().toLocalFile();
+    event->acceptProposedAction();
+    if (isProjectFile(path)) {
+        if (maybeSave()) openProject(path);
+    } else {
+        // An image dropped anywhere but on a slot goes to the normal slot.
+        m_panel->loadMap(MapSlot::Normal, path);
+    }
+}
+
+void MainWindow::restoreSettings() {
+    QSettings settings;
+    if (settings.contains("window/geometry"))
+        restoreGeometry(settings.value("window/geometry").toByteArray());
+    if (settings.contains("window/state")) restoreState(settings.value("window/state").toByteArray());
+    setAutosaveInterval(settings.value("autosaveSeconds", kDefaultAutosaveSeconds).toInt());
+}
+
+void MainWindow::saveSettings() {
+    QSettings settings;
+    settings.setValue("window/geometry", saveGeometry());
+    settings.setValue("window/state", saveState());
+}
+
+} // namespace burnish::studio

@@ -1,0 +1,105 @@
+// burnish-studio's main window: the material document with its undo stack, the central 2D texture
+// pane (the 3D viewport joins the central splitter later), dockable panels, menus with shortcuts,
+// the status bar, settings kept between runs, drag and drop, projects with autosave and recovery.
+#pragma once
+
+#include "material_document.h"
+
+#include <burnish/core/result.h>
+
+#include <QMainWindow>
+#include <QMessageBox>
+
+#include <functional>
+
+class QDockWidget;
+class QLabel;
+class QMenu;
+class QSplitter;
+class QTimer;
+
+namespace burnish::studio {
+
+class BakeDialog;
+class MaterialPanel;
+class PaintTool;
+class TexturePane;
+
+class MainWindow : public QMainWindow {
+    Q_OBJECT
+public:
+    explicit MainWindow(QWidget* parent = nullptr);
+    ~MainWindow() override;
+
+    MaterialDocument* document() const { return m_doc; }
+    MaterialPanel* materialPanel() const { return m_panel; }
+    TexturePane* texturePane() const { return m_texturePane; }
+    PaintTool* paintTool() const { return m_paintTool; }
+    /// The central splitter: the texture pane now, the 3D viewport beside it later.
+    QSplitter* centralSplitter() const { return m_central; }
+    BakeDialog* bakeDialog();
+    QString projectPath() const { return m_projectPath; }
+    bool isModified() const;
+
+    /// Opens a project: on any error the message is shown and the document stays as it was.
+    bool openProject(const QString& path);
+    bool saveProjectAs(const QString& path);
+    /// New document (the built-in sample), after asking about unsaved changes.
+    bool newDocument();
+    /// Writes the autosave copy when there are changes since the last save or autosave.
+    bool autosave();
+    void setAutosaveInterval(int seconds);
+    /// Offers to recover an autosave copy newer than the project (or of the untitled document).
+    void offerRecovery();
+    QStringList recentProjects() const;
+
+    /// How the window reports to the user; tests replace them to read the text without a modal box.
+    std::function<void(const QString& title, const QString& text)> showMessage;
+    /// Asks a question; returns the button chosen.
+    std::function<QMessageBox::StandardButton(const QString& title, const QString& text,
+                                              QMessageBox::StandardButtons buttons)>
+        ask;
+
+protected:
+    void closeEvent(QCloseEvent* event) override;
+    void dragEnterEvent(QDragEnterEvent* event) override;
+    void dropEvent(QDropEvent* event) override;
+
+private:
+    void buildMenus();
+    void updateTitle();
+    void updateStatus();
+    void updateRecentMenu();
+    void addRecent(const QString& path);
+    /// Save/Discard/Cancel when there are unsaved changes; false to stop.
+    bool maybeSave();
+    bool save();
+    bool saveAs();
+    void open();
+    void exportTextures();
+    void removeAutosave();
+    void restoreSettings();
+    void saveSettings();
+
+    MaterialDocument* m_doc;
+    QSplitter* m_central;
+    TexturePane* m_texturePane;
+    MaterialPanel* m_panel;
+    QDockWidget* m_materialDock;
+    QDockWidget* m_historyDock;
+    PaintTool* m_paintTool;
+    QDockWidget* m_paintDock;
+    BakeDialog* m_bakeDialog = nullptr;
+    QMenu* m_viewMenu = nullptr;
+    QMenu* m_recentMenu = nullptr;
+    QLabel* m_statusPower;
+    QLabel* m_statusGloss;
+    QLabel* m_statusMethod;
+    QLabel* m_statusPreset;
+    QTimer* m_autosaveTimer;
+    QString m_projectPath;
+    /// Undo index at the last autosave (-1: none since the last save).
+    int m_autosavedIndex = -1;
+};
+
+} // namespace burnish::studio

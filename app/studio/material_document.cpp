@@ -1,0 +1,471 @@
+#include "material_document.h"
+
+#include <burnish/core/bake.h>
+#include <burnish/core/env_sampling.h>
+#include <burnish/core/sample_maps.h>
+
+#include <QUndoCommand>
+
+#include <algorithm>
+#include <cmath>
+
+namespace burnish::studio {
+
+namespace {
+
+/// Merge ids of the edits a slider or colour drag repeats.
+enum MergeField {
+    kNoMerge = -1,
+    kGlossField = 1,
+    kAlbedoField = 2,
+    kSpecularField = 3,
+    kEnvironmentField = 4
+};
+
+class EditCommand : public QUndoCommand {
+public:
+    EditCommand(MaterialDocument* doc, MaterialSettings before, LoadedMaps beforeMaps, MaterialSettings after,
+                LoadedMaps afterMaps, const QString& text, int mergeField, int epoch)
+        : QUndoCommand(text)
+        , m_doc(doc)
+        , m_before(std::move(before))
+        , m_beforeMaps(std::move(beforeMaps))
+        , m_after(std::move(after))
+        , m_afterMaps(std::move(afterMaps))
+        , m_mergeField(mergeField)
+        , m_epoch(epoch) {}
+
+    void redo() override { m_doc->apply(m_after, m_afterMaps); }
+    void undo() override { m_doc->apply(m_before, m_beforeMaps); }
+    int id() const override { return m_mergeField; }
+    bool mergeWith(const QUndoCommand* other) override {
+        const auto* o = static_cast<const EditCommand*>(other);
+        if (o->m_epoch != m_epoch) return false;
+        m_after = o->m_after;
+        m_afterMaps = o->m_afterMaps;
+        return true;
+    }
+
+private:
+    MaterialDocument* m_doc;
+    MaterialSettings m_before;
+    LoadedMaps m_beforeMaps;
+    MaterialSettings m_after;
+    LoadedMaps m_afterMaps;
+    int m_mergeField;
+    int m_epoch;
+};
+
+LinearRgb clamped(const LinearRgb& c) {
+    return {clamp01(c.r), clamp01(c.g), clamp01(c.b)};
+}
+
+bool finiteRgb(const LinearRgb& c) {
+    return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b);
+}
+
+bool inUnitRange(const LinearRgb& c) {
+    return finiteRgb(c) && c.r >= 0 && c.r <= 1 && c.g >= 0 && c.g <= 1 && c.b >= 0 && c.b <= 1;
+}
+
+Result<const Preset*> builtinPreset(const QString& name) {
+    for (const auto& p : builtinPresets())
+        if (QString::fromStdString(p.name) == name) return &p;
+    return Error{"preset '" + name.toStdString() + "' is not known (known: " +
+                 QStringList([] {
+                     QStringList names;
+                     for (const auto& n : builtinPresetNames())
+                         names << QString::fromStdString(n);
+                     return names;
+                 }())
+                     .join(", ")
+                     .toStdString() +
+                 ")"};
+}
+
+} // namespace
+
+const char* mapSlotName(MapSlot slot) {
+    switch (slot) {
+    case MapSlot::Normal:
+        return "normal";
+    case MapSlot::Gloss:
+        return "gloss";
+    case MapSlot::Detail:
+        return "detail";
+    }
+    return "normal";
+}
+
+std::shared_ptr<const NormalMap> sampleNormalMap() {
+    static const auto sample =
+        std::make_shared<const NormalMap>(makeSampleNormalMap(SampleMapKind::Hammered, kSampleSize));
+    return sample;
+}
+
+MaterialDocument::MaterialDocument(QObject* parent)
+    : QObject(parent) {
+    m_settings = defaultSettings();
+    m_maps.normal = sampleNormalMap();
+    m_glossLayer = PaintLayer::create(PaintLayerKind::Gloss, kSampleSize, kSampleSize).value();
+    m_offsetLayer = PaintLayer::create(PaintLayerKind::VarianceOffset, kSampleSize, kSampleSize).value();
+    m_undo.setClean();
+}
+
+MaterialSettings MaterialDocument::defaultSettings() {
+    MaterialSettings s;
+    const MaterialTable& table = builtinMaterialTable();
+    if (const Material* m = table.find(kDefaultMaterial)) {
+        s.materialClass = m->materialClass;
+        s.specularName = QString::fromStdString(m->name);
+        s.specular = m->f0();
+    } else {
+        // A broken build without the table: the table's default dielectric F0 is not there either,
+        // so fall back to Lazarov 2011's hard-coded dielectric 0.03.
+        s.materialClass = MaterialClass::Dielectric;
+        s.specular = LinearRgb::grey(0.03);
+    }
+    // Metals have no diffuse term; a dark albedo keeps the default honest if switched to dielectric.
+    s.albedo = LinearRgb::grey(0.0);
+    if (auto p = builtinPreset(s.preset)) s.method = (*p)->method;
+    return s;
+}
+
+const Preset& MaterialDocument::preset() const {
+    if (auto p = builtinPreset(m_settings.preset)) return **p;
+    // validate() refuses unknown presets, so this is reached only by a build without presets.
+    static const Preset fallback;
+    return fallback;
+}
+
+std::vector<Method> MaterialDocument::availableMethods() const {
+    return compatibleMethods(preset());
+}
+
+double MaterialDocument::power() const {
+    return preset().encoding.power(m_settings.gloss);
+}
+
+QStringList MaterialDocument::diagnostics(MapSlot slot) const {
+    QStringList lines;
+    const NormalMapDiagnostics* d = nullptr;
+    const ImageSourceInfo* source = nullptr;
+    if (slot == MapSlot::Normal && m_maps.normal && !m_settings.normalMapPath.isEmpty()) {
+        d = &m_maps.normal->diagnostics;
+        source = &m_maps.normal->source;
+    } else if (slot == MapSlot::Detail && m_maps.detail) {
+        d = &m_maps.detail->diagnostics;
+        source = &m_maps.detail->source;
+    } else if (slot == MapSlot::Gloss && m_maps.gloss) {
+        source = &m_maps.gloss->source;
+    }
+    if (slot == MapSlot::Normal && m_settings.normalMapPath.isEmpty())
+        return {QString("built-in sample '%1', %2×%2").arg(kSampleName).arg(kSampleSize)};
+    if (source) {
+        int w = 0, h = 0;
+        if (slot == MapSlot::Gloss) {
+            w = m_maps.gloss->width;
+            h = m_maps.gloss->height;
+        } else {
+            const auto& map = slot == MapSlot::Normal ? *m_maps.normal : *m_maps.detail;
+            w = map.width;
+            h = map.height;
+        }
+        lines << QString("%1×%2, %3 %4")
+                     .arg(w)
+                     .arg(h)
+                     .arg(QString::fromStdString(source->formatName),
+                          QString::fromStdString(source->channelType));
+    }
+    if (d) {
+        QStringList flags;
+        if (d->zRebuilt) flags << "z rebuilt";
+        if (d->greenFlipped) flags << "green flipped";
+        if (d->alphaIgnored) flags << "alpha ignored";
+        if (d->signedValues) flags << "signed values";
+        if (!flags.isEmpty()) lines << flags.join(", ");
+        if (d->nonFiniteTexels || d->zeroLengthTexels)
+            lines << QString("%1 non-finite, %2 zero-length texels replaced by flat normals")
+                         .arg(d->nonFiniteTexels)
+                         .arg(d->zeroLengthTexels);
+        for (const auto& w : d->warnings)
+            lines << "warning: " + QString::fromStdString(w);
+    }
+    return lines;
+}
+
+void MaterialDocument::push(const MaterialSettings& after, const LoadedMaps& maps, const QString& text,
+                            int mergeField) {
+    if (after == m_settings && maps.normal == m_maps.normal && maps.gloss == m_maps.gloss &&
+        maps.detail == m_maps.detail)
+        return;
+    m_undo.push(new EditCommand(this, m_settings, m_maps, after, maps, text, mergeField, m_mergeEpoch));
+}
+
+void MaterialDocument::setMaterialClass(MaterialClass c) {
+    MaterialSettings s = m_settings;
+    s.materialClass = c;
+    push(s, m_maps, c == MaterialClass::Metal ? "Set metal" : "Set dielectric", kNoMerge);
+}
+
+Status MaterialDocument::setSpecularMaterial(const QString& name) {
+    const Material* m = builtinMaterialTable().find(name.toStdString());
+    if (!m) return Error{"material '" + name.toStdString() + "' is not in the calibrated table"};
+    MaterialSettings s = m_settings;
+    s.specularName = QString::fromStdString(m->name);
+    s.specular = m->f0();
+    s.materialClass = m->materialClass;
+    push(s, m_maps, "Specular: " + s.specularName, kNoMerge);
+    return {};
+}
+
+void MaterialDocument::setCustomSpecular(const LinearRgb& f0) {
+    MaterialSettings s = m_settings;
+    s.specularName.clear();
+    s.specular = clamped(f0);
+    push(s, m_maps, "Custom specular colour", kSpecularField);
+}
+
+void MaterialDocument::setAlbedo(const LinearRgb& albedo) {
+    MaterialSettings s = m_settings;
+    s.albedo = clamped(albedo);
+    push(s, m_maps, "Albedo", kAlbedoField);
+}
+
+void MaterialDocument::setGloss(double gloss, bool merge) {
+    MaterialSettings s = m_settings;
+    s.gloss = clamp01(gloss);
+    push(s, m_maps, QString("Gloss %1").arg(s.gloss, 0, 'f', 3), merge ? kGlossField : kNoMerge);
+}
+
+Status MaterialDocument::setMethod(Method method) {
+    if (const Status st = checkPresetMethod(preset(), method); !st) return st;
+    MaterialSettings s = m_settings;
+    s.method = method;
+    push(s, m_maps, "Method: " + QString::fromUtf8(methodName(method).data(), int(methodName(method).size())),
+         kNoMerge);
+    return {};
+}
+
+Status MaterialDocument::setPreset(const QString& name) {
+    const auto p = builtinPreset(name);
+    if (!p) return Error{p.error()};
+    MaterialSettings s = m_settings;
+    // Keep what the artist sees: the same power, written in the new preset's encoding.
+    s.gloss = (*p)->encoding.value(power());
+    s.preset = name;
+    if (!checkPresetMethod(**p, s.method)) s.method = (*p)->method;
+    push(s, m_maps, "Preset: " + name, kNoMerge);
+    return {};
+}
+
+Status MaterialDocument::loadMap(MapSlot slot, const QString& path) {
+    MaterialSettings s = m_settings;
+    switch (slot) {
+    case MapSlot::Normal:
+        s.normalMapPath = path;
+        break;
+    case MapSlot::Gloss:
+        s.glossMapPath = path;
+        break;
+    case MapSlot::Detail:
+        s.detailMapPath = path;
+        break;
+    }
+    auto maps = loadMaps(s);
+    if (!maps) return Error{maps.error()};
+    // Keep the maps of the other slots shared (no reload, same undo data).
+    LoadedMaps next = m_maps;
+    if (slot == MapSlot::Normal) next.normal = maps->normal;
+    if (slot == MapSlot::Gloss) next.gloss = maps->gloss;
+    if (slot == MapSlot::Detail) next.detail = maps->detail;
+    push(s, next, QString("Load %1 map").arg(mapSlotName(slot)), kNoMerge);
+    return {};
+}
+
+void MaterialDocument::clearMap(MapSlot slot) {
+    MaterialSettings s = m_settings;
+    LoadedMaps next = m_maps;
+    switch (slot) {
+    case MapSlot::Normal:
+        s.normalMapPath.clear();
+        next.normal = sampleNormalMap();
+        break;
+    case MapSlot::Gloss:
+        s.glossMapPath.clear();
+        next.gloss.reset();
+        break;
+    case MapSlot::Detail:
+        s.detailMapPath.clear();
+        next.detail.reset();
+        break;
+    }
+    if (slot == MapSlot::Normal && m_maps.gloss &&
+        (m_maps.gloss->width != next.normal->width || m_maps.gloss->height != next.normal->height)) {
+        // The gloss map is per normal-map texel: it cannot outlive a change of size.
+        s.glossMapPath.clear();
+        next.gloss.reset();
+    }
+    push(s, next, QString("Clear %1 map").arg(mapSlotName(slot)), kNoMerge);
+}
+
+void MaterialDocument::setExportSettings(const ExportSettings& exportSettings) {
+    MaterialSettings s = m_settings;
+    s.exportSettings = exportSettings;
+    push(s, m_maps, "Export settings", kNoMerge);
+}
+
+void MaterialDocument::setEnvironment(const EnvironmentSettings& environment, bool merge) {
+    MaterialSettings s = m_settings;
+    EnvironmentSettings e = environment;
+    // Non-finite values become the defaults; the rest is clamped to the ranges the settings promise.
+    e.rotationDegrees = std::isfinite(e.rotationDegrees) ? std::clamp(e.rotationDegrees, -180.0, 180.0) : 0.0;
+    e.intensity = std::isfinite(e.intensity) ? std::clamp(e.intensity, 0.0, kMaxEnvironmentIntensity) : 1.0;
+    e.fisSamples = std::clamp(e.fisSamples, 1, int(kMaxFisSamples));
+    s.environment = e;
+    push(s, m_maps, "Environment", merge ? kEnvironmentField : kNoMerge);
+}
+
+Status MaterialDocument::validate(const MaterialSettings& s) {
+    const auto p = builtinPreset(s.preset);
+    if (!p) return Error{p.error()};
+    if (const Status st = checkPresetMethod(**p, s.method); !st) return st;
+    if (!s.specularName.isEmpty()) {
+        const Material* m = builtinMaterialTable().find(s.specularName.toStdString());
+        if (!m)
+            return Error{"material '" + s.specularName.toStdString() + "' is not in the calibrated table"};
+    }
+    if (!inUnitRange(s.specular)) return Error{"the specular colour must have channels in [0, 1]"};
+    if (!inUnitRange(s.albedo)) return Error{"the albedo must have channels in [0, 1]"};
+    if (!(s.gloss >= 0.0 && s.gloss <= 1.0)) return Error{"the gloss must lie in [0, 1]"};
+    const ExportSettings& e = s.exportSettings;
+    if (!e.format.isEmpty() && !exportFormatFromName(e.format.toStdString()))
+        return Error{"export format '" + e.format.toStdString() + "' is not known"};
+    if (!e.compression.isEmpty() && !ddsCompressionFromName(e.compression.toStdString()))
+        return Error{"compression '" + e.compression.toStdString() + "' is not known"};
+    if (e.mips < 0) return Error{"the mip count must not be negative"};
+    const EnvironmentSettings& env = s.environment;
+    if (env.choice == EnvironmentChoice::File && env.path.isEmpty())
+        return Error{"the environment file is not set"};
+    if (!(env.intensity >= 0.0 && env.intensity <= kMaxEnvironmentIntensity))
+        return Error{"the environment intensity must lie in [0, 1024]"};
+    if (!(std::abs(env.rotationDegrees) <= 180.0))
+        return Error{"the environment rotation must lie in [-180, 180]"};
+    if (env.fisSamples < 1 || env.fisSamples > int(kMaxFisSamples))
+        return Error{"the environment sample count must lie in [1, 4096]"};
+    return {};
+}
+
+Result<LoadedMaps> MaterialDocument::loadMaps(const MaterialSettings& s) {
+    LoadedMaps maps;
+    if (s.normalMapPath.isEmpty()) {
+        maps.normal = sampleNormalMap();
+    } else {
+        auto normal = loadNormalMap(s.normalMapPath.toStdString());
+        if (!normal) return Error{"normal map: " + normal.error()};
+        maps.normal = std::make_shared<const NormalMap>(std::move(normal.value()));
+    }
+    if (!s.glossMapPath.isEmpty()) {
+        auto image = readImage(s.glossMapPath.toStdString());
+        if (!image) return Error{"gloss map: " + image.error()};
+        // The bake reads the gloss per normal-map texel: check it as the bake will.
+        if (auto gloss = glossFromImage(*image, maps.normal->width, maps.normal->height); !gloss)
+            return Error{"gloss map '" + s.glossMapPath.toStdString() + "': " + gloss.error()};
+        maps.gloss = std::make_shared<const Image>(std::move(image.value()));
+    }
+    if (!s.detailMapPath.isEmpty()) {
+        auto detail = loadNormalMap(s.detailMapPath.toStdString());
+        if (!detail) return Error{"detail map: " + detail.error()};
+        maps.detail = std::make_shared<const NormalMap>(std::move(detail.value()));
+    }
+    return maps;
+}
+
+Status MaterialDocument::reset(const MaterialSettings& settings, const std::vector<LayerFile>& layers) {
+    if (const Status st = validate(settings); !st) return st;
+    auto maps = loadMaps(settings);
+    if (!maps) return Error{maps.error()};
+    const int w = maps->normal->width, h = maps->normal->height;
+    auto gloss = PaintLayer::create(PaintLayerKind::Gloss, w, h);
+    auto offset = PaintLayer::create(PaintLayerKind::VarianceOffset, w, h);
+    if (!gloss || !offset) return Error{gloss ? offset.error() : gloss.error()};
+    for (const LayerFile& file : layers) {
+        auto layer = readPaintLayerExr(file.path.toStdString(), file.kind, w, h);
+        if (!layer) return Error{layer.error()};
+        (file.kind == PaintLayerKind::Gloss ? gloss : offset) = std::move(layer);
+    }
+    m_undo.clear();
+    m_glossLayer = std::move(gloss).value();
+    m_offsetLayer = std::move(offset).value();
+    m_authored.reset(); // recomposited by apply()
+    apply(settings, *maps);
+    m_undo.setClean();
+    return {};
+}
+
+void MaterialDocument::apply(const MaterialSettings& settings, const LoadedMaps& maps) {
+    const LoadedMaps old = m_maps;
+    const bool glossInputs = old.normal != maps.normal || old.gloss != maps.gloss ||
+                             m_settings.gloss != settings.gloss || m_settings.preset != settings.preset;
+    m_settings = settings;
+    m_maps = maps;
+    const int w = maps.normal->width, h = maps.normal->height;
+    if (m_glossLayer.width != w || m_glossLayer.height != h) {
+        // Layers are per normal-map texel: a map of another size starts unpainted.
+        m_glossLayer = PaintLayer::create(PaintLayerKind::Gloss, w, h).value();
+        m_offsetLayer = PaintLayer::create(PaintLayerKind::VarianceOffset, w, h).value();
+    }
+    if (glossInputs || !m_authored) recomposite(TexelRect::full(w, h), true);
+    if (old.normal != maps.normal) emit mapChanged(MapSlot::Normal);
+    if (old.gloss != maps.gloss) emit mapChanged(MapSlot::Gloss);
+    if (old.detail != maps.detail) emit mapChanged(MapSlot::Detail);
+    emit changed();
+}
+
+const PaintLayer& MaterialDocument::paintLayer(PaintLayerKind kind) const {
+    return kind == PaintLayerKind::Gloss ? m_glossLayer : m_offsetLayer;
+}
+
+PaintLayer& MaterialDocument::editablePaintLayer(PaintLayerKind kind) {
+    return kind == PaintLayerKind::Gloss ? m_glossLayer : m_offsetLayer;
+}
+
+void MaterialDocument::layerEdited(PaintLayerKind, const TexelRect& rect) {
+    if (rect.empty()) return;
+    recomposite(rect, false);
+    emit layersChanged(rect);
+}
+
+void MaterialDocument::applyPaintPatch(PaintLayerKind kind, const PaintPatch& patch) {
+    // Patches come from strokes on a layer of this size; one that does not fit changes nothing.
+    if (!applyPatch(editablePaintLayer(kind), patch)) return;
+    layerEdited(kind, patch.rect);
+    emit changed();
+}
+
+void MaterialDocument::recomposite(const TexelRect& rect, bool full) {
+    const int w = m_maps.normal->width, h = m_maps.normal->height;
+    std::vector<float> base;
+    if (m_maps.gloss) {
+        auto gloss = glossFromImage(*m_maps.gloss, w, h);
+        if (gloss) base = std::move(gloss).value();
+    }
+    const bool painted = m_glossLayer.painted() || m_offsetLayer.painted();
+    if (base.empty() && !painted) {
+        m_authored.reset(); // nothing authored per texel: the bake uses the base power
+        return;
+    }
+    TexelRect region = rect;
+    if (full || !m_authored) {
+        m_authored = std::make_shared<std::vector<float>>(size_t(w) * size_t(h));
+        region = TexelRect::full(w, h);
+    } else if (m_authored.use_count() > 1) {
+        // Someone (the renderer, a bake) holds the current values: write a new copy.
+        m_authored = std::make_shared<std::vector<float>>(*m_authored);
+    }
+    // Sizes match by construction (layers follow the normal map, loadMaps checks the gloss map).
+    (void)compositeAuthoredGloss(base.empty() ? nullptr : &base, m_settings.gloss, &m_glossLayer,
+                                 &m_offsetLayer, preset().encoding, w, h, region, *m_authored);
+}
+
+} // namespace burnish::studio

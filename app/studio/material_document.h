@@ -1,0 +1,193 @@
+// The studio's one source of truth: the material being authored (class, specular colour, albedo,
+// base gloss, maps, method, preset, export settings). Every edit is a QUndoCommand on the
+// document's stack; views listen to changed() and never keep their own copy.
+#pragma once
+
+#include <burnish/core/color.h>
+#include <burnish/core/environment.h>
+#include <burnish/core/image.h>
+#include <burnish/core/materials.h>
+#include <burnish/core/methods.h>
+#include <burnish/core/normal_map.h>
+#include <burnish/core/paint.h>
+#include <burnish/core/presets.h>
+#include <burnish/core/result.h>
+
+#include <QObject>
+#include <QString>
+#include <QUndoStack>
+
+#include <memory>
+#include <vector>
+
+namespace burnish::studio {
+
+/// The material slots that take an image file.
+enum class MapSlot { Normal, Gloss, Detail };
+const char* mapSlotName(MapSlot slot); // "normal", "gloss", "detail"
+
+/// What the Bake & Export dialog writes (saved with the project).
+struct ExportSettings {
+    QString format;      // an export format name; empty = the preset's default
+    QString compression; // a DDS compression name; empty = each file's preset choice
+    int mips = 0;        // mip levels written; 0 = the whole chain
+    QString outputFolder;
+    bool overwrite = false;
+    friend bool operator==(const ExportSettings&, const ExportSettings&) = default;
+};
+
+/// Where the viewport's environment lighting comes from.
+enum class EnvironmentChoice { Off, ProceduralStudio, File };
+
+/// The viewport's environment (saved with the settings, undoable like every edit): the source, its
+/// rotation and intensity, the prefilter lobe, and filtered importance sampling instead of the
+/// prefiltered map.
+struct EnvironmentSettings {
+    EnvironmentChoice choice = EnvironmentChoice::ProceduralStudio;
+    QString path;                 // for File: an equirectangular .exr/.hdr/.tif, absolute
+    double rotationDegrees = 0.0; // about +y, [-180, 180]
+    double intensity = 1.0;       // linear radiance scale, [0, kMaxEnvironmentIntensity]
+    LobeModel lobe = LobeModel::BlinnPhong;
+    bool fis = false;    // filtered importance sampling at shading time
+    int fisSamples = 64; // taps per pixel, [1, kMaxFisSamples of env_sampling.h]
+    friend bool operator==(const EnvironmentSettings&, const EnvironmentSettings&) = default;
+};
+/// The highest environment intensity the studio accepts (a 2^10 exposure range above 1).
+inline constexpr double kMaxEnvironmentIntensity = 1024.0;
+
+/// Every user-visible setting of a material. Paths are absolute; an empty normal-map path means
+/// the built-in sample.
+struct MaterialSettings {
+    MaterialClass materialClass = MaterialClass::Metal;
+    QString specularName; // a calibrated material of core's table; empty = custom colour
+    LinearRgb specular;   // linear F0
+    LinearRgb albedo;     // linear diffuse albedo (0 for metals by convention, kept as set)
+    double gloss = 0.7;   // base gloss in the preset's gloss encoding, [0, 1]
+    QString normalMapPath;
+    QString glossMapPath;
+    QString detailMapPath;
+    Method method = Method::VarianceToGloss;
+    QString preset = "blackops";
+    ExportSettings exportSettings;
+    EnvironmentSettings environment;
+    friend bool operator==(const MaterialSettings&, const MaterialSettings&) = default;
+};
+
+/// The decoded maps that go with a MaterialSettings (shared, immutable: undo steps share them).
+struct LoadedMaps {
+    std::shared_ptr<const NormalMap> normal; // never null: the sample when no path is set
+    std::shared_ptr<const Image> gloss;      // null when no gloss map
+    std::shared_ptr<const NormalMap> detail; // null when no detail map
+};
+
+/// A painted layer saved as a file (a project's "layers" entry; path absolute).
+struct LayerFile {
+    PaintLayerKind kind = PaintLayerKind::Gloss;
+    QString path;
+};
+
+/// Name of the built-in sample a new document starts with.
+inline constexpr const char* kSampleName = "hammered";
+/// Side of the built-in sample map in texels.
+inline constexpr int kSampleSize = 512;
+/// The calibrated material a new document starts with.
+inline constexpr const char* kDefaultMaterial = "iron";
+
+class MaterialDocument : public QObject {
+    Q_OBJECT
+public:
+    explicit MaterialDocument(QObject* parent = nullptr);
+
+    const MaterialSettings& settings() const { return m_settings; }
+    const LoadedMaps& maps() const { return m_maps; }
+    QUndoStack* undoStack() { return &m_undo; }
+
+    /// The preset named by settings().preset (a built-in; never fails on a valid document).
+    const Preset& preset() const;
+    /// Methods the current preset can store, in report order.
+    std::vector<Method> availableMethods() const;
+    /// Blinn-Phong power of the base gloss under the preset's encoding.
+    double power() const;
+    /// The diagnostics the decoder reported for a slot's map, as short lines (empty when none).
+    QStringList diagnostics(MapSlot slot) const;
+
+    // Edits: each pushes one undo step (nothing when the value does not change).
+    void setMaterialClass(MaterialClass c);
+    /// Specular colour from core's calibrated table; fails on an unknown name.
+    Status setSpecularMaterial(const QString& name);
+    /// A custom linear specular colour (channels clamped to [0, 1]).
+    void setCustomSpecular(const LinearRgb& f0);
+    void setAlbedo(const LinearRgb& albedo);
+    /// Base gloss in [0, 1]. With merge, consecutive calls inside one drag become one undo step.
+    void setGloss(double gloss, bool merge = false);
+    /// Ends a slider drag: the next merging edit starts a new undo step.
+    void endMerge() { ++m_mergeEpoch; }
+    /// Fails when the preset cannot store the method.
+    Status setMethod(Method method);
+    /// Switches preset keeping the base power (gloss re-encoded); the method is kept when the
+    /// preset stores it, else the preset's default. Fails on an unknown preset.
+    Status setPreset(const QString& name);
+    /// Loads a map through core (loadNormalMap / readImage); on error nothing changes.
+    Status loadMap(MapSlot slot, const QString& path);
+    /// Removes a map (the normal slot returns to the built-in sample).
+    void clearMap(MapSlot slot);
+    void setExportSettings(const ExportSettings& exportSettings);
+    /// The viewport's environment; out-of-range values are clamped. With merge, consecutive calls
+    /// inside one slider drag become one undo step (ended by endMerge()).
+    void setEnvironment(const EnvironmentSettings& environment, bool merge = false);
+
+    /// Replaces the whole document (a loaded project): every map is loaded and every name checked
+    /// first; on error nothing changes. Clears the undo history and marks the document clean.
+    /// `layers` are painted layers to load (EXR files of the normal map's size).
+    Status reset(const MaterialSettings& settings, const std::vector<LayerFile>& layers = {});
+    /// The settings of a new document: the calibrated default material on the built-in sample.
+    static MaterialSettings defaultSettings();
+
+    /// Loads the maps of `settings` without touching the document.
+    static Result<LoadedMaps> loadMaps(const MaterialSettings& settings);
+    /// Checks the names of `settings` (preset, method for the preset, material, values in range).
+    static Status validate(const MaterialSettings& settings);
+
+    /// Applies a state without an undo step (used by the undo commands).
+    void apply(const MaterialSettings& settings, const LoadedMaps& maps);
+
+    // Painting (paint_tool.h): two layers of the normal map's size, composited into the authored
+    // gloss the bake and the renderer read. Strokes are undo steps of the paint tool.
+    const PaintLayer& paintLayer(PaintLayerKind kind) const;
+    /// The authored gloss with the layers applied, one value per normal-map texel in the preset's
+    /// encoding; null when there is no gloss map and nothing is painted (the base power applies).
+    /// A new pointer after every change, so the renderer's bake cache (keyed on it) sees it.
+    std::shared_ptr<const std::vector<float>> authoredGloss() const { return m_authored; }
+    /// The layer a stroke in progress paints into; report each change with layerEdited().
+    PaintLayer& editablePaintLayer(PaintLayerKind kind);
+    /// Recomposites the authored gloss inside `rect` and emits layersChanged(rect).
+    void layerEdited(PaintLayerKind kind, const TexelRect& rect);
+    /// Writes a patch into a layer (the paint undo commands), then as layerEdited and changed().
+    void applyPaintPatch(PaintLayerKind kind, const PaintPatch& patch);
+
+signals:
+    /// Any setting changed (by an edit, undo/redo or reset).
+    void changed();
+    /// A slot's map changed (loaded, cleared, undone or reset).
+    void mapChanged(MapSlot slot);
+    /// Painted texels changed inside `rect` (finest texels of the normal map).
+    void layersChanged(burnish::TexelRect rect);
+
+private:
+    void push(const MaterialSettings& after, const LoadedMaps& maps, const QString& text, int mergeField);
+    /// Recomputes the authored gloss inside `rect` (all of it when the inputs changed).
+    void recomposite(const TexelRect& rect, bool full);
+
+    MaterialSettings m_settings;
+    LoadedMaps m_maps;
+    QUndoStack m_undo;
+    int m_mergeEpoch = 0;
+    PaintLayer m_glossLayer;
+    PaintLayer m_offsetLayer;
+    std::shared_ptr<std::vector<float>> m_authored;
+};
+
+/// The built-in sample normal map (shared; made once).
+std::shared_ptr<const NormalMap> sampleNormalMap();
+
+} // namespace burnish::studio

@@ -1,0 +1,324 @@
+#include "material_panel.h"
+
+#include <QColorDialog>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QDragEnterEvent>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QFormLayout>
+#include <QGroupBox>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QMimeData>
+#include <QPushButton>
+#include <QSettings>
+#include <QSlider>
+#include <QVBoxLayout>
+
+#include <cmath>
+
+namespace burnish::studio {
+
+namespace {
+
+QString qs(std::string_view s) {
+    return QString::fromUtf8(s.data(), int(s.size()));
+}
+
+QLabel* swatch(QWidget* parent) {
+    auto* l = new QLabel(parent);
+    l->setFixedSize(36, 22);
+    l->setFrameShape(QFrame::Box);
+    return l;
+}
+
+void paintSwatch(QLabel* label, const LinearRgb& c) {
+    label->setStyleSheet(QString("background: %1; border: 1px solid #111;").arg(srgbHex(c)));
+}
+
+QColor toQColor(const LinearRgb& c) {
+    const Srgb8 s = toSrgb8(c);
+    return QColor(s.r, s.g, s.b);
+}
+
+LinearRgb fromQColor(const QColor& c) {
+    return {srgb8ToLinear(uint8_t(c.red())), srgb8ToLinear(uint8_t(c.green())),
+            srgb8ToLinear(uint8_t(c.blue()))};
+}
+
+const QString kImageFilter =
+    "Images (*.png *.tga *.jpg *.jpeg *.exr *.tif *.tiff *.dds *.hdr);;All files (*)";
+
+} // namespace
+
+QString srgbHex(const LinearRgb& c) {
+    return toQColor(c).name(QColor::HexRgb);
+}
+
+QString colorText(const LinearRgb& c) {
+    const Srgb8 s = toSrgb8(c);
+    return QString("sRGB %1 %2 %3 · linear %4 %5 %6")
+        .arg(s.r)
+        .arg(s.g)
+        .arg(s.b)
+        .arg(c.r, 0, 'f', 3)
+        .arg(c.g, 0, 'f', 3)
+        .arg(c.b, 0, 'f', 3);
+}
+
+MapSlotWidget::MapSlotWidget(MapSlot slot, const QString& title, QWidget* parent)
+    : QFrame(parent)
+    , m_slot(slot) {
+    setAcceptDrops(true);
+    setFrameShape(QFrame::StyledPanel);
+    setObjectName("mapSlot");
+    auto* name = new QLabel("<b>" + title + "</b>", this);
+    m_file = new QLabel(this);
+    m_file->setTextInteractionFlags(Qt::TextSelectableByMouse);
+    m_diagnostics = new QLabel(this);
+    m_diagnostics->setWordWrap(true);
+    m_diagnostics->setStyleSheet("color: palette(mid);");
+    auto* load = new QPushButton("Load…", this);
+    m_clear = new QPushButton("Clear", this);
+    load->setToolTip("Load an image into this slot (or drop one here)");
+    connect(load, &QPushButton::clicked, this, [this] { emit loadRequested(m_slot, {}); });
+    connect(m_clear, &QPushButton::clicked, this, [this] { emit clearRequested(m_slot); });
+
+    auto* top = new QHBoxLayout;
+    top->addWidget(name);
+    top->addStretch(1);
+    top->addWidget(load);
+    top->addWidget(m_clear);
+    auto* layout = new QVBoxLayout(this);
+    layout->setContentsMargins(8, 6, 8, 6);
+    layout->setSpacing(2);
+    layout->addLayout(top);
+    layout->addWidget(m_file);
+    layout->addWidget(m_diagnostics);
+}
+
+void MapSlotWidget::setState(const QString& path, const QStringList& diagnostics, bool isSample) {
+    m_file->setText(path.isEmpty() ? (isSample ? "built-in sample" : "— none (drop an image here) —")
+                                   : QFileInfo(path).fileName());
+    m_file->setToolTip(path);
+    m_diagnostics->setText(diagnostics.join("\n"));
+    m_diagnostics->setVisible(!diagnostics.isEmpty());
+    m_clear->setEnabled(!path.isEmpty());
+}
+
+void MapSlotWidget::dragEnterEvent(QDragEnterEvent* event) {
+    if (event->mimeData()->hasUrls() && event->mimeData()->urls().first().isLocalFile()) {
+        event->acceptProposedAction();
+        setStyleSheet("#mapSlot { border: 1px solid palette(highlight); }");
+    }
+}
+
+void MapSlotWidget::dragLeaveEvent(QDragLeaveEvent*) {
+    setStyleSheet({});
+}
+
+void MapSlotWidget::dropEvent(QDropEvent* event) {
+    setStyleSheet({});
+    const QList<QUrl> urls = event->mimeData()->urls();
+    if (urls.isEmpty() || !urls.first().isLocalFile()) return;
+    event->acceptProposedAction();
+    emit loadRequested(m_slot, urls.first().toLocalFile());
+}
+
+MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
+    : QWidget(parent)
+    , m_doc(doc) {
+    m_preset = new QComboBox(this);
+    for (const auto& p : builtinPresets())
+        m_preset->addItem(QString::fromStdString(p.name), QString::fromStdString(p.name));
+    m_preset->setToolTip("Engine preset: gloss encoding, packing and default method");
+    m_method = new QComboBox(this);
+    m_method->setToolTip("Prefiltering method (those the preset can store)");
+    m_class = new QComboBox(this);
+    m_class->addItem("Metal", int(MaterialClass::Metal));
+    m_class->addItem("Dielectric", int(MaterialClass::Dielectric));
+
+    m_specular = new QComboBox(this);
+    for (const auto& m : builtinMaterialTable().materials)
+        m_specular->addItem(QString("%1 (%2)").arg(QString::fromStdString(m.name), toString(m.materialClass)),
+                            QString::fromStdString(m.name));
+    m_specular->addItem("Custom colour…", QString());
+    m_specular->setToolTip("Calibrated specular colour (F0) from core's material table, or a custom colour");
+    m_specularSwatch = swatch(this);
+    m_specularValues = new QLabel(this);
+    m_albedoSwatch = swatch(this);
+    m_albedoValues = new QLabel(this);
+    auto* albedoButton = new QPushButton("Choose…", this);
+
+    m_glossSlider = new QSlider(Qt::Horizontal, this);
+    m_glossSlider->setRange(0, kGlossSteps);
+    m_glossSpin = new QDoubleSpinBox(this);
+    m_glossSpin->setRange(0.0, 1.0);
+    m_glossSpin->setDecimals(3);
+    m_glossSpin->setSingleStep(0.01);
+    m_power = new QLabel(this);
+    m_power->setMinimumWidth(90);
+    m_encoding = new QLabel(this);
+    m_encoding->setStyleSheet("color: palette(mid);");
+
+    auto* materialBox = new QGroupBox("Material", this);
+    auto* form = new QFormLayout(materialBox);
+    form->setLabelAlignment(Qt::AlignRight);
+    form->addRow("Preset", m_preset);
+    form->addRow("Method", m_method);
+    form->addRow("Class", m_class);
+    form->addRow("Specular", m_specular);
+    auto* specRow = new QHBoxLayout;
+    specRow->addWidget(m_specularSwatch);
+    specRow->addWidget(m_specularValues, 1);
+    form->addRow("", specRow);
+    auto* albedoRow = new QHBoxLayout;
+    albedoRow->addWidget(m_albedoSwatch);
+    albedoRow->addWidget(m_albedoValues, 1);
+    albedoRow->addWidget(albedoButton);
+    form->addRow("Albedo", albedoRow);
+    auto* glossRow = new QHBoxLayout;
+    glossRow->addWidget(m_glossSlider, 1);
+    glossRow->addWidget(m_glossSpin);
+    glossRow->addWidget(m_power);
+    form->addRow("Gloss", glossRow);
+    form->addRow("", m_encoding);
+
+    auto* mapsBox = new QGroupBox("Maps", this);
+    auto* mapsLayout = new QVBoxLayout(mapsBox);
+    m_slots[0] = new MapSlotWidget(MapSlot::Normal, "Normal", this);
+    m_slots[1] = new MapSlotWidget(MapSlot::Gloss, "Gloss", this);
+    m_slots[2] = new MapSlotWidget(MapSlot::Detail, "Detail normal", this);
+    for (auto* s : m_slots) {
+        mapsLayout->addWidget(s);
+        connect(s, &MapSlotWidget::loadRequested, this, &MaterialPanel::loadMap);
+        connect(s, &MapSlotWidget::clearRequested, m_doc, &MaterialDocument::clearMap);
+    }
+
+    // Combos size to a short minimum and stretch with the dock, never forcing a horizontal scroll.
+    for (QComboBox* c : {m_preset, m_method, m_class, m_specular}) {
+        c->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+        c->setMinimumContentsLength(12);
+    }
+    m_specularValues->setWordWrap(true);
+    m_albedoValues->setWordWrap(true);
+    m_encoding->setWordWrap(true);
+
+    auto* layout = new QVBoxLayout(this);
+    layout->setContentsMargins(8, 8, 8, 8);
+    layout->setSpacing(10);
+    layout->addWidget(materialBox);
+    layout->addWidget(mapsBox);
+    layout->addStretch(1);
+
+    connect(m_preset, &QComboBox::activated, this, [this](int i) {
+        if (const Status st = m_doc->setPreset(m_preset->itemData(i).toString()); !st)
+            emit errorOccurred("Preset", QString::fromStdString(st.error()));
+    });
+    connect(m_method, &QComboBox::activated, this, [this](int i) {
+        if (const Status st = m_doc->setMethod(Method(m_method->itemData(i).toInt())); !st)
+            emit errorOccurred("Method", QString::fromStdString(st.error()));
+    });
+    connect(m_class, &QComboBox::activated, this,
+            [this](int i) { m_doc->setMaterialClass(MaterialClass(m_class->itemData(i).toInt())); });
+    connect(m_specular, &QComboBox::activated, this, [this](int i) {
+        const QString name = m_specular->itemData(i).toString();
+        if (name.isEmpty()) {
+            chooseCustomSpecular();
+            refresh(); // a cancelled dialog puts the combo back on the document's choice
+            return;
+        }
+        if (const Status st = m_doc->setSpecularMaterial(name); !st)
+            emit errorOccurred("Specular colour", QString::fromStdString(st.error()));
+    });
+    connect(albedoButton, &QPushButton::clicked, this, &MaterialPanel::chooseAlbedo);
+    connect(m_glossSlider, &QSlider::valueChanged, this, [this](int v) {
+        if (!m_refreshing) m_doc->setGloss(double(v) / kGlossSteps, m_glossSlider->isSliderDown());
+    });
+    connect(m_glossSlider, &QSlider::sliderReleased, m_doc, &MaterialDocument::endMerge);
+    connect(m_glossSpin, &QDoubleSpinBox::valueChanged, this, [this](double v) {
+        if (!m_refreshing) m_doc->setGloss(v, false);
+    });
+    connect(m_doc, &MaterialDocument::changed, this, &MaterialPanel::refresh);
+    refresh();
+}
+
+MapSlotWidget* MaterialPanel::slotWidget(MapSlot slot) const {
+    return m_slots[int(slot)];
+}
+
+void MaterialPanel::loadMap(MapSlot slot, const QString& requested) {
+    QString path = requested;
+    if (path.isEmpty()) {
+        QSettings settings;
+        path = QFileDialog::getOpenFileName(this, QString("Load %1 map").arg(mapSlotName(slot)),
+                                            settings.value("folders/maps").toString(), kImageFilter);
+        if (path.isEmpty()) return;
+        settings.setValue("folders/maps", QFileInfo(path).absolutePath());
+    }
+    if (const Status st = m_doc->loadMap(slot, QFileInfo(path).absoluteFilePath()); !st)
+        emit errorOccurred(QString("Cannot load the %1 map").arg(mapSlotName(slot)),
+                           QString::fromStdString(st.error()));
+}
+
+void MaterialPanel::chooseCustomSpecular() {
+    const QColor c =
+        QColorDialog::getColor(toQColor(m_doc->settings().specular), this, "Custom specular colour (sRGB)");
+    if (c.isValid()) m_doc->setCustomSpecular(fromQColor(c));
+}
+
+void MaterialPanel::chooseAlbedo() {
+    const QColor c = QColorDialog::getColor(toQColor(m_doc->settings().albedo), this, "Albedo (sRGB)");
+    if (c.isValid()) m_doc->setAlbedo(fromQColor(c));
+}
+
+void MaterialPanel::refresh() {
+    m_refreshing = true;
+    const MaterialSettings& s = m_doc->settings();
+    m_preset->setCurrentIndex(m_preset->findData(s.preset));
+    m_preset->setToolTip(QString::fromStdString(m_doc->preset().title + "\n" + m_doc->preset().conversion));
+
+    m_method->clear();
+    for (Method m : m_doc->availableMethods())
+        m_method->addItem(qs(methodName(m)), int(m));
+    m_method->setCurrentIndex(m_method->findData(int(s.method)));
+    m_method->setToolTip(qs(methodDescription(s.method)));
+
+    m_class->setCurrentIndex(m_class->findData(int(s.materialClass)));
+    m_specular->setCurrentIndex(m_specular->findData(s.specularName));
+    paintSwatch(m_specularSwatch, s.specular);
+    m_specularValues->setText(colorText(s.specular));
+    const F0Classification f0 = classifyF0(builtinMaterialTable(), s.specular);
+    m_specularValues->setToolTip(
+        QString("classified as %1%2").arg(toString(f0.f0Class), f0.tinted ? ", tinted" : ""));
+    paintSwatch(m_albedoSwatch, s.albedo);
+    m_albedoValues->setText(colorText(s.albedo));
+
+    m_glossSlider->setValue(int(std::lround(s.gloss * kGlossSteps)));
+    m_glossSpin->setValue(s.gloss);
+    m_power->setText(QString("power %1").arg(m_doc->power(), 0, 'g', 5));
+    const Preset& preset = m_doc->preset();
+    m_encoding->setText(QString("encoding %1: %2")
+                            .arg(QString::fromStdString(preset.encoding.name()),
+                                 QString::fromStdString(preset.encoding.formula())));
+
+    for (auto* slot : m_slots) {
+        QString path;
+        switch (slot->slot()) {
+        case MapSlot::Normal:
+            path = s.normalMapPath;
+            break;
+        case MapSlot::Gloss:
+            path = s.glossMapPath;
+            break;
+        case MapSlot::Detail:
+            path = s.detailMapPath;
+            break;
+        }
+        slot->setState(path, m_doc->diagnostics(slot->slot()), slot->slot() == MapSlot::Normal);
+    }
+    m_refreshing = false;
+}
+
+} // namespace burnish::studio

@@ -1,0 +1,96 @@
+// The material panel (a dock): preset, method, metal/dielectric, specular colour (core's calibrated
+// table or a custom colour, shown as sRGB and linear), albedo, base gloss with its power, and the
+// normal/gloss/detail map slots (drop an image on a slot, or Load…). Every control edits the
+// MaterialDocument; the panel redraws from the document's changed() signal.
+#pragma once
+
+#include "material_document.h"
+
+#include <QFrame>
+#include <QWidget>
+
+class QCheckBox;
+class QComboBox;
+class QDoubleSpinBox;
+class QLabel;
+class QPushButton;
+class QSlider;
+
+namespace burnish::studio {
+
+/// One image slot: title, file name, Load…/Clear, the decoder's diagnostics; accepts dropped files.
+class MapSlotWidget : public QFrame {
+    Q_OBJECT
+public:
+    MapSlotWidget(MapSlot slot, const QString& title, QWidget* parent = nullptr);
+    MapSlot slot() const { return m_slot; }
+    void setState(const QString& path, const QStringList& diagnostics, bool isSample);
+
+signals:
+    void loadRequested(MapSlot slot, const QString& path); // path empty: ask with a file dialog
+    void clearRequested(MapSlot slot);
+
+protected:
+    void dragEnterEvent(QDragEnterEvent* event) override;
+    void dragLeaveEvent(QDragLeaveEvent* event) override;
+    void dropEvent(QDropEvent* event) override;
+
+private:
+    MapSlot m_slot;
+    QLabel* m_file;
+    QLabel* m_diagnostics;
+    QPushButton* m_clear;
+};
+
+class MaterialPanel : public QWidget {
+    Q_OBJECT
+public:
+    explicit MaterialPanel(MaterialDocument* doc, QWidget* parent = nullptr);
+
+    // The controls, for tests and for the main window's shortcuts.
+    QComboBox* presetCombo() const { return m_preset; }
+    QComboBox* methodCombo() const { return m_method; }
+    QComboBox* classCombo() const { return m_class; }
+    QComboBox* specularCombo() const { return m_specular; }
+    QSlider* glossSlider() const { return m_glossSlider; }
+    QDoubleSpinBox* glossSpin() const { return m_glossSpin; }
+    MapSlotWidget* slotWidget(MapSlot slot) const;
+
+    /// Loads a map into a slot; errors go to errorOccurred and change nothing.
+    void loadMap(MapSlot slot, const QString& path);
+
+    /// Slider steps across the gloss range [0, 1].
+    static constexpr int kGlossSteps = 1000;
+
+signals:
+    /// A one-line message for the user (a map that failed to load, ...).
+    void errorOccurred(const QString& title, const QString& message);
+
+private:
+    void refresh();
+    void chooseCustomSpecular();
+    void chooseAlbedo();
+
+    MaterialDocument* m_doc;
+    QComboBox* m_preset;
+    QComboBox* m_method;
+    QComboBox* m_class;
+    QComboBox* m_specular;
+    QLabel* m_specularSwatch;
+    QLabel* m_specularValues;
+    QLabel* m_albedoSwatch;
+    QLabel* m_albedoValues;
+    QSlider* m_glossSlider;
+    QDoubleSpinBox* m_glossSpin;
+    QLabel* m_power;
+    QLabel* m_encoding;
+    MapSlotWidget* m_slots[3];
+    bool m_refreshing = false;
+};
+
+/// "#rrggbb" of a linear colour's sRGB encoding.
+QString srgbHex(const LinearRgb& c);
+/// "sRGB 212 212 212 · linear 0.651 0.651 0.651".
+QString colorText(const LinearRgb& c);
+
+} // namespace burnish::studio

@@ -1,0 +1,397 @@
+#include "paint_tool.h"
+
+#include "texture_view.h"
+#include "viewport.h"
+
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QFormLayout>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QPushButton>
+#include <QSpinBox>
+#include <QUndoCommand>
+
+#include <algorithm>
+#include <cmath>
+
+namespace burnish::studio {
+
+namespace {
+
+// A jump of more than a quarter of the map between two viewport events is a UV seam or another
+// island, not a drag: the stroke restarts there instead of drawing a line across the map.
+constexpr double kSeamJumpFraction = 0.25;
+// Over-shining texels: the warning colour over the grey at this strength, so the gloss under it
+// stays readable.
+constexpr double kOverShineMix = 0.65;
+
+/// One stroke (or a clear) on a layer: the changed rectangle before and after.
+class PaintCommand : public QUndoCommand {
+public:
+    PaintCommand(MaterialDocument* doc, PaintLayerKind kind, PaintPatch before, PaintPatch after,
+                 const QString& text)
+        : QUndoCommand(text)
+        , m_doc(doc)
+        , m_kind(kind)
+        , m_before(std::move(before))
+        , m_after(std::move(after)) {}
+
+    // The first redo (from push) writes what the stroke already painted: harmless, and it tells
+    // the document's listeners that the stroke is done.
+    void redo() override { m_doc->applyPaintPatch(m_kind, m_after); }
+    void undo() override { m_doc->applyPaintPatch(m_kind, m_before); }
+
+private:
+    MaterialDocument* m_doc;
+    PaintLayerKind m_kind;
+    PaintPatch m_before;
+    PaintPatch m_after;
+};
+
+QString qs(std::string_view s) {
+    return QString::fromUtf8(s.data(), int(s.size()));
+}
+
+uchar toByte(double v) {
+    return uchar(std::lround(std::clamp(v, 0.0, 1.0) * 255.0));
+}
+
+} // namespace
+
+PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
+    : QWidget(parent)
+    , m_doc(doc)
+    , m_view(view) {
+    m_paintButton = new QPushButton("Paint", this);
+    m_paintButton->setCheckable(true);
+    m_paintButton->setToolTip("Paint mode: the left button paints on the texture view and the 3D view");
+    m_layerCombo = new QComboBox(this);
+    m_layerCombo->addItem("Gloss", int(PaintLayerKind::Gloss));
+    m_layerCombo->addItem("Variance offset", int(PaintLayerKind::VarianceOffset));
+    m_layerCombo->setToolTip(
+        "Gloss replaces the authored gloss; a variance offset adds roughness as 1/(n+1)");
+    auto spin = [this](double lo, double hi, double step, int decimals, const QString& tip) {
+        auto* s = new QDoubleSpinBox(this);
+        s->setRange(lo, hi);
+        s->setSingleStep(step);
+        s->setDecimals(decimals);
+        s->setToolTip(tip);
+        return s;
+    };
+    m_radiusSpin = spin(kMinBrushRadius, 1024.0, 1.0, 1, "Brush radius in texels of the finest level");
+    m_hardnessSpin = spin(0.0, 1.0, 0.05, 2, "Fraction of the radius painted at full strength");
+    m_opacitySpin = spin(0.0, 1.0, 0.05, 2, "The most one stroke changes a texel");
+    m_valueSpin = spin(0.0, 1.0, 0.01, 3, "Gloss (preset encoding) or variance painted");
+    m_eyedropperButton = new QPushButton("Eyedropper", this);
+    m_eyedropperButton->setCheckable(true);
+    m_eyedropperButton->setToolTip("Pick the value under the cursor on the next click");
+    m_clearButton = new QPushButton("Clear layer", this);
+    m_overShineCheck = new QCheckBox("Show over-shine", this);
+    m_overShineCheck->setChecked(true);
+    m_overShineCheck->setToolTip(
+        "Mark texels whose painted gloss asks for more shine than the normal variance "
+        "at the chosen mip permits: there the highlight aliases");
+    m_showBakedCheck = new QCheckBox("Show the live bake at the mip", this);
+    m_mipSpin = new QSpinBox(this);
+    m_mipSpin->setPrefix("mip ");
+    m_mipSpin->setRange(0, 16);
+    m_status = new QLabel(this);
+    m_status->setWordWrap(true);
+
+    auto* buttons = new QHBoxLayout;
+    buttons->addWidget(m_paintButton);
+    buttons->addWidget(m_eyedropperButton);
+    buttons->addWidget(m_clearButton);
+    auto* form = new QFormLayout(this);
+    form->addRow(buttons);
+    form->addRow("Layer", m_layerCombo);
+    form->addRow("Radius", m_radiusSpin);
+    form->addRow("Hardness", m_hardnessSpin);
+    form->addRow("Opacity", m_opacitySpin);
+    form->addRow("Value", m_valueSpin);
+    form->addRow(m_overShineCheck, m_mipSpin);
+    form->addRow(m_showBakedCheck);
+    form->addRow(m_status);
+
+    syncWidgets();
+    m_mipSpin->setValue(m_overShineMip);
+    connect(m_paintButton, &QPushButton::toggled, this, &PaintTool::setPaintMode);
+    connect(m_eyedropperButton, &QPushButton::toggled, this, &PaintTool::setEyedropper);
+    connect(m_clearButton, &QPushButton::clicked, this, &PaintTool::clearLayer);
+    connect(m_layerCombo, &QComboBox::currentIndexChanged, this,
+            [this](int i) { setLayer(PaintLayerKind(m_layerCombo->itemData(i).toInt())); });
+    for (QDoubleSpinBox* s : {m_radiusSpin, m_hardnessSpin, m_opacitySpin, m_valueSpin})
+        connect(s, &QDoubleSpinBox::valueChanged, this, &PaintTool::readWidgets);
+    connect(m_mipSpin, &QSpinBox::valueChanged, this, &PaintTool::setOverShineMip);
+    connect(m_overShineCheck, &QCheckBox::toggled, this, [this] { updateOverlay(std::nullopt); });
+    connect(m_showBakedCheck, &QCheckBox::toggled, this, [this] { updateOverlay(std::nullopt); });
+
+    connect(m_view, &TextureView::paintPressed, this, &PaintTool::pressAt);
+    connect(m_view, &TextureView::paintMoved, this, &PaintTool::moveTo);
+    connect(m_view, &TextureView::paintReleased, this, &PaintTool::release);
+    connect(m_doc, &MaterialDocument::changed, this, &PaintTool::onDocumentChanged);
+    connect(m_doc, &MaterialDocument::layersChanged, this, &PaintTool::onLayersChanged);
+}
+
+PaintTool::~PaintTool() = default;
+
+void PaintTool::attachViewport(Viewport* viewport) {
+    m_viewport = viewport;
+    viewport->setPaintMode(m_paintMode);
+    connect(viewport, &Viewport::paintAt, this, [this](QPointF uv, bool strokeStart) {
+        const NormalMap& map = *m_doc->maps().normal;
+        // uvAt's v grows upwards; texel rows grow downwards (image pixel (u·w, (1 − v)·h)).
+        QPointF texel(uv.x() * map.width, (1.0 - uv.y()) * map.height);
+        if (strokeStart || !m_stroke || !m_lastPoint) {
+            pressAt(texel);
+            return;
+        }
+        // The nearest image of the point to the last one, so a stroke crosses the wrap seam.
+        const double dx = texel.x() - m_lastPoint->x, dy = texel.y() - m_lastPoint->y;
+        texel -= QPointF(map.width * std::round(dx / map.width), map.height * std::round(dy / map.height));
+        const double jump = std::hypot(texel.x() - m_lastPoint->x, texel.y() - m_lastPoint->y);
+        if (jump > kSeamJumpFraction * std::min(map.width, map.height)) {
+            m_lastPoint = glm::dvec2(texel.x(), texel.y());
+            if (m_stroke->jumpTo(*m_lastPoint)) m_doc->layerEdited(m_layer, m_stroke->takeRecentDirty());
+            return;
+        }
+        moveTo(texel);
+    });
+    connect(viewport, &Viewport::strokeFinished, this, &PaintTool::release);
+}
+
+void PaintTool::syncWidgets() {
+    const QSignalBlocker b1(m_radiusSpin), b2(m_hardnessSpin), b3(m_opacitySpin), b4(m_valueSpin),
+        b5(m_layerCombo), b6(m_eyedropperButton), b7(m_paintButton);
+    m_radiusSpin->setValue(m_brush.radius);
+    m_hardnessSpin->setValue(m_brush.hardness);
+    m_opacitySpin->setValue(m_brush.opacity);
+    m_valueSpin->setValue(m_brush.value);
+    m_layerCombo->setCurrentIndex(m_layerCombo->findData(int(m_layer)));
+    m_eyedropperButton->setChecked(m_eyedropper);
+    m_paintButton->setChecked(m_paintMode);
+    m_view->setBrushRadius(m_brush.radius);
+}
+
+void PaintTool::readWidgets() {
+    Brush b = m_brush;
+    b.radius = m_radiusSpin->value();
+    b.hardness = m_hardnessSpin->value();
+    b.opacity = m_opacitySpin->value();
+    b.value = float(m_valueSpin->value());
+    setBrush(b);
+}
+
+void PaintTool::setBrush(const Brush& brush) {
+    // The spin boxes keep every value in range; a programmatic brush is checked the same way.
+    if (!validateBrush(brush)) return;
+    m_brush = brush;
+    syncWidgets();
+}
+
+void PaintTool::setLayer(PaintLayerKind kind) {
+    m_layer = kind;
+    syncWidgets();
+}
+
+void PaintTool::setEyedropper(bool on) {
+    m_eyedropper = on;
+    syncWidgets();
+}
+
+void PaintTool::setPaintMode(bool on) {
+    m_paintMode = on;
+    m_view->setPaintMode(on);
+    if (m_viewport) m_viewport->setPaintMode(on);
+    syncWidgets();
+    if (on) {
+        rebuildLive();
+    } else {
+        m_view->setOverlay({});
+        m_status->clear();
+    }
+}
+
+void PaintTool::setOverShineMip(int mip) {
+    m_overShineMip = std::max(0, mip);
+    if (m_mipSpin->value() != m_overShineMip) m_mipSpin->setValue(m_overShineMip);
+    if (m_live) {
+        (void)overShine(*m_live, m_live->authoredGloss(), m_overShineMip, kOverShineStops,
+                        &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine);
+        updateOverlay(std::nullopt);
+    }
+}
+
+std::vector<float> PaintTool::currentAuthored() const {
+    if (const auto gloss = m_doc->authoredGloss()) return *gloss;
+    return std::vector<float>(m_doc->maps().normal->texelCount(), float(m_doc->settings().gloss));
+}
+
+float PaintTool::pickAt(QPointF texel) const {
+    const NormalMap& map = *m_doc->maps().normal;
+    // The texel under the point, wrapped like the brush.
+    const int x = borderIndex(int(std::floor(texel.x())), map.width, BorderMode::Wrap);
+    const int y = borderIndex(int(std::floor(texel.y())), map.height, BorderMode::Wrap);
+    const size_t i = size_t(y) * size_t(map.width) + size_t(x);
+    if (m_layer == PaintLayerKind::VarianceOffset) {
+        const PaintLayer& l = m_doc->paintLayer(PaintLayerKind::VarianceOffset);
+        return l.coverage[i] > 0.0f ? l.value[i] : 0.0f;
+    }
+    if (const auto gloss = m_doc->authoredGloss()) return (*gloss)[i];
+    return float(m_doc->settings().gloss);
+}
+
+void PaintTool::pressAt(QPointF texel) {
+    if (m_eyedropper) {
+        Brush b = m_brush;
+        b.value = pickAt(texel);
+        setBrush(b);
+        setEyedropper(false);
+        return;
+    }
+    m_stroke.reset();
+    auto stroke = PaintStroke::begin(m_doc->editablePaintLayer(m_layer), m_brush, BorderMode::Wrap);
+    if (!stroke) {
+        m_status->setText("cannot paint: " + QString::fromStdString(stroke.error()));
+        return;
+    }
+    m_stroke.emplace(std::move(stroke).value());
+    moveTo(texel);
+}
+
+void PaintTool::moveTo(QPointF texel) {
+    if (!m_stroke) return;
+    m_lastPoint = glm::dvec2(texel.x(), texel.y());
+    if (!m_stroke->addPoint(*m_lastPoint)) return; // a non-finite position: nothing to paint
+    m_doc->layerEdited(m_layer, m_stroke->takeRecentDirty());
+}
+
+void PaintTool::release() {
+    if (!m_stroke) return;
+    PaintStroke stroke = std::move(*m_stroke);
+    m_stroke.reset();
+    m_lastPoint.reset();
+    if (stroke.dirty().empty()) return;
+    const QString text = m_layer == PaintLayerKind::Gloss ? "Paint gloss" : "Paint variance offset";
+    m_doc->undoStack()->push(new PaintCommand(m_doc, m_layer, stroke.before(), stroke.after(), text));
+}
+
+void PaintTool::clearLayer() {
+    const PaintLayer& l = m_doc->paintLayer(m_layer);
+    PaintPatch before = copyPatch(l, TexelRect::full(l.width, l.height));
+    PaintPatch after = before;
+    std::fill(after.value.begin(), after.value.end(), 0.0f);
+    std::fill(after.coverage.begin(), after.coverage.end(), 0.0f);
+    m_doc->undoStack()->push(new PaintCommand(m_doc, m_layer, std::move(before), std::move(after),
+                                              "Clear " + qs(paintLayerName(m_layer)) + " layer"));
+}
+
+void PaintTool::onDocumentChanged() {
+    if (!m_paintMode) return;
+    const MaterialSettings& s = m_doc->settings();
+    const QString key = QString("%1/%2/%3/%4/%5")
+                            .arg(quintptr(m_doc->maps().normal.get()))
+                            .arg(quintptr(m_doc->maps().gloss.get()))
+                            .arg(s.gloss, 0, 'g', 17)
+                            .arg(s.preset, qs(methodName(s.method)));
+    // Paint undo/redo arrive through layersChanged; anything else that feeds the bake rebuilds it.
+    if (key != m_liveKey) rebuildLive();
+}
+
+void PaintTool::rebuildLive() {
+    m_live.reset();
+    const MaterialSettings& s = m_doc->settings();
+    m_liveKey = QString("%1/%2/%3/%4/%5")
+                    .arg(quintptr(m_doc->maps().normal.get()))
+                    .arg(quintptr(m_doc->maps().gloss.get()))
+                    .arg(s.gloss, 0, 'g', 17)
+                    .arg(s.preset, qs(methodName(s.method)));
+    BakeOptions options;
+    // LEAN and CLEAN store no gloss texture: the live view shows variance-to-gloss for them, which
+    // is also what the over-shine measure compares with.
+    options.method =
+        s.method == Method::Lean || s.method == Method::Clean ? Method::VarianceToGloss : s.method;
+    options.encoding = m_doc->preset().encoding;
+    options.basePower = m_doc->power();
+    options.authoredGloss = currentAuthored();
+    auto live = LiveGlossBake::create(m_doc->maps().normal, options);
+    if (!live) {
+        m_status->setText("live bake failed: " + QString::fromStdString(live.error()));
+        m_view->setOverlay({});
+        return;
+    }
+    m_live.emplace(std::move(live).value());
+    m_mipSpin->setRange(0, m_live->levelCount() - 1);
+    (void)overShine(*m_live, m_live->authoredGloss(), m_overShineMip, kOverShineStops,
+                    &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine);
+    updateOverlay(std::nullopt);
+    emit liveUpdated();
+}
+
+void PaintTool::onLayersChanged(const TexelRect& rect) {
+    if (!m_paintMode) return;
+    if (!m_live) {
+        rebuildLive();
+        return;
+    }
+    const std::vector<float> authored = currentAuthored();
+    if (!m_live->rebakeRegion(authored, rect)) {
+        rebuildLive();
+        return;
+    }
+    (void)overShine(*m_live, authored, m_overShineMip, kOverShineStops,
+                    &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine, rect);
+    updateOverlay(rect);
+    emit liveUpdated();
+}
+
+void PaintTool::updateOverlay(const std::optional<TexelRect>& rect) {
+    if (!m_paintMode || !m_live) return;
+    if (m_showBakedCheck->isChecked()) {
+        const int k = std::clamp(m_overShineMip, 0, m_live->levelCount() - 1);
+        const TextureMip& mip = m_live->gloss().mips[size_t(k)];
+        QImage image(mip.width, mip.height, QImage::Format_ARGB32);
+        for (int y = 0; y < mip.height; ++y)
+            for (int x = 0; x < mip.width; ++x) {
+                const int g = toByte(mip.texels[size_t(y) * size_t(mip.width) + size_t(x)]);
+                image.setPixel(x, y, qRgb(g, g, g));
+            }
+        m_overlay = image;
+    } else {
+        const int w = m_live->width(), h = m_live->height();
+        TexelRect r = rect.value_or(TexelRect::full(w, h));
+        if (m_overlay.width() != w || m_overlay.height() != h) {
+            m_overlay = QImage(w, h, QImage::Format_ARGB32);
+            r = TexelRect::full(w, h);
+        }
+        const std::vector<float>& authored = m_live->authoredGloss();
+        const bool warn = m_overShineCheck->isChecked() && m_overShine.flagged.size() == authored.size();
+        const QColor warning = QColor::fromRgba(kOverShineColor);
+        for (int y = r.y0; y < r.y1; ++y) {
+            auto* row = reinterpret_cast<QRgb*>(m_overlay.scanLine(y));
+            for (int x = r.x0; x < r.x1; ++x) {
+                const size_t i = size_t(y) * size_t(w) + size_t(x);
+                const double g = std::clamp(double(authored[i]), 0.0, 1.0);
+                if (warn && m_overShine.flagged[i]) {
+                    auto mix = [&](int c) {
+                        return toByte((kOverShineMix * c / 255.0) + (1 - kOverShineMix) * g);
+                    };
+                    row[x] = qRgb(mix(warning.red()), mix(warning.green()), mix(warning.blue()));
+                } else {
+                    const int v = toByte(g);
+                    row[x] = qRgb(v, v, v);
+                }
+            }
+        }
+    }
+    m_view->setOverlay(m_overlay);
+    m_status->setText(QString("%1 texels over-shine at mip %2 (painted gloss above what the normal variance "
+                              "permits); last update recomputed %3 baked texels")
+                          .arg(m_overShine.flaggedCount)
+                          .arg(m_overShine.mip)
+                          .arg(m_live->lastRecomputedTexels()));
+}
+
+} // namespace burnish::studio

@@ -1,0 +1,111 @@
+// The brush: paints the document's gloss or variance-offset layer on the 2D texture view and on
+// the 3D viewport (through its UV picking), with size, hardness, opacity, an eyedropper and
+// "clear layer"; each stroke is one undo step storing the changed rectangle before and after.
+// While painting, the variance-to-gloss bake of the painted gloss is kept live (core's
+// LiveGlossBake: only the dirty region's mips are recomputed) and the view shows where the painted
+// gloss over-shines: asks for more shine than the normal variance at the chosen mip permits.
+#pragma once
+
+#include "material_document.h"
+
+#include <burnish/core/paint.h>
+
+#include <QImage>
+#include <QPointF>
+#include <QWidget>
+
+#include <optional>
+
+class QCheckBox;
+class QComboBox;
+class QDoubleSpinBox;
+class QLabel;
+class QPushButton;
+class QSpinBox;
+
+namespace burnish::studio {
+
+class TextureView;
+class Viewport;
+
+/// Warning colour of over-shining texels in the overlay (an orange no gloss grey can be).
+inline constexpr unsigned kOverShineColor = 0xffff6a00u;
+
+class PaintTool : public QWidget {
+    Q_OBJECT
+public:
+    PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent = nullptr);
+    ~PaintTool() override;
+
+    /// Connects strokes on the 3D viewport (its paintAt/strokeFinished signals).
+    void attachViewport(Viewport* viewport);
+
+    void setPaintMode(bool on);
+    bool paintMode() const { return m_paintMode; }
+    void setLayer(PaintLayerKind kind);
+    PaintLayerKind layer() const { return m_layer; }
+    void setBrush(const Brush& brush);
+    const Brush& brush() const { return m_brush; }
+    void setEyedropper(bool on);
+    bool eyedropper() const { return m_eyedropper; }
+    /// The value under a texel: the authored gloss (gloss layer) or the painted variance.
+    float pickAt(QPointF texel) const;
+    /// Clears the current layer (one undo step).
+    void clearLayer();
+    /// The mip whose normal variance the over-shine warning compares with.
+    void setOverShineMip(int mip);
+
+    // A stroke, in texel coordinates (the view's and viewport's handlers call these).
+    void pressAt(QPointF texel);
+    void moveTo(QPointF texel);
+    void release();
+
+    /// The live bake of the painted gloss (null before paint mode or when it cannot be made).
+    const LiveGlossBake* liveBake() const { return m_live ? &*m_live : nullptr; }
+    const OverShineMap& overShineMap() const { return m_overShine; }
+    /// Texels recomputed by the last live update (all mips).
+    size_t lastRecomputedTexels() const { return m_live ? m_live->lastRecomputedTexels() : 0; }
+
+signals:
+    /// The live bake or the over-shine map changed.
+    void liveUpdated();
+
+private:
+    void syncWidgets();
+    void readWidgets();
+    void onDocumentChanged();
+    void onLayersChanged(const TexelRect& rect);
+    void rebuildLive();
+    void updateOverlay(const std::optional<TexelRect>& rect);
+    std::vector<float> currentAuthored() const;
+
+    MaterialDocument* m_doc;
+    TextureView* m_view;
+    Viewport* m_viewport = nullptr;
+    bool m_paintMode = false;
+    bool m_eyedropper = false;
+    PaintLayerKind m_layer = PaintLayerKind::Gloss;
+    Brush m_brush;
+    int m_overShineMip = 3;
+    std::optional<PaintStroke> m_stroke;
+    std::optional<glm::dvec2> m_lastPoint;
+    std::optional<LiveGlossBake> m_live;
+    QString m_liveKey; // what the live bake was made from (rebuilt when it changes)
+    OverShineMap m_overShine;
+    QImage m_overlay;
+
+    QPushButton* m_paintButton;
+    QComboBox* m_layerCombo;
+    QDoubleSpinBox* m_radiusSpin;
+    QDoubleSpinBox* m_hardnessSpin;
+    QDoubleSpinBox* m_opacitySpin;
+    QDoubleSpinBox* m_valueSpin;
+    QPushButton* m_eyedropperButton;
+    QPushButton* m_clearButton;
+    QCheckBox* m_overShineCheck;
+    QCheckBox* m_showBakedCheck;
+    QSpinBox* m_mipSpin;
+    QLabel* m_status;
+};
+
+} // namespace burnish::studio

@@ -1,0 +1,325 @@
+#include "project.h"
+
+#include <burnish/core/atomic_file.h>
+
+#include <nlohmann/json.hpp>
+
+#include <QCryptographicHash>
+#include <QDir>
+#include <QFileInfo>
+#include <QStandardPaths>
+
+#include <filesystem>
+#include <set>
+
+namespace burnish::studio {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+Json rgbJson(const LinearRgb& c) {
+    return Json::array({c.r, c.g, c.b});
+}
+
+/// `path` relative to `folder` where one exists, else absolute.
+Json relativePath(const QString& path, const QString& folder) {
+    if (path.isEmpty()) return nullptr;
+    const fs::path rel = fs::path(path.toStdString()).lexically_relative(folder.toStdString());
+    return rel.empty() ? path.toStdString() : rel.generic_string();
+}
+
+QString qsv(std::string_view s) {
+    return QString::fromUtf8(s.data(), int(s.size()));
+}
+
+QString folderOf(const QString& file) {
+    return QFileInfo(file).absolutePath();
+}
+
+/// Reads fields of one JSON object, collecting the first error with its path.
+class Reader {
+public:
+    Reader(const Json& object, std::string where)
+        : m_object(object)
+        , m_where(std::move(where)) {}
+
+    Status known(std::initializer_list<const char*> names) const {
+        const std::set<std::string> allowed(names.begin(), names.end());
+        for (const auto& [key, value] : m_object.items())
+            if (!allowed.count(key)) return Error{m_where + ": unknown field '" + key + "'"};
+        return {};
+    }
+    const Json* get(const char* key, bool required) const {
+        const auto it = m_object.find(key);
+        if (it == m_object.end()) {
+            if (required) m_error = Error{m_where + ": missing field '" + key + "'"};
+            return nullptr;
+        }
+        return &*it;
+    }
+    std::optional<std::string> string(const char* key, bool required = true, bool nullable = false) const {
+        const Json* v = get(key, required);
+        if (!v || (nullable && v->is_null())) return std::nullopt;
+        if (!v->is_string()) {
+            fail(key, nullable ? "a string or null" : "a string");
+            return std::nullopt;
+        }
+        return v->get<std::string>();
+    }
+    std::optional<double> number(const char* key, double min, double max) const {
+        const Json* v = get(key, true);
+        if (!v) return std::nullopt;
+        if (!v->is_number() || !(v->get<double>() >= min && v->get<double>() <= max)) {
+            fail(key, "a number in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+            return std::nullopt;
+        }
+        return v->get<double>();
+    }
+    std::optional<LinearRgb> rgb(const char* key) const {
+        const Json* v = get(key, true);
+        if (!v) return std::nullopt;
+        if (!v->is_array() || v->size() != 3 || !(*v)[0].is_number() || !(*v)[1].is_number() ||
+            !(*v)[2].is_number()) {
+            fail(key, "an array of 3 numbers");
+            return std::nullopt;
+        }
+        const LinearRgb c{(*v)[0].get<double>(), (*v)[1].get<double>(), (*v)[2].get<double>()};
+        for (double x : {c.r, c.g, c.b})
+            if (!(x >= 0.0 && x <= 1.0)) {
+                fail(key, "3 linear values in [0, 1]");
+                return std::nullopt;
+            }
+        return c;
+    }
+    const Json* object(const char* key) const {
+        const Json* v = get(key, true);
+        if (v && !v->is_object()) {
+            fail(key, "an object");
+            return nullptr;
+        }
+        return v;
+    }
+    void fail(const char* key, const std::string& expected) const {
+        if (!m_error) m_error = Error{m_where + ": '" + key + "' must be " + expected};
+    }
+    const std::optional<Error>& error() const { return m_error; }
+
+private:
+    const Json& m_object;
+    std::string m_where;
+    mutable std::optional<Error> m_error;
+};
+
+} // namespace
+
+QString layerPathFor(const QString& projectFile, PaintLayerKind kind) {
+    const QFileInfo info(projectFile);
+    return info.absolutePath() + "/" + info.completeBaseName() + ".layers/" + qsv(paintLayerName(kind)) +
+           ".exr";
+}
+
+std::string projectToJson(const MaterialSettings& s, const QString& projectFile, const QString& autosaveOf,
+                          const std::vector<LayerFile>& layers) {
+    const QString folder = folderOf(projectFile);
+    const ExportSettings& e = s.exportSettings;
+    Json root = {
+        {"format", kProjectFormat},
+        {"version", kProjectVersion},
+        {"material",
+         {{"class", toString(s.materialClass)},
+          {"specular",
+           {{"material", s.specularName.isEmpty() ? Json(nullptr) : Json(s.specularName.toStdString())},
+            {"linear", rgbJson(s.specular)}}},
+          {"albedo", rgbJson(s.albedo)},
+          {"gloss", s.gloss}}},
+        {"maps",
+         {{"normal", relativePath(s.normalMapPath, folder)},
+          {"gloss", relativePath(s.glossMapPath, folder)},
+          {"detail", relativePath(s.detailMapPath, folder)}}},
+        {"method", std::string(methodName(s.method))},
+        {"preset", s.preset.toStdString()},
+        {"export",
+         {{"format", e.format.isEmpty() ? Json(nullptr) : Json(e.format.toStdString())},
+          {"compression", e.compression.isEmpty() ? Json(nullptr) : Json(e.compression.toStdString())},
+          {"mips", e.mips},
+          {"outputFolder", relativePath(e.outputFolder, folder)},
+          {"overwrite", e.overwrite}}}};
+    // "layers" is written only when something is painted.
+    if (!layers.empty()) {
+        Json list = Json::array();
+        for (const LayerFile& l : layers)
+            list.push_back(
+                {{"name", std::string(paintLayerName(l.kind))}, {"file", relativePath(l.path, folder)}});
+        root["layers"] = list;
+    }
+    if (!autosaveOf.isEmpty()) root["autosaveOf"] = autosaveOf.toStdString();
+    return root.dump(2) + "\n";
+}
+
+Result<ParsedProject> parseProject(std::string_view text, const QString& projectFile) {
+    const std::string where = "project '" + projectFile.toStdString() + "'";
+    Json root;
+    try {
+        root = Json::parse(text);
+    } catch (const Json::parse_error& e) {
+        return Error{where + ": not valid JSON (" + e.what() + ")"};
+    }
+    if (!root.is_object()) return Error{where + ": not a Burnish project (expected a JSON object)"};
+    if (!root.contains("format") || root["format"] != kProjectFormat)
+        return Error{where + ": not a Burnish project (\"format\" must be \"" + kProjectFormat + "\")"};
+    if (!root.contains("version") || !root["version"].is_number_integer() || root["version"].get<int>() < 1)
+        return Error{where + ": \"version\" must be a positive integer"};
+    if (const int version = root["version"].get<int>(); version > kProjectVersion)
+        return Error{where + ": written by a newer Burnish (project version " + std::to_string(version) +
+                     "; this studio reads up to version " + std::to_string(kProjectVersion) + ")"};
+
+    const Reader top(root, where);
+    if (Status st = top.known(
+            {"format", "version", "material", "maps", "method", "preset", "export", "layers", "autosaveOf"});
+        !st)
+        return Error{st.error()};
+
+    const QDir folder(folderOf(projectFile));
+    auto absolute = [&](const std::optional<std::string>& p) {
+        return p ? QDir::cleanPath(folder.absoluteFilePath(QString::fromStdString(*p))) : QString();
+    };
+
+    ParsedProject out;
+    MaterialSettings& s = out.settings;
+    const Json* material = top.object("material");
+    const Json* maps = top.object("maps");
+    const Json* exportJson = top.object("export");
+    if (top.error()) return *top.error();
+
+    const Reader m(*material, where + " material");
+    if (Status st = m.known({"class", "specular", "albedo", "gloss"}); !st) return Error{st.error()};
+    const auto cls = m.string("class");
+    if (cls && *cls != "metal" && *cls != "dielectric") m.fail("class", "\"metal\" or \"dielectric\"");
+    const Json* specular = m.object("specular");
+    const auto albedo = m.rgb("albedo");
+    const auto gloss = m.number("gloss", 0.0, 1.0);
+    if (m.error()) return *m.error();
+    s.materialClass = *cls == "metal" ? MaterialClass::Metal : MaterialClass::Dielectric;
+    s.albedo = *albedo;
+    s.gloss = *gloss;
+
+    const Reader sp(*specular, where + " material.specular");
+    if (Status st = sp.known({"material", "linear"}); !st) return Error{st.error()};
+    const auto specularName = sp.string("material", true, true);
+    const auto linear = sp.rgb("linear");
+    if (sp.error()) return *sp.error();
+    s.specularName = specularName ? QString::fromStdString(*specularName) : QString();
+    s.specular = *linear;
+
+    const Reader mp(*maps, where + " maps");
+    if (Status st = mp.known({"normal", "gloss", "detail"}); !st) return Error{st.error()};
+    const auto normalPath = mp.string("normal", true, true);
+    const auto glossPath = mp.string("gloss", true, true);
+    const auto detailPath = mp.string("detail", true, true);
+    if (mp.error()) return *mp.error();
+    s.normalMapPath = absolute(normalPath);
+    s.glossMapPath = absolute(glossPath);
+    s.detailMapPath = absolute(detailPath);
+
+    const auto method = top.string("method");
+    const auto preset = top.string("preset");
+    const auto autosaveOf = top.string("autosaveOf", false);
+    if (top.error()) return *top.error();
+    const auto methodValue = methodFromName(*method);
+    if (!methodValue) return Error{where + ": method: " + methodValue.error()};
+    s.method = *methodValue;
+    s.preset = QString::fromStdString(*preset);
+    out.autosaveOf = autosaveOf ? QString::fromStdString(*autosaveOf) : QString();
+
+    if (const Json* layers = top.get("layers", false)) {
+        if (!layers->is_array()) return Error{where + ": 'layers' must be an array"};
+        for (const Json& entry : *layers) {
+            if (!entry.is_object()) return Error{where + ": each of 'layers' must be an object"};
+            const Reader l(entry, where + " layers");
+            if (Status st = l.known({"name", "file"}); !st) return Error{st.error()};
+            const auto name = l.string("name");
+            const auto file = l.string("file");
+            if (l.error()) return *l.error();
+            LayerFile layer;
+            if (*name == paintLayerName(PaintLayerKind::Gloss))
+                layer.kind = PaintLayerKind::Gloss;
+            else if (*name == paintLayerName(PaintLayerKind::VarianceOffset))
+                layer.kind = PaintLayerKind::VarianceOffset;
+            else
+                return Error{where + ": unknown layer '" + *name + "' (known: gloss, variance-offset)"};
+            layer.path = absolute(file);
+            out.layers.push_back(layer);
+        }
+    }
+
+    const Reader ex(*exportJson, where + " export");
+    if (Status st = ex.known({"format", "compression", "mips", "outputFolder", "overwrite"}); !st)
+        return Error{st.error()};
+    const auto format = ex.string("format", true, true);
+    const auto compression = ex.string("compression", true, true);
+    const auto mips = ex.number("mips", 0.0, 64.0); // 64 levels: a 2^63-texel side, beyond any image
+    const auto outputFolder = ex.string("outputFolder", true, true);
+    const Json* overwrite = ex.get("overwrite", true);
+    if (overwrite && !overwrite->is_boolean()) ex.fail("overwrite", "true or false");
+    if (mips && *mips != std::floor(*mips)) ex.fail("mips", "a whole number");
+    if (ex.error()) return *ex.error();
+    s.exportSettings.format = format ? QString::fromStdString(*format) : QString();
+    s.exportSettings.compression = compression ? QString::fromStdString(*compression) : QString();
+    s.exportSettings.mips = int(*mips);
+    s.exportSettings.outputFolder = absolute(outputFolder);
+    s.exportSettings.overwrite = overwrite->get<bool>();
+
+    if (Status st = MaterialDocument::validate(s); !st) return Error{where + ": " + st.error()};
+    return out;
+}
+
+Status saveProject(const MaterialSettings& settings, const QString& projectFile, const QString& autosaveOf,
+                   const std::vector<const PaintLayer*>& layers) {
+    std::vector<LayerFile> files;
+    for (const PaintLayer* layer : layers) {
+        if (!layer || !layer->painted()) continue;
+        const QString path = layerPathFor(projectFile, layer->kind);
+        if (!QDir().mkpath(QFileInfo(path).absolutePath()))
+            return Error{"cannot create folder '" + QFileInfo(path).absolutePath().toStdString() + "'"};
+        // The layers first: the project never names a file that is not there.
+        if (Status st = writePaintLayerExr(*layer, path.toStdString()); !st) return st;
+        files.push_back({layer->kind, path});
+    }
+    return writeFileAtomic(projectFile.toStdString(),
+                           projectToJson(settings, projectFile, autosaveOf, files));
+}
+
+Result<ParsedProject> loadProject(const QString& projectFile) {
+    const auto text = readFile(projectFile.toStdString());
+    if (!text) return Error{text.error()};
+    return parseProject(*text, projectFile);
+}
+
+QString autosaveFolder() {
+    return QStandardPaths::writableLocation(QStandardPaths::AppDataLocation) + "/autosave";
+}
+
+QString autosavePathFor(const QString& projectFile) {
+    if (projectFile.isEmpty()) return autosaveFolder() + "/untitled." + kProjectSuffix;
+    const QString absolute = QFileInfo(projectFile).absoluteFilePath();
+    // The name keeps copies recognisable; the hash of the whole path keeps two "material.burnish"
+    // files in different folders apart. 16 hex digits make a collision practically impossible.
+    const QString hash =
+        QCryptographicHash::hash(absolute.toUtf8(), QCryptographicHash::Sha1).toHex().left(16);
+    return autosaveFolder() + "/" + QFileInfo(projectFile).completeBaseName() + "-" + hash + "." +
+           kProjectSuffix;
+}
+
+std::optional<QString> recoverableAutosave(const QString& projectFile) {
+    const QString path = autosavePathFor(projectFile);
+    const QFileInfo copy(path);
+    if (!copy.exists()) return std::nullopt;
+    if (projectFile.isEmpty()) return path;
+    const QFileInfo project(projectFile);
+    if (!project.exists() || copy.lastModified() > project.lastModified()) return path;
+    return std::nullopt;
+}
+
+} // namespace burnish::studio

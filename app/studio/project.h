@@ -1,0 +1,76 @@
+// The project file (.burnish): versioned JSON holding every setting of a MaterialDocument, with
+// texture paths relative to the project file; and the autosave copies kept beside the user's data.
+//
+// Format, version 1:
+//   {
+//     "format": "burnish-project", "version": 1,
+//     "material": {"class": "metal"|"dielectric",
+//                  "specular": {"material": "iron"|null, "linear": [r, g, b]},
+//                  "albedo": [r, g, b], "gloss": g},          // gloss in the preset's encoding
+//     "maps": {"normal": path|null, "gloss": path|null, "detail": path|null},  // null normal = sample
+//     "method": "variance-to-gloss", "preset": "blackops",
+//     "export": {"format": name|null, "compression": name|null, "mips": 0, "outputFolder": path|null,
+//                "overwrite": false},
+//     "layers": [{"name": "gloss"|"variance-offset", "file": "<project>.layers/<name>.exr"}],
+//                                          // painted layers: float EXR (value, coverage) beside the
+//                                          // project, written atomically; only painted layers
+//     "autosaveOf": path                                                  // autosave copies only
+//   }
+// Paths are relative to the file's folder (absolute when no relative form exists).
+#pragma once
+
+#include "material_document.h"
+
+#include <burnish/core/result.h>
+
+#include <QString>
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace burnish::studio {
+
+inline constexpr const char* kProjectFormat = "burnish-project";
+/// The newest project version this studio reads and the one it writes.
+inline constexpr int kProjectVersion = 1;
+inline constexpr const char* kProjectSuffix = "burnish";
+
+/// The project JSON for `settings` saved as `projectFile` (paths made relative to its folder).
+/// `autosaveOf` is recorded in autosave copies: the project the copy belongs to.
+std::string projectToJson(const MaterialSettings& settings, const QString& projectFile,
+                          const QString& autosaveOf = {}, const std::vector<LayerFile>& layers = {});
+
+/// Where a layer of a project is saved: <folder>/<project name>.layers/<layer name>.exr.
+QString layerPathFor(const QString& projectFile, PaintLayerKind kind);
+
+struct ParsedProject {
+    MaterialSettings settings;     // paths absolute
+    QString autosaveOf;            // empty unless the file is an autosave copy
+    std::vector<LayerFile> layers; // painted layers to load (paths absolute)
+};
+
+/// Parses and validates a project read from `projectFile` (relative paths resolve against its
+/// folder). Every field is checked before anything is returned; the error is one line naming the
+/// file and the field. Loading the maps is the document's job (MaterialDocument::reset).
+Result<ParsedProject> parseProject(std::string_view json, const QString& projectFile);
+
+/// Writes the project atomically (core's writeFileAtomic).
+/// Painted `layers` (those with any coverage) are written first, each atomically, as EXR files at
+/// layerPathFor(); the JSON names them.
+Status saveProject(const MaterialSettings& settings, const QString& projectFile,
+                   const QString& autosaveOf = {}, const std::vector<const PaintLayer*>& layers = {});
+/// Reads and parses a project file.
+Result<ParsedProject> loadProject(const QString& projectFile);
+
+/// The folder autosave copies go to: <AppDataLocation>/autosave.
+QString autosaveFolder();
+/// The autosave copy of a project (an empty path: the untitled document):
+/// <autosaveFolder>/<id>.burnish with id = "<name>-<hash of the absolute path>" or "untitled".
+QString autosavePathFor(const QString& projectFile);
+/// The autosave copy to offer for recovery: it exists and is newer than the project (or the
+/// project file is missing). Empty when there is nothing to recover.
+std::optional<QString> recoverableAutosave(const QString& projectFile);
+
+} // namespace burnish::studio

@@ -1,0 +1,227 @@
+#include "texture_pane.h"
+
+#include <QComboBox>
+#include <QCoreApplication>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QPointer>
+#include <QSpinBox>
+#include <QThread>
+#include <QVBoxLayout>
+
+#include <algorithm>
+
+namespace burnish::studio {
+
+namespace {
+
+uchar toByte(double v) {
+    return uchar(std::lround(std::clamp(v, 0.0, 1.0) * 255.0));
+}
+
+} // namespace
+
+QImage normalMapImage(const NormalMap& map) {
+    QImage image(map.width, map.height, QImage::Format_RGB888);
+    for (int y = 0; y < map.height; ++y) {
+        uchar* row = image.scanLine(y);
+        for (int x = 0; x < map.width; ++x) {
+            const glm::vec3& n = map.at(x, y);
+            row[3 * x + 0] = toByte(n.x * 0.5 + 0.5);
+            row[3 * x + 1] = toByte(n.y * 0.5 + 0.5);
+            row[3 * x + 2] = toByte(n.z * 0.5 + 0.5);
+        }
+    }
+    return image;
+}
+
+QImage bakedChannelImage(const TextureMip& mip, int channels, int channel) {
+    QImage image(mip.width, mip.height, QImage::Format_Grayscale8);
+    for (int y = 0; y < mip.height; ++y) {
+        uchar* row = image.scanLine(y);
+        for (int x = 0; x < mip.width; ++x)
+            row[x] = toByte(
+                mip.texels[(size_t(y) * size_t(mip.width) + size_t(x)) * size_t(channels) + size_t(channel)]);
+    }
+    return image;
+}
+
+const BakedTexture* displayedBakedTexture(const BakeOutput& output) {
+    if (const BakedTexture* gloss = output.find("gloss")) return gloss;
+    for (const auto& t : output.textures)
+        if (t.role != "normal") return &t;
+    return output.textures.empty() ? nullptr : &output.textures.front();
+}
+
+TexturePane::TexturePane(MaterialDocument* doc, QWidget* parent)
+    : QWidget(parent)
+    , m_doc(doc) {
+    m_view = new TextureView(this);
+    m_modeCombo = new QComboBox(this);
+    m_modeCombo->addItem("Normal map", int(TextureMode::Normal));
+    m_modeCombo->addItem("Authored gloss", int(TextureMode::Gloss));
+    m_modeCombo->addItem("Baked gloss (method)", int(TextureMode::BakedGloss));
+    m_modeCombo->setToolTip("Which texture the view shows");
+    m_mipSpin = new QSpinBox(this);
+    m_mipSpin->setPrefix("mip ");
+    m_mipSpin->setRange(0, 0);
+    m_mipSpin->setToolTip("Mip level of the baked texture");
+    m_info = new QLabel(this);
+    m_info->setTextInteractionFlags(Qt::TextSelectableByMouse);
+
+    auto* bar = new QHBoxLayout;
+    bar->setContentsMargins(8, 6, 8, 6);
+    bar->setSpacing(8);
+    bar->addWidget(m_modeCombo);
+    bar->addWidget(m_mipSpin);
+    bar->addSpacing(8);
+    bar->addWidget(m_info, 1);
+    auto* layout = new QVBoxLayout(this);
+    layout->setContentsMargins(0, 0, 0, 0);
+    layout->setSpacing(0);
+    layout->addLayout(bar);
+    layout->addWidget(m_view, 1);
+
+    connect(m_modeCombo, &QComboBox::currentIndexChanged, this,
+            [this](int index) { setMode(TextureMode(m_modeCombo->itemData(index).toInt())); });
+    connect(m_mipSpin, &QSpinBox::valueChanged, this, [this](int mip) { setMip(mip); });
+    connect(m_doc, &MaterialDocument::changed, this, [this] {
+        m_bakeStale = true;
+        refresh();
+    });
+    refresh();
+}
+
+TexturePane::~TexturePane() {
+    // A running worker finishes into a QPointer that is null by then; see startBake.
+    ++m_generation;
+}
+
+void TexturePane::setMode(TextureMode mode) {
+    m_mode = mode;
+    const int index = m_modeCombo->findData(int(mode));
+    if (m_modeCombo->currentIndex() != index) m_modeCombo->setCurrentIndex(index);
+    refresh();
+}
+
+void TexturePane::setMip(int mip) {
+    m_mip = std::max(0, mip);
+    if (m_mipSpin->value() != m_mip) m_mipSpin->setValue(m_mip);
+    refresh();
+}
+
+void TexturePane::refresh() {
+    m_mipSpin->setEnabled(m_mode == TextureMode::BakedGloss);
+    const NormalMap& normal = *m_doc->maps().normal;
+    switch (m_mode) {
+    case TextureMode::Normal:
+        m_view->setImage(normalMapImage(normal));
+        m_info->setText(QString("normal map %1×%2").arg(normal.width).arg(normal.height));
+        emit imageUpdated();
+        return;
+    case TextureMode::Gloss:
+        if (const auto& gloss = m_doc->maps().gloss) {
+            TextureMip mip{gloss->width, gloss->height, gloss->pixels};
+            m_view->setImage(bakedChannelImage(mip, gloss->channels, 0));
+            m_info->setText(
+                QString("authored gloss map %1×%2 (first channel)").arg(gloss->width).arg(gloss->height));
+        } else {
+            // No map: the bake uses the base gloss on every texel, and that is what is shown.
+            QImage flat(normal.width, normal.height, QImage::Format_Grayscale8);
+            flat.fill(toByte(m_doc->settings().gloss));
+            m_view->setImage(flat);
+            m_info->setText(QString("no gloss map: base gloss %1 on every texel")
+                                .arg(m_doc->settings().gloss, 0, 'f', 3));
+        }
+        emit imageUpdated();
+        return;
+    case TextureMode::BakedGloss:
+        if (m_bakeStale) startBake();
+        showBaked();
+        return;
+    }
+}
+
+void TexturePane::startBake() {
+    m_bakeStale = false;
+    m_bakeRunning = true;
+    const int generation = ++m_generation;
+    BakeOptions options;
+    options.method = m_doc->settings().method;
+    options.encoding = m_doc->preset().encoding;
+    options.basePower = m_doc->power();
+    std::shared_ptr<const NormalMap> map = m_doc->maps().normal;
+    std::shared_ptr<const Image> glossImage = m_doc->maps().gloss;
+    QPointer<TexturePane> self(this);
+    QThread* worker = QThread::create([self, generation, options, map, glossImage]() mutable {
+        QString error;
+        std::shared_ptr<const BakeOutput> output;
+        if (glossImage) {
+            auto gloss = glossFromImage(*glossImage, map->width, map->height);
+            if (gloss)
+                options.authoredGloss = std::move(gloss.value());
+            else
+                error = QString::fromStdString(gloss.error());
+        }
+        if (error.isEmpty()) {
+            auto baked = bake(*map, options);
+            if (baked)
+                output = std::make_shared<const BakeOutput>(std::move(baked.value()));
+            else
+                error = QString::fromStdString(baked.error());
+        }
+        QMetaObject::invokeMethod(
+            QCoreApplication::instance(),
+            [self, generation, output, error] {
+                if (!self || generation != self->m_generation) return; // a newer bake supersedes this one
+                self->m_bakeRunning = false;
+                self->m_baked = output;
+                self->m_bakeError = error;
+                self->showBaked();
+            },
+            Qt::QueuedConnection);
+    });
+    connect(worker, &QThread::finished, worker, &QObject::deleteLater);
+    worker->start();
+}
+
+void TexturePane::showBaked() {
+    if (m_mode != TextureMode::BakedGloss) return;
+    if (m_bakeRunning) {
+        m_info->setText("baking…");
+        return;
+    }
+    if (!m_baked) {
+        m_info->setText("bake failed: " + m_bakeError);
+        return;
+    }
+    const BakedTexture* texture = displayedBakedTexture(*m_baked);
+    if (!texture || texture->mips.empty()) return;
+    const int mipCount = int(texture->mips.size());
+    m_mipSpin->setRange(0, mipCount - 1);
+    const int mip = std::min(m_mip, mipCount - 1);
+    const TextureMip& level = texture->mips[size_t(mip)];
+    const int channel = texture->role == "normal" ? -1 : 0;
+    if (channel < 0) {
+        NormalMap shown;
+        shown.width = level.width;
+        shown.height = level.height;
+        for (size_t i = 0; i < level.texels.size(); i += size_t(texture->channels))
+            shown.normals.emplace_back(level.texels[i] * 2 - 1, level.texels[i + 1] * 2 - 1,
+                                       texture->channels > 2 ? level.texels[i + 2] * 2 - 1 : 1.0f);
+        m_view->setImage(normalMapImage(shown));
+    } else {
+        m_view->setImage(bakedChannelImage(level, texture->channels, channel));
+    }
+    m_info->setText(QString("%1 · %2 (%3) · mip %4: %5×%6")
+                        .arg(QString::fromUtf8(methodName(m_baked->method).data(),
+                                               int(methodName(m_baked->method).size())),
+                             QString::fromStdString(texture->role),
+                             QString::fromStdString(texture->decode.empty() ? "" : texture->decode[0].name))
+                        .arg(mip)
+                        .arg(level.width)
+                        .arg(level.height));
+    emit imageUpdated();
+}
+
+} // namespace burnish::studio

@@ -1,0 +1,159 @@
+#include "texture_view.h"
+
+#include <QMouseEvent>
+#include <QPainter>
+#include <QWheelEvent>
+
+#include <algorithm>
+#include <cmath>
+
+namespace burnish::studio {
+
+namespace {
+// Zoom limits: 1/64 shows a 16k map in 256 pixels; 64 makes one texel a large, pickable square.
+constexpr double kMinZoom = 1.0 / 64.0;
+constexpr double kMaxZoom = 64.0;
+// One wheel notch (120 units) zooms by 2^(1/4): four notches double the size.
+constexpr double kZoomPerNotch = 1.189207115002721;
+} // namespace
+
+TextureView::TextureView(QWidget* parent)
+    : QWidget(parent) {
+    setMouseTracking(false);
+    setFocusPolicy(Qt::WheelFocus);
+    setMinimumSize(200, 200);
+    setAttribute(Qt::WA_OpaquePaintEvent);
+}
+
+void TextureView::setImage(const QImage& image) {
+    // A new size starts fitted again; the same size (another view of the map) keeps zoom and pan.
+    if (image.size() != m_image.size()) m_fitted = true;
+    m_image = image;
+    if (m_fitted) fit();
+    update();
+}
+
+void TextureView::setZoom(double zoom) {
+    zoomAbout(zoom, QPointF(width() / 2.0, height() / 2.0));
+}
+
+void TextureView::fit() {
+    if (m_image.isNull() || width() <= 0 || height() <= 0) return;
+    // A margin of 16 pixels around the image so its edge is visible against the background.
+    constexpr double kMargin = 16.0;
+    const double zx = (width() - 2 * kMargin) / m_image.width();
+    const double zy = (height() - 2 * kMargin) / m_image.height();
+    m_zoom = std::clamp(std::min(zx, zy), kMinZoom, kMaxZoom);
+    m_offset =
+        QPointF((width() - m_image.width() * m_zoom) / 2.0, (height() - m_image.height() * m_zoom) / 2.0);
+    emit zoomChanged(m_zoom);
+    update();
+}
+
+QPointF TextureView::texelAt(const QPointF& widgetPos) const {
+    return (widgetPos - m_offset) / m_zoom;
+}
+
+void TextureView::zoomAbout(double zoom, const QPointF& widgetPos) {
+    zoom = std::clamp(zoom, kMinZoom, kMaxZoom);
+    const QPointF texel = texelAt(widgetPos);
+    m_zoom = zoom;
+    m_offset = widgetPos - texel * m_zoom;
+    m_fitted = false;
+    emit zoomChanged(m_zoom);
+    update();
+}
+
+void TextureView::paintEvent(QPaintEvent*) {
+    QPainter p(this);
+    p.fillRect(rect(), palette().color(QPalette::Base).darker(130));
+    if (m_image.isNull()) return;
+    const QRectF target(m_offset, QSizeF(m_image.width() * m_zoom, m_image.height() * m_zoom));
+    // Smooth when minified (what a mip would show), nearest when magnified (texels stay crisp).
+    p.setRenderHint(QPainter::SmoothPixmapTransform, m_zoom < 1.0);
+    p.drawImage(target, m_image);
+    if (!m_overlay.isNull()) p.drawImage(target, m_overlay);
+    p.setPen(QPen(palette().color(QPalette::Mid), 1.0));
+    p.drawRect(target.adjusted(-0.5, -0.5, 0.5, 0.5));
+    if (m_paintMode && m_cursor) {
+        // The brush outline, dark and light so it shows on any gloss.
+        p.setRenderHint(QPainter::Antialiasing);
+        const double r = m_brushRadius * m_zoom;
+        p.setBrush(Qt::NoBrush);
+        p.setPen(QPen(QColor(0, 0, 0, 160), 3.0));
+        p.drawEllipse(*m_cursor, r, r);
+        p.setPen(QPen(QColor(255, 255, 255, 220), 1.0));
+        p.drawEllipse(*m_cursor, r, r);
+    }
+}
+
+void TextureView::setPaintMode(bool on) {
+    m_paintMode = on;
+    m_painting = false;
+    setMouseTracking(on); // the outline follows the cursor without a button down
+    if (!on) m_cursor.reset();
+    update();
+}
+
+void TextureView::setBrushRadius(double texels) {
+    m_brushRadius = texels;
+    update();
+}
+
+void TextureView::setOverlay(const QImage& overlay) {
+    m_overlay = overlay;
+    update();
+}
+
+void TextureView::wheelEvent(QWheelEvent* event) {
+    const double notches = event->angleDelta().y() / 120.0;
+    zoomAbout(m_zoom * std::pow(kZoomPerNotch, notches), event->position());
+    event->accept();
+}
+
+void TextureView::mousePressEvent(QMouseEvent* event) {
+    if (m_paintMode && event->button() == Qt::LeftButton) {
+        m_painting = true;
+        emit paintPressed(texelAt(event->position()));
+        return;
+    }
+    if (event->button() == Qt::MiddleButton || event->button() == Qt::LeftButton) {
+        m_panning = true;
+        m_panStart = event->position();
+        setCursor(Qt::ClosedHandCursor);
+    }
+}
+
+void TextureView::mouseMoveEvent(QMouseEvent* event) {
+    if (m_paintMode) {
+        m_cursor = event->position();
+        if (m_painting) emit paintMoved(texelAt(event->position()));
+        update();
+    }
+    if (!m_panning) return;
+    m_offset += event->position() - m_panStart;
+    m_fitted = false;
+    m_panStart = event->position();
+    update();
+}
+
+void TextureView::mouseReleaseEvent(QMouseEvent* event) {
+    if (m_painting && event->button() == Qt::LeftButton) {
+        m_painting = false;
+        emit paintReleased();
+        return;
+    }
+    m_panning = false;
+    unsetCursor();
+}
+
+void TextureView::mouseDoubleClickEvent(QMouseEvent*) {
+    m_fitted = true;
+    fit();
+}
+
+void TextureView::resizeEvent(QResizeEvent*) {
+    if (m_fitted) fit();
+}
+
+} // namespace burnish::studio

@@ -1,0 +1,741 @@
+#include "viewport.h"
+
+#include "scene_from_document.h"
+
+#include <burnish/render/context.h>
+#include <burnish/render/gpu_resources.h>
+#include <burnish/render/mesh.h>
+#include <burnish/render/renderer.h>
+#include <burnish/render/shimmer.h>
+
+#include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
+
+#include <QLabel>
+#include <QMouseEvent>
+#include <QOpenGLContext>
+#include <QOpenGLWidget>
+#include <QPainter>
+#include <QSurfaceFormat>
+#include <QTimer>
+#include <QWheelEvent>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+
+namespace burnish::studio {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Auto-orbit frame interval: 30 frames per second when the renderer keeps up.
+constexpr int kOrbitIntervalMs = 33;
+// The camera "rests" this long after the last interaction; then the reference side is drawn with
+// its full sample count (while moving it shows kMovingReferenceSamples, a software rasterizer
+// cannot draw 16 passes per interactive frame).
+constexpr int kRestMs = 300;
+constexpr int kMovingReferenceSamples = 2;
+// The renderer's largest reference sample count (renderer.cpp's kMaxReferenceSamples).
+constexpr int kMaxReferenceSamples = 4096;
+// The meter renders each side at this size, the whole object in view at any distance the control
+// gives, like `burnish render --sequence` (render/shimmer.h's default 128²).
+constexpr int kMeterSize = 128;
+// Deltas averaged by the meter: about a second of auto-orbit.
+constexpr int kMeterWindow = 30;
+// Degrees of orbit per dragged pixel: a 900-pixel drag turns the object most of the way round.
+constexpr float kOrbitDegreesPerPixel = 0.4f;
+// Pitch stops short of the poles, where the orbit camera's up vector degenerates.
+constexpr float kMaxPitch = 89.0f;
+// One wheel notch (120 units) moves the camera by 2^(1/4): four notches double the distance.
+constexpr float kWheelStopsPerNotch = 0.25f;
+// A UV-pass pixel is on the object when its b channel (1 on the object, 0 cleared) passes 0.5.
+constexpr float kCoveredThreshold = 0.5f;
+// The divider's grab width in pixels.
+constexpr int kHandleWidth = 7;
+
+QString qs(std::string_view s) {
+    return QString::fromUtf8(s.data(), int(s.size()));
+}
+
+QSurfaceFormat viewportFormat() {
+    QSurfaceFormat format = QSurfaceFormat::defaultFormat();
+    // The renderer needs OpenGL 3.3 core (render/context.h); the default framebuffer needs no depth,
+    // the renderer draws its passes into its own targets.
+    format.setVersion(3, 3);
+    format.setProfile(QSurfaceFormat::CoreProfile);
+    return format;
+}
+
+// Whether Qt can make an OpenGL context on this platform (the offscreen platform cannot without an
+// X display). BURNISH_VIEWPORT=gl|image forces one surface (to test both on one machine).
+bool platformHasOpenGl() {
+    static const bool has = [] {
+        const QByteArray forced = qgetenv("BURNISH_VIEWPORT");
+        if (forced == "gl") return true;
+        if (forced == "image") return false;
+        QOpenGLContext probe;
+        probe.setFormat(viewportFormat());
+        return probe.create() && probe.format().majorVersion() * 10 + probe.format().minorVersion() >= 33;
+    }();
+    return has;
+}
+
+// The light's direction from azimuth about +y (0 = +z) and elevation above the horizon.
+glm::vec3 lightDirection(float azimuthDegrees, float elevationDegrees) {
+    const float az = glm::radians(azimuthDegrees);
+    const float el = glm::radians(elevationDegrees);
+    return glm::vec3(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
+}
+
+// Per-pixel object coverage of a UV pass (RGBA floats).
+std::vector<std::uint8_t> coverage(const std::vector<float>& uvPass) {
+    std::vector<std::uint8_t> mask(uvPass.size() / 4);
+    for (size_t p = 0; p < mask.size(); ++p)
+        mask[p] = uvPass[4 * p + 2] > kCoveredThreshold ? 1 : 0;
+    return mask;
+}
+
+double mean(const std::deque<double>& values) {
+    double sum = 0.0;
+    for (double v : values)
+        sum += v;
+    return values.empty() ? 0.0 : sum / double(values.size());
+}
+
+} // namespace
+
+// Everything that lives in the renderer's context.
+struct Viewport::Engine {
+    std::unique_ptr<render::GlContext> context;
+    std::unique_ptr<render::Renderer> a;            // the document's method (and the reference, and picking)
+    std::unique_ptr<render::Renderer> b;            // the split's other method
+    std::optional<render::Framebuffer> imageTarget; // the headless surface's frame
+    SceneFromDocument mapper;
+
+    // Picking: the UV pass of the whole view, valid until the camera, mesh or size changes.
+    std::vector<float> uv;
+    int uvWidth = 0;
+    int uvHeight = 0;
+    bool uvValid = false;
+
+    // Meter: the previous frame's luma and coverage of each side, and the recent deltas.
+    std::vector<float> previousA;
+    std::vector<float> previousB;
+    std::vector<std::uint8_t> previousMask;
+    std::deque<double> deltasA;
+    std::deque<double> deltasB;
+
+    bool moving = false;
+
+    void resetMeter() {
+        previousA.clear();
+        previousB.clear();
+        previousMask.clear();
+        deltasA.clear();
+        deltasB.clear();
+    }
+};
+
+// The QOpenGLWidget surface: the renderer wraps its context and draws into its framebuffer.
+class Viewport::GlSurface : public QOpenGLWidget {
+public:
+    explicit GlSurface(Viewport* view)
+        : QOpenGLWidget(view)
+        , m_view(view) {
+        setFormat(viewportFormat());
+        // The viewport handles the mouse; the surface only shows the picture.
+        setAttribute(Qt::WA_TransparentForMouseEvents);
+    }
+    ~GlSurface() override { release(); }
+
+protected:
+    void initializeGL() override {
+        connect(context(), &QOpenGLContext::aboutToBeDestroyed, this, [this] { release(); });
+        m_view->initializeRenderers(true);
+    }
+    void paintGL() override {
+        const qreal dpr = devicePixelRatioF();
+        m_view->drawInto(defaultFramebufferObject(), int(std::lround(width() * dpr)),
+                         int(std::lround(height() * dpr)));
+    }
+
+private:
+    void release() {
+        if (!context()) return;
+        makeCurrent();
+        m_view->releaseRenderers();
+        doneCurrent();
+    }
+    Viewport* m_view;
+};
+
+// The headless surface: the renderer draws in its own context and the frame is painted as an image.
+class Viewport::ImageSurface : public QWidget {
+public:
+    explicit ImageSurface(Viewport* view)
+        : QWidget(view)
+        , m_view(view) {
+        setAttribute(Qt::WA_TransparentForMouseEvents);
+        setAttribute(Qt::WA_OpaquePaintEvent);
+    }
+
+    QImage render() {
+        const qreal dpr = devicePixelRatioF();
+        const int w = std::max(1, int(std::lround(width() * dpr)));
+        const int h = std::max(1, int(std::lround(height() * dpr)));
+        Engine& e = *m_view->m_engine;
+        if (!m_view->makeCurrent()) return {};
+        if (!e.imageTarget || e.imageTarget->width() != w || e.imageTarget->height() != h) {
+            e.imageTarget.reset();
+            auto fb = render::Framebuffer::create(w, h, render::ColorFormat::Rgba8, false);
+            if (!fb) {
+                m_view->setError(QString::fromStdString(fb.error()));
+                return {};
+            }
+            e.imageTarget.emplace(std::move(fb).value());
+        }
+        m_view->drawInto(e.imageTarget->id(), w, h);
+        const std::vector<std::uint8_t> rgba = e.imageTarget->readRgba8();
+        QImage image(rgba.data(), w, h, w * 4, QImage::Format_RGBA8888);
+        QImage copy = image.convertToFormat(QImage::Format_RGB32);
+        copy.setDevicePixelRatio(dpr);
+        return copy;
+    }
+
+protected:
+    void paintEvent(QPaintEvent*) override {
+        QPainter painter(this);
+        const QImage frame = render();
+        if (frame.isNull())
+            painter.fillRect(rect(), Qt::black);
+        else
+            painter.drawImage(rect(), frame);
+    }
+
+private:
+    Viewport* m_view;
+};
+
+// The A/B divider: drag it to move the split.
+class Viewport::SplitHandle : public QWidget {
+public:
+    explicit SplitHandle(Viewport* view)
+        : QWidget(view)
+        , m_view(view) {
+        setCursor(Qt::SplitHCursor);
+        setToolTip("Drag to move the A/B split");
+    }
+
+protected:
+    void paintEvent(QPaintEvent*) override {
+        QPainter painter(this);
+        painter.fillRect(QRect(width() / 2 - 1, 0, 2, height()), QColor(230, 230, 230, 200));
+    }
+    void mouseMoveEvent(QMouseEvent* event) override {
+        if (!(event->buttons() & Qt::LeftButton)) return;
+        const QPointF p = mapTo(m_view, event->position().toPoint());
+        m_view->m_engine->moving = true;
+        m_view->m_restTimer->start();
+        m_view->setSplitPosition(float(p.x() / std::max(1, m_view->width())));
+    }
+
+private:
+    Viewport* m_view;
+};
+
+Viewport::Viewport(MaterialDocument* doc, QWidget* parent)
+    : QWidget(parent)
+    , m_doc(doc)
+    , m_engine(std::make_unique<Engine>()) {
+    setObjectName("viewport");
+    setMinimumSize(160, 120);
+    setFocusPolicy(Qt::StrongFocus);
+    if (platformHasOpenGl()) {
+        m_glSurface = new GlSurface(this);
+    } else {
+        m_imageSurface = new ImageSurface(this);
+        auto context = render::createHeadlessContext();
+        if (context) {
+            m_engine->context = std::move(context).value();
+            initializeRenderers(false);
+        } else {
+            setError(QString::fromStdString(context.error()));
+        }
+    }
+    m_handle = new SplitHandle(this);
+    m_labelA = new QLabel(this);
+    m_labelB = new QLabel(this);
+    m_errorLabel = new QLabel(this);
+    for (QLabel* l : {m_labelA, m_labelB, m_errorLabel}) {
+        l->setStyleSheet("QLabel { background: rgba(20, 20, 22, 170); color: #e0e0e0; padding: 2px 6px; }");
+        l->setAttribute(Qt::WA_TransparentForMouseEvents);
+    }
+    m_errorLabel->setWordWrap(true);
+    m_errorLabel->setStyleSheet("QLabel { background: rgba(90, 20, 20, 220); color: white; padding: 6px; }");
+    m_errorLabel->hide();
+
+    m_orbitTimer = new QTimer(this);
+    m_orbitTimer->setInterval(kOrbitIntervalMs);
+    connect(m_orbitTimer, &QTimer::timeout, this, &Viewport::stepOrbit);
+    m_restTimer = new QTimer(this);
+    m_restTimer->setSingleShot(true);
+    m_restTimer->setInterval(kRestMs);
+    connect(m_restTimer, &QTimer::timeout, this, [this] {
+        m_engine->moving = autoOrbit();
+        requestUpdate();
+    });
+    connect(m_doc, &MaterialDocument::changed, this, [this] {
+        resetShimmer();
+        updateLabels();
+        requestUpdate();
+    });
+    updateLabels();
+    layoutOverlays();
+}
+
+Viewport::~Viewport() {
+    // The GL surface releases the renderers in its own context; it goes first, while the engine
+    // still exists (children are otherwise deleted after the members). The headless context's are
+    // released here.
+    if (m_glSurface) {
+        delete m_glSurface;
+        m_glSurface = nullptr;
+    } else if (m_engine->context) {
+        if (makeCurrent()) releaseRenderers();
+        m_engine->context.reset();
+    }
+}
+
+QWidget* Viewport::surface() const {
+    return m_glSurface ? static_cast<QWidget*>(m_glSurface) : static_cast<QWidget*>(m_imageSurface);
+}
+
+void Viewport::initializeRenderers(bool hostContext) {
+    Engine& e = *m_engine;
+    if (hostContext) e.context = render::wrapHostContext();
+    if (!e.context) return;
+    if (const Status s = e.context->makeCurrent(); !s) {
+        setError(QString::fromStdString(s.error()));
+        return;
+    }
+    m_contextDescription = QString::fromStdString(e.context->description());
+    for (auto* r : {&e.a, &e.b}) {
+        auto created = render::Renderer::create();
+        if (!created) {
+            setError("cannot create the renderer: " + QString::fromStdString(created.error()));
+            return;
+        }
+        *r = std::move(created).value();
+    }
+}
+
+void Viewport::releaseRenderers() {
+    Engine& e = *m_engine;
+    e.a.reset();
+    e.b.reset();
+    e.imageTarget.reset();
+    e.uvValid = false;
+}
+
+bool Viewport::makeCurrent() {
+    Engine& e = *m_engine;
+    if (m_glSurface) {
+        if (!m_glSurface->context()) return false;
+        m_glSurface->makeCurrent();
+    }
+    if (!e.context) return false;
+    if (const Status s = e.context->makeCurrent(); !s) {
+        setError(QString::fromStdString(s.error()));
+        return false;
+    }
+    return e.a && e.b;
+}
+
+void Viewport::doneCurrent() {
+    if (m_glSurface) m_glSurface->doneCurrent();
+}
+
+Result<render::Scene> Viewport::scene() {
+    auto material = m_engine->mapper.material(*m_doc);
+    if (!material) return Error{material.error()};
+    render::Scene scene;
+    scene.mesh = m_view.mesh;
+    scene.objPath = m_view.objPath.toStdString();
+    scene.camera.yawDegrees = m_view.yawDegrees;
+    scene.camera.pitchDegrees = m_view.pitchDegrees;
+    scene.camera.distance = m_view.distance;
+    scene.camera.target = m_view.target;
+    scene.light.direction = lightDirection(m_view.lightAzimuthDegrees, m_view.lightElevationDegrees);
+    scene.exposure = m_view.exposure;
+    scene.debugView = m_view.debugView;
+    scene.material = std::move(material).value();
+    applyEnvironment(m_doc->settings().environment, scene);
+    return scene;
+}
+
+void Viewport::drawInto(unsigned framebuffer, int width, int height) {
+    Engine& e = *m_engine;
+    if (!e.a || !e.b) return;
+    const auto start = Clock::now();
+    auto current = scene();
+    if (!current) {
+        setError(QString::fromStdString(current.error()));
+        return;
+    }
+    const render::Scene& scene = *current;
+
+    render::RenderTarget left{framebuffer, width, height};
+    render::RenderTarget right = left;
+    if (m_view.split) {
+        // The divider's column in pixels: the left side gets [0, splitX), the right [splitX, width).
+        const int splitX = std::clamp(int(std::lround(m_view.splitPosition * float(width))), 0, width);
+        left.scissorWidth = std::max(splitX, 1);
+        left.scissorHeight = height;
+        right.scissorX = splitX;
+        right.scissorWidth = std::max(width - splitX, 1);
+        right.scissorHeight = height;
+    }
+    Status status = e.a->setScene(scene);
+    if (status) status = e.a->render(left);
+    if (status && m_view.split) {
+        if (m_view.right.reference) {
+            const int samples = e.moving ? std::min(kMovingReferenceSamples, m_view.referenceSamples)
+                                         : m_view.referenceSamples;
+            status = e.a->renderReference(right, samples);
+        } else {
+            render::Scene other = scene;
+            other.material.method = m_view.right.method;
+            status = e.b->setScene(other);
+            if (status) status = e.b->render(right);
+        }
+    }
+    if (!status) {
+        setError(QString::fromStdString(status.error()));
+        return;
+    }
+    m_frameMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    setError({});
+    if (m_meterPending) {
+        m_meterPending = false;
+        meter();
+    }
+    emit frameRendered(m_frameMs);
+}
+
+void Viewport::meter() {
+    // Measured like render/shimmer.h: display luma of each side at kMeterSize², over the pixels the
+    // object covers in both frames (eroded by one pixel to leave out the silhouette's aliasing).
+    Engine& e = *m_engine;
+    render::Scene scene = e.a->scene();
+    scene.debugView = render::DebugView::Uv;
+    if (!e.a->setScene(scene)) return;
+    auto uvPass = e.a->renderToImage(kMeterSize, kMeterSize, render::ImageKind::Hdr);
+    scene.debugView = render::DebugView::None;
+    if (!uvPass || !e.a->setScene(scene)) return;
+    auto imageA = e.a->renderToImage(kMeterSize, kMeterSize, render::ImageKind::Display);
+    Result<std::vector<float>> imageB = Error{"no B side"};
+    if (m_view.right.reference || !m_view.split) {
+        // Without a split the meter compares with the ground truth, as `burnish render --sequence`.
+        imageB =
+            e.a->renderReference(kMeterSize, kMeterSize, m_view.referenceSamples, render::ImageKind::Display);
+    } else {
+        render::Scene other = scene;
+        other.material.method = m_view.right.method;
+        if (e.b->setScene(other))
+            imageB = e.b->renderToImage(kMeterSize, kMeterSize, render::ImageKind::Display);
+    }
+    if (!imageA || !imageB) return;
+    std::vector<float> lumaA = render::frameLuminance(*imageA);
+    std::vector<float> lumaB = render::frameLuminance(*imageB);
+    std::vector<std::uint8_t> mask = coverage(*uvPass);
+    if (e.previousMask.size() == mask.size()) {
+        std::vector<std::uint8_t> both(mask.size());
+        for (size_t p = 0; p < mask.size(); ++p)
+            both[p] = mask[p] && e.previousMask[p];
+        both = render::erodeMask(both, kMeterSize, kMeterSize);
+        const auto deltaA = render::meanAbsoluteChange(e.previousA, lumaA, both);
+        const auto deltaB = render::meanAbsoluteChange(e.previousB, lumaB, both);
+        if (deltaA && deltaB) {
+            e.deltasA.push_back(*deltaA);
+            e.deltasB.push_back(*deltaB);
+            while (int(e.deltasA.size()) > kMeterWindow) {
+                e.deltasA.pop_front();
+                e.deltasB.pop_front();
+            }
+            ShimmerReading r;
+            r.a = mean(e.deltasA);
+            r.b = mean(e.deltasB);
+            r.ratio = r.a / std::max(r.b, render::kMinShimmer);
+            r.deltas = int(e.deltasA.size());
+            m_shimmer = r;
+            emit shimmerChanged();
+        }
+    }
+    e.previousA = std::move(lumaA);
+    e.previousB = std::move(lumaB);
+    e.previousMask = std::move(mask);
+}
+
+QImage Viewport::grabFrame() {
+    if (m_glSurface) {
+        // The widget must exist on screen for its context; grabFramebuffer() renders a fresh frame.
+        return m_glSurface->grabFramebuffer();
+    }
+    return m_imageSurface->render();
+}
+
+std::optional<QPointF> Viewport::uvAt(QPoint widgetPos) {
+    Engine& e = *m_engine;
+    QWidget* s = surface();
+    const qreal dpr = s->devicePixelRatioF();
+    const int w = std::max(1, int(std::lround(s->width() * dpr)));
+    const int h = std::max(1, int(std::lround(s->height() * dpr)));
+    if (!e.uvValid || e.uvWidth != w || e.uvHeight != h) {
+        auto current = scene();
+        if (!current || !makeCurrent()) return std::nullopt;
+        render::Scene pick = std::move(current).value();
+        pick.debugView = render::DebugView::Uv;
+        const Status set = e.a->setScene(pick);
+        auto pass = set ? e.a->renderToImage(w, h, render::ImageKind::Hdr)
+                        : Result<std::vector<float>>(Error{set.error()});
+        doneCurrent();
+        if (!pass) return std::nullopt;
+        e.uv = std::move(pass).value();
+        e.uvWidth = w;
+        e.uvHeight = h;
+        e.uvValid = true;
+    }
+    const QPoint surfacePos = s->mapFrom(this, widgetPos);
+    const int x = int(std::floor(surfacePos.x() * dpr));
+    const int y = int(std::floor(surfacePos.y() * dpr));
+    if (x < 0 || y < 0 || x >= w || y >= h) return std::nullopt;
+    const size_t p = (size_t(y) * size_t(w) + size_t(x)) * 4;
+    if (!(e.uv[p + 2] > kCoveredThreshold)) return std::nullopt;
+    return QPointF(e.uv[p], e.uv[p + 1]);
+}
+
+void Viewport::setViewSettings(const ViewSettings& view) {
+    m_view = view;
+    changed(true);
+}
+
+Status Viewport::setMesh(render::MeshKind mesh, const QString& objPath) {
+    if (mesh == render::MeshKind::Obj) {
+        auto loaded = render::loadObj(objPath.toStdString());
+        if (!loaded) return Error{"OBJ '" + objPath.toStdString() + "': " + loaded.error()};
+    }
+    m_view.mesh = mesh;
+    m_view.objPath = mesh == render::MeshKind::Obj ? objPath : QString();
+    changed(true);
+    return {};
+}
+
+void Viewport::setDistance(float distance) {
+    if (!std::isfinite(distance)) return;
+    m_view.distance = std::clamp(distance, kMinDistance, kMaxDistance);
+    changed(true);
+}
+
+void Viewport::setExposure(float stops) {
+    if (!std::isfinite(stops)) return;
+    m_view.exposure = stops;
+    changed(false);
+}
+
+void Viewport::setLight(float azimuthDegrees, float elevationDegrees) {
+    m_view.lightAzimuthDegrees = azimuthDegrees;
+    m_view.lightElevationDegrees = std::clamp(elevationDegrees, -kMaxPitch, kMaxPitch);
+    changed(false);
+}
+
+void Viewport::setDebugView(render::DebugView view) {
+    m_view.debugView = view;
+    changed(false);
+}
+
+void Viewport::setSplit(bool on) {
+    m_view.split = on;
+    changed(false);
+}
+
+void Viewport::setSplitPosition(float fraction) {
+    // Each side keeps at least 5 % of the width, so the divider can always be grabbed again.
+    m_view.splitPosition = std::clamp(fraction, 0.05f, 0.95f);
+    layoutOverlays();
+    requestUpdate();
+    emit viewChanged();
+}
+
+void Viewport::setRightSide(const SplitSide& side) {
+    m_view.right = side;
+    changed(false);
+}
+
+void Viewport::setReferenceSamples(int samples) {
+    m_view.referenceSamples = std::clamp(samples, 1, kMaxReferenceSamples);
+    changed(false);
+}
+
+void Viewport::orbit(float yawDegrees, float pitchDegrees) {
+    m_view.yawDegrees = std::fmod(m_view.yawDegrees + yawDegrees, 360.0f);
+    m_view.pitchDegrees = std::clamp(m_view.pitchDegrees + pitchDegrees, -kMaxPitch, kMaxPitch);
+    changed(true);
+}
+
+void Viewport::setAutoOrbit(bool on) {
+    if (on == autoOrbit()) return;
+    // Turning on starts a new measurement; turning off keeps the last reading on show.
+    if (on) {
+        resetShimmer();
+        m_orbitTimer->start();
+    } else {
+        m_orbitTimer->stop();
+    }
+    m_engine->moving = on;
+    requestUpdate();
+    emit viewChanged();
+}
+
+bool Viewport::autoOrbit() const {
+    return m_orbitTimer->isActive();
+}
+
+void Viewport::stepOrbit() {
+    m_view.yawDegrees = std::fmod(m_view.yawDegrees + kOrbitDegreesPerFrame, 360.0f);
+    m_engine->uvValid = false;
+    m_meterPending = true;
+    requestUpdate();
+    emit viewChanged();
+}
+
+void Viewport::resetShimmer() {
+    m_engine->resetMeter();
+    const bool had = m_shimmer.has_value();
+    m_shimmer.reset();
+    if (had) emit shimmerChanged();
+}
+
+void Viewport::setPaintMode(bool on) {
+    m_paintMode = on;
+    setCursor(on ? Qt::CrossCursor : Qt::ArrowCursor);
+}
+
+void Viewport::changed(bool camera) {
+    if (camera) m_engine->uvValid = false;
+    // A change of anything but the camera's yaw breaks the meter's frame-to-frame comparison.
+    resetShimmer();
+    updateLabels();
+    layoutOverlays();
+    requestUpdate();
+    emit viewChanged();
+}
+
+void Viewport::requestUpdate() {
+    if (QWidget* s = surface()) s->update();
+}
+
+void Viewport::setError(const QString& message) {
+    if (message == m_error) return;
+    m_error = message;
+    m_errorLabel->setText(message);
+    m_errorLabel->setVisible(!message.isEmpty());
+    layoutOverlays();
+    emit errorChanged(message);
+}
+
+void Viewport::updateLabels() {
+    const QString a = qs(methodName(m_doc->settings().method));
+    const QString b = m_view.right.reference ? QString("reference (%1 spp)").arg(m_view.referenceSamples)
+                                             : qs(methodName(m_view.right.method));
+    m_labelA->setText("A: " + a);
+    m_labelB->setText("B: " + b);
+    m_labelA->adjustSize();
+    m_labelB->adjustSize();
+}
+
+void Viewport::layoutOverlays() {
+    if (QWidget* s = surface()) s->setGeometry(rect());
+    const int splitX = int(std::lround(m_view.splitPosition * float(width())));
+    m_handle->setVisible(m_view.split);
+    m_labelA->setVisible(m_view.split);
+    m_labelB->setVisible(m_view.split);
+    m_handle->setGeometry(splitX - kHandleWidth / 2, 0, kHandleWidth, height());
+    constexpr int kMargin = 6; // labels' distance from the view's edges and the divider
+    m_labelA->move(std::max(kMargin, splitX - m_labelA->width() - kMargin), kMargin);
+    m_labelB->move(std::min(splitX + kMargin, width() - m_labelB->width() - kMargin), kMargin);
+    m_errorLabel->setGeometry(kMargin, height() - 80, width() - 2 * kMargin, 80 - kMargin);
+    for (QWidget* w : {static_cast<QWidget*>(m_handle), static_cast<QWidget*>(m_labelA),
+                       static_cast<QWidget*>(m_labelB), static_cast<QWidget*>(m_errorLabel)})
+        w->raise();
+}
+
+void Viewport::resizeEvent(QResizeEvent* event) {
+    QWidget::resizeEvent(event);
+    m_engine->uvValid = false;
+    layoutOverlays();
+}
+
+void Viewport::mousePressEvent(QMouseEvent* event) {
+    m_lastMouse = event->position().toPoint();
+    m_dragButton = event->button();
+    if (m_paintMode && event->button() == Qt::LeftButton) {
+        m_painting = true;
+        if (const auto uv = uvAt(m_lastMouse)) emit paintAt(*uv, true);
+        return;
+    }
+    m_engine->moving = true;
+    m_restTimer->start();
+}
+
+void Viewport::mouseMoveEvent(QMouseEvent* event) {
+    const QPoint pos = event->position().toPoint();
+    const QPoint d = pos - m_lastMouse;
+    m_lastMouse = pos;
+    if (m_painting) {
+        if (const auto uv = uvAt(pos)) emit paintAt(*uv, false);
+        return;
+    }
+    if (m_dragButton == Qt::NoButton) return;
+    m_engine->moving = true;
+    m_restTimer->start();
+    if (m_dragButton == Qt::LeftButton) {
+        // Dragging right turns the object right: the camera goes the other way.
+        orbit(-float(d.x()) * kOrbitDegreesPerPixel, float(d.y()) * kOrbitDegreesPerPixel);
+        return;
+    }
+    // Pan: the target moves in the view plane so the point under the cursor follows it; at the
+    // target's depth the view is 2·distance·tan(fov/2) tall.
+    render::OrbitCamera camera;
+    camera.yawDegrees = m_view.yawDegrees;
+    camera.pitchDegrees = m_view.pitchDegrees;
+    camera.distance = m_view.distance;
+    camera.target = m_view.target;
+    const glm::vec3 forward = glm::normalize(camera.target - camera.position());
+    const glm::vec3 rightAxis = glm::normalize(glm::cross(forward, glm::vec3(0.0f, 1.0f, 0.0f)));
+    const glm::vec3 upAxis = glm::cross(rightAxis, forward);
+    const float unitsPerPixel = 2.0f * m_view.distance * std::tan(glm::radians(camera.fovDegrees) * 0.5f) /
+                                float(std::max(1, height()));
+    m_view.target += (-float(d.x()) * rightAxis + float(d.y()) * upAxis) * unitsPerPixel;
+    changed(true);
+}
+
+void Viewport::mouseReleaseEvent(QMouseEvent* event) {
+    if (m_painting && event->button() == Qt::LeftButton) {
+        m_painting = false;
+        emit strokeFinished();
+    }
+    if (event->button() == m_dragButton) m_dragButton = Qt::NoButton;
+}
+
+void Viewport::wheelEvent(QWheelEvent* event) {
+    const float notches = float(event->angleDelta().y()) / 120.0f;
+    m_engine->moving = true;
+    m_restTimer->start();
+    setDistance(m_view.distance * std::exp2(-notches * kWheelStopsPerNotch));
+    event->accept();
+}
+
+} // namespace burnish::studio

@@ -1,0 +1,197 @@
+// The studio's 3D viewport: render/'s Renderer (the same one `burnish render` runs headless) drawing
+// the document's material live, with an orbit camera, a distance control, an A/B split against a
+// second method or the supersampled reference, the debug views, a live shimmer meter while the
+// camera auto-orbits, and UV picking for painting on the preview.
+//
+// Where the platform gives Qt an OpenGL context (xcb, wayland, Windows, macOS), the picture comes
+// from a QOpenGLWidget whose context the renderer wraps (wrapHostContext) and whose framebuffer it
+// draws into. Where it does not (the offscreen platform of the tests and CI), the same code draws
+// in a headless EGL/OSMesa context of the renderer's own and the frame is shown as an image.
+#pragma once
+
+#include "material_document.h"
+
+#include <burnish/core/methods.h>
+#include <burnish/core/result.h>
+#include <burnish/render/features.h>
+#include <burnish/render/scene.h>
+
+#include <glm/vec3.hpp>
+
+#include <QImage>
+#include <QPointF>
+#include <QString>
+#include <QWidget>
+
+#include <memory>
+#include <optional>
+
+class QLabel;
+class QTimer;
+
+namespace burnish::studio {
+
+/// What the right side of the A/B split shows: another method, or the supersampled ground truth.
+struct SplitSide {
+    bool reference = false;
+    Method method = Method::Naive; // when !reference
+    friend bool operator==(const SplitSide&, const SplitSide&) = default;
+};
+
+/// The viewport's own state (not the material's: none of it is saved or undone).
+struct ViewSettings {
+    render::MeshKind mesh = render::MeshKind::Sphere;
+    QString objPath; // for MeshKind::Obj
+    float yawDegrees = 30.0f;
+    float pitchDegrees = 20.0f;
+    float distance = 3.0f; // camera distance from the target, in units of the sphere's radius
+    glm::vec3 target{0.0f};
+    float exposure = 0.0f;               // stops
+    float lightAzimuthDegrees = 35.0f;   // about +y, 0 = towards +z (the camera at yaw 0)
+    float lightElevationDegrees = 45.0f; // above the horizon
+    render::DebugView debugView = render::DebugView::None;
+    bool split = false;
+    float splitPosition = 0.5f; // the divider, as a fraction of the width from the left
+    SplitSide right;
+    int referenceSamples = 16; // samples per pixel of the reference side at rest (1..4096)
+};
+
+/// The live shimmer meter: mean |ΔY'| per object pixel between consecutive auto-orbit frames
+/// (display luma, render/shimmer.h's measure), averaged over the last frames, for each side.
+struct ShimmerReading {
+    double a = 0.0;     // the document's method
+    double b = 0.0;     // the split's right side (the reference when it shows one)
+    double ratio = 0.0; // a / b, b floored at render::kMinShimmer
+    int deltas = 0;     // frame-to-frame changes averaged
+};
+
+class Viewport : public QWidget {
+    Q_OBJECT
+public:
+    /// Camera distance range of the distance control: close enough to fill the view with the sphere,
+    /// far enough that a 512² map is far below a pixel.
+    static constexpr float kMinDistance = 1.5f;
+    static constexpr float kMaxDistance = 200.0f;
+    /// Orbit step per auto-orbit frame, degrees: a slow orbit, as `burnish render --sequence` uses.
+    static constexpr float kOrbitDegreesPerFrame = 0.5f;
+
+    explicit Viewport(MaterialDocument* doc, QWidget* parent = nullptr);
+    ~Viewport() override;
+
+    MaterialDocument* document() const { return m_doc; }
+    const ViewSettings& viewSettings() const { return m_view; }
+    void setViewSettings(const ViewSettings& view);
+
+    /// Mesh choice; an OBJ is read first and refused (nothing changes) when it cannot be drawn.
+    Status setMesh(render::MeshKind mesh, const QString& objPath = {});
+    void setDistance(float distance); // clamped to [kMinDistance, kMaxDistance]
+    void setExposure(float stops);
+    void setLight(float azimuthDegrees, float elevationDegrees);
+    void setDebugView(render::DebugView view);
+    void setSplit(bool on);
+    void setSplitPosition(float fraction); // clamped to [0.05, 0.95]
+    void setRightSide(const SplitSide& side);
+    void setReferenceSamples(int samples); // clamped to 1..4096
+    void orbit(float yawDegrees, float pitchDegrees);
+
+    /// Auto-orbit: the camera turns kOrbitDegreesPerFrame per frame and the shimmer meter runs.
+    void setAutoOrbit(bool on);
+    bool autoOrbit() const;
+    /// One auto-orbit frame now: turns the camera and marks the next frame for the meter.
+    void stepOrbit();
+    /// The meter's reading; none before two metered frames.
+    std::optional<ShimmerReading> shimmer() const { return m_shimmer; }
+    void resetShimmer();
+
+    /// Renders a fresh frame and returns it as shown (both sides of a split, without the labels).
+    QImage grabFrame();
+    /// The texture coordinate under a widget position: (u, v) wrapped into [0, 1)² as the renderer
+    /// samples the maps (v = 0 at the bottom row of the image: image pixel (u·width, (1 − v)·height)),
+    /// or nothing off the object or when nothing can be drawn. Reads back a UV pass of the whole
+    /// view once per camera change.
+    std::optional<QPointF> uvAt(QPoint widgetPos);
+
+    /// Paint mode: left-button presses and drags on the object emit paintAt() instead of orbiting.
+    void setPaintMode(bool on);
+    bool paintMode() const { return m_paintMode; }
+
+    /// Whether the picture comes from a QOpenGLWidget (else the headless context's images).
+    bool usesOpenGlWidget() const { return m_glSurface != nullptr; }
+    /// The context the renderer draws in ("host, OpenGL 4.5 (Core Profile) Mesa ...").
+    QString contextDescription() const { return m_contextDescription; }
+    /// Wall time of the last visible frame (both sides, GPU work included), ms.
+    double frameMs() const { return m_frameMs; }
+    /// The last rendering error; empty when the last frame drew.
+    QString lastError() const { return m_error; }
+
+    /// Draws the current frame into `framebuffer` (w × h pixels) with the renderer's context
+    /// current. Used by the surfaces; public only for them.
+    void drawInto(unsigned framebuffer, int width, int height);
+    /// Creates the renderers in the current context; the surfaces call it once.
+    void initializeRenderers(bool hostContext);
+    /// Releases every GL object (the context must be current).
+    void releaseRenderers();
+
+signals:
+    /// A frame was drawn (its wall time in ms).
+    void frameRendered(double ms);
+    /// The meter has a new reading.
+    void shimmerChanged();
+    /// Rendering failed (the message) or recovered (empty).
+    void errorChanged(const QString& message);
+    /// The camera or another view setting changed (the panel follows it).
+    void viewChanged();
+    /// Paint mode: the left button is down on the object at `uv` (see uvAt); `strokeStart` on press.
+    void paintAt(QPointF uv, bool strokeStart);
+    /// Paint mode: the left button was released.
+    void strokeFinished();
+
+protected:
+    void mousePressEvent(QMouseEvent* event) override;
+    void mouseMoveEvent(QMouseEvent* event) override;
+    void mouseReleaseEvent(QMouseEvent* event) override;
+    void wheelEvent(QWheelEvent* event) override;
+    void resizeEvent(QResizeEvent* event) override;
+
+private:
+    struct Engine;
+    class GlSurface;
+    class ImageSurface;
+    class SplitHandle;
+
+    /// Makes the renderer's context current; false when there is none.
+    bool makeCurrent();
+    void doneCurrent();
+    /// The scene of the current view and document. Errors: the document's maps do not fit together.
+    Result<render::Scene> scene();
+    QWidget* surface() const;
+    void changed(bool camera);
+    void requestUpdate();
+    void setError(const QString& message);
+    void layoutOverlays();
+    void updateLabels();
+    void meter();
+
+    MaterialDocument* m_doc;
+    ViewSettings m_view;
+    std::unique_ptr<Engine> m_engine;
+    GlSurface* m_glSurface = nullptr;
+    ImageSurface* m_imageSurface = nullptr;
+    SplitHandle* m_handle = nullptr;
+    QLabel* m_labelA = nullptr;
+    QLabel* m_labelB = nullptr;
+    QLabel* m_errorLabel = nullptr;
+    QTimer* m_orbitTimer = nullptr;
+    QTimer* m_restTimer = nullptr;
+    QString m_contextDescription;
+    QString m_error;
+    double m_frameMs = 0.0;
+    bool m_paintMode = false;
+    bool m_painting = false;
+    bool m_meterPending = false;
+    std::optional<ShimmerReading> m_shimmer;
+    QPoint m_lastMouse;
+    Qt::MouseButton m_dragButton = Qt::NoButton;
+};
+
+} // namespace burnish::studio

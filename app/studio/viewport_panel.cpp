@@ -1,0 +1,223 @@
+#include "viewport_panel.h"
+
+#include "viewport.h"
+
+#include <QCheckBox>
+#include <QComboBox>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QSettings>
+#include <QSlider>
+#include <QVBoxLayout>
+
+#include <cmath>
+
+namespace burnish::studio {
+
+namespace {
+
+QString qs(std::string_view s) {
+    return QString::fromUtf8(s.data(), int(s.size()));
+}
+
+// The debug views the combo offers, in enum order; DebugView::Uv is picking's, not a view.
+constexpr render::DebugView kDebugViews[] = {
+    render::DebugView::None,         render::DebugView::LightingOnly, render::DebugView::DiffuseOnly,
+    render::DebugView::SpecularOnly, render::DebugView::Power,        render::DebugView::Normals,
+    render::DebugView::MipLevel,     render::DebugView::Variance,     render::DebugView::ErrorHeatmap,
+};
+
+constexpr render::MeshKind kMeshes[] = {render::MeshKind::Sphere, render::MeshKind::Plane,
+                                        render::MeshKind::Torus, render::MeshKind::Obj};
+
+QSlider* slider(int min, int max, int value, const QString& tip, QWidget* parent) {
+    auto* s = new QSlider(Qt::Horizontal, parent);
+    s->setRange(min, max);
+    s->setValue(value);
+    s->setToolTip(tip);
+    s->setMinimumWidth(70);
+    return s;
+}
+
+QLabel* caption(const QString& text, QWidget* parent) {
+    auto* l = new QLabel(text, parent);
+    l->setContentsMargins(6, 0, 2, 0);
+    return l;
+}
+
+} // namespace
+
+ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
+    : QWidget(parent)
+    , m_doc(doc)
+    , m_viewport(new Viewport(doc, this)) {
+    setObjectName("viewportPanel");
+    const ViewSettings& v = m_viewport->viewSettings();
+
+    m_mesh = new QComboBox(this);
+    for (render::MeshKind k : kMeshes)
+        m_mesh->addItem(k == render::MeshKind::Obj ? QString("OBJ…") : qs(render::meshKindName(k)));
+    m_debug = new QComboBox(this);
+    for (render::DebugView d : kDebugViews)
+        m_debug->addItem(qs(render::debugViewName(d)));
+    m_debug->setToolTip("Debug view");
+
+    const double octaves = std::log2(Viewport::kMaxDistance / Viewport::kMinDistance);
+    m_distance = slider(0, int(std::lround(octaves * kDistanceStepsPerOctave)), 0,
+                        "Camera distance: push the object away to see the material shrink", this);
+    // ±6 stops: from a dim highlight to a blown-out one of the 1024 base power.
+    m_exposure = slider(-6 * kExposureStepsPerStop, 6 * kExposureStepsPerStop, 0, "Exposure (stops)", this);
+    m_azimuth = slider(-180, 180, int(v.lightAzimuthDegrees), "Light azimuth (degrees)", this);
+    m_elevation = slider(-89, 89, int(v.lightElevationDegrees), "Light elevation (degrees)", this);
+
+    m_split = new QCheckBox("A/B", this);
+    m_split->setToolTip("Split the view: the document's method (A) left, B right");
+    m_methodA = new QComboBox(this);
+    m_methodA->setToolTip("A: the document's method");
+    m_methodB = new QComboBox(this);
+    m_methodB->setToolTip("B: another method, or the supersampled reference");
+    for (Method m : allMethods())
+        m_methodB->addItem(qs(methodName(m)), int(m));
+    m_methodB->addItem(QString("reference (%1 spp)").arg(v.referenceSamples), -1);
+    m_orbit = new QCheckBox("auto-orbit", this);
+    m_orbit->setToolTip("Turn the camera slowly and measure the shimmer of A and B");
+    m_shimmer = new QLabel("shimmer: —", this);
+    m_shimmer->setToolTip("Mean |ΔY'| per object pixel between consecutive auto-orbit frames (display "
+                          "luma, 0–1), A and B, and A/B. Without the split B is the reference.");
+    m_frame = new QLabel(this);
+
+    auto* row1 = new QHBoxLayout;
+    row1->setContentsMargins(4, 2, 4, 0);
+    row1->addWidget(m_mesh);
+    row1->addWidget(caption("distance", this));
+    row1->addWidget(m_distance, 2);
+    row1->addWidget(caption("exposure", this));
+    row1->addWidget(m_exposure, 1);
+    row1->addWidget(caption("light", this));
+    row1->addWidget(m_azimuth, 1);
+    row1->addWidget(m_elevation, 1);
+    row1->addWidget(m_debug);
+    auto* row2 = new QHBoxLayout;
+    row2->setContentsMargins(4, 0, 4, 2);
+    row2->addWidget(m_split);
+    row2->addWidget(caption("A", this));
+    row2->addWidget(m_methodA);
+    row2->addWidget(caption("B", this));
+    row2->addWidget(m_methodB);
+    row2->addWidget(m_orbit);
+    row2->addWidget(m_shimmer, 1);
+    row2->addWidget(m_frame);
+    auto* layout = new QVBoxLayout(this);
+    layout->setContentsMargins(0, 0, 0, 0);
+    layout->setSpacing(2);
+    layout->addLayout(row1);
+    layout->addLayout(row2);
+    layout->addWidget(m_viewport, 1);
+
+    connect(m_mesh, &QComboBox::activated, this, &ViewportPanel::chooseMesh);
+    connect(m_debug, &QComboBox::currentIndexChanged, this, [this](int i) {
+        if (!m_syncing && i >= 0) m_viewport->setDebugView(kDebugViews[i]);
+    });
+    connect(m_distance, &QSlider::valueChanged, this, [this](int value) {
+        if (m_syncing) return;
+        m_viewport->setDistance(Viewport::kMinDistance *
+                                float(std::exp2(double(value) / kDistanceStepsPerOctave)));
+    });
+    connect(m_exposure, &QSlider::valueChanged, this, [this](int value) {
+        if (!m_syncing) m_viewport->setExposure(float(value) / kExposureStepsPerStop);
+    });
+    auto light = [this] {
+        if (!m_syncing) m_viewport->setLight(float(m_azimuth->value()), float(m_elevation->value()));
+    };
+    connect(m_azimuth, &QSlider::valueChanged, this, light);
+    connect(m_elevation, &QSlider::valueChanged, this, light);
+    connect(m_split, &QCheckBox::toggled, this, [this](bool on) {
+        if (!m_syncing) m_viewport->setSplit(on);
+    });
+    connect(m_methodA, &QComboBox::activated, this, [this](int i) {
+        const Status st = m_doc->setMethod(Method(m_methodA->itemData(i).toInt()));
+        if (!st) syncFromDocument();
+    });
+    connect(m_methodB, &QComboBox::activated, this, &ViewportPanel::chooseMethodB);
+    connect(m_orbit, &QCheckBox::toggled, this, [this](bool on) { m_viewport->setAutoOrbit(on); });
+    connect(m_viewport, &Viewport::viewChanged, this, &ViewportPanel::syncFromView);
+    connect(m_viewport, &Viewport::shimmerChanged, this, &ViewportPanel::updateShimmer);
+    connect(m_viewport, &Viewport::frameRendered, this,
+            [this](double ms) { m_frame->setText(QString("%1 ms").arg(ms, 0, 'f', 1)); });
+    connect(m_doc, &MaterialDocument::changed, this, &ViewportPanel::syncFromDocument);
+    syncFromDocument();
+    syncFromView();
+}
+
+void ViewportPanel::syncFromView() {
+    const ViewSettings& v = m_viewport->viewSettings();
+    m_syncing = true;
+    for (int i = 0; i < int(std::size(kMeshes)); ++i)
+        if (kMeshes[i] == v.mesh) m_mesh->setCurrentIndex(i);
+    for (int i = 0; i < int(std::size(kDebugViews)); ++i)
+        if (kDebugViews[i] == v.debugView) m_debug->setCurrentIndex(i);
+    m_distance->setValue(
+        int(std::lround(std::log2(v.distance / Viewport::kMinDistance) * kDistanceStepsPerOctave)));
+    m_exposure->setValue(int(std::lround(v.exposure * kExposureStepsPerStop)));
+    m_azimuth->setValue(int(std::lround(v.lightAzimuthDegrees)));
+    m_elevation->setValue(int(std::lround(v.lightElevationDegrees)));
+    m_split->setChecked(v.split);
+    m_methodB->setCurrentIndex(m_methodB->findData(v.right.reference ? -1 : int(v.right.method)));
+    m_orbit->setChecked(m_viewport->autoOrbit());
+    m_syncing = false;
+}
+
+void ViewportPanel::syncFromDocument() {
+    m_methodA->clear();
+    for (Method m : m_doc->availableMethods())
+        m_methodA->addItem(qs(methodName(m)), int(m));
+    m_methodA->setCurrentIndex(m_methodA->findData(int(m_doc->settings().method)));
+}
+
+void ViewportPanel::chooseMesh(int index) {
+    const render::MeshKind kind = kMeshes[index];
+    QString path;
+    if (kind == render::MeshKind::Obj) {
+        QSettings settings;
+        path =
+            QFileDialog::getOpenFileName(this, "Open OBJ mesh", settings.value("folders/meshes").toString(),
+                                         "Wavefront OBJ (*.obj);;All files (*)");
+        if (path.isEmpty()) {
+            syncFromView();
+            return;
+        }
+        settings.setValue("folders/meshes", QFileInfo(path).absolutePath());
+    }
+    // A refused OBJ leaves the mesh as it was; the viewport's error line says why.
+    if (const Status st = m_viewport->setMesh(kind, path); !st) {
+        m_viewport->setToolTip(QString::fromStdString(st.error()));
+        m_mesh->setToolTip(QString::fromStdString(st.error()));
+    }
+    syncFromView();
+}
+
+void ViewportPanel::chooseMethodB(int index) {
+    const int choice = m_methodB->itemData(index).toInt();
+    SplitSide side;
+    side.reference = choice < 0;
+    if (!side.reference) side.method = Method(choice);
+    m_viewport->setRightSide(side);
+    // Choosing what B shows means the user wants to see it.
+    if (!m_viewport->viewSettings().split) m_viewport->setSplit(true);
+}
+
+void ViewportPanel::updateShimmer() {
+    const auto r = m_viewport->shimmer();
+    if (!r) {
+        m_shimmer->setText("shimmer: —");
+        return;
+    }
+    m_shimmer->setText(QString("shimmer A %1  B %2  A/B %3")
+                           .arg(r->a, 0, 'f', 4)
+                           .arg(r->b, 0, 'f', 4)
+                           .arg(r->ratio, 0, 'f', 2));
+}
+
+} // namespace burnish::studio

@@ -1,0 +1,64 @@
+// The 3D viewport with its controls: mesh, distance, the A/B split (the document's method against
+// another method or the reference), debug view, exposure, light direction, auto-orbit, and a status
+// line with the live shimmer meter and the frame time.
+#pragma once
+
+#include "material_document.h"
+
+#include <QWidget>
+
+class QCheckBox;
+class QComboBox;
+class QLabel;
+class QSlider;
+
+namespace burnish::studio {
+
+class Viewport;
+
+class ViewportPanel : public QWidget {
+    Q_OBJECT
+public:
+    /// Steps of the distance slider per doubling of the distance.
+    static constexpr int kDistanceStepsPerOctave = 100;
+    /// Exposure slider steps per stop.
+    static constexpr int kExposureStepsPerStop = 10;
+
+    explicit ViewportPanel(MaterialDocument* doc, QWidget* parent = nullptr);
+
+    Viewport* viewport() const { return m_viewport; }
+    QComboBox* meshCombo() const { return m_mesh; }
+    QComboBox* methodACombo() const { return m_methodA; }
+    QComboBox* methodBCombo() const { return m_methodB; }
+    QComboBox* debugCombo() const { return m_debug; }
+    QCheckBox* splitCheck() const { return m_split; }
+    QCheckBox* orbitCheck() const { return m_orbit; }
+    QSlider* distanceSlider() const { return m_distance; }
+    QLabel* shimmerLabel() const { return m_shimmer; }
+    QLabel* frameLabel() const { return m_frame; }
+
+private:
+    void syncFromView();
+    void syncFromDocument();
+    void chooseMesh(int index);
+    void chooseMethodB(int index);
+    void updateShimmer();
+
+    MaterialDocument* m_doc;
+    Viewport* m_viewport;
+    QComboBox* m_mesh;
+    QComboBox* m_methodA;
+    QComboBox* m_methodB;
+    QComboBox* m_debug;
+    QCheckBox* m_split;
+    QCheckBox* m_orbit;
+    QSlider* m_distance;
+    QSlider* m_exposure;
+    QSlider* m_azimuth;
+    QSlider* m_elevation;
+    QLabel* m_shimmer;
+    QLabel* m_frame;
+    bool m_syncing = false;
+};
+
+} // namespace burnish::studio

@@ -1,0 +1,367 @@
+// The shared "resolve → bake → export" job of `burnish bake` and the studio's Bake & Export dialog,
+// its manifest reader, and the Ninja build file that runs many jobs as one command each.
+#include <burnish/core/bake_job.h>
+
+#include <burnish/core/atomic_file.h>
+#include <burnish/core/bake_ninja.h>
+#include <burnish/core/numeric.h>
+
+#include "temp_dir.h"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace burnish {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kNormalMap = std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png";
+
+// A small map keeps the report's evaluation (every method against the ground truth) quick.
+constexpr int kSmallMapSize = 16;
+
+// A kSmallMapSize² 8-bit normal map whose normals tilt along x by a sine: plausible, not flat.
+fs::path writeSmallNormalMap(const fs::path& path) {
+    std::vector<unsigned char> rgb;
+    for (int t = 0; t < kSmallMapSize * kSmallMapSize; ++t) {
+        // Slopes up to 0.5 (27°): well inside what the importer finds plausible.
+        const double slope = 0.5 * std::sin(2.0 * kPi<double> * double(t % kSmallMapSize) / kSmallMapSize);
+        const double n[3] = {slope, 0.0, 1.0};
+        const double len = std::hypot(n[0], n[1], n[2]);
+        for (double c : n) // unsigned encoding: [-1, 1] -> [0, 255]
+            rgb.push_back(static_cast<unsigned char>(std::lround((0.5 * c / len + 0.5) * 255.0)));
+    }
+    const auto out = OIIO::ImageOutput::create(path.string());
+    EXPECT_TRUE(
+        out &&
+        out->open(path.string(), OIIO::ImageSpec(kSmallMapSize, kSmallMapSize, 3, OIIO::TypeDesc::UINT8)) &&
+        out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) && out->close());
+    return path;
+}
+
+BakeJobSpec specFor(const fs::path& out) {
+    BakeJobSpec spec;
+    spec.input = kNormalMap;
+    spec.out = out.string();
+    spec.preset = "godot";
+    return spec;
+}
+
+TEST(BakeJob, ResolveNamesOptionsAsTheCommandLineSpellsThem) {
+    test::TempDir dir;
+    BakeJobSpec spec = specFor(dir.path());
+    spec.compression = "bc4";
+    const auto compression = resolveBakeJob(spec);
+    ASSERT_FALSE(compression);
+    EXPECT_NE(compression.error().find("--compression bc4 applies to --format dds only"), std::string::npos)
+        << compression.error();
+
+    spec = specFor(dir.path());
+    spec.mips = 0;
+    const auto mips = resolveBakeJob(spec);
+    ASSERT_FALSE(mips);
+    EXPECT_NE(mips.error().find("--mips 0"), std::string::npos) << mips.error();
+
+    spec = specFor(dir.path());
+    spec.method = "lean";
+    const auto method = resolveBakeJob(spec);
+    ASSERT_FALSE(method) << "godot stores a gloss map only; LEAN's moments have nowhere to go";
+
+    spec = specFor(dir.path());
+    spec.input = "sample:no-such-sample";
+    EXPECT_FALSE(resolveBakeJob(spec));
+}
+
+TEST(BakeJob, ResolveTakesThePresetDefaultsAndTheInputStem) {
+    test::TempDir dir;
+    const auto job = resolveBakeJob(specFor(dir.path()));
+    ASSERT_TRUE(job) << job.error();
+    EXPECT_EQ(job->method, job->preset.method);
+    EXPECT_EQ(job->exportOptions.stem, "trak-rust1_nm");
+    EXPECT_EQ(job->exportOptions.overwrite, Overwrite::Refuse);
+    EXPECT_EQ(job->bake.mipCount, 0) << "no --mips: the whole chain";
+}
+
+TEST(BakeJob, RunWritesTheSetAndLimitsTheChainToMips) {
+    test::TempDir dir;
+    BakeJobSpec spec = specFor(dir / "out");
+    constexpr int kMips = 3;
+    spec.mips = kMips;
+    const auto job = resolveBakeJob(spec);
+    ASSERT_TRUE(job) << job.error();
+    std::vector<std::string> stages;
+    const auto run = runBakeJob(*job, [&](double, std::string_view stage) {
+        stages.emplace_back(stage);
+        return true;
+    });
+    ASSERT_TRUE(run) << run.error();
+    EXPECT_EQ(run->baked.stats.mipCount, kMips);
+    EXPECT_EQ(run->summary["mipCount"].get<int>(), kMips);
+    EXPECT_EQ(stages, (std::vector<std::string>{"reading", "baking", "writing", "done"}));
+    for (const auto& f : run->summary["files"])
+        EXPECT_TRUE(fs::exists(f.get<std::string>())) << f;
+    const auto manifest = readFile(dir / "out" / "bake.json");
+    ASSERT_TRUE(manifest) << manifest.error();
+    const auto record = nlohmann::json::parse(*manifest);
+    EXPECT_NE(record.dump().find("\"mips\":3"), std::string::npos) << "a limited chain is recorded";
+
+    // The same job again refuses to replace the set, and says how to.
+    const auto again = runBakeJob(*job);
+    ASSERT_FALSE(again);
+    EXPECT_NE(again.error().find("--force"), std::string::npos) << again.error();
+}
+
+TEST(BakeJob, CancelBeforeWritingLeavesNoFile) {
+    test::TempDir dir;
+    const auto job = resolveBakeJob(specFor(dir / "out"));
+    ASSERT_TRUE(job) << job.error();
+    const auto run = runBakeJob(*job, [](double, std::string_view stage) { return stage != "writing"; });
+    ASSERT_FALSE(run);
+    EXPECT_EQ(run.error(), "cancelled");
+    EXPECT_FALSE(fs::exists(dir / "out")) << "cancelled before the output folder was created";
+}
+
+TEST(BakeJob, BakesTheBuiltInSampleByName) {
+    test::TempDir dir;
+    BakeJobSpec spec = specFor(dir.path());
+    spec.input = std::string(kSampleInputPrefix) + "hammered";
+    const auto job = resolveBakeJob(spec);
+    ASSERT_TRUE(job) << job.error();
+    EXPECT_EQ(job->exportOptions.stem, "hammered");
+    const auto run = runBakeJob(*job);
+    ASSERT_TRUE(run) << run.error();
+    EXPECT_EQ(run->map.width, kSampleBakeSize);
+    EXPECT_EQ(run->summary["input"].get<std::string>(), spec.input);
+}
+
+// A job on a small map with --report, baking into <dir>/out.
+BakeJobSpec smallReportSpec(const fs::path& dir) {
+    BakeJobSpec spec = specFor(dir / "out");
+    spec.input = writeSmallNormalMap(dir / "small.png").string();
+    spec.report = true;
+    return spec;
+}
+
+TEST(BakeJob, ReportWritesTheEvaluationAsItsOwnStage) {
+    test::TempDir dir;
+    const auto job = resolveBakeJob(smallReportSpec(dir.path()));
+    ASSERT_TRUE(job) << job.error();
+    std::vector<std::string> stages; // each stage once, in the order first seen
+    double last = 0.0;
+    bool monotone = true;
+    const auto run = runBakeJob(*job, [&](double fraction, std::string_view stage) {
+        if (stages.empty() || stages.back() != stage) stages.emplace_back(stage);
+        monotone = monotone && fraction >= last && fraction <= 1.0;
+        last = fraction;
+        return true;
+    });
+    ASSERT_TRUE(run) << run.error();
+    EXPECT_EQ(stages, (std::vector<std::string>{"reading", "baking", "writing", "evaluating", "done"}));
+    constexpr double kAllDone = 1.0; // "done" reports the whole job, exactly
+    EXPECT_TRUE(monotone) << "the fraction done never goes back nor passes 1";
+    EXPECT_EQ(last, kAllDone);
+    ASSERT_TRUE(run->summary.contains("report"));
+    EXPECT_EQ(fs::path(run->summary["report"].get<std::string>()), dir / "out" / "report" / "evaluate.md");
+    for (const auto f : kBakeReportFiles)
+        EXPECT_TRUE(fs::exists(dir / "out" / kBakeReportFolder / f)) << f;
+}
+
+TEST(BakeJob, CancelAtTheReportKeepsTheSetAndWritesNoReport) {
+    test::TempDir dir;
+    const auto job = resolveBakeJob(smallReportSpec(dir.path()));
+    ASSERT_TRUE(job) << job.error();
+    const auto run = runBakeJob(*job, [](double, std::string_view stage) { return stage != "evaluating"; });
+    ASSERT_FALSE(run);
+    EXPECT_EQ(run.error(), "cancelled");
+    EXPECT_TRUE(fs::exists(dir / "out" / "bake.json")) << "the export before the report is complete";
+    EXPECT_FALSE(fs::exists(dir / "out" / "report"));
+}
+
+TEST(BakeJob, ManifestJobsStartFromTheDefaultsWithPathsFromItsFolder) {
+    test::TempDir dir;
+    fs::create_directories(dir / "jobs");
+    const fs::path manifest = dir / "jobs" / "m.json";
+    const std::string absoluteOut = (dir / "elsewhere").string();
+    ASSERT_TRUE(writeFileAtomic(manifest,
+                                R"({"version": 1, "jobs": [
+        {"input": "maps/a.png", "out": "o", "preset": "godot", "mips": 2, "detail": "d.png"},
+        {"input": "sample:hammered", "out": ")" +
+                                    absoluteOut + R"(", "preset": "unity", "kernel": "gaussian",
+         "force": true}]})",
+                                Overwrite::Refuse));
+    BakeJobSpec defaults;
+    defaults.kernel = "box";
+    defaults.report = true;
+    const auto specs = readBakeManifest(manifest.string(), defaults);
+    ASSERT_TRUE(specs) << specs.error();
+    ASSERT_EQ(specs->size(), 2u);
+    const BakeJobSpec& a = (*specs)[0];
+    EXPECT_EQ(fs::path(a.input), dir / "jobs" / "maps" / "a.png");
+    EXPECT_EQ(fs::path(a.out), dir / "jobs" / "o");
+    EXPECT_EQ(fs::path(a.detail.value_or("")), dir / "jobs" / "d.png");
+    EXPECT_EQ(a.mips, 2);
+    EXPECT_EQ(a.kernel, "box") << "a field the job leaves out is the command line's";
+    EXPECT_TRUE(a.report);
+    EXPECT_FALSE(a.force);
+    const BakeJobSpec& b = (*specs)[1];
+    EXPECT_EQ(b.input, "sample:hammered") << "a sample is a name, not a path";
+    EXPECT_EQ(b.out, absoluteOut);
+    EXPECT_EQ(b.kernel, "gaussian") << "the job's own field wins";
+    EXPECT_TRUE(b.force);
+}
+
+TEST(BakeJob, ManifestErrorsNameTheJobAndTheField) {
+    test::TempDir dir;
+    const std::map<std::string, std::string> cases{
+        {R"({"jobs": [{"input": "a.png", "colour": 1}]})", "job 1: unknown field 'colour'"},
+        {R"({"jobs": [{"input": "a.png"}, {"mips": 1.5}]})", "job 2: 'mips' must be an integer"},
+        {R"({"jobs": [{"force": "yes"}]})", "'force' must be true or false"},
+        {R"({"jobs": []})", "\"jobs\" is empty"},
+        {R"({"version": 2, "jobs": [{}]})", "version must be 1"},
+        {R"({"jobs": [)", "invalid JSON"}};
+    for (const auto& [text, expected] : cases) {
+        const fs::path manifest = dir / "m.json";
+        ASSERT_TRUE(writeFileAtomic(manifest, text, Overwrite::Allow));
+        const auto specs = readBakeManifest(manifest.string(), {});
+        ASSERT_FALSE(specs) << text;
+        EXPECT_NE(specs.error().find(expected), std::string::npos) << specs.error();
+    }
+    EXPECT_FALSE(readBakeManifest((dir / "missing.json").string(), {}));
+}
+
+// The options of a `burnish bake` command line read back into a spec (the flags the command writes).
+BakeJobSpec specFromCommand(const std::vector<std::string>& args) {
+    BakeJobSpec spec;
+    spec.input = args.at(2);
+    const std::map<std::string, std::optional<std::string>*> named{{"--method", &spec.method},
+                                                                   {"--format", &spec.format},
+                                                                   {"--kernel", &spec.kernel},
+                                                                   {"--border", &spec.border},
+                                                                   {"--green", &spec.green},
+                                                                   {"--layout", &spec.layout},
+                                                                   {"--gloss", &spec.gloss},
+                                                                   {"--detail", &spec.detail},
+                                                                   {"--detail-fade", &spec.detailFade},
+                                                                   {"--compression", &spec.compression}};
+    for (size_t i = 3; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        if (a == "--force")
+            spec.force = true;
+        else if (a == "--report")
+            spec.report = true;
+        else if (a == "--allow-implausible")
+            spec.allowImplausible = true;
+        else if (a == "--allow-8bit")
+            spec.allowEightBit = true;
+        else if (a == "--out")
+            spec.out = args.at(++i);
+        else if (a == "--preset")
+            spec.preset = args.at(++i);
+        else if (a == "--power")
+            spec.power = std::stod(args.at(++i));
+        else if (a == "--metallic")
+            spec.metallic = std::stod(args.at(++i));
+        else if (a == "--mips")
+            spec.mips = std::stoi(args.at(++i));
+        else if (named.count(a))
+            *named.at(a) = args.at(++i);
+        else
+            ADD_FAILURE() << "unexpected argument " << a;
+    }
+    return spec;
+}
+
+TEST(BakeNinja, TheJobCommandMeansTheSameJob) {
+    test::TempDir dir;
+    BakeJobSpec spec = specFor(dir / "out");
+    spec.preset = "unity";
+    spec.power = 300.0;
+    spec.mips = 3;
+    spec.kernel = "gaussian";
+    spec.border = "clamp";
+    spec.metallic = 1.0;
+    spec.detail = kNormalMap;
+    spec.detailFade = "1:2";
+    spec.report = true;
+    const auto job = resolveBakeJob(spec);
+    ASSERT_TRUE(job) << job.error();
+    const std::string exe = "/opt/burnish";
+    const auto args = bakeJobCommand(exe, *job);
+    ASSERT_GE(args.size(), 3u);
+    EXPECT_EQ(args[0], exe);
+    EXPECT_EQ(args[1], "bake");
+    EXPECT_EQ(args.back(), "--report");
+
+    const auto again = resolveBakeJob(specFromCommand(args));
+    ASSERT_TRUE(again) << again.error();
+    EXPECT_EQ(again->method, job->method);
+    EXPECT_EQ(again->bake.basePower, job->bake.basePower);
+    EXPECT_EQ(again->bake.mipCount, job->bake.mipCount);
+    EXPECT_EQ(again->bake.pyramid.kernel, job->bake.pyramid.kernel);
+    EXPECT_EQ(again->bake.pyramid.border, job->bake.pyramid.border);
+    EXPECT_EQ(again->exportOptions.format, job->preset.format) << "the preset's format spelled out";
+    EXPECT_EQ(again->exportOptions.parameters, job->exportOptions.parameters);
+    EXPECT_EQ(again->exportOptions.stem, job->exportOptions.stem);
+    EXPECT_EQ(again->detail.fadeStartMip, job->detail.fadeStartMip);
+    EXPECT_EQ(again->detail.fadeEndMip, job->detail.fadeEndMip);
+    EXPECT_EQ(again->exportOptions.overwrite, Overwrite::Allow) << "a rebuild replaces the last outputs";
+    EXPECT_TRUE(again->spec.report);
+    EXPECT_TRUE(fs::path(again->spec.out).is_absolute());
+
+    spec = specFor(dir / "out");
+    spec.input = std::string(kSampleInputPrefix) + "brushed";
+    const auto sample = resolveBakeJob(spec);
+    ASSERT_TRUE(sample) << sample.error();
+    EXPECT_EQ(bakeJobCommand(exe, *sample).at(2), spec.input) << "a sample's name is not made a path";
+}
+
+TEST(BakeNinja, OutputsAreExactlyWhatTheJobWrites) {
+    test::TempDir dir;
+    const fs::path manifest = dir / "m.json"; // only named: a job's dependency, never read here
+    BakeJobSpec spec = specFor(dir / "out");
+    spec.input = writeSmallNormalMap(dir / "small.png").string();
+    spec.preset = "blackops";
+    spec.detail = spec.input;
+    spec.report = true;
+    const auto job = resolveBakeJob(spec);
+    ASSERT_TRUE(job) << job.error();
+    const fs::path ninjaFile = dir / "build.ninja";
+    const auto written = writeBakeNinja({*job}, manifest.string(), ninjaFile.string(), "/opt/burnish");
+    ASSERT_TRUE(written) << written.error();
+    EXPECT_EQ((*written)["jobs"].get<size_t>(), 1u);
+    EXPECT_FALSE(fs::exists(dir / "out")) << "planning bakes and writes nothing";
+
+    const auto run = runBakeJob(*job);
+    ASSERT_TRUE(run) << run.error();
+    std::vector<std::string> produced;
+    for (const auto& e : fs::recursive_directory_iterator(dir / "out"))
+        if (e.is_regular_file()) produced.push_back(e.path().string());
+    std::vector<std::string> planned = (*written)["outputs"].get<std::vector<std::string>>();
+    std::sort(produced.begin(), produced.end());
+    std::sort(planned.begin(), planned.end());
+    EXPECT_EQ(planned, produced);
+
+    const auto text = readFile(ninjaFile);
+    ASSERT_TRUE(text) << text.error();
+    EXPECT_NE(text->find("restat = 1"), std::string::npos);
+    EXPECT_NE(text->find(manifest.string()), std::string::npos) << "the manifest is an input of its jobs";
+
+    // Two jobs writing one folder would race: refused, and no build file is replaced.
+    ASSERT_TRUE(fs::remove(ninjaFile));
+    const auto clash = writeBakeNinja({*job, *job}, manifest.string(), ninjaFile.string(), "/opt/burnish");
+    ASSERT_FALSE(clash);
+    EXPECT_NE(clash.error().find("manifest job 2"), std::string::npos) << clash.error();
+    EXPECT_NE(clash.error().find("which job 1 writes too"), std::string::npos) << clash.error();
+    EXPECT_FALSE(fs::exists(ninjaFile));
+}
+
+} // namespace
+} // namespace burnish

@@ -1,0 +1,391 @@
+#include <burnish/core/paint.h>
+
+#include <burnish/core/sample_maps.h>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <random>
+#include <tuple>
+
+#include <unistd.h>
+
+using namespace burnish;
+
+namespace {
+
+// Layer values are float: a double-computed composite rounds once, so one float ulp at 1.
+constexpr float kFloatTol = 1e-6f;
+// Dab positions are computed from the segment's start in double: far below a texel.
+constexpr double kPositionTol = 1e-9;
+
+NormalMap gaussianField(int width, int height, double sigma, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g(0.0, sigma);
+    std::vector<glm::vec3> n(size_t(width) * size_t(height));
+    for (auto& v : n)
+        v = glm::vec3(glm::normalize(glm::dvec3(g(rng), g(rng), 1.0)));
+    return makeNormalMap(width, height, std::move(n));
+}
+
+NormalMap flatMap(int width, int height) {
+    return makeNormalMap(width, height, std::vector<glm::vec3>(size_t(width) * size_t(height), {0, 0, 1}));
+}
+
+PaintLayer layer(int w, int h, PaintLayerKind kind = PaintLayerKind::Gloss) {
+    auto l = PaintLayer::create(kind, w, h);
+    EXPECT_TRUE(l) << l.error();
+    return std::move(l).value();
+}
+
+Brush brush(double radius, double hardness, double opacity, float value) {
+    Brush b;
+    b.radius = radius;
+    b.hardness = hardness;
+    b.opacity = opacity;
+    b.value = value;
+    return b;
+}
+
+PaintStroke stroke(PaintLayer& l, const Brush& b, BorderMode border = BorderMode::Wrap) {
+    auto s = PaintStroke::begin(l, b, border);
+    EXPECT_TRUE(s) << s.error();
+    return std::move(s).value();
+}
+
+bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+} // namespace
+
+TEST(Paint, FalloffIsFullInsideTheHardCoreAndSmoothToTheRim) {
+    const double r = 10.0, hardness = 0.4;
+    EXPECT_EQ(brushFalloff(0.0, r, hardness), 1.0);
+    EXPECT_EQ(brushFalloff(hardness * r, r, hardness), 1.0);
+    EXPECT_EQ(brushFalloff(r, r, hardness), 0.0);
+    EXPECT_EQ(brushFalloff(2 * r, r, hardness), 0.0);
+    EXPECT_EQ(brushFalloff(std::nan(""), r, hardness), 0.0);
+    // Halfway between core and rim the smoothstep is exactly one half.
+    EXPECT_NEAR(brushFalloff(0.5 * (hardness * r + r), r, hardness), 0.5, 1e-12);
+    double previous = 1.0;
+    for (double d = 0.0; d <= r; d += 0.01 * r) {
+        const double f = brushFalloff(d, r, hardness);
+        EXPECT_LE(f, previous) << "falloff rises at d = " << d;
+        previous = f;
+    }
+    // Hardness 1: a hard edge.
+    EXPECT_EQ(brushFalloff(0.999 * r, r, 1.0), 1.0);
+    EXPECT_EQ(brushFalloff(r, r, 1.0), 0.0);
+}
+
+TEST(Paint, OpacityBoundsWhatOneStrokeDoes) {
+    PaintLayer l = layer(32, 32);
+    PaintStroke s = stroke(l, brush(4.0, 1.0, 0.5, 1.0f));
+    // Many dabs on the same texels: the stroke keeps the strongest, it does not pile them up.
+    for (int i = 0; i < 20; ++i)
+        ASSERT_TRUE(s.addPoint({16.0 + 0.01 * (i % 2), 16.0}));
+    const size_t c = l.index(16, 16);
+    EXPECT_NEAR(l.coverage[c], 0.5f, kFloatTol);
+    EXPECT_NEAR(l.value[c], 1.0f, kFloatTol);
+    // A second stroke over the first: source-over with alpha 0.5 again.
+    PaintStroke s2 = stroke(l, brush(4.0, 1.0, 0.5, 0.0f));
+    ASSERT_TRUE(s2.addPoint({16.0, 16.0}));
+    EXPECT_NEAR(l.coverage[c], 0.75f, kFloatTol);              // 0.5 + 0.5·(1 − 0.5)
+    EXPECT_NEAR(l.value[c], (0.5f * 0.5f) / 0.75f, kFloatTol); // old value 1 weighted 0.25 of 0.75
+    // The soft rim paints less than the core.
+    PaintLayer soft = layer(64, 64);
+    PaintStroke s3 = stroke(soft, brush(10.0, 0.0, 1.0, 1.0f));
+    ASSERT_TRUE(s3.addPoint({32.0, 32.0}));
+    EXPECT_GT(soft.coverage[soft.index(31, 31)], soft.coverage[soft.index(38, 31)]);
+    EXPECT_GT(soft.coverage[soft.index(38, 31)], 0.0f);
+    EXPECT_EQ(soft.coverage[soft.index(43, 31)], 0.0f); // 11.5 texels away: beyond the radius
+}
+
+TEST(Paint, EraseLowersCoverage) {
+    PaintLayer l = layer(16, 16);
+    PaintStroke s = stroke(l, brush(3.0, 1.0, 1.0, 0.8f));
+    ASSERT_TRUE(s.addPoint({8.0, 8.0}));
+    Brush eraser = brush(3.0, 1.0, 0.25, 0.0f);
+    eraser.erase = true;
+    PaintStroke e = stroke(l, eraser);
+    ASSERT_TRUE(e.addPoint({8.0, 8.0}));
+    EXPECT_NEAR(l.coverage[l.index(8, 8)], 0.75f, kFloatTol);
+    EXPECT_NEAR(l.value[l.index(8, 8)], 0.8f, kFloatTol);
+}
+
+TEST(Paint, DabsWrapAroundTheBordersOfATilingMap) {
+    PaintLayer wrapped = layer(32, 24);
+    PaintStroke s = stroke(wrapped, brush(4.0, 1.0, 1.0, 1.0f), BorderMode::Wrap);
+    ASSERT_TRUE(s.addPoint({0.5, 0.5})); // centred on texel (0, 0)
+    // Texel (31, 23) is one texel up-left across both borders, like (1, 1) down-right.
+    EXPECT_EQ(wrapped.coverage[wrapped.index(31, 23)], 1.0f);
+    EXPECT_EQ(wrapped.coverage[wrapped.index(1, 1)], 1.0f);
+    EXPECT_EQ(wrapped.coverage[wrapped.index(29, 0)], 1.0f); // 3 texels left across the edge
+    EXPECT_EQ(wrapped.coverage[wrapped.index(28, 0)], 0.0f); // 4 texels: on the rim, outside
+    EXPECT_EQ(s.dirty(), (TexelRect{0, 0, 32, 24}));         // both edges touched: full span
+    // A dab centred outside the map wraps too.
+    PaintLayer outside = layer(32, 24);
+    PaintStroke so = stroke(outside, brush(2.0, 1.0, 1.0, 1.0f), BorderMode::Wrap);
+    ASSERT_TRUE(so.addPoint({32.0 + 10.5, -24.0 + 5.5}));
+    EXPECT_EQ(outside.coverage[outside.index(10, 5)], 1.0f);
+
+    PaintLayer clamped = layer(32, 24);
+    PaintStroke c = stroke(clamped, brush(4.0, 1.0, 1.0, 1.0f), BorderMode::Clamp);
+    ASSERT_TRUE(c.addPoint({0.5, 0.5}));
+    EXPECT_EQ(clamped.coverage[clamped.index(31, 23)], 0.0f);
+    EXPECT_EQ(clamped.coverage[clamped.index(1, 1)], 1.0f);
+    EXPECT_EQ(c.dirty(), (TexelRect{0, 0, 4, 4}));
+}
+
+TEST(Paint, StrokeSpacingIsIndependentOfTheMouseEvents) {
+    PaintLayer l = layer(128, 32);
+    Brush b = brush(8.0, 0.5, 1.0, 1.0f);
+    b.spacing = 0.25; // a dab every 2 texels
+    PaintStroke s = stroke(l, b);
+    // Irregular mouse events along a straight line, some closer than the spacing.
+    for (double x : {10.0, 10.7, 11.2, 13.9, 30.05, 30.1, 77.7, 110.0})
+        ASSERT_TRUE(s.addPoint({x, 16.0}));
+    const auto& dabs = s.dabs();
+    ASSERT_EQ(dabs.size(), size_t(51)); // 10, 12, ..., 110
+    for (size_t i = 0; i < dabs.size(); ++i) {
+        EXPECT_NEAR(dabs[i].x, 10.0 + 2.0 * double(i), kPositionTol);
+        EXPECT_NEAR(dabs[i].y, 16.0, kPositionTol);
+    }
+    // A diagonal segment keeps the spacing along its length.
+    PaintLayer d = layer(128, 128);
+    PaintStroke sd = stroke(d, b);
+    ASSERT_TRUE(sd.addPoint({0.0, 0.0}));
+    ASSERT_TRUE(sd.addPoint({30.0, 40.0})); // length 50: 25 steps
+    ASSERT_EQ(sd.dabs().size(), size_t(26));
+    for (size_t i = 1; i < sd.dabs().size(); ++i)
+        EXPECT_NEAR(glm::length(sd.dabs()[i] - sd.dabs()[i - 1]), 2.0, kPositionTol);
+    EXPECT_FALSE(sd.addPoint({std::nan(""), 1.0}));
+}
+
+TEST(Paint, DirtyRectangleBoundsExactlyTheChangedTexels) {
+    PaintLayer l = layer(64, 64);
+    const PaintLayer before = l;
+    PaintStroke s = stroke(l, brush(3.0, 1.0, 1.0, 0.7f), BorderMode::Clamp);
+    ASSERT_TRUE(s.addPoint({20.5, 30.5}));
+    // Texel centres strictly within 3 texels: columns 18..22, rows 28..32.
+    EXPECT_EQ(s.dirty(), (TexelRect{18, 28, 23, 33}));
+    EXPECT_EQ(s.takeRecentDirty(), s.dirty());
+    EXPECT_TRUE(s.takeRecentDirty().empty());
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x)
+            if (!s.dirty().contains(x, y)) {
+                ASSERT_EQ(l.coverage[l.index(x, y)], before.coverage[l.index(x, y)]) << x << "," << y;
+            }
+    ASSERT_TRUE(s.addPoint({40.5, 30.5}));
+    EXPECT_EQ(s.dirty(), (TexelRect{18, 28, 43, 33}));
+    // Only texels the later dabs changed: the first dab already painted columns 18..22 at full
+    // strength, and the next dab (at 21.25) first reaches a new texel at column 23.
+    EXPECT_EQ(s.takeRecentDirty(), (TexelRect{23, 28, 43, 33}));
+
+    // The undo patch restores the layer exactly; the redo patch re-applies the stroke.
+    const PaintLayer painted = l;
+    const PaintPatch undo = s.before(), redo = s.after();
+    EXPECT_EQ(undo.rect, s.dirty());
+    ASSERT_TRUE(applyPatch(l, undo));
+    EXPECT_TRUE(sameBits(l.value, before.value) && sameBits(l.coverage, before.coverage));
+    ASSERT_TRUE(applyPatch(l, redo));
+    EXPECT_TRUE(sameBits(l.value, painted.value) && sameBits(l.coverage, painted.coverage));
+}
+
+TEST(Paint, InvalidBrushesAreRefused) {
+    PaintLayer l = layer(8, 8);
+    EXPECT_FALSE(PaintStroke::begin(l, brush(0.1, 0.5, 1.0, 1.0f), BorderMode::Wrap));
+    EXPECT_FALSE(PaintStroke::begin(l, brush(4.0, 1.5, 1.0, 1.0f), BorderMode::Wrap));
+    EXPECT_FALSE(PaintStroke::begin(l, brush(4.0, 0.5, std::nan(""), 1.0f), BorderMode::Wrap));
+    EXPECT_FALSE(PaintStroke::begin(l, brush(4.0, 0.5, 1.0, 2.0f), BorderMode::Wrap));
+    EXPECT_FALSE(PaintLayer::create(PaintLayerKind::Gloss, 0, 8));
+}
+
+TEST(Paint, CompositeBlendsGlossAndAddsVarianceOnlyWherePainted) {
+    const GlossEncoding enc = GlossEncoding::blackOps();
+    const int w = 16, h = 8;
+    PaintLayer gloss = layer(w, h);
+    PaintLayer offset = layer(w, h, PaintLayerKind::VarianceOffset);
+    gloss.value[gloss.index(2, 2)] = 1.0f;
+    gloss.coverage[gloss.index(2, 2)] = 0.25f;
+    offset.value[offset.index(5, 5)] = 0.1f;
+    offset.coverage[offset.index(5, 5)] = 1.0f;
+    std::vector<float> base(size_t(w * h));
+    for (size_t i = 0; i < base.size(); ++i)
+        base[i] = float(i) / float(base.size());
+    std::vector<float> out(base.size(), -1.0f);
+    ASSERT_TRUE(compositeAuthoredGloss(&base, 0.0, &gloss, &offset, enc, w, h, TexelRect::full(w, h), out));
+    const size_t g = gloss.index(2, 2), v = offset.index(5, 5);
+    EXPECT_NEAR(out[g], base[g] + 0.25f * (1.0f - base[g]), kFloatTol);
+    EXPECT_NEAR(out[v], float(varianceToGloss(base[v], 0.1, enc)), kFloatTol);
+    EXPECT_LT(out[v], base[v]); // a variance makes it rougher
+    for (size_t i = 0; i < base.size(); ++i)
+        if (i != g && i != v) {
+            ASSERT_EQ(out[i], base[i]) << i; // unpainted: bit for bit
+        }
+    // Without a map, the base gloss; outside the region, untouched.
+    std::vector<float> flat(base.size(), -1.0f);
+    ASSERT_TRUE(compositeAuthoredGloss(nullptr, 0.6, nullptr, nullptr, enc, w, h, {0, 0, 4, 4}, flat));
+    EXPECT_EQ(flat[0], 0.6f);
+    EXPECT_EQ(flat[size_t(5 * w + 5)], -1.0f);
+    EXPECT_FALSE(compositeAuthoredGloss(nullptr, 0.6, &gloss, nullptr, enc, w + 1, h, {}, flat));
+}
+
+// The live bake after a stroke equals a full bake of the same authored gloss, bit for bit, for
+// every kernel, border and gloss-storing method, on a size that is not a power of two (uneven
+// footprints), while recomputing only part of the chain.
+TEST(Paint, RebakeRegionEqualsAFullBakeBitForBit) {
+    const int w = 60, h = 44;
+    auto map = std::make_shared<const NormalMap>(gaussianField(w, h, 0.25, 7));
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.2f, 0.9f);
+    std::vector<float> base(map->texelCount());
+    for (auto& g : base)
+        g = u(rng);
+    for (FilterKernel kernel : {FilterKernel::Box, FilterKernel::Tent, FilterKernel::Gaussian})
+        for (BorderMode border : {BorderMode::Wrap, BorderMode::Clamp})
+            for (Method method : {Method::VarianceToGloss, Method::Vmf, Method::Naive}) {
+                SCOPED_TRACE(std::string(kernelName(kernel)) +
+                             (border == BorderMode::Wrap ? " wrap " : " clamp ") +
+                             std::string(methodName(method)));
+                BakeOptions options;
+                options.method = method;
+                options.pyramid = {border, kernel};
+                options.authoredGloss = base;
+                auto live = LiveGlossBake::create(map, options);
+                ASSERT_TRUE(live) << live.error();
+                auto full0 = bake(*map, options);
+                ASSERT_TRUE(full0) << full0.error();
+                for (size_t k = 0; k < full0->find("gloss")->mips.size(); ++k)
+                    ASSERT_TRUE(sameBits(live->gloss().mips[k].texels, full0->find("gloss")->mips[k].texels))
+                        << "initial mip " << k;
+
+                // Two strokes: one across the left border (wraps with Wrap), one inside.
+                PaintLayer paint = layer(w, h);
+                std::vector<float> authored = base;
+                for (const auto& [from, to, value] :
+                     {std::tuple{glm::dvec2(1.0, 10.0), glm::dvec2(-6.0, 18.0), 1.0f},
+                      std::tuple{glm::dvec2(30.0, 30.0), glm::dvec2(41.0, 25.0), 0.05f}}) {
+                    PaintStroke s = stroke(paint, brush(3.5, 0.3, 0.8, value), border);
+                    ASSERT_TRUE(s.addPoint(from));
+                    ASSERT_TRUE(s.addPoint(to));
+                    ASSERT_TRUE(compositeAuthoredGloss(&base, 0.0, &paint, nullptr, options.encoding, w, h,
+                                                       s.dirty(), authored));
+                    ASSERT_TRUE(live.value().rebakeRegion(authored, s.dirty()));
+                    size_t total = 0;
+                    for (const auto& m : live->gloss().mips)
+                        total += m.texels.size();
+                    EXPECT_LT(live->lastRecomputedTexels(), total / 2) << "recomputed more than the region";
+
+                    options.authoredGloss = authored;
+                    auto full = bake(*map, options);
+                    ASSERT_TRUE(full) << full.error();
+                    const BakedTexture* g = full->find("gloss");
+                    ASSERT_EQ(g->mips.size(), live->gloss().mips.size());
+                    for (size_t k = 0; k < g->mips.size(); ++k)
+                        ASSERT_TRUE(sameBits(live->gloss().mips[k].texels, g->mips[k].texels)) << "mip " << k;
+                }
+            }
+}
+
+TEST(Paint, RebakeRegionRefusesBadInputAndLeanHasNoGloss) {
+    auto map = std::make_shared<const NormalMap>(gaussianField(16, 16, 0.2, 3));
+    BakeOptions options;
+    options.authoredGloss = std::vector<float>(map->texelCount(), 0.5f);
+    auto live = LiveGlossBake::create(map, options);
+    ASSERT_TRUE(live);
+    const auto before = live->gloss().mips[0].texels;
+    std::vector<float> bad(map->texelCount(), 0.5f);
+    bad[5] = std::nanf("");
+    EXPECT_FALSE(live.value().rebakeRegion(bad, TexelRect::full(16, 16)));
+    EXPECT_FALSE(live.value().rebakeRegion(std::vector<float>(3, 0.5f), TexelRect::full(16, 16)));
+    EXPECT_TRUE(sameBits(live->gloss().mips[0].texels, before));
+    options.method = Method::Lean;
+    EXPECT_FALSE(LiveGlossBake::create(map, options));
+    options.method = Method::VarianceToGloss;
+    options.authoredGloss.reset();
+    EXPECT_FALSE(LiveGlossBake::create(map, options));
+}
+
+// Painting maximum gloss on a bumpy map asks for a lobe far narrower than the normal spread at a
+// distant mip: flagged. The same paint on a flat map, or minimum gloss on the bumpy one, is not.
+TEST(Paint, OverShineFlagsMaxGlossOnBumpsAndNotOnAFlatMap) {
+    const int size = 64, mip = 3;
+    const GlossEncoding enc = GlossEncoding::blackOps();
+    PaintLayer paint = layer(size, size);
+    PaintStroke s = stroke(paint, brush(12.0, 1.0, 1.0, 1.0f));
+    ASSERT_TRUE(s.addPoint({32.0, 32.0}));
+    const size_t paintedTexels =
+        size_t(std::count_if(paint.coverage.begin(), paint.coverage.end(), [](float c) { return c > 0.0f; }));
+    ASSERT_GT(paintedTexels, size_t(0));
+    std::vector<float> authored(size_t(size * size));
+    ASSERT_TRUE(compositeAuthoredGloss(nullptr, 0.3, &paint, nullptr, enc, size, size,
+                                       TexelRect::full(size, size), authored));
+    BakeOptions options;
+    options.authoredGloss = authored;
+
+    auto bumpy = LiveGlossBake::create(
+        std::make_shared<const NormalMap>(makeSampleNormalMap(SampleMapKind::Bumpy, size)), options);
+    ASSERT_TRUE(bumpy) << bumpy.error();
+    OverShineMap bumps;
+    ASSERT_TRUE(overShine(*bumpy, authored, mip, kOverShineStops, &paint, bumps));
+    // Every painted texel of the bumpy map: 8192 asks for far more than the variance permits.
+    EXPECT_EQ(bumps.flaggedCount, paintedTexels);
+    EXPECT_GT(bumps.stops[paint.index(32, 32)], 4.0f); // more than 16× the (n+1) it can deliver
+    // Unpainted texels are never flagged with the mask, even where base gloss over-shines.
+    EXPECT_EQ(bumps.flagged[paint.index(0, 0)], 0);
+
+    auto flat = LiveGlossBake::create(std::make_shared<const NormalMap>(flatMap(size, size)), options);
+    ASSERT_TRUE(flat);
+    OverShineMap flatShine;
+    ASSERT_TRUE(overShine(*flat, authored, mip, kOverShineStops, &paint, flatShine));
+    EXPECT_EQ(flatShine.flaggedCount, size_t(0));
+    EXPECT_EQ(flatShine.stops[paint.index(32, 32)], 0.0f);
+
+    // Minimum gloss painted on the bumps: the lobe is wider than the normal spread, no flag.
+    std::vector<float> rough(authored.size(), 0.0f);
+    OverShineMap roughShine;
+    ASSERT_TRUE(overShine(*bumpy, rough, mip, kOverShineStops, &paint, roughShine));
+    EXPECT_EQ(roughShine.flaggedCount, 0u);
+
+    // A regional update gives what a full computation gives.
+    OverShineMap updated = roughShine;
+    std::vector<float> mixed = rough;
+    for (int y = 20; y < 44; ++y)
+        for (int x = 20; x < 44; ++x)
+            mixed[size_t(y * size + x)] = authored[size_t(y * size + x)];
+    ASSERT_TRUE(overShine(*bumpy, mixed, mip, kOverShineStops, &paint, updated, TexelRect{20, 20, 44, 44}));
+    OverShineMap fresh;
+    ASSERT_TRUE(overShine(*bumpy, mixed, mip, kOverShineStops, &paint, fresh));
+    EXPECT_EQ(updated.flaggedCount, fresh.flaggedCount);
+    EXPECT_TRUE(updated.flagged == fresh.flagged);
+    EXPECT_GT(fresh.flaggedCount, 0u);
+}
+
+TEST(Paint, LayersRoundTripThroughExr) {
+    const auto dir = std::filesystem::temp_directory_path() / ("burnish-paint-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    PaintLayer l = layer(20, 12, PaintLayerKind::VarianceOffset);
+    PaintStroke s = stroke(l, brush(5.0, 0.2, 0.7, 0.123f));
+    ASSERT_TRUE(s.addPoint({3.0, 4.0}));
+    ASSERT_TRUE(s.addPoint({17.0, 9.0}));
+    const auto path = dir / "offset.exr";
+    ASSERT_TRUE(writePaintLayerExr(l, path));
+    auto back = readPaintLayerExr(path, PaintLayerKind::VarianceOffset, 20, 12);
+    ASSERT_TRUE(back) << back.error();
+    EXPECT_TRUE(sameBits(back->value, l.value));
+    EXPECT_TRUE(sameBits(back->coverage, l.coverage));
+    EXPECT_FALSE(readPaintLayerExr(path, PaintLayerKind::VarianceOffset, 21, 12));
+    EXPECT_FALSE(readPaintLayerExr(dir / "missing.exr", PaintLayerKind::Gloss, 20, 12));
+    // No temporary left beside it.
+    int files = 0;
+    for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir))
+        ++files;
+    EXPECT_EQ(files, 1);
+    std::filesystem::remove_all(dir);
+}

@@ -1,0 +1,333 @@
+// The studio's charts: picks on the specular and gloss charts edit the document (one undo step),
+// the BRDF plots hold core's values, and the error-against-cost chart measures every method in a
+// worker with the results the texts predict (the naive mean normal is too shiny, LEAN is not).
+#include "charts/brdf_plots.h"
+#include "charts/charts_panel.h"
+#include "charts/error_cost_chart.h"
+#include "charts/gloss_chart.h"
+#include "charts/specular_chart.h"
+#include "main_window.h"
+
+#include <burnish/core/fresnel.h>
+#include <burnish/core/materials.h>
+#include <burnish/core/methods.h>
+#include <burnish/core/ndf.h>
+#include <burnish/core/sample_maps.h>
+#include <burnish/core/spherical_gaussian.h>
+#include <burnish/core/visibility.h>
+
+#include "temp_dir.h"
+
+#include <gtest/gtest.h>
+
+#include <QAction>
+#include <QApplication>
+#include <QImage>
+#include <QLineSeries>
+#include <QMenu>
+#include <QMenuBar>
+#include <QScatterSeries>
+#include <QSet>
+#include <QSignalSpy>
+#include <QTest>
+
+#include <algorithm>
+#include <cmath>
+
+namespace burnish::studio {
+namespace {
+
+// The plots sample core's double-precision functions and store doubles (QPointF): a point equals
+// the function at its x up to the rounding of recomputing x (degrees → radians) — a few ulps.
+constexpr double kPlotRelTolerance = 1e-12;
+// Waiting for a worker: the 64² evaluation takes well under a second; generous for loaded CI.
+constexpr int kWorkerTimeoutMs = 120000;
+// Side of the small normal map the error-cost test evaluates.
+constexpr int kSmallMap = 64;
+// The mip where the 64² map's footprints (4×4 texels) hold a patch of detail: naive must lose to
+// LEAN there. From mip 3 on (8×8 and 16×16 of 64²) a footprint spans several whole dents of the
+// hammered sample plus the flat metal between them, a spike-plus-ring mixture no single lobe fits:
+// there every variance method (LEAN, Toksvig, variance-to-gloss) measures worse than naive at the
+// default power, so those mips are not asserted.
+constexpr int kFootprintMip = 2;
+// Width the specular chart is laid out at in the tests (a docked chart's usual width).
+constexpr int kChartWidth = 1100;
+
+bool near(double a, double b) {
+    return std::abs(a - b) <= kPlotRelTolerance * std::max(1.0, std::max(std::abs(a), std::abs(b)));
+}
+
+/// Every point of a series equals f(x); the series is not empty.
+void expectSeriesEquals(QXYSeries* s, const std::function<double(double)>& f, const char* name) {
+    ASSERT_NE(s, nullptr) << name;
+    // Each curve has kSamples points; the NDF plots drop only underflowed zeros of the far tail.
+    ASSERT_GE(s->count(), BrdfPlots::kSamples / 2) << name;
+    for (const QPointF& p : s->points())
+        EXPECT_TRUE(near(p.y(), f(p.x())))
+            << name << " at x = " << p.x() << ": " << p.y() << " vs " << f(p.x());
+}
+
+constexpr double kDeg = kPi<double> / 180.0;
+
+TEST(SpecularChart, ClickingAMarkerPicksThatMaterialAndUndoRestores) {
+    MaterialDocument doc;
+    SpecularChart chart(&doc);
+    chart.resize(kChartWidth, chart.minimumSizeHint().height());
+    chart.show();
+    QApplication::processEvents();
+    const MaterialTable& table = builtinMaterialTable();
+    ASSERT_FALSE(table.materials.empty());
+    for (const Material& m : table.materials) {
+        const QString name = QString::fromStdString(m.name);
+        const QRectF rect = chart.markerRect(name);
+        ASSERT_FALSE(rect.isEmpty()) << m.name << " has a marker";
+        const MaterialSettings before = doc.settings();
+        const int steps = doc.undoStack()->count();
+        QTest::mouseClick(&chart, Qt::LeftButton, {}, rect.center().toPoint());
+        if (before.specularName.compare(name, Qt::CaseInsensitive) == 0) continue; // already picked
+        EXPECT_EQ(doc.settings().specularName, name) << "the click lands on " << m.name << "'s marker only";
+        EXPECT_EQ(doc.settings().specular, m.f0()) << m.name;
+        EXPECT_EQ(doc.settings().materialClass, m.materialClass) << m.name;
+        EXPECT_EQ(doc.undoStack()->count(), steps + 1) << "one undo step";
+        doc.undoStack()->undo();
+        EXPECT_EQ(doc.settings(), before) << "undo restores the colour before " << m.name;
+        doc.undoStack()->redo();
+    }
+}
+
+TEST(SpecularChart, ClickingTheStripPicksItsGreyAsOneUndoStep) {
+    MaterialDocument doc;
+    SpecularChart chart(&doc);
+    chart.resize(kChartWidth, chart.minimumSizeHint().height());
+    chart.show();
+    QApplication::processEvents();
+    // sRGB 60: inside the chart's dielectric gradient (40-75), so the class becomes dielectric.
+    constexpr std::uint8_t kCode = 60;
+    const double f0 = srgb8ToLinear(kCode);
+    const QPointF at(chart.xForF0(f0), chart.stripRect().center().y());
+    const MaterialSettings before = doc.settings();
+    ASSERT_EQ(before.materialClass, MaterialClass::Metal) << "the default document is iron";
+    QTest::mouseClick(&chart, Qt::LeftButton, {}, at.toPoint());
+    EXPECT_EQ(toSrgb8(doc.settings().specular), (Srgb8{kCode, kCode, kCode}));
+    EXPECT_TRUE(doc.settings().specularName.isEmpty()) << "a custom colour";
+    EXPECT_EQ(doc.settings().materialClass, MaterialClass::Dielectric);
+    doc.undoStack()->undo();
+    EXPECT_EQ(doc.settings(), before) << "colour and class are one undo step";
+}
+
+TEST(GlossChart, ClickingASpherePicksItsGlossAndUndoRestores) {
+    MaterialDocument doc;
+    GlossChart chart(&doc);
+    chart.resize(chart.sizeHint());
+    chart.show();
+    QApplication::processEvents();
+    if (!chart.glAvailable()) {
+        EXPECT_FALSE(chart.glMessage().isEmpty()) << "the chart says why it has no spheres";
+        GTEST_SKIP() << chart.glMessage().toStdString();
+    }
+    ASSERT_TRUE(chart.renderSpheres()) << chart.glMessage().toStdString();
+    EXPECT_TRUE(chart.glMessage().isEmpty());
+    // The camera frames the unit sphere to ~97% of the image's half side: it covers ~74% of the
+    // pixels. Half of them differing from the background (the corner) means a sphere was drawn.
+    constexpr double kMinSphereCoverage = 0.5;
+    // The highlight of the directional light, on the brightest channel, above the background:
+    // even the g = 1 (n = 8192) lobe of iron lights a pixel to near white; a third of the range.
+    constexpr int kMinHighlightContrast = 85;
+    for (int i = 0; i < GlossChart::kSpheres; ++i) {
+        const QImage& image = chart.sphereImage(i);
+        ASSERT_EQ(image.width(), GlossChart::kSphereSize);
+        const QRgb background = image.pixel(0, 0);
+        int differing = 0, brightest = 0;
+        for (int y = 0; y < image.height(); ++y)
+            for (int x = 0; x < image.width(); ++x) {
+                const QRgb c = image.pixel(x, y);
+                differing += c != background;
+                brightest = std::max({brightest, qRed(c), qGreen(c), qBlue(c)});
+            }
+        EXPECT_GE(differing, kMinSphereCoverage * image.width() * image.height())
+            << "sphere " << i << " is drawn";
+        EXPECT_GE(brightest - std::max({qRed(background), qGreen(background), qBlue(background)}),
+                  kMinHighlightContrast)
+            << "sphere " << i << " has its highlight";
+    }
+
+    constexpr int kSphere = 3; // g = 0.3
+    const MaterialSettings before = doc.settings();
+    QTest::mouseClick(&chart, Qt::LeftButton, {}, chart.sphereRect(kSphere).center());
+    EXPECT_EQ(doc.settings().gloss, GlossChart::glossAt(kSphere));
+    EXPECT_EQ(doc.power(), doc.preset().encoding.power(GlossChart::glossAt(kSphere)));
+    doc.undoStack()->undo();
+    EXPECT_EQ(doc.settings(), before);
+}
+
+TEST(GlossChart, SpheresFollowTheSpecularColour) {
+    MaterialDocument doc;
+    GlossChart chart(&doc);
+    chart.resize(chart.sizeHint());
+    chart.show();
+    QApplication::processEvents();
+    if (!chart.glAvailable()) {
+        GTEST_SKIP() << chart.glMessage().toStdString();
+    }
+    QSignalSpy rendered(&chart, &GlossChart::spheresRendered);
+    if (chart.renderCount() == 0) {
+        ASSERT_TRUE(rendered.wait(kWorkerTimeoutMs)) << "the first render on show";
+    }
+    const QImage iron = chart.sphereImage(GlossChart::kSpheres / 2);
+    const int renders = chart.renderCount();
+    ASSERT_TRUE(doc.setSpecularMaterial("gold"));
+    ASSERT_TRUE(rendered.wait(kWorkerTimeoutMs)) << "a colour change re-renders";
+    EXPECT_EQ(chart.renderCount(), renders + 1);
+    EXPECT_NE(chart.sphereImage(GlossChart::kSpheres / 2), iron) << "gold spheres differ from iron ones";
+    doc.setGloss(0.2);
+    QApplication::processEvents();
+    EXPECT_EQ(chart.renderCount(), renders + 1) << "a gloss change only moves the marker";
+}
+
+TEST(BrdfPlots, SeriesHoldCoresValues) {
+    MaterialDocument doc;
+    ASSERT_TRUE(doc.setSpecularMaterial("skin"));
+    doc.setGloss(0.55);
+    BrdfPlots plots(&doc);
+    const double n = doc.power();
+    const double m = beckmannRoughnessFromPower(n);
+    const double alpha = ggxAlphaFromPower(n);
+    const double s2 = 1.0 / n; // LEAN's I/s for a flat footprint
+    auto cosDeg = [](double deg) { return std::cos(deg * kDeg); };
+
+    expectSeriesEquals(
+        plots.findSeries("ndf/blinn-phong"), [&](double x) { return blinnPhongNdf(cosDeg(x), n); },
+        "ndf/blinn-phong");
+    expectSeriesEquals(
+        plots.findSeries("ndf/beckmann"), [&](double x) { return beckmannNdf(cosDeg(x), m); },
+        "ndf/beckmann");
+    expectSeriesEquals(
+        plots.findSeries("ndf/ggx"), [&](double x) { return ggxNdf(cosDeg(x), alpha); }, "ndf/ggx");
+    expectSeriesEquals(
+        plots.findSeries("ndf/sg"),
+        [&](double x) { return blinnPhongNdfNorm(n) * sgLobe(cosDeg(x), n, kSgOffsetLagarde); }, "ndf/sg");
+    expectSeriesEquals(
+        plots.findSeries("ndf/lean"),
+        [&](double x) {
+            return slopeGaussianNdf(glm::dvec3(std::sin(x * kDeg), 0.0, cosDeg(x)), glm::dvec2(0.0),
+                                    {s2, s2, 0.0});
+        },
+        "ndf/lean");
+    // Polar angles run over [0, 360): 360 − θ is the lobe at −θ, the same value by symmetry.
+    expectSeriesEquals(
+        plots.findSeries("polar/ggx"),
+        [&](double a) { return ggxNdf(cosDeg(a > 180.0 ? 360.0 - a : a), alpha); }, "polar/ggx");
+
+    const double f0 = luminance(doc.settings().specular);
+    EXPECT_EQ(plots.plottedF0(), f0);
+    expectSeriesEquals(
+        plots.findSeries("fresnel/schlick"), [&](double x) { return fresnelSchlick(f0, cosDeg(x)); },
+        "fresnel/schlick");
+    expectSeriesEquals(
+        plots.findSeries("fresnel/glossy"),
+        [&](double x) { return fresnelGlossy(f0, cosDeg(x), doc.settings().gloss); }, "fresnel/glossy");
+    expectSeriesEquals(
+        plots.findSeries("fresnel/sg"), [&](double x) { return fresnelSchlickSg(f0, cosDeg(x)); },
+        "fresnel/sg");
+    expectSeriesEquals(
+        plots.findSeries("fresnel/dielectric"), [&](double x) { return fresnelDielectric(f0, cosDeg(x)); },
+        "fresnel/dielectric");
+
+    expectSeriesEquals(
+        plots.findSeries("visibility/schlick-smith"),
+        [&](double v) { return visibilitySchlickSmith(v, v, n); }, "visibility/schlick-smith");
+    expectSeriesEquals(
+        plots.findSeries("visibility/smith-ggx"),
+        [&](double v) { return visibilitySmithGgxCorrelated(v, v, alpha); }, "visibility/smith-ggx");
+    expectSeriesEquals(
+        plots.findSeries("visibility/kelemen"), [&](double v) { return visibilityKelemen(v); },
+        "visibility/kelemen");
+
+    const GlossEncoding& enc = doc.preset().encoding;
+    expectSeriesEquals(
+        plots.findSeries("gloss/power"), [&](double g) { return enc.power(g); }, "gloss/power");
+    QXYSeries* current = plots.findSeries("gloss/current");
+    ASSERT_NE(current, nullptr);
+    ASSERT_EQ(current->count(), 1);
+    EXPECT_EQ(current->at(0), QPointF(doc.settings().gloss, n));
+
+    // An edit re-samples: the Blinn-Phong peak follows the new power.
+    doc.setGloss(0.9);
+    const double n2 = doc.power();
+    ASSERT_NE(n2, n);
+    expectSeriesEquals(
+        plots.findSeries("ndf/blinn-phong"), [&](double x) { return blinnPhongNdf(cosDeg(x), n2); },
+        "ndf/blinn-phong after the edit");
+    EXPECT_EQ(plots.findSeries("gloss/current")->at(0), QPointF(0.9, n2));
+}
+
+TEST(ErrorCostChart, WorkerShowsOnePointPerMethodAndNaiveIsWorseThanLean) {
+    test::TempDir dir;
+    // The hammered sample at 64², through an 8-bit PNG as a user's map would come.
+    const NormalMap sample = makeSampleNormalMap(SampleMapKind::Hammered, kSmallMap);
+    QImage png(kSmallMap, kSmallMap, QImage::Format_RGB888);
+    for (int y = 0; y < kSmallMap; ++y)
+        for (int x = 0; x < kSmallMap; ++x) {
+            const glm::vec3 nrm = sample.at(x, y);
+            auto byte = [](float c) { return int(std::lround((c * 0.5f + 0.5f) * 255.0f)); };
+            png.setPixel(x, y, qRgb(byte(nrm.x), byte(nrm.y), byte(nrm.z)));
+        }
+    const QString path = QString::fromStdString((dir / "hammered64.png").string());
+    ASSERT_TRUE(png.save(path));
+    MaterialDocument doc;
+    ASSERT_TRUE(doc.loadMap(MapSlot::Normal, path));
+    ASSERT_EQ(doc.maps().normal->width, kSmallMap);
+
+    ErrorCostChart chart(&doc);
+    QSignalSpy updated(&chart, &ErrorCostChart::methodsUpdated);
+    chart.evaluateNow();
+    EXPECT_TRUE(chart.evaluating()) << "the evaluation runs off the GUI thread";
+    ASSERT_TRUE(updated.wait(kWorkerTimeoutMs));
+    ASSERT_FALSE(chart.evaluating());
+    ASSERT_NE(chart.report(), nullptr) << chart.statusText().toStdString();
+    ASSERT_GE(chart.report()->result.lastMip, kFootprintMip);
+    for (int mip = chart.report()->result.firstMip; mip <= chart.report()->result.lastMip; ++mip) {
+        chart.setMip(mip);
+        std::map<Method, QPointF> points;
+        for (Method method : allMethods()) {
+            QScatterSeries* s = chart.methodSeries(method);
+            ASSERT_NE(s, nullptr) << methodName(method) << " at mip " << mip;
+            ASSERT_EQ(s->count(), 1) << methodName(method);
+            const QPointF p = s->at(0);
+            EXPECT_TRUE(std::isfinite(p.x()) && p.x() > 0.0) << methodName(method) << " cost " << p.x();
+            EXPECT_TRUE(std::isfinite(p.y()) && p.y() > 0.0) << methodName(method) << " error " << p.y();
+            points[method] = p;
+        }
+        for (const MipError& e : chart.report()->result.errors) {
+            if (e.mip == mip && e.kernel == FilterKernel::Box) {
+                EXPECT_EQ(points[e.method].y(), e.relativeL1) << "the chart shows core's number";
+            }
+        }
+        // Baker & Hill 2012: the renormalized mean normal keeps the base power and is too shiny once
+        // a footprint holds detail; LEAN's covariance keeps the spread.
+        if (mip == kFootprintMip) {
+            EXPECT_GT(points[Method::Naive].y(), points[Method::Lean].y()) << "mip " << mip;
+        }
+    }
+    // Storage as the cost axis: LEAN stores more per texel than the naive normal map.
+    chart.setCostAxis(ErrorCostChart::CostAxis::BytesPerTexel);
+    EXPECT_GT(chart.methodSeries(Method::Lean)->at(0).x(), chart.methodSeries(Method::Naive)->at(0).x());
+}
+
+TEST(ChartsPanel, TheMainWindowHasAChartsDockWithAViewToggle) {
+    MainWindow window;
+    window.setAutosaveInterval(0);
+    auto* panel = window.findChild<ChartsPanel*>("chartsDock");
+    ASSERT_NE(panel, nullptr);
+    window.document()->setGloss(0.25);
+    EXPECT_EQ(panel->brdfPlots()->findSeries("gloss/current")->at(0).x(), 0.25)
+        << "the charts show the window's document";
+    QAction* toggle = panel->toggleViewAction();
+    bool inViewMenu = false;
+    for (QAction* menu : window.menuBar()->actions())
+        if (menu->menu() && menu->menu()->actions().contains(toggle)) inViewMenu = true;
+    EXPECT_TRUE(inViewMenu) << "the View menu toggles the Charts dock";
+}
+
+} // namespace
+} // namespace burnish::studio

@@ -1,0 +1,370 @@
+// The studio shell under the offscreen platform: panels edit the document and undo restores it,
+// projects round-trip and refuse bad files without touching the document, autosave and recovery,
+// the Bake & Export dialog writes the bytes `burnish bake` writes, and the window draws something.
+#include "bake_dialog.h"
+#include "main_window.h"
+#include "material_panel.h"
+#include "project.h"
+#include "studio_app.h"
+#include "texture_pane.h"
+
+#include <burnish/core/atomic_file.h>
+
+#include "cli_run.h"
+#include "temp_dir.h"
+
+#include <gtest/gtest.h>
+
+#include <QApplication>
+#include <QComboBox>
+#include <QDateTime>
+#include <QDoubleSpinBox>
+#include <QFile>
+#include <QImage>
+#include <QLabel>
+#include <QLineEdit>
+#include <QSet>
+#include <QSettings>
+#include <QSignalSpy>
+#include <QSlider>
+#include <QStandardPaths>
+
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <string>
+
+namespace burnish::studio {
+namespace {
+
+namespace fs = std::filesystem;
+
+const QString kNormalMap = QString(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png";
+// Waiting for a worker thread (a 512² bake takes well under a second; generous for loaded CI).
+constexpr int kWorkerTimeoutMs = 60000;
+// Doubles written to JSON by nlohmann round-trip exactly; settings compare with ==.
+
+QString q(const fs::path& p) {
+    return QString::fromStdString(p.string());
+}
+
+/// A main window whose messages and questions are recorded instead of shown in modal boxes.
+struct TestWindow {
+    MainWindow window;
+    QStringList messages;
+    QMessageBox::StandardButton answer = QMessageBox::Discard;
+    TestWindow() {
+        window.showMessage = [this](const QString&, const QString& text) { messages << text; };
+        window.ask = [this](const QString&, const QString&, QMessageBox::StandardButtons) { return answer; };
+        window.setAutosaveInterval(0);
+    }
+};
+
+/// A grey 8-bit PNG gloss map of the given size.
+QString writeGlossMap(const fs::path& path, int size, int grey) {
+    QImage image(size, size, QImage::Format_Grayscale8);
+    image.fill(grey);
+    EXPECT_TRUE(image.save(q(path)));
+    return q(path);
+}
+
+TEST(MaterialPanel, GlossSliderEditsTheDocumentAndUndoRestores) {
+    MaterialDocument doc;
+    MaterialPanel panel(&doc);
+    const double before = doc.settings().gloss;
+    constexpr int kSliderValue = 250; // gloss 0.25
+    panel.glossSlider()->setValue(kSliderValue);
+    EXPECT_EQ(doc.settings().gloss, double(kSliderValue) / MaterialPanel::kGlossSteps);
+    EXPECT_EQ(panel.glossSpin()->value(), doc.settings().gloss) << "the spin box follows the document";
+    doc.undoStack()->undo();
+    EXPECT_EQ(doc.settings().gloss, before);
+    EXPECT_EQ(panel.glossSlider()->value(), int(std::lround(before * MaterialPanel::kGlossSteps)));
+}
+
+TEST(MaterialPanel, SpecularComboTakesACalibratedMaterialAndUndoRestores) {
+    MaterialDocument doc;
+    MaterialPanel panel(&doc);
+    const MaterialSettings before = doc.settings();
+    const int gold = panel.specularCombo()->findData(QString("gold"));
+    ASSERT_GE(gold, 0) << "core's table has gold";
+    panel.specularCombo()->setCurrentIndex(gold);
+    emit panel.specularCombo()->activated(gold);
+    const Material* m = builtinMaterialTable().find("gold");
+    ASSERT_NE(m, nullptr);
+    EXPECT_EQ(doc.settings().specular, m->f0());
+    EXPECT_EQ(doc.settings().specularName, "gold");
+    doc.undoStack()->undo();
+    EXPECT_EQ(doc.settings(), before);
+}
+
+TEST(MaterialPanel, PresetComboFiltersMethodsAndKeepsThePower) {
+    MaterialDocument doc;
+    MaterialPanel panel(&doc);
+    const double power = doc.power();
+    const int lean = panel.presetCombo()->findData(QString("lean"));
+    ASSERT_GE(lean, 0);
+    emit panel.presetCombo()->activated(lean);
+    EXPECT_EQ(doc.settings().preset, "lean");
+    // The gloss is re-encoded for the new preset: the power moves only by the encoding's rounding.
+    constexpr double kPowerRelativeTolerance = 1e-9;
+    EXPECT_NEAR(doc.power(), power, power * kPowerRelativeTolerance);
+    ASSERT_EQ(panel.methodCombo()->count(), int(doc.availableMethods().size()));
+    for (int i = 0; i < panel.methodCombo()->count(); ++i)
+        EXPECT_TRUE(checkPresetMethod(doc.preset(), Method(panel.methodCombo()->itemData(i).toInt())));
+}
+
+TEST(MaterialDocument, ASliderDragIsOneUndoStep) {
+    MaterialDocument doc;
+    doc.setGloss(0.1, true);
+    doc.setGloss(0.2, true);
+    doc.setGloss(0.3, true);
+    EXPECT_EQ(doc.undoStack()->count(), 1);
+    doc.endMerge();
+    doc.setGloss(0.4, true);
+    EXPECT_EQ(doc.undoStack()->count(), 2) << "a new drag starts a new step";
+    doc.undoStack()->undo();
+    EXPECT_EQ(doc.settings().gloss, 0.3);
+}
+
+TEST(MaterialDocument, AMapThatFailsToLoadChangesNothing) {
+    test::TempDir dir;
+    MaterialDocument doc;
+    const MaterialSettings before = doc.settings();
+    const Status missing = doc.loadMap(MapSlot::Normal, q(dir / "missing.png"));
+    ASSERT_FALSE(missing);
+    EXPECT_NE(missing.error().find("missing.png"), std::string::npos) << missing.error();
+    // A gloss map of another size than the normal map (the sample is 512²).
+    const Status wrongSize = doc.loadMap(MapSlot::Gloss, writeGlossMap(dir / "g.png", 16, 128));
+    ASSERT_FALSE(wrongSize);
+    EXPECT_EQ(doc.settings(), before);
+    EXPECT_EQ(doc.undoStack()->count(), 0);
+}
+
+TEST(Project, SaveLoadRoundTripsEveryField) {
+    test::TempDir dir;
+    fs::create_directories(dir / "project");
+    TestWindow a;
+    MaterialDocument* doc = a.window.document();
+    ASSERT_TRUE(doc->setPreset("gltf"));
+    ASSERT_TRUE(doc->loadMap(MapSlot::Normal, kNormalMap));
+    ASSERT_TRUE(doc->loadMap(MapSlot::Gloss, writeGlossMap(dir / "gloss.png", 512, 100)));
+    ASSERT_TRUE(doc->loadMap(MapSlot::Detail, kNormalMap));
+    doc->setCustomSpecular({0.05, 0.04, 0.03});
+    doc->setMaterialClass(MaterialClass::Dielectric);
+    doc->setAlbedo({0.5, 0.25, 0.125});
+    doc->setGloss(0.4375);
+    ASSERT_TRUE(doc->setMethod(Method::Vmf) || doc->setMethod(Method::VarianceToGloss));
+    doc->setExportSettings({"png16", "", 4, q(dir / "out"), true});
+    const MaterialSettings saved = doc->settings();
+
+    const QString file = q(dir / "project" / "m.burnish");
+    ASSERT_TRUE(a.window.saveProjectAs(file)) << a.messages.join("\n").toStdString();
+    EXPECT_FALSE(a.window.isModified());
+    const auto text = readFile(file.toStdString());
+    ASSERT_TRUE(text);
+    const auto json = nlohmann::json::parse(*text);
+    EXPECT_EQ(json["format"], "burnish-project");
+    EXPECT_EQ(json["version"], 1);
+    EXPECT_EQ(json["maps"]["gloss"], "../gloss.png") << "paths relative to the project file";
+    EXPECT_FALSE(json.contains("layers")) << "layers are written only when painted layers exist";
+
+    TestWindow b;
+    ASSERT_TRUE(b.window.openProject(file)) << b.messages.join("\n").toStdString();
+    EXPECT_EQ(b.window.document()->settings(), saved);
+    EXPECT_EQ(b.window.document()->maps().gloss->width, 512);
+    EXPECT_FALSE(b.window.isModified());
+    EXPECT_EQ(b.window.recentProjects().value(0), file);
+}
+
+TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
+    test::TempDir dir;
+    TestWindow w;
+    MaterialDocument* doc = w.window.document();
+    doc->setGloss(0.25);
+    const MaterialSettings before = doc->settings();
+    const int undoIndex = doc->undoStack()->index();
+
+    const std::string valid = projectToJson(before, q(dir / "p.burnish"));
+    auto withField = [&](const char* key, nlohmann::json value) {
+        auto j = nlohmann::json::parse(valid);
+        j[key] = std::move(value);
+        return j.dump();
+    };
+    auto materialGloss = [&](nlohmann::json value) {
+        auto j = nlohmann::json::parse(valid);
+        j["material"]["gloss"] = std::move(value);
+        return j.dump();
+    };
+    const std::map<std::string, std::pair<std::string, std::string>> cases = {
+        {"corrupt", {valid.substr(0, valid.size() / 2), "not valid JSON"}},
+        {"wrong-type", {materialGloss("high"), "'gloss' must be a number in [0"}},
+        {"newer", {withField("version", 2), "written by a newer Burnish (project version 2"}},
+        {"unknown-preset", {withField("preset", "no-such-preset"), "preset 'no-such-preset' is not known"}},
+        {"missing-map",
+         {[&] {
+              auto j = nlohmann::json::parse(valid);
+              j["maps"]["normal"] = "missing.png";
+              return j.dump();
+          }(),
+          "missing.png"}},
+    };
+    for (const auto& [name, c] : cases) {
+        const fs::path file = dir / (name + ".burnish");
+        ASSERT_TRUE(writeFileAtomic(file, c.first));
+        w.messages.clear();
+        EXPECT_FALSE(w.window.openProject(q(file))) << name;
+        ASSERT_EQ(w.messages.size(), 1) << name;
+        EXPECT_TRUE(w.messages[0].contains(QString::fromStdString(c.second)))
+            << name << ": " << w.messages[0].toStdString();
+        EXPECT_EQ(doc->settings(), before) << name;
+        EXPECT_EQ(doc->undoStack()->index(), undoIndex) << name;
+        EXPECT_TRUE(w.window.projectPath().isEmpty()) << name;
+    }
+}
+
+TEST(Project, AutosaveIsWrittenAndOfferedForRecovery) {
+    test::TempDir dir;
+    const QString file = q(dir / "a.burnish");
+    {
+        TestWindow w;
+        ASSERT_TRUE(w.window.saveProjectAs(file));
+        EXPECT_FALSE(w.window.autosave()) << "nothing to autosave in a clean document";
+        w.window.document()->setGloss(0.125);
+        ASSERT_TRUE(w.window.autosave());
+        const QString copy = autosavePathFor(file);
+        ASSERT_TRUE(QFile::exists(copy));
+        const auto parsed = loadProject(copy);
+        ASSERT_TRUE(parsed) << parsed.error();
+        EXPECT_EQ(parsed->autosaveOf, file);
+        EXPECT_EQ(parsed->settings.gloss, 0.125);
+        // Make the project clearly older than its copy (file times may share a clock tick).
+        QFile project(file);
+        ASSERT_TRUE(project.open(QIODevice::ReadWrite));
+        ASSERT_TRUE(project.setFileTime(QDateTime::currentDateTime().addSecs(-60),
+                                        QFileDevice::FileModificationTime));
+        project.close();
+        ASSERT_TRUE(recoverableAutosave(file).has_value());
+        // The window "crashes" here: its destructor runs no close event, so the copy stays.
+    }
+    TestWindow again;
+    ASSERT_TRUE(again.window.openProject(file));
+    EXPECT_NE(again.window.document()->settings().gloss, 0.125) << "the saved project has the old gloss";
+    again.answer = QMessageBox::Yes;
+    again.window.offerRecovery();
+    EXPECT_EQ(again.window.document()->settings().gloss, 0.125);
+    EXPECT_TRUE(again.window.isModified()) << "recovered changes are not saved yet";
+    ASSERT_TRUE(again.window.saveProjectAs(file));
+    EXPECT_FALSE(QFile::exists(autosavePathFor(file))) << "saving removes the autosave copy";
+    EXPECT_FALSE(recoverableAutosave(file).has_value());
+}
+
+std::map<std::string, std::string> folderBytes(const fs::path& folder) {
+    std::map<std::string, std::string> files;
+    for (const auto& e : fs::recursive_directory_iterator(folder))
+        if (e.is_regular_file()) {
+            auto bytes = readFile(e.path());
+            files[fs::relative(e.path(), folder).string()] = bytes ? *bytes : "<unreadable>";
+        }
+    return files;
+}
+
+TEST(BakeDialog, ExportWritesTheBytesOfBurnishBake) {
+    struct Case {
+        const char* preset;
+        const char* format;
+        const char* compression;
+        bool detail;
+    };
+    for (const Case c : {Case{"gltf", "png16", "", true}, Case{"blackops", "dds", "rgba8", false}}) {
+        SCOPED_TRACE(c.preset);
+        test::TempDir dir;
+        MaterialDocument doc;
+        ASSERT_TRUE(doc.setPreset(c.preset));
+        ASSERT_TRUE(doc.loadMap(MapSlot::Normal, kNormalMap));
+        if (c.detail) {
+            ASSERT_TRUE(doc.loadMap(MapSlot::Detail, kNormalMap));
+        }
+        doc.setGloss(0.6);
+        BakeDialog dialog(&doc);
+        dialog.formatCombo()->setCurrentIndex(dialog.formatCombo()->findData(QString(c.format)));
+        dialog.compressionCombo()->setCurrentIndex(
+            std::max(0, dialog.compressionCombo()->findData(QString(c.compression))));
+        dialog.outputEdit()->setText(q(dir / "studio"));
+        QSignalSpy finished(&dialog, &BakeDialog::bakeFinished);
+        dialog.startBake();
+        ASSERT_TRUE(finished.count() > 0 || finished.wait(kWorkerTimeoutMs));
+        ASSERT_TRUE(finished.at(0).at(0).toBool()) << finished.at(0).at(1).toString().toStdString();
+        EXPECT_TRUE(dialog.resultLabel()->text().startsWith("Wrote"));
+
+        char power[64];
+        std::snprintf(power, sizeof power, "%.17g", doc.power());
+        std::string args = "bake " + test::shellQuote(kNormalMap.toStdString()) + " --preset " + c.preset +
+                           " --method " + std::string(methodName(doc.settings().method)) + " --power " +
+                           power + " --format " + c.format + " --out " +
+                           test::shellQuote((dir / "cli").string());
+        if (c.detail) args += " --detail " + test::shellQuote(kNormalMap.toStdString());
+        if (*c.compression) args += std::string(" --compression ") + c.compression;
+        if (doc.preset().findParameter("metallic")) args += " --metallic 1";
+        const auto cli = test::runBurnish(args);
+        ASSERT_EQ(cli.exitCode, 0) << cli.err;
+
+        const auto studio = folderBytes(dir / "studio");
+        const auto reference = folderBytes(dir / "cli");
+        ASSERT_FALSE(reference.empty());
+        ASSERT_EQ(studio.size(), reference.size());
+        for (const auto& [name, bytes] : reference) {
+            ASSERT_TRUE(studio.count(name)) << name;
+            if (name == "bake.json") {
+                // bake.json names the output folder's files only; both record the same input path.
+                EXPECT_EQ(studio.at(name), bytes) << name;
+            } else {
+                EXPECT_TRUE(studio.at(name) == bytes) << name << " differs";
+            }
+        }
+    }
+}
+
+TEST(TexturePane, BakedGlossIsBakedInAWorkerPerMip) {
+    MaterialDocument doc;
+    TexturePane pane(&doc);
+    QSignalSpy updated(&pane, &TexturePane::imageUpdated);
+    pane.setMode(TextureMode::BakedGloss);
+    ASSERT_TRUE(pane.baking()) << "the bake runs off the GUI thread";
+    ASSERT_TRUE(updated.wait(kWorkerTimeoutMs));
+    EXPECT_FALSE(pane.baking());
+    EXPECT_EQ(pane.view()->image().width(), kSampleSize);
+    constexpr int kMip = 3;
+    pane.setMip(kMip);
+    EXPECT_EQ(pane.view()->image().width(), kSampleSize >> kMip);
+    EXPECT_TRUE(pane.view()->image().isGrayscale()) << "variance-to-gloss shows its gloss channel";
+}
+
+TEST(MainWindow, ScreenshotIsNotBlank) {
+    TestWindow w;
+    w.window.resize(1200, 800);
+    w.window.show();
+    QApplication::processEvents();
+    const QImage shot = w.window.grab().toImage();
+    ASSERT_FALSE(shot.isNull());
+    QSet<QRgb> colours;
+    for (int y = 0; y < shot.height(); y += 4)
+        for (int x = 0; x < shot.width(); x += 4)
+            colours.insert(shot.pixel(x, y));
+    // Panels, text and the normal map give hundreds of colours; a blank or failed grab gives one.
+    constexpr int kMinDistinctColours = 50;
+    EXPECT_GE(colours.size(), kMinDistinctColours);
+}
+
+} // namespace
+} // namespace burnish::studio
+
+int main(int argc, char** argv) {
+    if (qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM")) qputenv("QT_QPA_PLATFORM", "offscreen");
+    QApplication app(argc, argv);
+    burnish::studio::setUpApplication(app);
+    // Settings and autosave copies go to test locations, never the user's.
+    QStandardPaths::setTestModeEnabled(true);
+    QSettings().clear();
+    ::testing::InitGoogleTest(&argc, argv);
+    return RUN_ALL_TESTS();
+}

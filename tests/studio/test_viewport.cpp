@@ -1,0 +1,219 @@
+// The 3D viewport: it draws the document's material, follows the document, splits A/B, picks UVs
+// and meters shimmer. Under the offscreen platform (ctest's) it draws in its own headless EGL context;
+// under a display (xvfb-run with QT_QPA_PLATFORM=xcb) in a QOpenGLWidget. Both run the same tests.
+#include "main_window.h"
+#include "viewport.h"
+#include "viewport_panel.h"
+
+#include <gtest/gtest.h>
+
+#include <QApplication>
+#include <QImage>
+
+#include <cmath>
+
+namespace burnish::studio {
+namespace {
+
+// A small view: the software rasterizer draws it in tens of milliseconds.
+constexpr int kWidth = 320;
+constexpr int kHeight = 240;
+// A distance at which the 512² sample's bumps are a few texels per pixel: the methods differ most.
+constexpr float kFarDistance = 8.0f;
+
+struct Stats {
+    double mean = 0.0;
+    double stddev = 0.0;
+};
+
+// Mean and standard deviation of the 8-bit luma over columns [x0, x1).
+Stats lumaStats(const QImage& image, int x0, int x1) {
+    double sum = 0.0, sum2 = 0.0;
+    int n = 0;
+    for (int y = 0; y < image.height(); ++y)
+        for (int x = x0; x < x1; ++x) {
+            const QRgb p = image.pixel(x, y);
+            const double Y = 0.2126 * qRed(p) + 0.7152 * qGreen(p) + 0.0722 * qBlue(p);
+            sum += Y;
+            sum2 += Y * Y;
+            ++n;
+        }
+    Stats s;
+    s.mean = sum / std::max(n, 1);
+    s.stddev = std::sqrt(std::max(sum2 / std::max(n, 1) - s.mean * s.mean, 0.0));
+    return s;
+}
+
+// Mean absolute difference of the RGB channels (0..255) over columns [x0, x1).
+double meanAbsDiff(const QImage& a, const QImage& b, int x0, int x1) {
+    double sum = 0.0;
+    int n = 0;
+    for (int y = 0; y < a.height(); ++y)
+        for (int x = x0; x < x1; ++x) {
+            const QRgb p = a.pixel(x, y), q = b.pixel(x, y);
+            sum +=
+                std::abs(qRed(p) - qRed(q)) + std::abs(qGreen(p) - qGreen(q)) + std::abs(qBlue(p) - qBlue(q));
+            n += 3;
+        }
+    return sum / std::max(n, 1);
+}
+
+/// A shown viewport of kWidth × kHeight over its own document.
+struct TestViewport {
+    MaterialDocument doc;
+    Viewport view{&doc};
+    TestViewport() {
+        view.resize(kWidth, kHeight);
+        view.show();
+        QApplication::processEvents();
+    }
+    QImage grab() {
+        QImage image = view.grabFrame().convertToFormat(QImage::Format_RGB32);
+        EXPECT_EQ(view.lastError(), QString()) << "rendering failed";
+        return image;
+    }
+};
+
+TEST(Viewport, RendersTheSampleNonBlank) {
+    TestViewport t;
+    const QImage frame = t.grab();
+    ASSERT_FALSE(frame.isNull()) << t.view.contextDescription().toStdString();
+    ASSERT_EQ(frame.width(), kWidth);
+    RecordProperty("surface", t.view.usesOpenGlWidget() ? "QOpenGLWidget" : "headless image");
+    RecordProperty("context", t.view.contextDescription().toStdString());
+    // A lit, bumpy sphere over a black background: the luma spreads over much of the 8-bit range;
+    // a blank or uniform frame has a deviation of 0.
+    constexpr double kMinLumaDeviation = 10.0;
+    EXPECT_GT(lumaStats(frame, 0, kWidth).stddev, kMinLumaDeviation);
+    // The sphere is in the middle, the corners are background.
+    const QRgb corner = frame.pixel(1, 1);
+    EXPECT_EQ(qRed(corner) + qGreen(corner) + qBlue(corner), 0) << "the cleared background is black";
+    EXPECT_GT(t.view.frameMs(), 0.0);
+}
+
+TEST(Viewport, ChangingTheDocumentsMethodChangesTheImage) {
+    TestViewport t;
+    t.view.setDistance(kFarDistance);
+    ASSERT_TRUE(t.doc.setMethod(Method::Naive));
+    const QImage naive = t.grab();
+    ASSERT_TRUE(t.doc.setMethod(Method::VarianceToGloss));
+    const QImage baked = t.grab();
+    // Naive keeps the base power where the bumps have averaged out, variance-to-gloss widens the
+    // lobe: the highlight's shape changes over many pixels. Identical images differ by 0.
+    constexpr double kMinMeanDifference = 0.2;
+    EXPECT_GT(meanAbsDiff(naive, baked, 0, kWidth), kMinMeanDifference);
+    // Undo restores the method and the picture.
+    t.doc.undoStack()->undo();
+    const QImage undone = t.grab();
+    constexpr double kSameImage = 1e-9; // the same scene draws the same bytes
+    EXPECT_LT(meanAbsDiff(naive, undone, 0, kWidth), kSameImage);
+}
+
+TEST(Viewport, SplitShowsTheSecondMethodOnTheRight) {
+    TestViewport t;
+    t.view.setDistance(kFarDistance);
+    ASSERT_TRUE(t.doc.setMethod(Method::Naive));
+    t.view.setSplitPosition(0.5f);
+    t.view.setSplit(true);
+    t.view.setRightSide(SplitSide{false, Method::Naive});
+    const QImage naiveNaive = t.grab();
+    t.view.setRightSide(SplitSide{false, Method::Lean});
+    const QImage naiveLean = t.grab();
+    t.view.setSplit(false);
+    const QImage whole = t.grab();
+
+    const int half = kWidth / 2;
+    // Columns kept clear of the divider on each side (its rounding and the sphere's middle).
+    constexpr int kGuard = 2;
+    constexpr double kSameImage = 1e-9; // the same scene draws the same bytes
+    EXPECT_LT(meanAbsDiff(naiveNaive, whole, 0, kWidth), kSameImage)
+        << "naive | naive is the whole naive frame";
+    EXPECT_LT(meanAbsDiff(naiveLean, whole, 0, half - kGuard), kSameImage) << "A stays on the left";
+    // LEAN's anisotropic lobe from the slope moments against the naive mirror-like highlight.
+    constexpr double kMinMeanDifference = 0.2;
+    EXPECT_GT(meanAbsDiff(naiveLean, whole, half + kGuard, kWidth), kMinMeanDifference)
+        << "B (LEAN) differs from naive on the right";
+}
+
+TEST(Viewport, ReferenceSideDraws) {
+    TestViewport t;
+    t.view.setDistance(kFarDistance);
+    t.view.setSplit(true);
+    t.view.setReferenceSamples(4); // a few passes: this checks the wiring, not the convergence
+    t.view.setRightSide(SplitSide{true, Method::Naive});
+    const QImage frame = t.grab();
+    constexpr double kMinLumaDeviation = 5.0; // the reference half shows a lit sphere, not black
+    EXPECT_GT(lumaStats(frame, kWidth / 2 + 1, kWidth).stddev, kMinLumaDeviation);
+}
+
+TEST(Viewport, UvAtPicksTheObjectAndNothingOffIt) {
+    TestViewport t;
+    t.grab();
+    const auto centre = t.view.uvAt(QPoint(kWidth / 2, kHeight / 2));
+    ASSERT_TRUE(centre.has_value()) << "the sphere covers the view's centre";
+    EXPECT_GE(centre->x(), 0.0);
+    EXPECT_LT(centre->x(), 1.0);
+    EXPECT_GE(centre->y(), 0.0);
+    EXPECT_LT(centre->y(), 1.0);
+    EXPECT_FALSE(t.view.uvAt(QPoint(2, 2)).has_value()) << "the corner is background";
+    EXPECT_FALSE(t.view.uvAt(QPoint(-5, kHeight / 2)).has_value()) << "outside the widget";
+    // The texture coordinate follows the surface: a point to the right has another u.
+    constexpr int kStep = 20;
+    const auto right = t.view.uvAt(QPoint(kWidth / 2 + kStep, kHeight / 2));
+    ASSERT_TRUE(right.has_value());
+    // One sphere around is 2 texture repeats (makeSphere's uvRepeat) over 2π: 20 px of a sphere
+    // ~110 px in radius at the centre turn it by ~0.18 rad, ~0.06 in u; well above float noise.
+    constexpr double kMinUvChange = 0.01;
+    EXPECT_GT(std::abs(right->x() - centre->x()), kMinUvChange);
+    // After turning the camera the same pixel shows another texel.
+    t.view.orbit(30.0f, 0.0f);
+    const auto turned = t.view.uvAt(QPoint(kWidth / 2, kHeight / 2));
+    ASSERT_TRUE(turned.has_value());
+    EXPECT_GT(std::abs(turned->x() - centre->x()), kMinUvChange) << "the pick follows the camera";
+}
+
+TEST(Viewport, ShimmerMeterReadsAfterAutoOrbitFrames) {
+    TestViewport t;
+    t.view.setDistance(kFarDistance);
+    t.view.setReferenceSamples(4); // the meter's reference side: a few passes keep the test quick
+    EXPECT_FALSE(t.view.shimmer().has_value());
+    t.view.setAutoOrbit(true);
+    constexpr int kFrames = 4; // three frame-to-frame deltas
+    for (int i = 0; i < kFrames; ++i) {
+        t.view.stepOrbit();
+        t.grab();
+    }
+    t.view.setAutoOrbit(false);
+    ASSERT_TRUE(t.view.shimmer().has_value());
+    const ShimmerReading r = *t.view.shimmer();
+    EXPECT_GE(r.deltas, kFrames - 1);
+    EXPECT_TRUE(std::isfinite(r.a) && std::isfinite(r.b) && std::isfinite(r.ratio));
+    // Turning a bumpy sphere under a fixed light moves its highlights: the method's frames change.
+    EXPECT_GT(r.a, 0.0);
+    EXPECT_GE(r.b, 0.0);
+    // A view change other than the orbit starts the meter again.
+    t.view.setExposure(1.0f);
+    EXPECT_FALSE(t.view.shimmer().has_value());
+}
+
+TEST(Viewport, MainWindowShowsTheRenderedViewport) {
+    MainWindow window;
+    window.setAutosaveInterval(0);
+    window.resize(1400, 880);
+    window.show();
+    QApplication::processEvents();
+    auto* panel = window.findChild<ViewportPanel*>();
+    ASSERT_NE(panel, nullptr) << "the viewport is in the central area";
+    Viewport* view = panel->viewport();
+    ASSERT_GT(view->width(), 0);
+    // The window grab (what --screenshot saves) holds the rendered sphere inside the viewport.
+    const QImage shot = window.grab().toImage().convertToFormat(QImage::Format_RGB32);
+    const QRect r(view->mapTo(&window, QPoint(0, 0)), view->size());
+    const QImage inView = shot.copy(r);
+    constexpr double kMinLumaDeviation = 10.0; // as RendersTheSampleNonBlank
+    EXPECT_GT(lumaStats(inView, 0, inView.width()).stddev, kMinLumaDeviation);
+    EXPECT_EQ(view->lastError(), QString());
+}
+
+} // namespace
+} // namespace burnish::studio

@@ -16,9 +16,11 @@
 #include <burnish/render/renderer.h>
 #include <burnish/render/shader_source.h>
 
+#include "renderer_fixture.h"
 #include <epoxy/gl.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/mat3x3.hpp>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -44,38 +46,8 @@ constexpr double kFloatEps = 5.96e-8;
 // Half-float (RGB16F) storage: 11 significant bits, a relative rounding of 2^-11.
 constexpr double kHalfRel = 4.9e-4;
 
-std::unique_ptr<GlContext>& context() {
-    static std::unique_ptr<GlContext> ctx;
-    return ctx;
-}
-
-class EnvironmentRender : public ::testing::Test {
+class EnvironmentRender : public burnish::test::RendererFixture {
 protected:
-    static void SetUpTestSuite() {
-        auto created = createHeadlessContext();
-        if (!created) {
-            s_error = created.error();
-            return;
-        }
-        context() = std::move(created).value();
-        auto renderer = Renderer::create();
-        if (!renderer)
-            s_error = renderer.error();
-        else
-            s_renderer = std::move(renderer).value();
-    }
-    static void TearDownTestSuite() {
-        s_renderer.reset();
-        context().reset();
-    }
-    void SetUp() override {
-        ASSERT_TRUE(context()) << "no headless OpenGL context: " << s_error;
-        ASSERT_TRUE(context()->makeCurrent().ok());
-        ASSERT_TRUE(s_renderer) << s_error;
-    }
-
-    static Renderer& renderer() { return *s_renderer; }
-
     static std::vector<float> render(const Scene& scene, ImageKind kind = ImageKind::Hdr) {
         const Status set = renderer().setScene(scene);
         EXPECT_TRUE(set.ok()) << set.error();
@@ -84,9 +56,6 @@ protected:
         EXPECT_TRUE(image.ok()) << image.error();
         return image ? std::move(image).value() : std::vector<float>{};
     }
-
-    static inline std::string s_error;
-    static inline std::unique_ptr<Renderer> s_renderer;
 };
 
 std::shared_ptr<const CubeMap> constantCube(int size, glm::vec3 L) {

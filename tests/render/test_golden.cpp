@@ -27,6 +27,8 @@
 #include "image_compare.h"
 #include "temp_dir.h"
 
+#include "renderer_fixture.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -71,38 +73,8 @@ bool updating() {
     return update && std::string(update) == "1";
 }
 
-std::unique_ptr<GlContext>& context() {
-    static std::unique_ptr<GlContext> ctx;
-    return ctx;
-}
-
-class GoldenTest : public ::testing::Test {
+class GoldenTest : public burnish::test::RendererFixture {
 protected:
-    static void SetUpTestSuite() {
-        auto created = createHeadlessContext();
-        if (!created) {
-            s_error = created.error();
-            return;
-        }
-        context() = std::move(created).value();
-        auto renderer = Renderer::create();
-        if (!renderer)
-            s_error = renderer.error();
-        else
-            s_renderer = std::move(renderer).value();
-    }
-    static void TearDownTestSuite() {
-        s_renderer.reset();
-        context().reset();
-    }
-    void SetUp() override {
-        ASSERT_TRUE(context()) << "no headless OpenGL context: " << s_error;
-        ASSERT_TRUE(context()->makeCurrent().ok());
-        ASSERT_TRUE(s_renderer) << s_error;
-    }
-
-    static Renderer& renderer() { return *s_renderer; }
-
     // The display image of a scene (or of its reference), after checking that the HDR image the
     // display one is made from holds no NaN or Inf.
     static RgbaImage render(const Scene& scene, int referenceSamples = 0) {
@@ -144,9 +116,6 @@ protected:
             burnish::test::compareAndReport(name, *expected, actual, kGoldenThresholds, diffDir());
         EXPECT_TRUE(result.passed) << result.message;
     }
-
-    static inline std::string s_error;
-    static inline std::unique_ptr<Renderer> s_renderer;
 };
 
 Scene goldenScene() {

@@ -5,6 +5,8 @@
 #include <burnish/render/gpu_resources.h>
 #include <burnish/render/renderer.h>
 
+#include "renderer_fixture.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -27,38 +29,8 @@ constexpr float kLitThreshold = 1e-4f;
 // the key light is the least a working material pass gives.
 constexpr double kMinLitFraction = 0.08;
 
-std::unique_ptr<GlContext>& context() {
-    static std::unique_ptr<GlContext> ctx;
-    return ctx;
-}
-
-class RendererTest : public ::testing::Test {
+class RendererTest : public burnish::test::RendererFixture {
 protected:
-    static void SetUpTestSuite() {
-        auto created = createHeadlessContext();
-        if (!created) {
-            s_error = created.error();
-            return;
-        }
-        context() = std::move(created).value();
-        auto renderer = Renderer::create();
-        if (!renderer)
-            s_error = renderer.error();
-        else
-            s_renderer = std::move(renderer).value();
-    }
-    static void TearDownTestSuite() {
-        s_renderer.reset();
-        context().reset();
-    }
-    void SetUp() override {
-        ASSERT_TRUE(context()) << "no headless OpenGL context: " << s_error;
-        ASSERT_TRUE(context()->makeCurrent().ok());
-        ASSERT_TRUE(s_renderer) << s_error;
-    }
-
-    static Renderer& renderer() { return *s_renderer; }
-
     static std::vector<float> hdr(const Scene& scene, int size = kSize) {
         const Status set = renderer().setScene(scene);
         EXPECT_TRUE(set.ok()) << set.error();
@@ -66,9 +38,6 @@ protected:
         EXPECT_TRUE(image.ok()) << image.error();
         return image ? std::move(image).value() : std::vector<float>{};
     }
-
-    static inline std::string s_error;
-    static inline std::unique_ptr<Renderer> s_renderer;
 };
 
 size_t nonFiniteCount(const std::vector<float>& rgba) {

@@ -7,6 +7,7 @@
 #include "temp_dir.h"
 
 #include "cli_run.h"
+#include "normal_map_files.h"
 #include <OpenImageIO/imageio.h>
 
 #include <glm/geometric.hpp>
@@ -40,22 +41,7 @@ int countLines(const std::string& s) {
 
 // A 32x32 8-bit RGB tangent-space normal map with bumps (unsigned encoding, +Y green).
 void writeNormalMap(const fs::path& path, int size = 32) {
-    std::vector<unsigned char> pixels(size_t(size) * size_t(size) * 3);
-    for (int y = 0; y < size; ++y)
-        for (int x = 0; x < size; ++x) {
-            const float nx = 0.4f * std::sin(6.2831853f * 3.0f * float(x) / float(size));
-            const float ny = 0.3f * std::cos(6.2831853f * 2.0f * float(y) / float(size));
-            const float len = std::sqrt(nx * nx + ny * ny + 1.0f);
-            const float n[3] = {nx / len, ny / len, 1.0f / len};
-            for (int c = 0; c < 3; ++c)
-                pixels[(size_t(y) * size_t(size) + size_t(x)) * 3 + size_t(c)] =
-                    static_cast<unsigned char>(std::lround((0.5f * n[c] + 0.5f) * 255.0f));
-        }
-    auto out = OIIO::ImageOutput::create(path.string());
-    ASSERT_TRUE(out);
-    ASSERT_TRUE(out->open(path.string(), OIIO::ImageSpec(size, size, 3, OIIO::TypeDesc::UINT8)));
-    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, pixels.data()));
-    ASSERT_TRUE(out->close());
+    burnish::test::writeSineNormalMap(path, size);
 }
 
 // Random colours: not a plausible normal map (many texels point below the surface).
@@ -385,21 +371,11 @@ TEST(CliBake, MipsBeyondTheChainAreClampedWithANote) {
 // Grooves along x: columns alternate between slopes +kGrooveSlope and -kGrooveSlope (8-bit RGB).
 constexpr float kGrooveSlope = 0.5f;
 void writeGrooves(const fs::path& path, int size) {
-    std::vector<unsigned char> pixels(size_t(size) * size_t(size) * 3);
-    for (int y = 0; y < size; ++y)
-        for (int x = 0; x < size; ++x) {
-            const float nx = x % 2 ? kGrooveSlope : -kGrooveSlope;
-            const float len = std::sqrt(nx * nx + 1.0f);
-            const float n[3] = {nx / len, 0.0f, 1.0f / len};
-            for (int c = 0; c < 3; ++c)
-                pixels[(size_t(y) * size_t(size) + size_t(x)) * 3 + size_t(c)] =
-                    static_cast<unsigned char>(std::lround((0.5f * n[c] + 0.5f) * 255.0f));
-        }
-    auto out = OIIO::ImageOutput::create(path.string());
-    ASSERT_TRUE(out);
-    ASSERT_TRUE(out->open(path.string(), OIIO::ImageSpec(size, size, 3, OIIO::TypeDesc::UINT8)));
-    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, pixels.data()));
-    ASSERT_TRUE(out->close());
+    burnish::test::writeNormals8(path, size, size, [](int x, int, float n[3]) {
+        n[0] = x % 2 ? kGrooveSlope : -kGrooveSlope;
+        n[1] = 0.0f;
+        n[2] = 1.0f;
+    });
 }
 
 TEST(CliBake, DetailMapIsAnExtraFileOfEveryPreset) {

@@ -4,6 +4,7 @@
 #include <burnish/core/atomic_file.h>
 
 #include "cli_run.h"
+#include "normal_map_files.h"
 #include "temp_dir.h"
 
 #include <OpenImageIO/imageio.h>
@@ -29,22 +30,7 @@ using burnish::test::TempDir;
 
 // A size×size 8-bit normal map of sines; `phase` makes a different map of the same size.
 void writeNormalMap(const fs::path& path, int size, float phase = 0.0f) {
-    std::vector<unsigned char> pixels(size_t(size) * size_t(size) * 3);
-    for (int y = 0; y < size; ++y)
-        for (int x = 0; x < size; ++x) {
-            const float nx = 0.4f * std::sin(6.2831853f * 3.0f * float(x) / float(size) + phase);
-            const float ny = 0.3f * std::cos(6.2831853f * 2.0f * float(y) / float(size));
-            const float len = std::sqrt(nx * nx + ny * ny + 1.0f);
-            const float n[3] = {nx / len, ny / len, 1.0f / len};
-            for (int c = 0; c < 3; ++c)
-                pixels[(size_t(y) * size_t(size) + size_t(x)) * 3 + size_t(c)] =
-                    static_cast<unsigned char>(std::lround((0.5f * n[c] + 0.5f) * 255.0f));
-        }
-    auto out = OIIO::ImageOutput::create(path.string());
-    ASSERT_TRUE(out);
-    ASSERT_TRUE(out->open(path.string(), OIIO::ImageSpec(size, size, 3, OIIO::TypeDesc::UINT8)));
-    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, pixels.data()));
-    ASSERT_TRUE(out->close());
+    burnish::test::writeSineNormalMap(path, size, phase);
 }
 
 void writeText(const fs::path& path, const std::string& text) {

@@ -38,10 +38,18 @@ BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc) {
     spec.out = s.exportSettings.outputFolder.toStdString();
     spec.preset = s.preset.toStdString();
     spec.method = std::string(methodName(s.method));
-    if (s.glossMapPath.isEmpty())
+    if (!s.glossMapPath.isEmpty()) spec.gloss = s.glossMapPath.toStdString();
+    const bool painted = doc.paintLayer(PaintLayerKind::Gloss).painted() ||
+                         doc.paintLayer(PaintLayerKind::VarianceOffset).painted();
+    if (painted && doc.authoredGloss()) {
+        // The layers composited over the gloss map (or the base gloss): what the views show. It
+        // overrides the gloss file (then only named in bake.json) and holds the base power per texel.
+        // The document copies before its next edit while this is shared, so the worker reads a
+        // snapshot.
+        spec.authoredGloss = doc.authoredGloss();
+    } else if (s.glossMapPath.isEmpty()) {
         spec.power = doc.power();
-    else
-        spec.gloss = s.glossMapPath.toStdString();
+    }
     if (!s.exportSettings.format.isEmpty()) spec.format = s.exportSettings.format.toStdString();
     if (!s.exportSettings.compression.isEmpty())
         spec.compression = s.exportSettings.compression.toStdString();

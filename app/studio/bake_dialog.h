@@ -24,7 +24,9 @@ class QSpinBox;
 namespace burnish::studio {
 
 /// The job the document's settings describe (the input file or "sample:hammered", the base power
-/// from the gloss unless a gloss map is set, metallic 1/0 for presets that store it).
+/// from the gloss unless a gloss map is set, metallic 1/0 for presets that store it). With painted
+/// layers, the document's composited authored gloss goes in as the job's in-memory authored gloss
+/// (overriding the gloss map, which bake.json names as what was painted over; no base power).
 BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc);
 
 /// Runs one job on a worker thread; progress and the result arrive on the GUI thread.

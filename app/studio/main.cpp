@@ -1,5 +1,6 @@
 // burnish-studio [PROJECT]: the material-authoring studio. Opens PROJECT or the built-in sample.
 // --screenshot FILE renders the main window once the UI has settled, saves it and exits (CI).
+// --help and --version print without a display.
 #include "main_window.h"
 #include "studio_app.h"
 #include "texture_pane.h"
@@ -12,6 +13,10 @@
 #include <cstdio>
 
 int main(int argc, char** argv) {
+    // The window toolkit connects to the display when QApplication starts, before the command line
+    // is parsed: a command line that only prints (help, version, a usage error) runs on the
+    // offscreen platform, so it works over ssh and in CI.
+    if (burnish::studio::commandLineOnlyPrints(argc, argv)) qputenv("QT_QPA_PLATFORM", "offscreen");
     // The 3D viewport's renderer needs OpenGL 3.3 core; every QOpenGLWidget of a window shares one
     // format, so it is set for the whole application before it starts.
     QSurfaceFormat format = QSurfaceFormat::defaultFormat();
@@ -22,15 +27,7 @@ int main(int argc, char** argv) {
     burnish::studio::setUpApplication(app);
 
     QCommandLineParser parser;
-    parser.setApplicationDescription("Burnish Studio: specular colour and gloss authoring with normal-map "
-                                     "prefiltering.");
-    parser.addHelpOption();
-    parser.addVersionOption();
-    QCommandLineOption screenshot("screenshot", "Save a picture of the main window to FILE and exit.",
-                                  "FILE");
-    parser.addOption(screenshot);
-    parser.addPositionalArgument("project", "A .burnish project to open (default: the built-in sample).",
-                                 "[PROJECT]");
+    burnish::studio::addStudioOptions(parser);
     parser.process(app);
     if (parser.positionalArguments().size() > 1) {
         std::fprintf(stderr, "burnish-studio: give at most one project\n");
@@ -38,7 +35,7 @@ int main(int argc, char** argv) {
     }
 
     burnish::studio::MainWindow window;
-    const bool shooting = parser.isSet(screenshot);
+    const bool shooting = parser.isSet(burnish::studio::kScreenshotOption);
     if (!parser.positionalArguments().isEmpty()) {
         if (shooting) {
             window.showMessage = [](const QString&, const QString& text) {
@@ -49,7 +46,7 @@ int main(int argc, char** argv) {
     }
     window.show();
     if (shooting) {
-        const QString file = parser.value(screenshot);
+        const QString file = parser.value(burnish::studio::kScreenshotOption);
         // Let layouts, docks and the first paint settle before grabbing.
         QTimer::singleShot(500, &window, [&window, file] {
             const bool ok = window.grab().save(file);

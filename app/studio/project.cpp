@@ -1,6 +1,7 @@
 #include "project.h"
 
 #include <burnish/core/atomic_file.h>
+#include <burnish/core/env_sampling.h>
 
 #include <nlohmann/json.hpp>
 
@@ -9,6 +10,7 @@
 #include <QFileInfo>
 #include <QStandardPaths>
 
+#include <cmath>
 #include <filesystem>
 #include <set>
 
@@ -36,6 +38,18 @@ QString qsv(std::string_view s) {
 
 QString folderOf(const QString& file) {
     return QFileInfo(file).absolutePath();
+}
+
+/// The environment source names of the project file (as `burnish render --env` spells them).
+constexpr std::pair<EnvironmentChoice, const char*> kEnvironmentSources[] = {
+    {EnvironmentChoice::Off, "off"},
+    {EnvironmentChoice::ProceduralStudio, "studio"},
+    {EnvironmentChoice::File, "file"}};
+
+const char* environmentSourceName(EnvironmentChoice choice) {
+    for (const auto& [c, name] : kEnvironmentSources)
+        if (c == choice) return name;
+    return "studio";
 }
 
 /// Reads fields of one JSON object, collecting the first error with its path.
@@ -145,7 +159,16 @@ std::string projectToJson(const MaterialSettings& s, const QString& projectFile,
           {"compression", e.compression.isEmpty() ? Json(nullptr) : Json(e.compression.toStdString())},
           {"mips", e.mips},
           {"outputFolder", relativePath(e.outputFolder, folder)},
-          {"overwrite", e.overwrite}}}};
+          {"overwrite", e.overwrite}}},
+        {"environment",
+         {{"source", environmentSourceName(s.environment.choice)},
+          // Kept when another source is chosen, as the settings keep it (the panel offers it again).
+          {"file", relativePath(s.environment.path, folder)},
+          {"rotation", s.environment.rotationDegrees},
+          {"intensity", s.environment.intensity},
+          {"lobe", lobeModelName(s.environment.lobe)},
+          {"fis", s.environment.fis},
+          {"fisSamples", s.environment.fisSamples}}}};
     // "layers" is written only when something is painted.
     if (!layers.empty()) {
         Json list = Json::array();
@@ -176,8 +199,8 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
                      "; this studio reads up to version " + std::to_string(kProjectVersion) + ")"};
 
     const Reader top(root, where);
-    if (Status st = top.known(
-            {"format", "version", "material", "maps", "method", "preset", "export", "layers", "autosaveOf"});
+    if (Status st = top.known({"format", "version", "material", "maps", "method", "preset", "export",
+                               "environment", "layers", "autosaveOf"});
         !st)
         return Error{st.error()};
 
@@ -270,6 +293,48 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
     s.exportSettings.mips = int(*mips);
     s.exportSettings.outputFolder = absolute(outputFolder);
     s.exportSettings.overwrite = overwrite->get<bool>();
+
+    // Projects written before the environment was saved light the viewport with the defaults.
+    if (const Json* environment = top.get("environment", false)) {
+        if (!environment->is_object()) return Error{where + ": 'environment' must be an object"};
+        const Reader en(*environment, where + " environment");
+        if (Status st = en.known({"source", "file", "rotation", "intensity", "lobe", "fis", "fisSamples"});
+            !st)
+            return Error{st.error()};
+        const auto source = en.string("source");
+        std::optional<EnvironmentChoice> choice;
+        for (const auto& [c, name] : kEnvironmentSources)
+            if (source && *source == name) choice = c;
+        if (source && !choice) en.fail("source", "\"off\", \"studio\" or \"file\"");
+        const auto file = en.string("file", true, true);
+        if (choice == EnvironmentChoice::File && !file && !en.error())
+            en.fail("file", "a path when the source is \"file\"");
+        const auto rotation = en.number("rotation", -180.0, 180.0);
+        const auto intensity = en.number("intensity", 0.0, kMaxEnvironmentIntensity);
+        const auto lobe = en.string("lobe");
+        std::optional<LobeModel> lobeValue;
+        for (LobeModel l : {LobeModel::BlinnPhong, LobeModel::Phong})
+            if (lobe && *lobe == lobeModelName(l)) lobeValue = l;
+        if (lobe && !lobeValue)
+            en.fail("lobe", std::string("\"") + lobeModelName(LobeModel::BlinnPhong) + "\" or \"" +
+                                lobeModelName(LobeModel::Phong) + "\"");
+        const Json* fis = en.get("fis", true);
+        if (fis && !fis->is_boolean()) en.fail("fis", "true or false");
+        const auto samples = en.number("fisSamples", 1.0, double(kMaxFisSamples));
+        if (samples && *samples != std::floor(*samples)) en.fail("fisSamples", "a whole number");
+        if (en.error()) return *en.error();
+        EnvironmentSettings& e = s.environment;
+        e.choice = *choice;
+        e.path = absolute(file);
+        e.rotationDegrees = *rotation;
+        e.intensity = *intensity;
+        e.lobe = *lobeValue;
+        e.fis = fis->get<bool>();
+        e.fisSamples = int(*samples);
+        // The viewport would fail on every frame: refuse it here with the file's name instead.
+        if (e.choice == EnvironmentChoice::File && !QFileInfo(e.path).isFile())
+            return Error{where + ": environment file '" + e.path.toStdString() + "' does not exist"};
+    }
 
     if (Status st = MaterialDocument::validate(s); !st) return Error{where + ": " + st.error()};
     return out;

@@ -11,6 +11,9 @@
 //     "method": "variance-to-gloss", "preset": "blackops",
 //     "export": {"format": name|null, "compression": name|null, "mips": 0, "outputFolder": path|null,
 //                "overwrite": false},
+//     "environment": {"source": "off"|"studio"|"file", "file": path|null, // the viewport's lighting
+//                     "rotation": degrees, "intensity": x, "lobe": "blinn-phong"|"phong",
+//                     "fis": false, "fisSamples": n},     // optional: absent = the defaults
 //     "layers": [{"name": "gloss"|"variance-offset", "file": "<project>.layers/<name>.exr"}],
 //                                          // painted layers: float EXR (value, coverage) beside the
 //                                          // project, written atomically; only painted layers

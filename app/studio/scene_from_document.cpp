@@ -2,6 +2,8 @@
 
 #include <burnish/core/bake.h>
 
+#include <string>
+
 namespace burnish::studio {
 
 namespace {
@@ -45,7 +47,18 @@ Result<render::MaterialSettings> SceneFromDocument::material(const MaterialDocum
     m.normalMap = maps.normal;
     m.detailMap = maps.detail;
 
-    if (!maps.gloss) {
+    if (const auto authored = doc.authoredGloss()) {
+        // Painted layers composited over the gloss map (or the base gloss) by the document, already
+        // one value per normal-map texel in the preset's encoding: no conversion to cache.
+        if (!maps.normal) return Error{"an authored gloss needs a normal map"};
+        if (authored->size() != maps.normal->texelCount())
+            return Error{"the authored gloss has " + std::to_string(authored->size()) + " texels, the " +
+                         std::to_string(maps.normal->width) + "x" + std::to_string(maps.normal->height) +
+                         " normal map " + std::to_string(maps.normal->texelCount())};
+        m_glossImage.reset();
+        m_glossFor.reset();
+        m_gloss = authored;
+    } else if (!maps.gloss) {
         m_glossImage.reset();
         m_glossFor.reset();
         m_gloss.reset();

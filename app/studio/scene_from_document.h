@@ -18,13 +18,15 @@ void applyEnvironment(const EnvironmentSettings& environment, render::Scene& sce
 /// Face size of the environment cube the viewport prefilters.
 inline constexpr int kViewportEnvironmentFaceSize = 64;
 
-/// Maps a MaterialDocument to render::MaterialSettings. Keeps the converted gloss map between calls,
-/// so the renderer (which keys its bake cache on the map's identity) bakes again only when the
-/// document's gloss image itself changed.
+/// Maps a MaterialDocument to render::MaterialSettings. The renderer keys its bake cache on the gloss
+/// map's identity (its pointer), so the gloss handed over keeps its identity until its values change:
+/// the document's composited authored gloss (painted layers over the gloss map or base gloss; a new
+/// pointer after each change, the same one otherwise), or, where the document has none, the gloss
+/// image converted once and kept between calls.
 class SceneFromDocument {
 public:
-    /// The document's material. Errors: a gloss map whose size does not match the normal map (the
-    /// message names both sizes).
+    /// The document's material. Errors: a gloss map or authored gloss whose size does not match the
+    /// normal map (the message names both sizes).
     Result<render::MaterialSettings> material(const MaterialDocument& doc);
 
 private:

@@ -1,7 +1,9 @@
 #include "studio_app.h"
 
 #include <QApplication>
+#include <QCommandLineParser>
 #include <QPalette>
+#include <QStringList>
 #include <QStyleFactory>
 
 namespace burnish::studio {
@@ -35,6 +37,33 @@ void setUpApplication(QApplication& app) {
     p.setColor(QPalette::Disabled, QPalette::ButtonText, QColor(120, 120, 120));
     p.setColor(QPalette::Disabled, QPalette::WindowText, QColor(120, 120, 120));
     app.setPalette(p);
+}
+
+void addStudioOptions(QCommandLineParser& parser) {
+    parser.setApplicationDescription("Burnish Studio: specular colour and gloss authoring with normal-map "
+                                     "prefiltering.");
+    parser.addHelpOption();
+    parser.addVersionOption();
+    parser.addOption(
+        QCommandLineOption(kScreenshotOption, "Save a picture of the main window to FILE and exit.", "FILE"));
+    parser.addPositionalArgument("project", "A .burnish project to open (default: the built-in sample).",
+                                 "[PROJECT]");
+}
+
+bool commandLineOnlyPrints(int argc, const char* const* argv) {
+    QStringList arguments;
+    for (int i = 0; i < argc; ++i)
+        arguments << QString::fromLocal8Bit(argv[i]);
+    QCommandLineParser parser;
+    addStudioOptions(parser);
+    // Not understood: QCommandLineParser::process prints the error and exits.
+    if (!parser.parse(arguments)) return true;
+    // The names as given on the command line, so the platform-specific help aliases count too.
+    for (const QString& name : parser.optionNames())
+        if (name == "h" || name == "?" || name == "help" || name == "help-all" || name == "v" ||
+            name == "version")
+            return true;
+    return false;
 }
 
 } // namespace burnish::studio

@@ -89,6 +89,12 @@ TexturePane::TexturePane(MaterialDocument* doc, QWidget* parent)
         m_bakeStale = true;
         refresh();
     });
+    // While a stroke goes on: the authored view follows each dab (a conversion, no bake); the baked
+    // view is baked again when the stroke ends (its undo step emits changed()).
+    connect(m_doc, &MaterialDocument::layersChanged, this, [this] {
+        m_bakeStale = true;
+        if (m_mode == TextureMode::Gloss) refresh();
+    });
     refresh();
 }
 
@@ -120,7 +126,20 @@ void TexturePane::refresh() {
         emit imageUpdated();
         return;
     case TextureMode::Gloss:
-        if (const auto& gloss = m_doc->maps().gloss) {
+        if (const auto authored = m_doc->authoredGloss()) {
+            // What the bake and the viewport read: the painted layers over the gloss map or base gloss.
+            const TextureMip mip{normal.width, normal.height, *authored};
+            m_view->setImage(bakedChannelImage(mip, 1, 0));
+            const bool painted = m_doc->paintLayer(PaintLayerKind::Gloss).painted() ||
+                                 m_doc->paintLayer(PaintLayerKind::VarianceOffset).painted();
+            m_info->setText(QString("authored gloss %1×%2: %3")
+                                .arg(normal.width)
+                                .arg(normal.height)
+                                .arg(!painted              ? QString("gloss map (first channel)")
+                                     : m_doc->maps().gloss ? QString("painted layers over the gloss map")
+                                                           : QString("painted layers over base gloss %1")
+                                                                 .arg(m_doc->settings().gloss, 0, 'f', 3)));
+        } else if (const auto& gloss = m_doc->maps().gloss) {
             TextureMip mip{gloss->width, gloss->height, gloss->pixels};
             m_view->setImage(bakedChannelImage(mip, gloss->channels, 0));
             m_info->setText(
@@ -128,7 +147,9 @@ void TexturePane::refresh() {
         } else {
             // No map: the bake uses the base gloss on every texel, and that is what is shown.
             QImage flat(normal.width, normal.height, QImage::Format_Grayscale8);
-            flat.fill(toByte(m_doc->settings().gloss));
+            // Rounded through float as the composited gloss stores it, so that the first stroke does
+            // not move the unpainted texels by a grey level.
+            flat.fill(toByte(double(float(m_doc->settings().gloss))));
             m_view->setImage(flat);
             m_info->setText(QString("no gloss map: base gloss %1 on every texel")
                                 .arg(m_doc->settings().gloss, 0, 'f', 3));
@@ -152,11 +173,16 @@ void TexturePane::startBake() {
     options.basePower = m_doc->power();
     std::shared_ptr<const NormalMap> map = m_doc->maps().normal;
     std::shared_ptr<const Image> glossImage = m_doc->maps().gloss;
+    // The composited authored gloss (painted layers over the gloss map or base gloss) when there is
+    // one: the document copies before its next edit while the worker shares it.
+    std::shared_ptr<const std::vector<float>> authored = m_doc->authoredGloss();
     QPointer<TexturePane> self(this);
-    QThread* worker = QThread::create([self, generation, options, map, glossImage]() mutable {
+    QThread* worker = QThread::create([self, generation, options, map, glossImage, authored]() mutable {
         QString error;
         std::shared_ptr<const BakeOutput> output;
-        if (glossImage) {
+        if (authored) {
+            options.authoredGloss = *authored;
+        } else if (glossImage) {
             auto gloss = glossFromImage(*glossImage, map->width, map->height);
             if (gloss)
                 options.authoredGloss = std::move(gloss.value());

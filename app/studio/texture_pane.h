@@ -1,5 +1,6 @@
-// The central 2D texture pane: which texture to show (the normal map as colours, the authored gloss,
-// or the current method's baked gloss at a chosen mip, baked by core in a worker thread) over a
+// The central 2D texture pane: which texture to show (the normal map as colours, the authored gloss —
+// the document's painted layers composited over the gloss map or base gloss —, or the current
+// method's bake of that authored gloss at a chosen mip, baked by core in a worker thread) over a
 // TextureView.
 #pragma once
 

@@ -8,8 +8,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <initializer_list>
 #include <utility>
@@ -40,6 +44,39 @@ std::string joined(const std::vector<std::string>& names) {
     return out;
 }
 
+/// An in-memory authored gloss checked and clamped as glossFromImage treats a gloss file's values,
+/// so painted values and the same values read back from a float file bake the same bytes.
+Result<std::vector<float>> checkedAuthoredGloss(const std::vector<float>& values, int width, int height) {
+    const size_t texels = size_t(width) * size_t(height);
+    if (values.size() != texels)
+        return Error{fmt::format("authored gloss: {} values for a {}x{} normal map ({} texels)",
+                                 values.size(), width, height, texels)};
+    std::vector<float> gloss(texels);
+    for (size_t i = 0; i < texels; ++i) {
+        const float v = values[i];
+        if (!std::isfinite(v))
+            return Error{fmt::format("authored gloss: a NaN or infinite value at index {}", i)};
+        // The gloss encodings are defined on [0, 1]; a file's values are clamped the same way.
+        gloss[i] = std::clamp(v, 0.0f, 1.0f);
+    }
+    return gloss;
+}
+
+/// FNV-1a (64-bit) of the values' bytes, as 16 hex digits: names which painted gloss made a set.
+// Fowler, Noll & Vo, "FNV-1a": offset basis 14695981039346656037, prime 1099511628211
+std::string fnv1a64(const std::vector<float>& values) {
+    uint64_t hash = 14695981039346656037ull;
+    for (float v : values) {
+        unsigned char bytes[sizeof(float)];
+        std::memcpy(bytes, &v, sizeof v);
+        for (unsigned char b : bytes) {
+            hash ^= b;
+            hash *= 1099511628211ull;
+        }
+    }
+    return fmt::format("{:016x}", hash);
+}
+
 /// The file stem of the outputs: the input's file stem, or the sample's name.
 std::string inputStem(const std::string& input) {
     if (isSampleBakeInput(input)) return input.substr(kSampleInputPrefix.size());
@@ -60,6 +97,7 @@ Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
     job.spec = spec;
     if (spec.input.empty()) return Error{"no input normal map given"};
     if (spec.out.empty()) return Error{"no output folder given (--out DIR)"};
+    if (spec.authoredGloss && spec.authoredGloss->empty()) return Error{"authored gloss: no values given"};
     if (spec.preset.empty())
         return Error{"no preset given (--preset P; known: " + joined(builtinPresetNames()) + ")"};
     if (isSampleBakeInput(spec.input)) {
@@ -212,7 +250,12 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
     if (!map) return Error{map.error()};
 
     BakeOptions options = job.bake;
-    if (job.spec.gloss) {
+    if (job.spec.authoredGloss) {
+        // The in-memory gloss overrides the file: spec.gloss is only recorded, not read.
+        auto gloss = checkedAuthoredGloss(*job.spec.authoredGloss, map->width, map->height);
+        if (!gloss) return Error{gloss.error()};
+        options.authoredGloss = std::move(gloss.value());
+    } else if (job.spec.gloss) {
         const auto image = readImage(*job.spec.gloss);
         if (!image) return Error{"--gloss: " + image.error()};
         auto gloss = glossFromImage(*image, map->width, map->height);
@@ -265,6 +308,13 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
                       {{"format", map->source.formatName},
                        {"channelType", map->source.channelType},
                        {"bitsPerChannel", map->source.bitsPerChannel}}}};
+    if (job.spec.authoredGloss) {
+        // Not a file: say where the gloss came from and which values it held, instead of a path.
+        record.inputs.erase("glossMap");
+        record.inputs["gloss"] = {{"source", std::string(kPaintedGlossSource)},
+                                  {"paintedOver", job.spec.gloss ? Json(*job.spec.gloss) : Json(nullptr)},
+                                  {"fnv1a64", fnv1a64(*options.authoredGloss)}};
+    }
     const ExportFormat format = job.exportOptions.format.value_or(job.preset.format);
     record.options = {
         {"preset", job.spec.preset},

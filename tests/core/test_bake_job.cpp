@@ -185,6 +185,111 @@ TEST(BakeJob, CancelAtTheReportKeepsTheSetAndWritesNoReport) {
     EXPECT_FALSE(fs::exists(dir / "out" / "report"));
 }
 
+// A one-channel float EXR holding `values` (kSmallMapSize² of them): a gloss file read exactly.
+fs::path writeFloatGloss(const fs::path& path, const std::vector<float>& values) {
+    const auto out = OIIO::ImageOutput::create(path.string());
+    EXPECT_TRUE(
+        out &&
+        out->open(path.string(), OIIO::ImageSpec(kSmallMapSize, kSmallMapSize, 1, OIIO::TypeDesc::FLOAT)) &&
+        out->write_image(OIIO::TypeDesc::FLOAT, values.data()) && out->close());
+    return path;
+}
+
+// Every file of a folder (relative name → bytes).
+std::map<std::string, std::string> folderBytes(const fs::path& folder) {
+    std::map<std::string, std::string> files;
+    for (const auto& e : fs::recursive_directory_iterator(folder))
+        if (e.is_regular_file()) {
+            const auto bytes = readFile(e.path());
+            files[fs::relative(e.path(), folder).string()] = bytes ? *bytes : "<unreadable>";
+        }
+    return files;
+}
+
+TEST(BakeJob, InMemoryAuthoredGlossBakesAsTheSameValuesFromAFile) {
+    test::TempDir dir;
+    const fs::path map = writeSmallNormalMap(dir / "small.png");
+    // A gradient across the map, with one value above and one below [0, 1]: both paths clamp them.
+    std::vector<float> gloss(size_t(kSmallMapSize) * kSmallMapSize);
+    for (size_t i = 0; i < gloss.size(); ++i)
+        gloss[i] = float(i) / float(gloss.size());
+    gloss[3] = 1.5f;
+    gloss[7] = -0.25f;
+    const fs::path glossFile = writeFloatGloss(dir / "gloss.exr", gloss);
+    // A different gloss file named beside the in-memory gloss: it must not be read.
+    const fs::path underneath = writeFloatGloss(dir / "under.exr", std::vector<float>(gloss.size(), 0.5f));
+
+    BakeJobSpec fromFile = specFor(dir / "file");
+    fromFile.input = map.string();
+    fromFile.gloss = glossFile.string();
+    BakeJobSpec inMemory = fromFile;
+    inMemory.out = (dir / "memory").string();
+    inMemory.gloss = underneath.string();
+    inMemory.authoredGloss = std::make_shared<const std::vector<float>>(gloss);
+    for (const BakeJobSpec& spec : {fromFile, inMemory}) {
+        const auto job = resolveBakeJob(spec);
+        ASSERT_TRUE(job) << job.error();
+        const auto run = runBakeJob(*job);
+        ASSERT_TRUE(run) << run.error();
+    }
+
+    const auto file = folderBytes(dir / "file");
+    const auto memory = folderBytes(dir / "memory");
+    ASSERT_EQ(file.size(), memory.size());
+    ASSERT_GT(file.size(), 1u) << "textures beside bake.json";
+    for (const auto& [name, bytes] : file) {
+        ASSERT_TRUE(memory.count(name)) << name;
+        if (name != "bake.json") {
+            EXPECT_TRUE(memory.at(name) == bytes) << name << " differs";
+        }
+    }
+    auto fileRecord = nlohmann::json::parse(file.at("bake.json"));
+    auto memoryRecord = nlohmann::json::parse(memory.at("bake.json"));
+    EXPECT_EQ(fileRecord["inputs"]["glossMap"], glossFile.string()) << "a job without it records as before";
+    EXPECT_FALSE(fileRecord["inputs"].contains("gloss"));
+    EXPECT_FALSE(memoryRecord["inputs"].contains("glossMap")) << "no file was read";
+    const auto& source = memoryRecord["inputs"]["gloss"];
+    EXPECT_EQ(source["source"], std::string(kPaintedGlossSource));
+    EXPECT_EQ(source["paintedOver"], underneath.string());
+    constexpr size_t kHashDigits = 16; // 64 bits in hex
+    EXPECT_EQ(source["fnv1a64"].get<std::string>().size(), kHashDigits);
+    // Apart from where the gloss came from, the two records are the same.
+    fileRecord["inputs"].erase("glossMap");
+    memoryRecord["inputs"].erase("gloss");
+    EXPECT_EQ(memoryRecord, fileRecord);
+}
+
+TEST(BakeJob, InMemoryAuthoredGlossIsCheckedAgainstTheMap) {
+    test::TempDir dir;
+    BakeJobSpec spec = specFor(dir / "out");
+    spec.input = writeSmallNormalMap(dir / "small.png").string();
+
+    spec.authoredGloss = std::make_shared<const std::vector<float>>();
+    const auto empty = resolveBakeJob(spec);
+    ASSERT_FALSE(empty);
+    EXPECT_NE(empty.error().find("authored gloss"), std::string::npos) << empty.error();
+
+    constexpr size_t kTooFew = 3;
+    spec.authoredGloss = std::make_shared<const std::vector<float>>(kTooFew, 0.5f);
+    const auto small = resolveBakeJob(spec);
+    ASSERT_TRUE(small) << small.error() << ": the size is checked once the map is read";
+    const auto wrongSize = runBakeJob(*small);
+    ASSERT_FALSE(wrongSize);
+    EXPECT_NE(wrongSize.error().find("authored gloss: 3 values for a 16x16 normal map"), std::string::npos)
+        << wrongSize.error();
+
+    std::vector<float> nan(size_t(kSmallMapSize) * kSmallMapSize, 0.5f);
+    nan[5] = std::nanf("");
+    spec.authoredGloss = std::make_shared<const std::vector<float>>(nan);
+    const auto job = resolveBakeJob(spec);
+    ASSERT_TRUE(job) << job.error();
+    const auto notFinite = runBakeJob(*job);
+    ASSERT_FALSE(notFinite);
+    EXPECT_NE(notFinite.error().find("NaN or infinite value at index 5"), std::string::npos)
+        << notFinite.error();
+    EXPECT_FALSE(fs::exists(dir / "out")) << "nothing written";
+}
+
 TEST(BakeJob, ManifestJobsStartFromTheDefaultsWithPathsFromItsFolder) {
     test::TempDir dir;
     fs::create_directories(dir / "jobs");

@@ -1,5 +1,8 @@
-// Painting in the studio: strokes on the texture view, undo/redo, the eyedropper, and the layers
-// saved beside a project and loaded back. main() is test_studio.cpp's (one QApplication).
+// Painting in the studio: strokes on the texture view, undo/redo, the eyedropper, the layers saved
+// beside a project and loaded back, the texture pane's authored and baked views of the painted gloss,
+// and the export of it (the bytes `burnish bake --gloss` writes for the same values). main() is
+// test_studio.cpp's (one QApplication).
+#include "bake_dialog.h"
 #include "main_window.h"
 #include "material_document.h"
 #include "paint_tool.h"
@@ -7,14 +10,26 @@
 #include "texture_pane.h"
 #include "texture_view.h"
 
+#include "cli_run.h"
 #include "temp_dir.h"
 
+#include <burnish/core/atomic_file.h>
+
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <QApplication>
+#include <QComboBox>
+#include <QImage>
+#include <QLabel>
+#include <QLineEdit>
+#include <QSignalSpy>
 #include <QTest>
 
 #include <cstring>
+#include <filesystem>
+#include <map>
+#include <string>
 
 using namespace burnish;
 using namespace burnish::studio;
@@ -36,6 +51,61 @@ void dragAcross(TextureView* view) {
                      Qt::LeftButton, {});
     QApplication::sendEvent(view, &move);
     QTest::mouseRelease(view, Qt::LeftButton, {}, b);
+}
+
+// Waiting for a worker thread (a 512² bake takes well under a second; generous for loaded CI).
+constexpr int kWorkerTimeoutMs = 60000;
+
+// One stroke through the paint tool (one undo step) on `kind`, from `a` to `b` in texels.
+void stroke(PaintTool& tool, PaintLayerKind kind, float value, double radius, QPointF a, QPointF b) {
+    tool.setLayer(kind);
+    Brush brush;
+    brush.radius = radius;
+    brush.hardness = 1.0;
+    brush.opacity = 1.0;
+    brush.value = value;
+    tool.setBrush(brush);
+    tool.pressAt(a);
+    tool.moveTo(b);
+    tool.release();
+}
+
+uchar grey(const QImage& image, int x, int y) {
+    return uchar(qGray(image.pixel(x, y)));
+}
+
+// The gloss channel of core's bake of the document's composited gloss, at a mip, as the pane shows it.
+QImage coreBakedGloss(const MaterialDocument& doc, int mip) {
+    BakeOptions options;
+    options.method = doc.settings().method;
+    options.encoding = doc.preset().encoding;
+    options.basePower = doc.power();
+    if (doc.authoredGloss()) options.authoredGloss = *doc.authoredGloss();
+    const auto baked = bake(*doc.maps().normal, options);
+    EXPECT_TRUE(baked) << baked.error();
+    if (!baked) return {};
+    const BakedTexture* gloss = baked->find("gloss");
+    EXPECT_NE(gloss, nullptr);
+    return gloss ? bakedChannelImage(gloss->mips[size_t(mip)], gloss->channels, 0) : QImage();
+}
+
+namespace fs = std::filesystem;
+
+std::map<std::string, std::string> folderBytes(const fs::path& folder) {
+    std::map<std::string, std::string> files;
+    for (const auto& e : fs::recursive_directory_iterator(folder))
+        if (e.is_regular_file()) {
+            auto bytes = readFile(e.path());
+            files[fs::relative(e.path(), folder).string()] = bytes ? *bytes : "<unreadable>";
+        }
+    return files;
+}
+
+// The values as a one-channel float EXR (exact: the CLI reads back the same floats).
+bool writeFloatExr(const fs::path& path, const std::vector<float>& values, int width, int height) {
+    const auto out = OIIO::ImageOutput::create(path.string());
+    return out && out->open(path.string(), OIIO::ImageSpec(width, height, 1, OIIO::TypeDesc::FLOAT)) &&
+           out->write_image(OIIO::TypeDesc::FLOAT, values.data()) && out->close();
 }
 
 } // namespace
@@ -135,4 +205,111 @@ TEST(StudioPaint, LayersSurviveASaveAndLoad) {
     EXPECT_FALSE(third.openProject(file));
     EXPECT_TRUE(message.contains("gloss.exr")) << message.toStdString();
     EXPECT_FALSE(third.document()->paintLayer(PaintLayerKind::VarianceOffset).painted());
+}
+
+TEST(StudioPaint, TexturePaneShowsThePaintedGlossAndItsBake) {
+    MaterialDocument doc;
+    TexturePane pane(&doc);
+    PaintTool tool(&doc, pane.view());
+    pane.setMode(TextureMode::Gloss);
+    // 8-bit view of the base gloss, before anything is painted.
+    const uchar base = grey(pane.view()->image(), 400, 400);
+    // The base gloss as the authored gloss stores it (float).
+    EXPECT_EQ(base, uchar(std::lround(double(float(doc.settings().gloss)) * 255.0)));
+
+    constexpr float kPainted = 0.2f;
+    constexpr double kRadius = 20.0;
+    stroke(tool, PaintLayerKind::Gloss, kPainted, kRadius, {100.5, 100.5}, {100.5, 100.5});
+    const QImage authored = pane.view()->image();
+    EXPECT_EQ(grey(authored, 100, 100), uchar(std::lround(kPainted * 255.0))) << "the painted texel";
+    EXPECT_EQ(grey(authored, 400, 400), base) << "a texel far from the dab keeps the base gloss";
+
+    // The baked view bakes the composited gloss: the same image as core's bake of it, per mip.
+    QSignalSpy updated(&pane, &TexturePane::imageUpdated);
+    pane.setMode(TextureMode::BakedGloss);
+    ASSERT_TRUE(updated.wait(kWorkerTimeoutMs));
+    ASSERT_FALSE(pane.baking());
+    const QImage expected = coreBakedGloss(doc, 0);
+    EXPECT_EQ(pane.view()->image().convertToFormat(QImage::Format_Grayscale8), expected);
+    constexpr int kMip = 2;
+    pane.setMip(kMip);
+    EXPECT_EQ(pane.view()->image().convertToFormat(QImage::Format_Grayscale8), coreBakedGloss(doc, kMip));
+
+    // The paint makes a difference there: undo, and the bake without it differs at the dab.
+    pane.setMip(0);
+    doc.undoStack()->undo();
+    ASSERT_FALSE(doc.authoredGloss());
+    ASSERT_TRUE(pane.baking()) << "an undone stroke is baked again";
+    ASSERT_TRUE(updated.wait(kWorkerTimeoutMs));
+    EXPECT_NE(grey(pane.view()->image(), 100, 100), grey(expected, 100, 100));
+    EXPECT_EQ(pane.view()->image().convertToFormat(QImage::Format_Grayscale8), coreBakedGloss(doc, 0));
+}
+
+TEST(StudioPaint, ExportOfPaintedLayersWritesTheBytesOfBurnishBakeWithTheSameGloss) {
+    struct Case {
+        const char* preset;
+        const char* format;
+        bool glossMap; // paint over a gloss map rather than over the base gloss
+    };
+    for (const Case c : {Case{"blackops", "png16", false}, Case{"gltf", "exr-float", true}}) {
+        SCOPED_TRACE(c.preset);
+        test::TempDir dir;
+        MaterialDocument doc;
+        ASSERT_TRUE(doc.setPreset(c.preset));
+        doc.setGloss(0.6);
+        if (c.glossMap) {
+            QImage gloss(kSampleSize, kSampleSize, QImage::Format_Grayscale8);
+            gloss.fill(90);
+            const QString path = QString::fromStdString((dir / "under.png").string());
+            ASSERT_TRUE(gloss.save(path));
+            ASSERT_TRUE(doc.loadMap(MapSlot::Gloss, path));
+        }
+        {
+            TextureView canvas;
+            PaintTool tool(&doc, &canvas);
+            stroke(tool, PaintLayerKind::Gloss, 0.95f, 40.0, {60.0, 60.0}, {300.0, 200.0});
+            stroke(tool, PaintLayerKind::VarianceOffset, 0.05f, 30.0, {400.0, 100.0}, {420.0, 450.0});
+        }
+        ASSERT_TRUE(doc.authoredGloss());
+
+        BakeDialog dialog(&doc);
+        dialog.formatCombo()->setCurrentIndex(dialog.formatCombo()->findData(QString(c.format)));
+        dialog.outputEdit()->setText(QString::fromStdString((dir / "studio").string()));
+        QSignalSpy finished(&dialog, &BakeDialog::bakeFinished);
+        dialog.startBake();
+        ASSERT_TRUE(finished.count() > 0 || finished.wait(kWorkerTimeoutMs));
+        ASSERT_TRUE(finished.at(0).at(0).toBool()) << finished.at(0).at(1).toString().toStdString();
+
+        // The same values through a file and the command line.
+        const fs::path exr = dir / "painted.exr";
+        ASSERT_TRUE(writeFloatExr(exr, *doc.authoredGloss(), kSampleSize, kSampleSize));
+        std::string args = std::string("bake ") + kSampleInputPrefix.data() + kSampleName + " --preset " +
+                           c.preset + " --method " + std::string(methodName(doc.settings().method)) +
+                           " --gloss " + test::shellQuote(exr.string()) + " --format " + c.format +
+                           " --out " + test::shellQuote((dir / "cli").string());
+        if (doc.preset().findParameter("metallic")) args += " --metallic 1";
+        const auto cli = test::runBurnish(args);
+        ASSERT_EQ(cli.exitCode, 0) << cli.err;
+
+        const auto studio = folderBytes(dir / "studio");
+        const auto reference = folderBytes(dir / "cli");
+        ASSERT_GT(reference.size(), 1u) << "textures beside bake.json";
+        ASSERT_EQ(studio.size(), reference.size());
+        for (const auto& [name, bytes] : reference) {
+            ASSERT_TRUE(studio.count(name)) << name;
+            if (name != "bake.json") {
+                EXPECT_TRUE(studio.at(name) == bytes) << name << " differs";
+            }
+        }
+        // bake.json: the same but for where the gloss came from.
+        auto studioRecord = nlohmann::json::parse(studio.at("bake.json"));
+        auto cliRecord = nlohmann::json::parse(reference.at("bake.json"));
+        const auto& source = studioRecord["inputs"]["gloss"];
+        EXPECT_EQ(source["source"], std::string(kPaintedGlossSource));
+        EXPECT_EQ(source["paintedOver"], c.glossMap ? nlohmann::json((dir / "under.png").string()) : nullptr);
+        EXPECT_EQ(cliRecord["inputs"]["glossMap"], exr.string());
+        studioRecord["inputs"].erase("gloss");
+        cliRecord["inputs"].erase("glossMap");
+        EXPECT_EQ(studioRecord, cliRecord);
+    }
 }

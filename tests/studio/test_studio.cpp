@@ -1,6 +1,7 @@
 // The studio shell under the offscreen platform: panels edit the document and undo restores it,
-// projects round-trip and refuse bad files without touching the document, autosave and recovery,
-// the Bake & Export dialog writes the bytes `burnish bake` writes, and the window draws something.
+// projects round-trip (environment included) and refuse bad files without touching the document,
+// autosave and recovery, the Bake & Export dialog writes the bytes `burnish bake` writes, the window
+// draws something, and burnish-studio --help/--version work without a display.
 #include "bake_dialog.h"
 #include "main_window.h"
 #include "material_panel.h"
@@ -13,6 +14,7 @@
 #include "cli_run.h"
 #include "temp_dir.h"
 
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <QApplication>
@@ -31,8 +33,11 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
+#include <sys/wait.h>
 
 namespace burnish::studio {
 namespace {
@@ -65,6 +70,19 @@ QString writeGlossMap(const fs::path& path, int size, int grey) {
     QImage image(size, size, QImage::Format_Grayscale8);
     image.fill(grey);
     EXPECT_TRUE(image.save(q(path)));
+    return q(path);
+}
+
+/// A small equirectangular float EXR (a sky brighter at the top) to light the viewport with.
+QString writeEnvironment(const fs::path& path) {
+    constexpr int kWidth = 16, kHeight = 8; // 2:1, as an equirectangular map is
+    std::vector<float> rgb;
+    for (int y = 0; y < kHeight; ++y)
+        for (int x = 0; x < kWidth * 3; ++x)
+            rgb.push_back(float(kHeight - y) / kHeight);
+    const auto out = OIIO::ImageOutput::create(path.string());
+    EXPECT_TRUE(out && out->open(path.string(), OIIO::ImageSpec(kWidth, kHeight, 3, OIIO::TypeDesc::FLOAT)) &&
+                out->write_image(OIIO::TypeDesc::FLOAT, rgb.data()) && out->close());
     return q(path);
 }
 
@@ -155,7 +173,18 @@ TEST(Project, SaveLoadRoundTripsEveryField) {
     doc->setGloss(0.4375);
     ASSERT_TRUE(doc->setMethod(Method::Vmf) || doc->setMethod(Method::VarianceToGloss));
     doc->setExportSettings({"png16", "", 4, q(dir / "out"), true});
+    EnvironmentSettings environment;
+    environment.choice = EnvironmentChoice::File;
+    environment.path = writeEnvironment(dir / "sky.exr");
+    environment.rotationDegrees = -37.25;
+    environment.intensity = 2.125;
+    environment.lobe = LobeModel::Phong;
+    environment.fis = true;
+    environment.fisSamples = 96;
+    doc->setEnvironment(environment);
+    ASSERT_EQ(doc->settings().environment, environment) << "every value inside its range";
     const MaterialSettings saved = doc->settings();
+    ASSERT_NE(saved.environment, EnvironmentSettings{}) << "the round trip would not see a lost environment";
 
     const QString file = q(dir / "project" / "m.burnish");
     ASSERT_TRUE(a.window.saveProjectAs(file)) << a.messages.join("\n").toStdString();
@@ -167,6 +196,9 @@ TEST(Project, SaveLoadRoundTripsEveryField) {
     EXPECT_EQ(json["version"], 1);
     EXPECT_EQ(json["maps"]["gloss"], "../gloss.png") << "paths relative to the project file";
     EXPECT_FALSE(json.contains("layers")) << "layers are written only when painted layers exist";
+    EXPECT_EQ(json["environment"]["source"], "file");
+    EXPECT_EQ(json["environment"]["file"], "../sky.exr") << "relative to the project file";
+    EXPECT_EQ(json["environment"]["lobe"], "phong");
 
     TestWindow b;
     ASSERT_TRUE(b.window.openProject(file)) << b.messages.join("\n").toStdString();
@@ -174,6 +206,21 @@ TEST(Project, SaveLoadRoundTripsEveryField) {
     EXPECT_EQ(b.window.document()->maps().gloss->width, 512);
     EXPECT_FALSE(b.window.isModified());
     EXPECT_EQ(b.window.recentProjects().value(0), file);
+
+    // Each source kind comes back as saved (the studio and off keep the last file's path too).
+    for (const EnvironmentChoice choice : {EnvironmentChoice::Off, EnvironmentChoice::ProceduralStudio}) {
+        MaterialSettings other = saved;
+        other.environment.choice = choice;
+        const auto parsed = parseProject(projectToJson(other, file), file);
+        ASSERT_TRUE(parsed) << parsed.error();
+        EXPECT_EQ(parsed->settings.environment, other.environment);
+    }
+    // Projects written before the environment was saved open with the default environment.
+    auto old = nlohmann::json::parse(*text);
+    old.erase("environment");
+    const auto parsed = parseProject(old.dump(), file);
+    ASSERT_TRUE(parsed) << parsed.error();
+    EXPECT_EQ(parsed->settings.environment, EnvironmentSettings{});
 }
 
 TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
@@ -195,7 +242,42 @@ TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
         j["material"]["gloss"] = std::move(value);
         return j.dump();
     };
+    auto environmentField = [&](const char* key, nlohmann::json value) {
+        auto j = nlohmann::json::parse(valid);
+        j["environment"][key] = std::move(value);
+        return j.dump();
+    };
     const std::map<std::string, std::pair<std::string, std::string>> cases = {
+        {"environment-source",
+         {environmentField("source", "sun"),
+          "environment: 'source' must be \"off\", \"studio\" or \"file\""}},
+        {"environment-intensity",
+         {environmentField("intensity", 5000), "'intensity' must be a number in [0"}},
+        {"environment-rotation",
+         {environmentField("rotation", "left"), "'rotation' must be a number in [-180"}},
+        {"environment-lobe",
+         {environmentField("lobe", "ggx"), "'lobe' must be \"blinn-phong\" or \"phong\""}},
+        {"environment-fis", {environmentField("fis", "yes"), "'fis' must be true or false"}},
+        {"environment-samples", {environmentField("fisSamples", 0), "'fisSamples' must be a number in [1"}},
+        {"environment-fractional-samples",
+         {environmentField("fisSamples", 2.5), "'fisSamples' must be a whole"}},
+        {"environment-unknown", {environmentField("exposure", 1), "environment: unknown field 'exposure'"}},
+        {"environment-missing-file",
+         {[&] {
+              auto j = nlohmann::json::parse(valid);
+              j["environment"]["source"] = "file";
+              j["environment"]["file"] = "nowhere.hdr";
+              return j.dump();
+          }(),
+          "nowhere.hdr' does not exist"}},
+        {"environment-file-null",
+         {[&] {
+              auto j = nlohmann::json::parse(valid);
+              j["environment"]["source"] = "file";
+              j["environment"]["file"] = nullptr;
+              return j.dump();
+          }(),
+          "'file' must be a path when the source is \"file\""}},
         {"corrupt", {valid.substr(0, valid.size() / 2), "not valid JSON"}},
         {"wrong-type", {materialGloss("high"), "'gloss' must be a number in [0"}},
         {"newer", {withField("version", 2), "written by a newer Burnish (project version 2"}},
@@ -337,6 +419,71 @@ TEST(TexturePane, BakedGlossIsBakedInAWorkerPerMip) {
     pane.setMip(kMip);
     EXPECT_EQ(pane.view()->image().width(), kSampleSize >> kMip);
     EXPECT_TRUE(pane.view()->image().isGrayscale()) << "variance-to-gloss shows its gloss channel";
+}
+
+struct StudioRun {
+    int exitCode = -1; // -1: did not exit normally (killed by a signal, e.g. an abort)
+    std::string out;
+    std::string err;
+};
+
+/// Runs the built burnish-studio with `args` and no display: DISPLAY, WAYLAND_DISPLAY and
+/// QT_QPA_PLATFORM removed from its environment, as over ssh or on a CI machine.
+StudioRun runStudioWithoutDisplay(const std::string& args) {
+    test::TempDir dir;
+    const fs::path errPath = dir / "stderr.txt";
+    const std::string command = "env -u DISPLAY -u WAYLAND_DISPLAY -u QT_QPA_PLATFORM " +
+                                test::shellQuote(BURNISH_STUDIO_EXE) + " " + args + " 2>" +
+                                test::shellQuote(errPath.string());
+    StudioRun run;
+    FILE* pipe = ::popen(command.c_str(), "r");
+    if (!pipe) return run;
+    char buffer[4096];
+    size_t n;
+    while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0)
+        run.out.append(buffer, n);
+    const int status = ::pclose(pipe);
+    run.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream err(errPath);
+    std::stringstream ss;
+    ss << err.rdbuf();
+    run.err = ss.str();
+    return run;
+}
+
+TEST(StudioCommandLine, HelpAndVersionNeedNoDisplay) {
+    const StudioRun help = runStudioWithoutDisplay("--help");
+    EXPECT_EQ(help.exitCode, 0) << help.err;
+    EXPECT_NE(help.out.find("Burnish Studio"), std::string::npos) << help.out;
+    EXPECT_NE(help.out.find("--screenshot <FILE>"), std::string::npos) << help.out;
+    EXPECT_NE(help.out.find("[PROJECT]"), std::string::npos) << help.out;
+
+    const StudioRun shortHelp = runStudioWithoutDisplay("-h");
+    EXPECT_EQ(shortHelp.exitCode, 0) << shortHelp.err;
+    EXPECT_EQ(shortHelp.out, help.out);
+
+    const StudioRun version = runStudioWithoutDisplay("--version");
+    EXPECT_EQ(version.exitCode, 0) << version.err;
+    EXPECT_EQ(version.out, std::string("burnish-studio ") + kStudioVersion + "\n");
+
+    // A usage error is printed too, with a failing exit status, instead of a toolkit abort.
+    const StudioRun unknown = runStudioWithoutDisplay("--no-such-option");
+    EXPECT_GT(unknown.exitCode, 0) << unknown.err;
+    EXPECT_NE(unknown.err.find("no-such-option"), std::string::npos) << unknown.err;
+}
+
+TEST(StudioCommandLine, OnlyPrintingCommandLinesAreRecognisedBeforeTheApplicationStarts) {
+    auto onlyPrints = [](std::vector<const char*> args) {
+        args.insert(args.begin(), "burnish-studio");
+        return commandLineOnlyPrints(int(args.size()), args.data());
+    };
+    EXPECT_TRUE(onlyPrints({"--help"}));
+    EXPECT_TRUE(onlyPrints({"project.burnish", "-v"}));
+    EXPECT_TRUE(onlyPrints({"--bogus"}));
+    EXPECT_FALSE(onlyPrints({}));
+    EXPECT_FALSE(onlyPrints({"project.burnish"}));
+    EXPECT_FALSE(onlyPrints({"--screenshot", "shot.png"}));
+    EXPECT_FALSE(onlyPrints({"--", "--help"})) << "after --, a project that happens to be named so";
 }
 
 TEST(MainWindow, ScreenshotIsNotBlank) {

@@ -2,6 +2,9 @@
 // and meters shimmer. Under the offscreen platform (ctest's) it draws in its own headless EGL context;
 // under a display (xvfb-run with QT_QPA_PLATFORM=xcb) in a QOpenGLWidget. Both run the same tests.
 #include "main_window.h"
+#include "paint_tool.h"
+#include "scene_from_document.h"
+#include "texture_view.h"
 #include "viewport.h"
 #include "viewport_panel.h"
 
@@ -107,6 +110,74 @@ TEST(Viewport, ChangingTheDocumentsMethodChangesTheImage) {
     const QImage undone = t.grab();
     constexpr double kSameImage = 1e-9; // the same scene draws the same bytes
     EXPECT_LT(meanAbsDiff(naive, undone, 0, kWidth), kSameImage);
+}
+
+/// Paints one gloss stroke through the paint tool (one undo step): a brush as wide as the sample,
+/// dragged across its middle row, so the whole visible surface takes the painted gloss.
+void paintAcross(MaterialDocument& doc, float gloss) {
+    TextureView canvas;
+    PaintTool tool(&doc, &canvas);
+    Brush b;
+    b.radius = kSampleSize; // covers the map from the middle row, with wrap-around
+    b.hardness = 1.0;
+    b.opacity = 1.0;
+    b.value = gloss;
+    tool.setBrush(b);
+    tool.pressAt(QPointF(0.0, kSampleSize / 2.0));
+    tool.moveTo(QPointF(kSampleSize, kSampleSize / 2.0));
+    tool.release();
+}
+
+TEST(Viewport, APaintedStrokeChangesTheImageAndUndoRestoresIt) {
+    TestViewport t;
+    t.view.setDistance(kFarDistance);
+    const QImage before = t.grab();
+    // Gloss 0 is the encoding's lowest power (1 for Black Ops' 8192^g) against the default 0.7
+    // (power ~550): the highlight spreads over the whole sphere.
+    paintAcross(t.doc, 0.0f);
+    ASSERT_TRUE(t.doc.paintLayer(PaintLayerKind::Gloss).painted());
+    const QImage painted = t.grab();
+    constexpr double kMinMeanDifference = 0.2; // as the method change: many pixels move visibly
+    EXPECT_GT(meanAbsDiff(before, painted, 0, kWidth), kMinMeanDifference)
+        << "the viewport draws the painted gloss, not the base gloss";
+    t.doc.undoStack()->undo();
+    const QImage undone = t.grab();
+    constexpr double kSameImage = 1e-9; // the same scene draws the same bytes
+    EXPECT_LT(meanAbsDiff(before, undone, 0, kWidth), kSameImage);
+}
+
+TEST(SceneFromDocument, HandsOverThePaintedGlossKeepingItsIdentityUntilItChanges) {
+    MaterialDocument doc;
+    SceneFromDocument mapper;
+    const auto plain = mapper.material(doc);
+    ASSERT_TRUE(plain) << plain.error();
+    EXPECT_FALSE(plain->glossMap) << "no gloss map, nothing painted: the base power";
+
+    paintAcross(doc, 0.25f);
+    const auto painted = mapper.material(doc);
+    ASSERT_TRUE(painted) << painted.error();
+    ASSERT_TRUE(painted->glossMap);
+    ASSERT_TRUE(doc.authoredGloss());
+    EXPECT_EQ(*painted->glossMap, *doc.authoredGloss()) << "the composited gloss, value for value";
+    const std::vector<float> firstValues = *painted->glossMap;
+
+    // The renderer keys its bake on the pointer: unchanged gloss, same pointer, no bake.
+    const auto again = mapper.material(doc);
+    ASSERT_TRUE(again);
+    EXPECT_EQ(again->glossMap, painted->glossMap);
+    doc.setCustomSpecular({0.5, 0.5, 0.5});
+    const auto otherEdit = mapper.material(doc);
+    ASSERT_TRUE(otherEdit);
+    EXPECT_EQ(otherEdit->glossMap, painted->glossMap) << "an edit that leaves the gloss alone";
+
+    // Another stroke: a new pointer, and the values the renderer holds are not written over.
+    paintAcross(doc, 0.75f);
+    const auto repainted = mapper.material(doc);
+    ASSERT_TRUE(repainted);
+    ASSERT_TRUE(repainted->glossMap);
+    EXPECT_NE(repainted->glossMap, painted->glossMap);
+    EXPECT_EQ(*painted->glossMap, firstValues);
+    EXPECT_NE(*repainted->glossMap, firstValues);
 }
 
 TEST(Viewport, SplitShowsTheSecondMethodOnTheRight) {

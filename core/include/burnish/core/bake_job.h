@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -40,6 +41,13 @@ struct BakeJobSpec {
     std::optional<std::string> method;
     std::optional<double> power;
     std::optional<std::string> gloss; // authored gloss map file
+    /// An authored gloss held in memory instead of a file (the studio's painted layers composited
+    /// over its gloss map or base gloss): one value per texel of the normal map, row-major, in the
+    /// preset's gloss encoding; values are clamped to [0, 1] as a gloss file's are. It overrides
+    /// `gloss` (that file is then not read, only named in bake.json as what was painted over), and
+    /// bake.json records inputs.gloss = {"source": kPaintedGlossSource, "paintedOver", "fnv1a64"}
+    /// in place of inputs.glossMap. Null: none. Not expressible in a manifest or a Ninja file.
+    std::shared_ptr<const std::vector<float>> authoredGloss;
     std::optional<std::string> format;
     std::optional<std::string> compression;
     std::optional<std::string> kernel;
@@ -59,6 +67,9 @@ struct BakeJobSpec {
     /// per-texel powers) and border, and write the report into <out>/report/ (`--report`).
     bool report = false;
 };
+
+/// bake.json's inputs.gloss.source for a job with an in-memory authored gloss.
+inline constexpr std::string_view kPaintedGlossSource = "painted layers";
 
 /// A job with every name resolved and checked: nothing of it is read or written yet.
 struct BakeJob {
@@ -107,7 +118,8 @@ struct BakeJobResult {
 
 /// Reads the input (and authored gloss map and detail map), bakes and exports into spec.out, then
 /// with spec.report writes the ground-truth report. Errors: unreadable or implausible inputs, a gloss
-/// map of the wrong size ("--gloss ..."), a bad detail map ("--detail ..."), an existing output set
+/// map of the wrong size ("--gloss ..."), an in-memory authored gloss of the wrong size or with a
+/// non-finite value ("authored gloss: ..."), a bad detail map ("--detail ..."), an existing output set
 /// without force ("refusing to overwrite ... (use --force to replace the set)"), a failed report
 /// ("--report: ..."), "cancelled" when progress returned false.
 Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& progress = {});

@@ -179,8 +179,10 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
 
     connect(m_runner, &BakeRunner::progress, this, [this](double fraction, const QString& stage) {
         if (!m_progress) return;
-        m_progress->setValue(int(fraction * kProgressSteps));
+        // The label first: setValue() on a window-modal QProgressDialog processes events, which
+        // may deliver `finished` and delete the dialog before this slot resumes.
         m_progress->setLabelText("Bake & export: " + stage + "…");
+        m_progress->setValue(int(fraction * kProgressSteps));
     });
     connect(m_runner, &BakeRunner::finished, this, [this](bool ok, const QString& message) {
         if (m_progress) {

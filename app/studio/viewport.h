@@ -183,6 +183,9 @@ private:
     QLabel* m_errorLabel = nullptr;
     QTimer* m_orbitTimer = nullptr;
     QTimer* m_restTimer = nullptr;
+    QTimer* m_dabTimer = nullptr;     // throttles redraws during a stroke (kDabRedrawIntervalMs)
+    bool m_dabPending = false;        // a dab arrived while m_dabTimer ran: redraw when it fires
+    bool m_dabFrameRequested = false; // a dab redraw is requested and not drawn yet
     QString m_contextDescription;
     QString m_error;
     double m_frameMs = 0.0;

@@ -2,6 +2,7 @@
 
 #include <burnish/core/atomic_file.h>
 #include <burnish/core/color.h>
+#include <burnish/core/evaluate.h>
 #include <burnish/core/fit.h>
 #include <burnish/core/fresnel.h>
 #include <burnish/core/geometric_aa.h>
@@ -657,7 +658,10 @@ void markParetoFront(std::vector<ApproximationEntry>& entries) {
         entries[i].pareto = front[i];
 }
 
-Result<ApproximationReport> measureApproximations(const ApproximationOptions& options) {
+Result<ApproximationReport> measureApproximations(const ApproximationOptions& options,
+                                                  const std::atomic<bool>* cancel) {
+    // Relaxed: the flag carries no data, only "stop"; the worker sees it at its next check.
+    auto cancelled = [cancel] { return cancel && cancel->load(std::memory_order_relaxed); };
     const auto start = std::chrono::steady_clock::now();
     ApproximationReport report;
     report.quick = options.quick;
@@ -675,10 +679,12 @@ Result<ApproximationReport> measureApproximations(const ApproximationOptions& op
         const auto pair =
             std::find_if(pairs.begin(), pairs.end(), [&](const auto& p) { return p.id == def.id; });
         if (pair == pairs.end()) return Error{"approximations: no timed kernel for entry " + def.id};
+        if (cancelled()) return Error{std::string(kCancelledMessage)};
         const ErrorAccumulator acc = def.error(density);
         if (acc.nonFinite() > 0)
             return Error{
                 fmt::format("approximations: {} produced {} NaN/Inf samples", def.id, acc.nonFinite())};
+        if (cancelled()) return Error{std::string(kCancelledMessage)};
         const KernelTiming timing = timeKernelPair(*pair, report.inputs, report.repetitions);
 
         ApproximationEntry e;
@@ -704,6 +710,7 @@ Result<ApproximationReport> measureApproximations(const ApproximationOptions& op
             report.groups.push_back(e.group);
         report.entries.push_back(std::move(e));
     }
+    if (cancelled()) return Error{std::string(kCancelledMessage)};
     markParetoFront(report.entries);
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return report;

@@ -131,8 +131,12 @@ double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, dou
 }
 
 Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOptions& options,
-                                         const std::function<void(double)>& progress) {
+                                         const std::function<void(double)>& progress,
+                                         const std::atomic<bool>* cancel) {
     const auto start = std::chrono::steady_clock::now();
+    // Relaxed: the flag carries no data, only "stop"; the worker sees it at its next check.
+    auto cancelled = [cancel] { return cancel && cancel->load(std::memory_order_relaxed); };
+    if (cancelled()) return Error{std::string(kCancelledMessage)};
     if (map.texelCount() == 0) return Error{"the normal map is empty"};
     const std::vector<double>* texelPowers = options.texelPowers ? &*options.texelPowers : nullptr;
     std::vector<double> basePowers = options.basePowers;
@@ -203,6 +207,7 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             methodCount, std::vector<std::vector<TexelLobe>>(size_t(mipCount)));
         for (size_t m = 0; m < methodCount; ++m)
             for (int k = firstMip; k <= lastMip; ++k) {
+                if (cancelled()) return Error{std::string(kCancelledMessage)};
                 const PyramidLevel& level = pyramid.level(k);
                 auto& out = lobes[m][size_t(k - firstMip)];
                 out.resize(size_t(level.width) * size_t(level.height));
@@ -232,6 +237,7 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
         }
 
         for (const DirectionPair& d : directions) {
+            if (cancelled()) return Error{std::string(kCancelledMessage)};
             const PyramidLevel& l0 = pyramid.level(0);
             tbb::parallel_for(0, l0.height, [&](int y) {
                 for (int x = 0; x < l0.width; ++x)
@@ -253,6 +259,7 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                 });
             }
             for (int k = firstMip; k <= lastMip; ++k) {
+                if (cancelled()) return Error{std::string(kCancelledMessage)};
                 const PyramidLevel& level = pyramid.level(k);
                 const size_t mi = size_t(k - firstMip);
                 // Per-row partial sums, added in row order afterwards: deterministic results.
@@ -304,6 +311,8 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                 }
             }
     }
+    // A flag raised during the last pass still wins: the caller asked for no result.
+    if (cancelled()) return Error{std::string(kCancelledMessage)};
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
 }

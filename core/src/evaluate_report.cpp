@@ -95,11 +95,16 @@ MethodStorage methodStorage(Method method) {
 }
 
 Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const EvaluationReportOptions& options,
-                                               const std::function<void(double)>& progress) {
+                                               const std::function<void(double)>& progress,
+                                               const std::atomic<bool>* cancel) {
     if (options.bakeRuns < 1) return Error{"bake runs must be at least 1"};
-    auto evaluated = evaluateMethods(map, options.evaluate, [&](double f) {
-        if (progress) progress(0.8 * f);
-    });
+    auto cancelled = [cancel] { return cancel && cancel->load(std::memory_order_relaxed); };
+    auto evaluated = evaluateMethods(
+        map, options.evaluate,
+        [&](double f) {
+            if (progress) progress(0.8 * f);
+        },
+        cancel);
     if (!evaluated) return Error{evaluated.error()};
 
     EvaluationReport report;
@@ -141,17 +146,20 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
         bakeOptions.authoredGloss = authoredGloss;
         std::vector<double> runs;
         for (int r = 0; r < options.bakeRuns; ++r) {
+            if (cancelled()) return Error{std::string(kCancelledMessage)};
             const auto start = Clock::now();
             auto baked = bake(map, bakeOptions);
             runs.push_back(std::chrono::duration<double>(Clock::now() - start).count());
             if (!baked) return Error{baked.error()};
         }
         cost.bakeSeconds = median(runs);
+        if (cancelled()) return Error{std::string(kCancelledMessage)};
         cost.nsPerLobe = measureShadingNs(pyramid, report.result.firstMip, method, s, options.evaluate,
                                           report.result.directions);
         report.costs.push_back(cost);
         if (progress) progress(0.8 + 0.2 * double(i + 1) / double(methodCount));
     }
+    if (cancelled()) return Error{std::string(kCancelledMessage)};
     return report;
 }
 

@@ -1,10 +1,13 @@
 #include <burnish/core/evaluate.h>
 
+#include <burnish/core/approximations.h>
+#include <burnish/core/evaluate_report.h>
 #include <burnish/core/ndf.h>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <random>
 
@@ -325,4 +328,121 @@ TEST(Evaluate, GlossCheckerIsAMixtureNoSingleLobeMatches) {
     const EvaluationResult wide = run({20.0, 30.0});
     for (const MipError& e : wide.errors)
         EXPECT_LT(e.relativeL1, singleLobeError(wide.directions, sMean)) << methodName(e.method);
+}
+
+// Cancellation and progress (the studio's error-against-cost chart runs these in a worker with a
+// progress bar and a Cancel button).
+namespace {
+
+// A small map whose evaluation has many steps (direction pairs) to cancel between.
+NormalMap cancellableMap() {
+    constexpr int kSize = 32;
+    return makeNormalMap(kSize, kSize, gaussianSlopes(kSize * kSize, 0.2, 5));
+}
+
+EvaluateOptions cancellableOptions() {
+    EvaluateOptions options;
+    options.basePowers = {64.0, 256.0};
+    options.firstMip = 1;
+    options.lastMip = 3;
+    options.methods = {Method::Naive, Method::Lean};
+    return options;
+}
+
+} // namespace
+
+TEST(EvaluateCancel, AFlagRaisedBeforeTheStartGivesCancelledAndNoProgress) {
+    const NormalMap map = cancellableMap();
+    const std::atomic<bool> cancel{true};
+    int calls = 0;
+    auto result = evaluateMethods(
+        map, cancellableOptions(), [&](double) { ++calls; }, &cancel);
+    ASSERT_FALSE(result.ok());
+    EXPECT_TRUE(isCancelled(Error{result.error()})) << result.error();
+    EXPECT_EQ(calls, 0) << "no work was done";
+}
+
+TEST(EvaluateCancel, AFlagRaisedWhileRunningStopsAtTheNextStep) {
+    const NormalMap map = cancellableMap();
+    const EvaluateOptions options = cancellableOptions();
+    std::atomic<bool> cancel{false};
+    int callsAfterRaise = 0;
+    bool raised = false;
+    // Raised from inside the run (after its first direction pair): deterministic, and the same
+    // path as a flag raised by another thread, which the worker reads at the same checks.
+    auto result = evaluateMethods(
+        map, options,
+        [&](double) {
+            if (raised) ++callsAfterRaise;
+            raised = true;
+            cancel = true;
+        },
+        &cancel);
+    ASSERT_FALSE(result.ok()) << "a raised flag gives no result, not a partial one";
+    EXPECT_TRUE(isCancelled(Error{result.error()})) << result.error();
+    EXPECT_EQ(callsAfterRaise, 0) << "the run stops before the next direction pair";
+
+    // The same flag, lowered: the evaluation runs through and equals one without a flag.
+    cancel = false;
+    auto withFlag = evaluateMethods(map, options, {}, &cancel);
+    auto without = evaluateMethods(map, options);
+    ASSERT_TRUE(withFlag.ok()) << withFlag.error();
+    ASSERT_TRUE(without.ok()) << without.error();
+    ASSERT_EQ(withFlag->errors.size(), without->errors.size());
+    for (size_t i = 0; i < without->errors.size(); ++i)
+        EXPECT_EQ(withFlag->errors[i].relativeL1, without->errors[i].relativeL1) << "deterministic";
+}
+
+TEST(EvaluateCancel, ProgressIsMonotoneAndEndsAtOne) {
+    const NormalMap map = cancellableMap();
+    std::vector<double> seen;
+    auto result = evaluateMethods(map, cancellableOptions(), [&](double f) { seen.push_back(f); });
+    ASSERT_TRUE(result.ok()) << result.error();
+    ASSERT_FALSE(seen.empty());
+    // One call per power and direction pair: more than one step to show.
+    EXPECT_EQ(seen.size(), cancellableOptions().basePowers.size() * result->directions.size());
+    EXPECT_GT(seen.front(), 0.0);
+    for (size_t i = 1; i < seen.size(); ++i)
+        EXPECT_GE(seen[i], seen[i - 1]) << "step " << i;
+    EXPECT_EQ(seen.back(), 1.0) << "the last step is all of it, exactly";
+}
+
+TEST(EvaluateCancel, ReportProgressEndsAtOneAndCancelDuringTheCostPhaseGivesNoReport) {
+    const NormalMap map = cancellableMap();
+    EvaluationReportOptions options;
+    options.evaluate = cancellableOptions();
+    options.bakeRuns = 1;
+    std::vector<double> seen;
+    auto report = buildEvaluationReport(map, options, [&](double f) { seen.push_back(f); });
+    ASSERT_TRUE(report.ok()) << report.error();
+    ASSERT_FALSE(seen.empty());
+    for (size_t i = 1; i < seen.size(); ++i)
+        EXPECT_GE(seen[i], seen[i - 1]) << "step " << i;
+    EXPECT_EQ(seen.back(), 1.0);
+
+    // The evaluation reports up to 0.8 of the whole; past it the bakes and shading timings run.
+    constexpr double kEvaluationShare = 0.8;
+    std::atomic<bool> cancel{false};
+    bool sawCostPhase = false;
+    auto cancelled = buildEvaluationReport(
+        map, options,
+        [&](double f) {
+            if (f > kEvaluationShare) {
+                sawCostPhase = true;
+                cancel = true;
+            }
+        },
+        &cancel);
+    EXPECT_TRUE(sawCostPhase) << "the cost phase reports progress";
+    ASSERT_FALSE(cancelled.ok()) << "a flag raised after the first method's cost gives no report";
+    EXPECT_TRUE(isCancelled(Error{cancelled.error()})) << cancelled.error();
+}
+
+TEST(EvaluateCancel, ApproximationsStopOnARaisedFlag) {
+    const std::atomic<bool> cancel{true};
+    ApproximationOptions options;
+    options.quick = true;
+    auto measured = measureApproximations(options, &cancel);
+    ASSERT_FALSE(measured.ok());
+    EXPECT_TRUE(isCancelled(Error{measured.error()})) << measured.error();
 }

@@ -22,16 +22,22 @@
 
 #include <QAction>
 #include <QApplication>
+#include <QElapsedTimer>
 #include <QImage>
 #include <QLineSeries>
 #include <QMenu>
 #include <QMenuBar>
+#include <QPointer>
+#include <QProgressBar>
+#include <QPushButton>
 #include <QScatterSeries>
 #include <QSet>
 #include <QSignalSpy>
 #include <QTest>
+#include <QThread>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace burnish::studio {
@@ -312,6 +318,132 @@ TEST(ErrorCostChart, WorkerShowsOnePointPerMethodAndNaiveIsWorseThanLean) {
     // Storage as the cost axis: LEAN stores more per texel than the naive normal map.
     chart.setCostAxis(ErrorCostChart::CostAxis::BytesPerTexel);
     EXPECT_GT(chart.methodSeries(Method::Lean)->at(0).x(), chart.methodSeries(Method::Naive)->at(0).x());
+}
+
+/// Loads the hammered sample at `size`² into `doc` through an 8-bit PNG written in `dir`.
+void loadHammered(MaterialDocument& doc, const test::TempDir& dir, int size) {
+    const NormalMap sample = makeSampleNormalMap(SampleMapKind::Hammered, size);
+    QImage png(size, size, QImage::Format_RGB888);
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const glm::vec3 nrm = sample.at(x, y);
+            auto byte = [](float c) { return int(std::lround((c * 0.5f + 0.5f) * 255.0f)); };
+            png.setPixel(x, y, qRgb(byte(nrm.x), byte(nrm.y), byte(nrm.z)));
+        }
+    const QString path = QString::fromStdString((dir / "hammered.png").string());
+    ASSERT_TRUE(png.save(path));
+    ASSERT_TRUE(doc.loadMap(MapSlot::Normal, path));
+    ASSERT_EQ(doc.maps().normal->width, size);
+}
+
+// The document's default normal map (the 512² sample) evaluates for seconds: long enough to act
+// while it runs. Waiting for its first visible progress:
+constexpr int kFirstProgressTimeoutMs = 60000;
+
+/// Processes events until the progress bar shows more than 0% (the worker is past its first steps).
+bool waitForProgress(ErrorCostChart& chart) {
+    QElapsedTimer timer;
+    timer.start();
+    while (chart.progressBar()->value() <= 0 && timer.elapsed() < kFirstProgressTimeoutMs)
+        QTest::qWait(10);
+    return chart.progressBar()->value() > 0;
+}
+
+TEST(ErrorCostChart, ProgressBarShowsWhileRunningAndReaches100) {
+    test::TempDir dir;
+    MaterialDocument doc;
+    loadHammered(doc, dir, kSmallMap);
+    ErrorCostChart chart(&doc);
+    QProgressBar* bar = chart.progressBar();
+    ASSERT_NE(bar, nullptr);
+    EXPECT_FALSE(bar->isVisibleTo(&chart)) << "no bar before anything runs";
+    QList<int> values;
+    QObject::connect(bar, &QProgressBar::valueChanged, [&](int v) { values << v; });
+    QSignalSpy updated(&chart, &ErrorCostChart::methodsUpdated);
+    chart.evaluateNow();
+    EXPECT_TRUE(bar->isVisibleTo(&chart)) << "the bar shows in the tab while the worker runs";
+    EXPECT_TRUE(chart.cancelButton()->isVisibleTo(&chart));
+    ASSERT_TRUE(updated.wait(kWorkerTimeoutMs));
+    ASSERT_NE(chart.report(), nullptr) << chart.statusText().toStdString();
+    EXPECT_EQ(bar->value(), bar->maximum()) << "a finished run ends at 100%";
+    EXPECT_EQ(bar->maximum(), 100);
+    ASSERT_FALSE(values.isEmpty());
+    // 0 at the start, then steps in between (the evaluation reports each direction pair), then 100.
+    EXPECT_TRUE(std::any_of(values.begin(), values.end(), [](int v) { return v > 0 && v < 100; }))
+        << "the bar moves while the worker runs, not only at its end";
+    EXPECT_TRUE(std::is_sorted(values.begin() + 1, values.end())) << "progress never goes back";
+    EXPECT_FALSE(bar->isVisibleTo(&chart)) << "the bar goes when the run is done";
+    EXPECT_FALSE(chart.cancelButton()->isVisibleTo(&chart));
+}
+
+TEST(ErrorCostChart, CancelStopsALongRunWithACancelledStateAndNoPoints) {
+    MaterialDocument doc; // the 512² sample
+    ErrorCostChart chart(&doc);
+    QSignalSpy updated(&chart, &ErrorCostChart::methodsUpdated);
+    chart.evaluateNow();
+    ASSERT_TRUE(waitForProgress(chart)) << chart.statusText().toStdString();
+    const int atCancel = chart.progressBar()->value();
+    EXPECT_LT(atCancel, 100) << "cancelled before the end";
+    ASSERT_TRUE(chart.cancelButton()->isVisibleTo(&chart));
+    ASSERT_TRUE(chart.cancelButton()->isEnabled());
+    QTest::mouseClick(chart.cancelButton(), Qt::LeftButton);
+    ASSERT_TRUE(updated.wait(kWorkerTimeoutMs));
+    EXPECT_FALSE(chart.evaluating());
+    EXPECT_EQ(chart.report(), nullptr) << "a cancelled run leaves no report";
+    EXPECT_TRUE(chart.statusText().contains("cancelled")) << chart.statusText().toStdString();
+    for (Method method : allMethods())
+        EXPECT_EQ(chart.methodSeries(method), nullptr) << methodName(method) << " has no point";
+    EXPECT_FALSE(chart.progressBar()->isVisibleTo(&chart));
+    EXPECT_FALSE(chart.cancelButton()->isVisibleTo(&chart));
+}
+
+TEST(ErrorCostChart, ANewerEvaluationReplacesTheRunningOne) {
+    test::TempDir dir;
+    MaterialDocument doc;
+    loadHammered(doc, dir, kSmallMap);
+    ErrorCostChart chart(&doc);
+    QSignalSpy updated(&chart, &ErrorCostChart::methodsUpdated);
+    chart.evaluateNow();
+    chart.evaluateNow();
+    ASSERT_TRUE(updated.wait(kWorkerTimeoutMs));
+    ASSERT_NE(chart.report(), nullptr) << chart.statusText().toStdString();
+    // Let the first worker's own result (cancelled or finished) arrive: it is dropped, not shown.
+    constexpr int kSettleMs = 500;
+    QTest::qWait(kSettleMs);
+    EXPECT_EQ(updated.count(), 1) << "only the newer evaluation reports";
+    EXPECT_FALSE(chart.evaluating());
+}
+
+TEST(ErrorCostChart, DestroyingTheChartMidRunJoinsItsWorker) {
+    MaterialDocument doc; // the 512² sample: seconds of work left when the chart goes
+    auto* chart = new ErrorCostChart(&doc);
+    chart->evaluateNow();
+    ASSERT_TRUE(waitForProgress(*chart)) << chart->statusText().toStdString();
+    const QList<QThread*> threads = chart->findChildren<QThread*>();
+    ASSERT_EQ(threads.size(), 1) << "one worker runs";
+    QPointer<QThread> worker = threads.front();
+    ASSERT_TRUE(worker->isRunning());
+    std::atomic<bool> finished{false};
+    QObject::connect(
+        worker.data(), &QThread::finished, worker.data(), [&finished] { finished = true; },
+        Qt::DirectConnection);
+    delete chart; // a running QThread destroyed with its parent would abort the process
+    EXPECT_TRUE(finished) << "the worker ended before the chart was gone";
+    EXPECT_TRUE(worker.isNull()) << "and its thread object went with the chart";
+    // The worker's queued results find no chart: nothing happens.
+    QApplication::processEvents();
+}
+
+TEST(ErrorCostChart, CancellingTheApproximationsShowsCancelled) {
+    MaterialDocument doc;
+    ErrorCostChart chart(&doc);
+    QSignalSpy updated(&chart, &ErrorCostChart::approximationsUpdated);
+    chart.measureApproximationsNow();
+    ASSERT_TRUE(chart.measuring());
+    chart.cancelApproximations();
+    ASSERT_TRUE(updated.wait(kWorkerTimeoutMs));
+    EXPECT_FALSE(chart.measuring());
+    EXPECT_TRUE(chart.approximationSeries().isEmpty()) << "a cancelled measurement shows no points";
 }
 
 TEST(ChartsPanel, TheMainWindowHasAChartsDockWithAViewToggle) {

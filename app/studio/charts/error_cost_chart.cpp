@@ -8,6 +8,7 @@
 #include <QLabel>
 #include <QLogValueAxis>
 #include <QPointer>
+#include <QProgressBar>
 #include <QPushButton>
 #include <QScatterSeries>
 #include <QSpinBox>
@@ -105,9 +106,20 @@ ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
     m_methodsView->setMinimumSize(420, 280);
     m_status = new QLabel(methods);
     m_status->setWordWrap(true);
+    m_progress = new QProgressBar(methods);
+    m_progress->setObjectName("errorCostProgress");
+    m_progress->setRange(0, 100);
+    m_progress->hide();
+    m_cancelButton = new QPushButton("Cancel", methods);
+    m_cancelButton->setObjectName("errorCostCancel");
+    m_cancelButton->hide();
+    auto* progressRow = new QHBoxLayout;
+    progressRow->addWidget(m_progress, 1);
+    progressRow->addWidget(m_cancelButton);
     auto* methodsLayout = new QVBoxLayout(methods);
     methodsLayout->addLayout(controls);
     methodsLayout->addWidget(m_methodsView, 1);
+    methodsLayout->addLayout(progressRow);
     methodsLayout->addWidget(m_status);
     addTab(methods, "Methods vs ground truth");
 
@@ -119,8 +131,18 @@ ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
         new QLabel("Measures every approximation of core against its exact form (quick mode).", approx);
     m_approxStatus->setWordWrap(true);
     m_measureButton = new QPushButton("Measure", approx);
+    // measureApproximations reports no fraction done: a busy bar while it runs.
+    m_approxProgress = new QProgressBar(approx);
+    m_approxProgress->setObjectName("approximationsProgress");
+    m_approxProgress->setRange(0, 0);
+    m_approxProgress->hide();
+    m_approxCancelButton = new QPushButton("Cancel", approx);
+    m_approxCancelButton->setObjectName("approximationsCancel");
+    m_approxCancelButton->hide();
     auto* approxControls = new QHBoxLayout;
     approxControls->addWidget(m_approxStatus, 1);
+    approxControls->addWidget(m_approxProgress);
+    approxControls->addWidget(m_approxCancelButton);
     approxControls->addWidget(m_measureButton);
     auto* approxLayout = new QVBoxLayout(approx);
     approxLayout->addWidget(m_approxView, 1);
@@ -141,6 +163,12 @@ ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
         showMethods();
     });
     connect(rerun, &QPushButton::clicked, this, &ErrorCostChart::evaluateNow);
+    connect(m_cancelButton, &QPushButton::clicked, this, &ErrorCostChart::cancelEvaluation);
+    connect(m_approxCancelButton, &QPushButton::clicked, this, &ErrorCostChart::cancelApproximations);
+    // No worker may outlive the event loop: a window closed while one runs would leave it running
+    // at exit if the chart were not destroyed before the application object.
+    connect(QCoreApplication::instance(), &QCoreApplication::aboutToQuit, this,
+            &ErrorCostChart::cancelAndJoinWorkers);
     connect(m_measureButton, &QPushButton::clicked, this, &ErrorCostChart::measureApproximationsNow);
     connect(this, &QTabWidget::currentChanged, this, [this](int tab) {
         if (tab == 1 && !m_approximations && !m_measuring) measureApproximationsNow();
@@ -149,7 +177,19 @@ ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
     showApproximations();
 }
 
-ErrorCostChart::~ErrorCostChart() = default;
+ErrorCostChart::~ErrorCostChart() {
+    cancelAndJoinWorkers();
+}
+
+void ErrorCostChart::cancelAndJoinWorkers() {
+    for (const Worker& w : m_workers)
+        w.cancel->store(true);
+    // Each worker stops at its next check (one direction pair of the evaluation, one approximation
+    // entry); its queued result finds the chart gone or a newer generation and is dropped.
+    for (const Worker& w : m_workers)
+        if (w.thread) w.thread->wait();
+    m_workers.clear();
+}
 
 QString ErrorCostChart::evaluationKey() const {
     return QString("%1 %2").arg(quintptr(m_doc->maps().normal.get())).arg(m_doc->power(), 0, 'g', 17);
@@ -167,12 +207,11 @@ void ErrorCostChart::showEvent(QShowEvent* event) {
 
 void ErrorCostChart::evaluateNow() {
     m_debounce->stop();
-    if (m_evaluating) {
-        m_restartWhenDone = true;
-        return;
-    }
+    // A newer evaluation replaces a running one: the old stops at its next step, its result is
+    // dropped (older generation).
+    if (m_evaluation.cancel) m_evaluation.cancel->store(true);
     m_evaluating = true;
-    m_restartWhenDone = false;
+    const quint64 generation = ++m_evaluationGeneration;
     m_runningKey = evaluationKey();
     std::shared_ptr<const NormalMap> map = m_doc->maps().normal;
     EvaluationReportOptions options;
@@ -187,78 +226,134 @@ void ErrorCostChart::evaluateNow() {
                           .arg(map->width)
                           .arg(map->height)
                           .arg(m_doc->power(), 0, 'g', 4));
+    m_progress->setValue(0);
+    m_progress->show();
+    m_cancelButton->setEnabled(true);
+    m_cancelButton->show();
     QPointer<ErrorCostChart> self(this);
     const QString key = m_runningKey;
-    QThread* worker = QThread::create([self, map, options, key] {
+    auto cancel = std::make_shared<std::atomic<bool>>(false);
+    QThread* worker = QThread::create([self, map, options, key, generation, cancel] {
         double lastShown = -1.0;
         auto progress = [&](double f) {
-            if (f - lastShown < kProgressStep) return;
+            if (f - lastShown < kProgressStep && f < 1.0) return;
             lastShown = f;
             QMetaObject::invokeMethod(
                 QCoreApplication::instance(),
-                [self, f, key] {
-                    if (self && self->m_evaluating && self->m_runningKey == key)
-                        self->m_status->setText(QString("evaluating… %1%").arg(int(std::lround(100.0 * f))));
+                [self, f, generation] {
+                    if (!self || self->m_evaluationGeneration != generation || !self->m_evaluating) return;
+                    const int percent = int(std::lround(100.0 * f));
+                    self->m_progress->setValue(std::max(self->m_progress->value(), percent));
+                    self->m_status->setText(QString("evaluating… %1%").arg(percent));
                 },
                 Qt::QueuedConnection);
         };
-        auto built = buildEvaluationReport(*map, options, progress);
+        auto built = buildEvaluationReport(*map, options, progress, cancel.get());
         std::shared_ptr<const EvaluationReport> report;
         QString error;
-        if (built)
+        bool cancelled = false;
+        if (built) {
             report = std::make_shared<const EvaluationReport>(std::move(built.value()));
-        else
+        } else {
             error = QString::fromStdString(built.error());
+            cancelled = isCancelled(Error{built.error()});
+        }
         QMetaObject::invokeMethod(
             QCoreApplication::instance(),
-            [self, report, error, key] {
-                if (!self) return;
+            [self, report, error, key, generation, cancelled] {
+                // Gone, or replaced by a newer evaluation: that one reports.
+                if (!self || self->m_evaluationGeneration != generation) return;
                 self->m_evaluating = false;
+                self->m_evaluation = {};
                 self->m_report = report;
                 self->m_evaluatedKey = key;
-                if (!report) self->m_status->setText("evaluation failed: " + error);
+                self->m_cancelButton->hide();
+                if (report) self->m_progress->setValue(100);
+                self->m_progress->hide();
+                if (cancelled)
+                    self->m_status->setText("evaluation cancelled: press Evaluate now to run it again");
+                else if (!report)
+                    self->m_status->setText("evaluation failed: " + error);
                 self->showMethods();
-                if (self->m_restartWhenDone || (self->isVisible() && self->evaluationKey() != key))
-                    self->evaluateNow();
+                if (!cancelled && self->isVisible() && self->evaluationKey() != key) self->evaluateNow();
                 emit self->methodsUpdated();
             },
             Qt::QueuedConnection);
     });
-    connect(worker, &QThread::finished, worker, &QObject::deleteLater);
+    worker->setParent(this);
+    m_evaluation = {worker, cancel};
+    m_workers.append(m_evaluation);
+    connect(worker, &QThread::finished, this, [this, worker] {
+        m_workers.removeIf([worker](const Worker& w) { return w.thread == worker; });
+        worker->deleteLater();
+    });
     worker->start();
+}
+
+void ErrorCostChart::cancelEvaluation() {
+    if (!m_evaluating || !m_evaluation.cancel) return;
+    m_evaluation.cancel->store(true);
+    m_cancelButton->setEnabled(false);
+    m_status->setText("cancelling…");
 }
 
 void ErrorCostChart::measureApproximationsNow() {
     if (m_measuring) return;
     m_measuring = true;
     m_measureButton->setEnabled(false);
+    m_approxProgress->show();
+    m_approxCancelButton->setEnabled(true);
+    m_approxCancelButton->show();
     m_approxStatus->setText("measuring every approximation (quick mode, a few seconds)…");
     QPointer<ErrorCostChart> self(this);
-    QThread* worker = QThread::create([self] {
+    auto cancel = std::make_shared<std::atomic<bool>>(false);
+    QThread* worker = QThread::create([self, cancel] {
         ApproximationOptions options;
         options.quick = true;
-        auto measured = measureApproximations(options);
+        auto measured = measureApproximations(options, cancel.get());
         std::shared_ptr<const ApproximationReport> report;
         QString error;
-        if (measured)
+        bool cancelled = false;
+        if (measured) {
             report = std::make_shared<const ApproximationReport>(std::move(measured.value()));
-        else
+        } else {
             error = QString::fromStdString(measured.error());
+            cancelled = isCancelled(Error{measured.error()});
+        }
         QMetaObject::invokeMethod(
             QCoreApplication::instance(),
-            [self, report, error] {
+            [self, report, error, cancelled] {
                 if (!self) return;
                 self->m_measuring = false;
+                self->m_approximation = {};
                 self->m_measureButton->setEnabled(true);
+                self->m_approxProgress->hide();
+                self->m_approxCancelButton->hide();
                 self->m_approximations = report;
-                if (!report) self->m_approxStatus->setText("measurement failed: " + error);
+                if (cancelled)
+                    self->m_approxStatus->setText("measurement cancelled: press Measure to run it again");
+                else if (!report)
+                    self->m_approxStatus->setText("measurement failed: " + error);
                 self->showApproximations();
                 emit self->approximationsUpdated();
             },
             Qt::QueuedConnection);
     });
-    connect(worker, &QThread::finished, worker, &QObject::deleteLater);
+    worker->setParent(this);
+    m_approximation = {worker, cancel};
+    m_workers.append(m_approximation);
+    connect(worker, &QThread::finished, this, [this, worker] {
+        m_workers.removeIf([worker](const Worker& w) { return w.thread == worker; });
+        worker->deleteLater();
+    });
     worker->start();
+}
+
+void ErrorCostChart::cancelApproximations() {
+    if (!m_measuring || !m_approximation.cancel) return;
+    m_approximation.cancel->store(true);
+    m_approxCancelButton->setEnabled(false);
+    m_approxStatus->setText("cancelling…");
 }
 
 void ErrorCostChart::setMip(int mip) {

@@ -11,17 +11,22 @@
 #include <burnish/core/approximations.h>
 #include <burnish/core/evaluate_report.h>
 
+#include <QList>
+#include <QPointer>
 #include <QTabWidget>
 
+#include <atomic>
 #include <memory>
 #include <optional>
 
 class QChartView;
 class QComboBox;
 class QLabel;
+class QProgressBar;
 class QPushButton;
 class QScatterSeries;
 class QSpinBox;
+class QThread;
 class QTimer;
 
 namespace burnish::studio {
@@ -34,11 +39,17 @@ public:
     explicit ErrorCostChart(MaterialDocument* doc, QWidget* parent = nullptr);
     ~ErrorCostChart() override;
 
-    /// Starts the method evaluation for the current document now (a running one finishes first and
-    /// its result is dropped). The chart also does this by itself, debounced, while it is visible.
+    /// Starts the method evaluation for the current document now (a running one is cancelled and
+    /// its result dropped). The chart also does this by itself, debounced, while it is visible.
+    /// While it runs, the tab shows a progress bar and a Cancel button.
     void evaluateNow();
+    /// Cancels the running method evaluation: it stops at its next step, and the tab then shows
+    /// "cancelled" and no points. Nothing happens when none runs.
+    void cancelEvaluation();
     /// Starts the quick approximations report (the chart does this when its tab is first shown).
     void measureApproximationsNow();
+    /// Cancels the running approximations measurement (it stops before its next entry).
+    void cancelApproximations();
     bool evaluating() const { return m_evaluating; }
     bool measuring() const { return m_measuring; }
 
@@ -54,6 +65,9 @@ public:
     const EvaluationReport* report() const { return m_report.get(); }
     /// The status line under the methods chart (progress, errors, what was measured).
     QString statusText() const;
+    /// The methods tab's progress bar (0..100; shown while an evaluation runs) and Cancel button.
+    QProgressBar* progressBar() const { return m_progress; }
+    QPushButton* cancelButton() const { return m_cancelButton; }
 
 signals:
     /// A method evaluation finished (successfully or not; statusText() says).
@@ -70,6 +84,14 @@ private:
     void onDocumentChanged();
     void showMethods();
     void showApproximations();
+    /// Raises every worker's cancel flag and waits for each thread to end (destruction, app exit).
+    void cancelAndJoinWorkers();
+
+    /// A worker thread with its cancel flag; the thread is a child of the chart.
+    struct Worker {
+        QPointer<QThread> thread;
+        std::shared_ptr<std::atomic<bool>> cancel;
+    };
 
     MaterialDocument* m_doc;
     QChartView* m_methodsView;
@@ -79,6 +101,10 @@ private:
     QLabel* m_status;
     QLabel* m_approxStatus;
     QPushButton* m_measureButton;
+    QProgressBar* m_progress;
+    QPushButton* m_cancelButton;
+    QProgressBar* m_approxProgress;
+    QPushButton* m_approxCancelButton;
     QTimer* m_debounce;
     std::shared_ptr<const EvaluationReport> m_report;
     std::shared_ptr<const ApproximationReport> m_approximations;
@@ -86,7 +112,11 @@ private:
     QString m_runningKey;
     bool m_evaluating = false;
     bool m_measuring = false;
-    bool m_restartWhenDone = false;
+    /// Increases with every evaluation started: a result of an older one is dropped.
+    quint64 m_evaluationGeneration = 0;
+    Worker m_evaluation;     // the current evaluation (thread null when none runs)
+    Worker m_approximation;  // the current approximations measurement
+    QList<Worker> m_workers; // every thread started and not yet ended, cancelled ones included
     CostAxis m_costAxis = CostAxis::NsPerLobe;
 };
 

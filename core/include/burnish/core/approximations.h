@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -152,8 +153,11 @@ struct ApproximationReport {
     std::vector<ApproximationEntry> entries;
 };
 
-/// Measures every entry. Fails only if a measurement produced a non-finite number (a bug).
-Result<ApproximationReport> measureApproximations(const ApproximationOptions& options);
+/// Measures every entry. Fails if a measurement produced a non-finite number (a bug), or when
+/// `cancel` (if set, raised from any thread; read before each entry's error grid and timing) is
+/// raised: then the Error's message is "cancelled" (kCancelledMessage of evaluate.h) and no report.
+Result<ApproximationReport> measureApproximations(const ApproximationOptions& options,
+                                                  const std::atomic<bool>* cancel = nullptr);
 
 /// Marks each entry's Pareto flag among the entries of its group with the same exact form (cost:
 /// approx ns/eval; error: headline metric). Alternatives to different references never compete.

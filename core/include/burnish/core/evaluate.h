@@ -27,11 +27,20 @@
 
 #include <glm/vec3.hpp>
 
+#include <atomic>
 #include <functional>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 namespace burnish {
+
+/// The message of the Error a cancelled evaluation or measurement returns (and nothing else).
+inline constexpr std::string_view kCancelledMessage = "cancelled";
+/// Whether an error is the one a cancelled run returns.
+inline bool isCancelled(const Error& error) {
+    return error.message == kCancelledMessage;
+}
 
 struct EvaluateOptions {
     std::vector<double> basePowers{512.0};
@@ -109,9 +118,12 @@ double methodValue(const TexelLobe& lobe, const DirectionPair& d);
 
 /// Errors of every requested method, power and mip. Fails on bad options (no directions left,
 /// empty power list, non-positive power, mip range outside the map, texelPowers of the wrong size
-/// or with a power outside (0, 1e9]). `progress` (if set) is
-/// called with the fraction done.
+/// or with a power outside (0, 1e9]). `progress` (if set) is called with the fraction done,
+/// non-decreasing, ending at exactly 1 on success. `cancel` (if set) may be raised from another
+/// thread: it is read before the work starts and between direction pairs and mips, and a raised
+/// flag returns the Error kCancelledMessage and no partial result.
 Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOptions& options,
-                                         const std::function<void(double)>& progress = {});
+                                         const std::function<void(double)>& progress = {},
+                                         const std::atomic<bool>* cancel = nullptr);
 
 } // namespace burnish

@@ -47,9 +47,13 @@ struct EvaluationReportOptions {
     std::string inputName;
 };
 
-/// Runs the evaluation and the cost measurements.
+/// Runs the evaluation and the cost measurements. `progress` (if set): the fraction done,
+/// non-decreasing, ending at 1. `cancel` (if set, raised from any thread) is checked as in
+/// evaluateMethods and between the methods' bake runs: a raised flag returns the Error
+/// kCancelledMessage (evaluate.h) and no report.
 Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const EvaluationReportOptions& options,
-                                               const std::function<void(double)>& progress = {});
+                                               const std::function<void(double)>& progress = {},
+                                               const std::atomic<bool>* cancel = nullptr);
 
 std::string evaluationMarkdown(const EvaluationReport& report);
 nlohmann::json evaluationJson(const EvaluationReport& report);

@@ -135,7 +135,16 @@ MainWindow::MainWindow(QWidget* parent)
     updateTitle();
 }
 
-MainWindow::~MainWindow() = default;
+MainWindow::~MainWindow() {
+    // The document outlives every view of it. Left to ~QWidget, the document (the first child)
+    // would die first: its undo stack emits cleanChanged into this half-destroyed window, and the
+    // panels, viewport and charts that hold it would outlive it. So: stop listening, delete the
+    // views, then the document.
+    m_doc->undoStack()->disconnect(this);
+    m_doc->disconnect(this);
+    qDeleteAll(findChildren<QWidget*>(QString(), Qt::FindDirectChildrenOnly));
+    delete m_doc;
+}
 
 void MainWindow::buildMenus() {
     QMenu* file = menuBar()->addMenu("&File");

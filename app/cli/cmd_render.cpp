@@ -294,18 +294,8 @@ Status writeImage(const fs::path& path, int width, int height, const std::vector
     for (size_t p = 0; p < rgb.size() / 3; ++p)
         for (size_t c = 0; c < 3; ++c)
             rgb[3 * p + c] = exr ? rgba[4 * p + c] * scale : std::clamp(rgba[4 * p + c], 0.0f, 1.0f);
-    const fs::path tmp = temporaryPathFor(path);
-    auto out = OIIO::ImageOutput::create(path.string()); // the plugin chosen by the real name
-    if (!out) return Error{"cannot write '" + path.string() + "': " + OIIO::geterror()};
-    OIIO::ImageSpec spec(width, height, 3, exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-    if (exr) spec.attribute("compression", "zip");
-    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, rgb.data()) ||
-        !out->close()) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        return Error{"cannot write '" + path.string() + "': " + out->geterror()};
-    }
-    return commitTemporary(tmp, path);
+    return writeImageAtomic(path, width, height, 3, rgb,
+                            {exr ? StoredType::Float : StoredType::UInt8, {}, {}});
 }
 
 Result<std::unique_ptr<GlContext>> makeContext(const std::string& gl) {

@@ -1,5 +1,7 @@
 #include <burnish/core/environment.h>
 
+#include <burnish/core/image.h>
+
 #include <burnish/core/atomic_file.h>
 #include <burnish/core/numeric.h>
 
@@ -986,23 +988,10 @@ Result<std::vector<std::string>> writeCubeExrFaces(const CubeMap& cube, const fs
             std::vector<float> values = level.faces[size_t(f)];
             for (float& v : values)
                 v = std::isfinite(v) ? std::clamp(v, 0.0f, kHalfMax) : 0.0f; // half storage: see toHalfBits
-            const fs::path tmp = temporaryPathFor(path);
-            auto out = OIIO::ImageOutput::create(path.string());
-            if (!out) return Error{"cannot write '" + path.string() + "': " + OIIO::geterror()};
-            OIIO::ImageSpec spec(level.size, level.size, 3, OIIO::TypeDesc::HALF);
-            spec.attribute("compression", "zip");
-            // No timestamp, so the bytes depend on the data only.
-            spec.attribute("DateTime", "");
-            if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, values.data()) ||
-                !out->close()) {
-                const std::string why = out->geterror();
-                out.reset();
-                std::error_code ec;
-                fs::remove(tmp, ec);
-                return Error{"cannot write '" + path.string() + "': " + why};
-            }
-            out.reset();
-            if (const Status s = commitTemporary(tmp, path); !s) return Error{s.error()};
+            if (const Status s =
+                    writeImageAtomic(path, level.size, level.size, 3, values, {StoredType::Half, {}, {}});
+                !s)
+                return Error{s.error()};
             names.push_back(name);
         }
     }

@@ -1,5 +1,7 @@
 #include <burnish/core/evaluate_report.h>
 
+#include <burnish/core/image.h>
+
 #include <burnish/core/atomic_file.h>
 #include <burnish/core/bake.h>
 #include <burnish/core/plot.h>
@@ -340,21 +342,7 @@ PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& r) {
 }
 
 Status writeFloatExr(const fs::path& path, int width, int height, const std::vector<float>& values) {
-    if (values.size() != size_t(width) * size_t(height))
-        return Error{"error map size does not match its extent"};
-    const fs::path tmp = temporaryPathFor(path);
-    auto out = OIIO::ImageOutput::create(path.string()); // plugin chosen by the real name
-    if (!out) return Error{"cannot write '" + path.string() + "': " + OIIO::geterror()};
-    OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
-    spec.channelnames = {"Y"};
-    spec.attribute("compression", "zip");
-    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, values.data()) ||
-        !out->close()) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        return Error{"cannot write '" + path.string() + "': " + out->geterror()};
-    }
-    return commitTemporary(tmp, path);
+    return writeImageAtomic(path, width, height, 1, values, {StoredType::Float, {"Y"}, {}});
 }
 
 Status writeEvaluationReport(const EvaluationReport& r, const fs::path& dir) {

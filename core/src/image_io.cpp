@@ -1,5 +1,7 @@
 #include <burnish/core/image.h>
 
+#include <burnish/core/atomic_file.h>
+
 #include <OpenImageIO/imageio.h>
 
 #include <system_error>
@@ -60,6 +62,38 @@ Result<Image> readImage(const fs::path& path) {
     }
     in->close();
     return image;
+}
+
+Status writeImageAtomic(const fs::path& path, int width, int height, int channels,
+                        const std::vector<float>& pixels, const ImageWriteOptions& options) {
+    if (width < 1 || height < 1 || channels < 1 ||
+        pixels.size() != size_t(width) * size_t(height) * size_t(channels))
+        return Error{"cannot write '" + path.string() + "': the pixels do not match a " +
+                     std::to_string(width) + "x" + std::to_string(height) + "x" + std::to_string(channels) +
+                     " image"};
+    auto out = OIIO::ImageOutput::create(path.string()); // the plugin chosen by the real name
+    if (!out) return Error{"cannot write '" + path.string() + "': " + OIIO::geterror()};
+    const OIIO::TypeDesc type = options.type == StoredType::UInt8  ? OIIO::TypeDesc::UINT8
+                                : options.type == StoredType::Half ? OIIO::TypeDesc::HALF
+                                                                   : OIIO::TypeDesc::FLOAT;
+    OIIO::ImageSpec spec(width, height, channels, type);
+    if (!options.channelNames.empty()) spec.channelnames = options.channelNames;
+    if (std::string(out->format_name()) == "openexr") spec.attribute("compression", "zip");
+    // No timestamp: OpenImageIO stamps the current time unless the attribute is present and empty.
+    spec.attribute("DateTime", "");
+    for (const auto& [name, value] : options.attributes)
+        spec.attribute(name, value);
+    const fs::path tmp = temporaryPathFor(path);
+    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) ||
+        !out->close()) {
+        const std::string why = out->geterror();
+        out.reset();
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        return Error{"cannot write '" + path.string() + "': " + why};
+    }
+    out.reset();
+    return commitTemporary(tmp, path);
 }
 
 } // namespace burnish

@@ -557,25 +557,10 @@ Status writePaintLayerExr(const PaintLayer& layer, const fs::path& path) {
         interleaved[2 * i] = layer.value[i];
         interleaved[2 * i + 1] = layer.coverage[i];
     }
-    const fs::path tmp = temporaryPathFor(path);
-    auto out = OIIO::ImageOutput::create(path.string()); // the plugin chosen by the real name
-    if (!out) return Error{"cannot write '" + path.string() + "': " + OIIO::geterror()};
-    OIIO::ImageSpec spec(layer.width, layer.height, 2, OIIO::TypeDesc::FLOAT);
-    spec.channelnames = {"value", "coverage"};
-    spec.attribute("compression", "zip");
-    spec.attribute("burnish:layer", std::string(paintLayerName(layer.kind)));
-    // No timestamp, so the bytes depend on the data only.
-    spec.attribute("DateTime", "");
-    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) ||
-        !out->close()) {
-        const std::string why = out->geterror();
-        out.reset();
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        return Error{"cannot write '" + path.string() + "': " + why};
-    }
-    out.reset();
-    return commitTemporary(tmp, path);
+    return writeImageAtomic(path, layer.width, layer.height, 2, interleaved,
+                            {StoredType::Float,
+                             {"value", "coverage"},
+                             {{"burnish:layer", std::string(paintLayerName(layer.kind))}}});
 }
 
 Result<PaintLayer> readPaintLayerExr(const fs::path& path, PaintLayerKind kind, int width, int height) {

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace burnish {
@@ -47,5 +48,22 @@ inline constexpr std::uint64_t kMaxImageTexels = std::uint64_t(1) << 30;
 /// Reads the first subimage's top mip level. Errors name the file and say what is wrong
 /// (missing, unreadable, corrupt or truncated, too large, no channels).
 Result<Image> readImage(const std::filesystem::path& path);
+
+/// How writeImageAtomic stores the channels.
+enum class StoredType { UInt8, Half, Float };
+
+struct ImageWriteOptions {
+    StoredType type = StoredType::Float;
+    std::vector<std::string> channelNames;                       // empty: the format's defaults
+    std::vector<std::pair<std::string, std::string>> attributes; // extra string metadata
+};
+
+/// Writes `pixels` (width·height·channels floats, row-major, top row first) in the format the
+/// path's extension names, through a temporary file renamed over the target: readers never see a
+/// partial file. UInt8 values are clamped to [0, 1] and rounded by OpenImageIO. EXR files are
+/// zip-compressed; no file gets a timestamp, so its bytes depend on the data only. Errors: a
+/// pixel count that does not match, an unknown extension, a failed write or rename.
+Status writeImageAtomic(const std::filesystem::path& path, int width, int height, int channels,
+                        const std::vector<float>& pixels, const ImageWriteOptions& options = {});
 
 } // namespace burnish

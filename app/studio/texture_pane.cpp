@@ -128,7 +128,8 @@ void TexturePane::refresh() {
     case TextureMode::Gloss:
         if (const auto authored = m_doc->authoredGloss()) {
             // What the bake and the viewport read: the painted layers over the gloss map or base gloss.
-            const TextureMip mip{normal.width, normal.height, *authored};
+            const TextureMip mip{normal.width, normal.height,
+                                 TexelVector(authored->begin(), authored->end())};
             m_view->setImage(bakedChannelImage(mip, 1, 0));
             const bool painted = m_doc->paintLayer(PaintLayerKind::Gloss).painted() ||
                                  m_doc->paintLayer(PaintLayerKind::VarianceOffset).painted();
@@ -140,7 +141,8 @@ void TexturePane::refresh() {
                                                            : QString("painted layers over base gloss %1")
                                                                  .arg(m_doc->settings().gloss, 0, 'f', 3)));
         } else if (const auto& gloss = m_doc->maps().gloss) {
-            TextureMip mip{gloss->width, gloss->height, gloss->pixels};
+            TextureMip mip{gloss->width, gloss->height,
+                           TexelVector(gloss->pixels.begin(), gloss->pixels.end())};
             m_view->setImage(bakedChannelImage(mip, gloss->channels, 0));
             m_info->setText(
                 QString("authored gloss map %1×%2 (first channel)").arg(gloss->width).arg(gloss->height));

@@ -136,7 +136,10 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     out.method = options.method;
     auto start = Clock::now();
     const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
-    const NormalPyramid pyramid = NormalPyramid::build(borrowed, options.pyramid);
+    // Only the moments the method reads: the rest are most of the pyramid's work.
+    PyramidOptions pyramidOptions = options.pyramid;
+    pyramidOptions.moments = momentsNeeded(options.method);
+    const NormalPyramid pyramid = NormalPyramid::build(borrowed, pyramidOptions);
     std::optional<BaseVariancePyramid> base;
     if (options.authoredGloss) base.emplace(pyramid, *options.authoredGloss, options.encoding);
     out.stats.pyramidSeconds = seconds(start);
@@ -228,8 +231,6 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                         : tex.role == "clean"   ? Role::Clean
                                                 : Role::LeanGloss);
 
-    const bool needsLobe =
-        adjustedGloss || std::find(roles.begin(), roles.end(), Role::LeanGloss) != roles.end();
     // Without a gloss map the stored gloss of the non-adjusting methods is the base power's at
     // every texel: encoded once, with its clamp counts added per texel below.
     const bool constantGloss = !adjustedGloss && !base;
@@ -250,64 +251,97 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
         }
         std::vector<size_t> lowRow(static_cast<size_t>(level.height), 0),
             highRow(static_cast<size_t>(level.height), 0);
-        // Each row is produced from its filtered moments as they stream out of the pyramid.
+        // Each row is produced from its filtered moments as they stream out of the pyramid, one
+        // role at a time, so each inner loop does one texture's arithmetic.
         pyramid.forEachMomentRow(k, [&](int y, const NormalMoments* row) {
-            for (int x = 0; x < level.width; ++x) {
-                const size_t t = size_t(y) * size_t(level.width) + size_t(x);
-                const NormalMoments& m = row[x];
-                const double s = base ? base->power(k, x, y) : options.basePower;
-                // Only the adjusted gloss and compact LEAN read the lobe; the other roles store
-                // moments or the base power directly.
-                const TexelLobe lobe = needsLobe ? methodLobe(method, m, s, options.params) : TexelLobe{};
-                for (size_t r = 0; r < roles.size(); ++r) {
-                    BakedTexture& tex = out.textures[r];
-                    float* px = &tex.mips[size_t(k)].texels[t * size_t(tex.channels)];
-                    switch (roles[r]) {
-                    case Role::Normal: {
-                        const glm::vec3 n = unnormalized ? m.mean : m.meanDirection();
+            const int width = level.width;
+            const size_t first = size_t(y) * size_t(width);
+            // The base power per texel (authored gloss, filtered as variance), or the constant.
+            thread_local std::vector<double> basePowers;
+            basePowers.resize(size_t(width));
+            for (int x = 0; x < width; ++x)
+                basePowers[size_t(x)] = base ? base->power(k, x, y) : options.basePower;
+            // Only the adjusted gloss reads the lobe; the other roles store moments or the base
+            // power directly.
+            thread_local std::vector<double> lobePowers;
+            if (adjustedGloss) {
+                lobePowers.resize(size_t(width));
+                for (int x = 0; x < width; ++x)
+                    lobePowers[size_t(x)] =
+                        methodLobe(method, row[x], basePowers[size_t(x)], options.params).power;
+            }
+            // 1/s per texel for the slope textures; sB and sM are powers of two, so multiplying by
+            // their reciprocals is exact.
+            thread_local std::vector<double> invBase;
+            if (slopeMethod) {
+                invBase.resize(size_t(width));
+                const double invConstant = 1.0 / options.basePower;
+                for (int x = 0; x < width; ++x)
+                    invBase[size_t(x)] = base ? 1.0 / basePowers[size_t(x)] : invConstant;
+            }
+            const double invB2 = 1.0 / (2 * sB), invM = 1.0 / sM, invM2 = 1.0 / (2 * sM);
+            for (size_t r = 0; r < roles.size(); ++r) {
+                BakedTexture& tex = out.textures[r];
+                float* px = &tex.mips[size_t(k)].texels[first * size_t(tex.channels)];
+                switch (roles[r]) {
+                case Role::Normal:
+                    for (int x = 0; x < width; ++x, px += 3) {
+                        const glm::vec3 n = unnormalized ? row[x].mean : row[x].meanDirection();
                         for (int c = 0; c < 3; ++c)
                             px[c] = unit(0.5 * double(n[c]) + 0.5);
+                    }
+                    break;
+                case Role::Gloss:
+                    if (constantGloss) {
+                        std::fill(px, px + width, baseGloss); // the base power's gloss, encoded once above
                         break;
                     }
-                    case Role::Gloss: {
-                        if (constantGloss) {
-                            px[0] = baseGloss; // the base power's gloss, encoded once above
-                            break;
-                        }
-                        const double p = adjustedGloss ? lobe.power : s;
+                    for (int x = 0; x < width; ++x) {
+                        const double p = adjustedGloss ? lobePowers[size_t(x)] : basePowers[size_t(x)];
                         if (p < glossMinPower) ++lowRow[size_t(y)];
                         if (p > glossMaxPower) ++highRow[size_t(y)];
-                        px[0] = unit(options.encoding.value(p));
-                        break;
+                        px[x] = unit(options.encoding.value(p));
                     }
-                    case Role::Toksvig:
-                        px[0] = unit(toksvigFactor(m.lengthNa(), options.params.toksvigMapPower));
-                        break;
-                    case Role::LeanB:
-                    case Role::Clean:
+                    break;
+                case Role::Toksvig:
+                    for (int x = 0; x < width; ++x)
+                        px[x] = unit(toksvigFactor(row[x].lengthNa(), options.params.toksvigMapPower));
+                    break;
+                case Role::LeanB:
+                    for (int x = 0; x < width; ++x, px += 2) {
+                        px[0] = unit(double(row[x].slope.x) * invB2 + 0.5);
+                        px[1] = unit(double(row[x].slope.y) * invB2 + 0.5);
+                    }
+                    break;
+                case Role::Clean:
+                    for (int x = 0; x < width; ++x, px += 3) {
+                        const NormalMoments& m = row[x];
                         px[0] = unit(double(m.slope.x) / (2 * sB) + 0.5);
                         px[1] = unit(double(m.slope.y) / (2 * sB) + 0.5);
-                        if (roles[r] == Role::Clean) {
-                            const auto M = m.slopeSecondMoments();
-                            px[2] = unit((0.5 * (double(M[0]) + double(M[1])) + 1.0 / s) / sM);
-                        }
-                        break;
-                    case Role::LeanM: {
                         const auto M = m.slopeSecondMoments();
-                        px[0] = unit((double(M[0]) + 1.0 / s) / sM);
-                        px[1] = unit((double(M[1]) + 1.0 / s) / sM);
-                        px[2] = unit(double(M[2]) / (2 * sM) + 0.5);
-                        break;
+                        px[2] =
+                            unit((0.5 * (double(M[0]) + double(M[1])) + 1.0 / basePowers[size_t(x)]) / sM);
                     }
-                    case Role::LeanGloss: {
-                        const auto& S = lobe.slopeCov;
+                    break;
+                case Role::LeanM:
+                    for (int x = 0; x < width; ++x, px += 3) {
+                        const auto M = row[x].slopeSecondMoments();
+                        const double invS = invBase[size_t(x)];
+                        px[0] = unit((double(M[0]) + invS) * invM);
+                        px[1] = unit((double(M[1]) + invS) * invM);
+                        px[2] = unit(double(M[2]) * invM2 + 0.5);
+                    }
+                    break;
+                case Role::LeanGloss:
+                    for (int x = 0; x < width; ++x, px += 3) {
+                        // The lobe's Σ = slope covariance + I/s, as methodLobe builds it.
+                        const auto S = leanSlopeCovariance(row[x], basePowers[size_t(x)]);
                         px[0] = unit(encodeLogVariance(S[0]));
                         px[1] = unit(encodeLogVariance(S[1]));
                         const double rho = S[2] / std::sqrt(std::max(S[0] * S[1], 1e-300));
                         px[2] = unit(0.5 * std::clamp(rho, -1.0, 1.0) + 0.5);
-                        break;
                     }
-                    }
+                    break;
                 }
             }
         });

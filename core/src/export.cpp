@@ -1,5 +1,7 @@
 #include <burnish/core/export.h>
 
+#include "png_encode.h"
+
 #include <OpenImageIO/imageio.h>
 #include <tbb/parallel_for.h>
 
@@ -18,11 +20,42 @@ using Json = nlohmann::json;
 
 namespace {
 
-/// One file of the plan with its packed values (the file's channels, before any format padding).
+/// Where one channel of a file comes from: a baked texture's channel (flipped for the DirectX
+/// convention), or a constant or parameter value.
+struct Source {
+    const BakedTexture* texture = nullptr;
+    int index = 0;
+    bool flip = false;
+    float value = 0.0f;
+
+    /// The stored value of texel t of level k, in [0, 1].
+    float at(size_t k, size_t t) const {
+        if (!texture) return value;
+        const float v =
+            std::clamp(texture->mips[k].texels[t * size_t(texture->channels) + size_t(index)], 0.0f, 1.0f);
+        return flip ? 1.0f - v : v;
+    }
+};
+
+/// One file of the plan: its channels' sources (before any format padding), read straight from
+/// the bake when each level is encoded, so no packed copy of the bake is ever held.
 struct PlannedFile {
     ExportedFile info;
     int channels = 0;
-    std::vector<TextureMip> mips;
+    std::vector<Source> sources;
+
+    /// Level k's values, `channels` per texel (what the DDS encoder takes).
+    TextureMip packedLevel(size_t k) const {
+        TextureMip mip;
+        mip.width = info.mipSizes[k].first;
+        mip.height = info.mipSizes[k].second;
+        const size_t n = size_t(mip.width) * size_t(mip.height);
+        mip.texels.resize(n * size_t(channels));
+        for (size_t t = 0; t < n; ++t)
+            for (size_t c = 0; c < sources.size(); ++c)
+                mip.texels[t * sources.size() + c] = sources[c].at(k, t);
+        return mip;
+    }
 };
 
 struct Plan {
@@ -94,9 +127,10 @@ Json decodeJson(const ExportedChannel& c, int index) {
 // The file a bake's detail texture goes to, beside the preset's own: every channel as baked.
 constexpr const char* kDetailFileName = "detail";
 
-/// `pack`: also pack every level's values (exportBake); planExport needs only the names.
+/// `withValues`: also check that the bake holds every level's values (exportBake); planExport
+/// needs only the names and sizes (bakeShape gives it textures without values).
 Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
-                      const BakeRecord& record, bool pack) {
+                      const BakeRecord& record, bool withValues) {
     const ExportFormat format = options.format.value_or(preset.format);
     if (options.compression && format != ExportFormat::Dds)
         return Error{"a DDS compression was given but the format is " +
@@ -170,13 +204,7 @@ Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const Export
         }
 
         // Resolve every channel to a baked texture channel, a constant or a parameter value.
-        struct Source {
-            const BakedTexture* texture = nullptr;
-            int index = 0;
-            bool flip = false;
-            float value = 0.0f;
-        };
-        std::vector<Source> sources;
+        std::vector<Source>& sources = pf.sources;
         bool highPrecision = false;
         bool holdsNormal = false;
         for (const auto& ch : file.channels) {
@@ -280,36 +308,16 @@ Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const Export
         for (size_t k = 0; k < levels; ++k)
             pf.info.mipSizes.emplace_back(chain->mips[k].width, chain->mips[k].height);
 
-        // Pack every level.
-        if (pack) {
-            pf.mips.resize(levels);
+        // Every level's values must be there to be encoded.
+        if (withValues)
             for (size_t k = 0; k < levels; ++k) {
-                const int w = chain->mips[k].width;
-                const int h = chain->mips[k].height;
-                const size_t n = size_t(w) * size_t(h);
-                auto& mip = pf.mips[k];
-                mip.width = w;
-                mip.height = h;
-                mip.texels.resize(n * size_t(pf.channels));
-                for (size_t c = 0; c < sources.size(); ++c) {
-                    const Source& s = sources[c];
-                    if (!s.texture) {
-                        for (size_t t = 0; t < n; ++t)
-                            mip.texels[t * sources.size() + c] = s.value;
-                        continue;
-                    }
-                    const TextureMip& in = s.texture->mips[k];
-                    const size_t tc = size_t(s.texture->channels);
-                    if (in.texels.size() != n * tc)
-                        return Error{"the bake's '" + s.texture->role + "' texture has no values at mip " +
+                const size_t n = size_t(pf.info.mipSizes[k].first) * size_t(pf.info.mipSizes[k].second);
+                for (const Source& src : sources)
+                    if (src.texture &&
+                        src.texture->mips[k].texels.size() != n * size_t(src.texture->channels))
+                        return Error{"the bake's '" + src.texture->role + "' texture has no values at mip " +
                                      std::to_string(k)};
-                    for (size_t t = 0; t < n; ++t) {
-                        const float v = std::clamp(in.texels[t * tc + size_t(s.index)], 0.0f, 1.0f);
-                        mip.texels[t * sources.size() + c] = s.flip ? 1.0f - v : v;
-                    }
-                }
             }
-        }
 
         const std::string base = options.stem + "_" + file.name;
         if (onePerMip(format))
@@ -391,17 +399,19 @@ Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const Export
     return plan;
 }
 
-// Round to nearest integer code of an unsigned normalized format.
+// Round to nearest integer code of an unsigned normalized format: x + 0.5 truncated is
+// lround(x) for x >= 0 (x = v·maxCode is exact in double), without lround's call.
 template <class T> T quantize(float v, double maxCode) {
-    return static_cast<T>(std::lround(double(std::clamp(v, 0.0f, 1.0f)) * maxCode));
+    return static_cast<T>(double(std::clamp(v, 0.0f, 1.0f)) * maxCode + 0.5);
 }
 
 // The level's values in the type the format stores (OpenImageIO converts half itself).
+// Uninitialised on resize: pixelsOf writes every value from parallel blocks.
 struct PixelData {
     OIIO::TypeDesc type;
-    std::vector<std::uint8_t> u8;
-    std::vector<std::uint16_t> u16;
-    std::vector<float> f32;
+    std::vector<std::uint8_t, TexelAllocator<std::uint8_t>> u8;
+    std::vector<std::uint16_t, TexelAllocator<std::uint16_t>> u16;
+    TexelVector f32;
     const void* data() const {
         return type == OIIO::TypeDesc::UINT8    ? static_cast<const void*>(u8.data())
                : type == OIIO::TypeDesc::UINT16 ? static_cast<const void*>(u16.data())
@@ -409,30 +419,51 @@ struct PixelData {
     }
 };
 
-PixelData pixelsOf(const TextureMip& mip, int channels, int stored, ExportFormat format) {
+// Level k of the file, read from its sources and converted in parallel blocks of texels; `stored`
+// channels per texel, those past the file's own zero (TGA's blue of a two-channel file).
+PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat format) {
     PixelData p;
-    const size_t n = size_t(mip.width) * size_t(mip.height);
-    auto value = [&](size_t t, int c) {
-        return c < channels ? mip.texels[t * size_t(channels) + size_t(c)] : 0.0f;
+    const size_t n = size_t(file.info.mipSizes[k].first) * size_t(file.info.mipSizes[k].second);
+    const size_t channels = file.sources.size();
+    auto convert = [&](auto* out, auto&& code) {
+        constexpr size_t kBlock = size_t(1) << 14; // texels per task: large enough to amortise
+        tbb::parallel_for(size_t(0), (n + kBlock - 1) / kBlock, [&](size_t block) {
+            const size_t end = std::min(n, (block + 1) * kBlock);
+            for (size_t c = 0; c < size_t(stored); ++c) {
+                auto* o = out + c;
+                if (c >= channels) {
+                    for (size_t t = block * kBlock; t < end; ++t)
+                        o[t * size_t(stored)] = code(0.0f);
+                    continue;
+                }
+                const Source& src = file.sources[c];
+                if (!src.texture) {
+                    for (size_t t = block * kBlock; t < end; ++t)
+                        o[t * size_t(stored)] = code(src.value);
+                    continue;
+                }
+                // A baked channel: strided reads of one texture, clamped and flipped as Source::at.
+                const size_t tc = size_t(src.texture->channels);
+                const float* in = src.texture->mips[k].texels.data() + size_t(src.index);
+                for (size_t t = block * kBlock; t < end; ++t) {
+                    const float v = std::clamp(in[t * tc], 0.0f, 1.0f);
+                    o[t * size_t(stored)] = code(src.flip ? 1.0f - v : v);
+                }
+            }
+        });
     };
     if (format == ExportFormat::Png8 || format == ExportFormat::Tga) {
         p.type = OIIO::TypeDesc::UINT8;
         p.u8.resize(n * size_t(stored));
-        for (size_t t = 0; t < n; ++t)
-            for (int c = 0; c < stored; ++c)
-                p.u8[t * size_t(stored) + size_t(c)] = quantize<std::uint8_t>(value(t, c), 255.0);
+        convert(p.u8.data(), [](float v) { return quantize<std::uint8_t>(v, 255.0); });
     } else if (format == ExportFormat::Png16 || format == ExportFormat::Tiff16) {
         p.type = OIIO::TypeDesc::UINT16;
         p.u16.resize(n * size_t(stored));
-        for (size_t t = 0; t < n; ++t)
-            for (int c = 0; c < stored; ++c)
-                p.u16[t * size_t(stored) + size_t(c)] = quantize<std::uint16_t>(value(t, c), 65535.0);
+        convert(p.u16.data(), [](float v) { return quantize<std::uint16_t>(v, 65535.0); });
     } else {
         p.type = OIIO::TypeDesc::FLOAT;
         p.f32.resize(n * size_t(stored));
-        for (size_t t = 0; t < n; ++t)
-            for (int c = 0; c < stored; ++c)
-                p.f32[t * size_t(stored) + size_t(c)] = value(t, c);
+        convert(p.f32.data(), [](float v) { return v; });
     }
     return p;
 }
@@ -466,6 +497,25 @@ Status syncFile(const fs::path& path) {
     return {};
 }
 
+/// Writes level k of a PNG file to `staging` with core's parallel encoder: libpng compresses one
+/// file on one core, and a 4096² level was the longest single step of a bake.
+Status writePng(const PlannedFile& file, size_t k, const fs::path& target, const fs::path& staging) {
+    const ExportFormat format = file.info.format;
+    const PixelData pixels = pixelsOf(file, k, file.info.storedChannels, format);
+    PngPixels png;
+    png.width = file.info.mipSizes[k].first;
+    png.height = file.info.mipSizes[k].second;
+    png.channels = file.info.storedChannels;
+    png.bitDepth = format == ExportFormat::Png16 ? 16 : 8;
+    png.data = pixels.data();
+    // zlib level 3: measured as the knee of size against time for baked maps (4% larger than
+    // libpng's adaptive filtering at 1/7 of the time).
+    constexpr int kPngLevel = 3;
+    const auto bytes = encodePng(png, kPngLevel);
+    if (!bytes) return Error{"cannot write '" + target.string() + "': " + bytes.error()};
+    return writeFileAtomic(staging, *bytes, Overwrite::Refuse);
+}
+
 /// Writes levels [first, last) of a file through OpenImageIO to `staging`; the plugin is chosen
 /// from `target`'s extension.
 Status writeOiio(const PlannedFile& file, size_t first, size_t last, const fs::path& target,
@@ -475,8 +525,8 @@ Status writeOiio(const PlannedFile& file, size_t first, size_t last, const fs::p
     if (!out) return Error{"cannot write '" + target.string() + "': " + OIIO::geterror()};
     const bool mipmapped = last - first > 1;
     const int stored = file.info.storedChannels;
-    const TextureMip& top = file.mips[first];
-    OIIO::ImageSpec spec(top.width, top.height, stored, fileType(format));
+    const auto [topWidth, topHeight] = file.info.mipSizes[first];
+    OIIO::ImageSpec spec(topWidth, topHeight, stored, fileType(format));
     // No timestamp: OpenImageIO writes the current time into TIFF and EXR headers unless the
     // attribute is present; an empty one is left out, so output bytes depend on the data only.
     spec.attribute("DateTime", "");
@@ -485,13 +535,6 @@ Status writeOiio(const PlannedFile& file, size_t first, size_t last, const fs::p
     spec.alpha_channel = -1;
     spec.attribute("oiio:UnassociatedAlpha", 1);
     const bool exr = format == ExportFormat::ExrHalf || format == ExportFormat::ExrFloat;
-    if (format == ExportFormat::Png8 || format == ExportFormat::Png16) {
-        // libpng's default adaptive filter choice tries every filter on every row and costs more
-        // than zlib itself (4096² RGB16: 5.1 s); the fixed Sub filter at zlib level 3 writes the same
-        // pixels, losslessly and deterministically, in 0.7 s for files about 4% larger.
-        spec.attribute("png:filter", 16); // PNG_FILTER_SUB
-        spec.attribute("png:compressionLevel", 3);
-    }
     if (mipmapped) {
         // Both plugins take MIP levels only for "Plain Texture" files (what maketx writes).
         spec.attribute("textureformat", "Plain Texture");
@@ -512,16 +555,15 @@ Status writeOiio(const PlannedFile& file, size_t first, size_t last, const fs::p
     };
     if (!out->open(staging.string(), spec, OIIO::ImageOutput::Create)) return fail(out->geterror());
     for (size_t k = first; k < last; ++k) {
-        const TextureMip& mip = file.mips[k];
         if (k > first) {
             OIIO::ImageSpec level = spec;
-            level.width = level.full_width = mip.width;
-            level.height = level.full_height = mip.height;
+            level.width = level.full_width = file.info.mipSizes[k].first;
+            level.height = level.full_height = file.info.mipSizes[k].second;
             // TIFF has no MIP levels of its own: OpenImageIO stores them as reduced-image subimages.
             const auto mode = exr ? OIIO::ImageOutput::AppendMIPLevel : OIIO::ImageOutput::AppendSubimage;
             if (!out->open(staging.string(), level, mode)) return fail(out->geterror());
         }
-        const PixelData pixels = pixelsOf(mip, file.channels, stored, format);
+        const PixelData pixels = pixelsOf(file, k, stored, format);
         if (!out->write_image(pixels.type, pixels.data())) return fail(out->geterror());
     }
     if (!out->close()) return fail(out->geterror());
@@ -634,13 +676,18 @@ Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, co
         if (!t.file) {
             s = writeFileAtomic(staging, plan.result.manifest.dump(2) + "\n", Overwrite::Refuse);
         } else if (t.file->info.format == ExportFormat::Dds) {
-            const auto bytes = encodeDds(t.file->mips, t.file->channels, *t.file->info.compression);
+            std::vector<TextureMip> mips;
+            for (size_t k = 0; k < t.file->info.mipSizes.size(); ++k)
+                mips.push_back(t.file->packedLevel(k));
+            const auto bytes = encodeDds(mips, t.file->channels, *t.file->info.compression);
             s = bytes ? writeFileAtomic(staging, *bytes, Overwrite::Refuse)
                       : Status(Error{"cannot write '" + t.path.string() + "': " + bytes.error()});
+        } else if (t.file->info.format == ExportFormat::Png8 || t.file->info.format == ExportFormat::Png16) {
+            s = writePng(*t.file, t.mip, t.path, staging);
         } else if (onePerMip(t.file->info.format)) {
             s = writeOiio(*t.file, t.mip, t.mip + 1, t.path, staging);
         } else {
-            s = writeOiio(*t.file, 0, t.file->mips.size(), t.path, staging);
+            s = writeOiio(*t.file, 0, t.file->info.mipSizes.size(), t.path, staging);
         }
         if (s) t.staging = staging;
         staged[i] = s;

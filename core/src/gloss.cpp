@@ -35,8 +35,15 @@ GlossEncoding::GlossEncoding(GlossKind kind, double nMin, double nMax, std::stri
     , m_nMin(nMin)
     , m_nMax(nMax)
     , m_logRange(kind == GlossKind::LogPower ? std::log(nMax / nMin) : 0.0)
+    , m_minPower(nMin)
+    , m_maxPower(nMax)
     , m_name(std::move(name))
-    , m_formula(std::move(formula)) {}
+    , m_formula(std::move(formula)) {
+    if (kind != GlossKind::LogPower) {
+        m_minPower = power(increasesWithPower() ? 0.0 : 1.0);
+        m_maxPower = power(increasesWithPower() ? 1.0 : 0.0);
+    }
+}
 
 GlossEncoding GlossEncoding::blackOps() {
     return GlossEncoding(GlossKind::LogPower, 1.0, 8192.0, "blackops",
@@ -136,10 +143,10 @@ double GlossEncoding::value(double n) const {
 }
 
 double GlossEncoding::minPower() const {
-    return m_kind == GlossKind::LogPower ? m_nMin : power(increasesWithPower() ? 0.0 : 1.0);
+    return m_minPower;
 }
 double GlossEncoding::maxPower() const {
-    return m_kind == GlossKind::LogPower ? m_nMax : power(increasesWithPower() ? 1.0 : 0.0);
+    return m_maxPower;
 }
 
 bool GlossEncoding::increasesWithPower() const {

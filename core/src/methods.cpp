@@ -82,31 +82,52 @@ double vmfKappa(double r) {
     return std::clamp(r * (3.0 - r * r) / oneMinusR2, 0.0, kMaxPower);
 }
 
-TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, const MethodParams& params) {
+std::array<double, 3> leanSlopeCovariance(const NormalMoments& moments, double s) {
+    // Olano & Baker 2010, "LEAN Mapping": Σ = M − BBᵀ + I/s
+    const double invS = 1.0 / std::max(clampPower(s), kMinBasePower);
+    return {double(moments.slopeCov[0]) + invS, double(moments.slopeCov[1]) + invS,
+            double(moments.slopeCov[2])};
+}
+
+double methodPower(Method method, const NormalMoments& moments, double s, const MethodParams& params) {
+    if (method == Method::Lean || method == Method::Clean)
+        return methodLobe(method, moments, s, params).power;
     s = std::max(clampPower(s), kMinBasePower);
-    TexelLobe lobe;
-    const bool slopeMethod = method == Method::Lean || method == Method::Clean;
-    // The slope methods take their normal from B (below) and never read |Na|: skip the square roots.
-    if (!slopeMethod) lobe.normal = moments.meanDirection();
-    const double lenNa = slopeMethod ? 1.0 : double(moments.lengthNa());
     switch (method) {
     case Method::Naive:
-        lobe.power = s;
-        break;
+        return s;
     case Method::Toksvig:
-        lobe.power = toksvigPower(lenNa, s);
-        break;
+        return toksvigPower(double(moments.lengthNa()), s);
     case Method::ToksvigMap: {
         // The map stores f_t for the fixed power in 8 bits.
-        const double ft = std::round(toksvigFactor(lenNa, params.toksvigMapPower) * 255.0) / 255.0;
-        lobe.power = convertToksvigFactor(ft, params.toksvigMapPower, s) * s;
-        break;
+        const double ft =
+            std::round(toksvigFactor(double(moments.lengthNa()), params.toksvigMapPower) * 255.0) / 255.0;
+        return convertToksvigFactor(ft, params.toksvigMapPower, s) * s;
     }
     case Method::VarianceToGloss: {
         const double v = moments.projectedVariance();
-        lobe.power = clampPower(1.0 / (v + 1.0 / (s + 1.0)) - 1.0);
+        return clampPower(1.0 / (v + 1.0 / (s + 1.0)) - 1.0);
+    }
+    case Method::Vmf: {
+        const double kappa = vmfKappa(double(moments.lengthNa()));
+        return kappa > 0.0 ? clampPower(1.0 / (1.0 / s + 1.0 / kappa)) : 0.0;
+    }
+    case Method::Lean:
+    case Method::Clean:
         break;
     }
+    return s;
+}
+
+TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, const MethodParams& params) {
+    TexelLobe lobe;
+    if (method != Method::Lean && method != Method::Clean) {
+        lobe.normal = moments.meanDirection();
+        lobe.power = methodPower(method, moments, s, params);
+        return lobe;
+    }
+    s = std::max(clampPower(s), kMinBasePower);
+    switch (method) {
     case Method::Lean:
     case Method::Clean: {
         lobe.slopeGaussian = true;
@@ -114,8 +135,7 @@ TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, cons
         lobe.normal = normalOfSlope(lobe.slopeMean);
         const double invS = 1.0 / s;
         if (method == Method::Lean) {
-            lobe.slopeCov = {double(moments.slopeCov[0]) + invS, double(moments.slopeCov[1]) + invS,
-                             double(moments.slopeCov[2])};
+            lobe.slopeCov = leanSlopeCovariance(moments, s);
         } else {
             const double sigma2 = 0.5 * (double(moments.slopeCov[0]) + double(moments.slopeCov[1])) + invS;
             lobe.slopeCov = {sigma2, sigma2, 0.0};
@@ -124,13 +144,26 @@ TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, cons
             powerFromVariance(0.5 * (lobe.slopeCov[0] + lobe.slopeCov[1]), VarianceConvention::InversePower);
         break;
     }
-    case Method::Vmf: {
-        const double kappa = vmfKappa(lenNa);
-        lobe.power = kappa > 0.0 ? clampPower(1.0 / (1.0 / s + 1.0 / kappa)) : 0.0;
+    default: // the isotropic methods, above
         break;
     }
-    }
     return lobe;
+}
+
+unsigned momentsNeeded(Method method) {
+    switch (method) {
+    case Method::Naive:
+    case Method::Toksvig:
+    case Method::ToksvigMap:
+    case Method::Vmf:
+        return kMomentsMean;
+    case Method::VarianceToGloss:
+        return kMomentsCov;
+    case Method::Lean:
+    case Method::Clean:
+        return kMomentsSlope;
+    }
+    return kMomentsAll;
 }
 
 double slopeGaussianNdf(const glm::dvec3& h, const glm::dvec2& mean, const std::array<double, 3>& cov) {

@@ -1,7 +1,9 @@
 #include <burnish/core/normal_map.h>
 
 #include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -73,44 +75,65 @@ Result<NormalMap> decodeNormalMap(const Image& image, const NormalMapOptions& op
     diag.signedValues = isSigned;
 
     map.normals.resize(image.texelCount());
-    double lengthSum = 0.0;
+    // Decoded in parallel over fixed blocks of texels; each block's counts and length sum are
+    // added in block order, so the diagnostics do not depend on the thread count.
+    struct BlockTally {
+        double lengthSum = 0.0;
+        size_t nonFinite = 0, offLength = 0, negativeZ = 0, zeroLength = 0;
+    };
+    constexpr size_t kBlock = size_t(1) << 16;
+    const size_t texels = image.texelCount();
+    std::vector<BlockTally> tallies((texels + kBlock - 1) / kBlock);
     const size_t stride = static_cast<size_t>(image.channels);
-    for (size_t i = 0; i < image.texelCount(); ++i) {
-        const float* p = &image.pixels[i * stride];
-        double v[3] = {p[0], p[1], rg ? 0.0 : p[2]};
-        bool finite = true;
-        for (int c = 0; c < used; ++c) {
-            if (!std::isfinite(v[c])) finite = false;
-            if (!isSigned) v[c] = 2.0 * v[c] - 1.0;
-        }
-        if (!finite) {
-            ++diag.nonFiniteTexels;
-            map.normals[i] = kFlat;
-            continue;
-        }
-        if (diag.greenFlipped) v[1] = -v[1];
-        if (rg) {
-            const double r2 = v[0] * v[0] + v[1] * v[1];
-            if (r2 > 1.0) {
-                const double s = 1.0 / std::sqrt(r2);
-                v[0] *= s;
-                v[1] *= s;
+    const bool greenFlipped = diag.greenFlipped;
+    tbb::parallel_for(size_t(0), tallies.size(), [&](size_t block) {
+        BlockTally& tally = tallies[block];
+        const size_t end = std::min(texels, (block + 1) * kBlock);
+        for (size_t i = block * kBlock; i < end; ++i) {
+            const float* p = &image.pixels[i * stride];
+            double v[3] = {p[0], p[1], rg ? 0.0 : p[2]};
+            bool finite = true;
+            for (int c = 0; c < used; ++c) {
+                if (!std::isfinite(v[c])) finite = false;
+                if (!isSigned) v[c] = 2.0 * v[c] - 1.0;
             }
-            v[2] = std::sqrt(std::max(0.0, 1.0 - v[0] * v[0] - v[1] * v[1]));
+            if (!finite) {
+                ++tally.nonFinite;
+                map.normals[i] = kFlat;
+                continue;
+            }
+            if (greenFlipped) v[1] = -v[1];
+            if (rg) {
+                const double r2 = v[0] * v[0] + v[1] * v[1];
+                if (r2 > 1.0) {
+                    const double s = 1.0 / std::sqrt(r2);
+                    v[0] *= s;
+                    v[1] *= s;
+                }
+                v[2] = std::sqrt(std::max(0.0, 1.0 - v[0] * v[0] - v[1] * v[1]));
+            }
+            const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            if (!rg) {
+                tally.lengthSum += len;
+                if (std::abs(len - 1.0) > kOffLengthTolerance) ++tally.offLength;
+            }
+            if (v[2] < 0.0) ++tally.negativeZ;
+            if (len < kMinDecodedLength) {
+                ++tally.zeroLength;
+                map.normals[i] = kFlat;
+                continue;
+            }
+            const double s = options.renormalize ? 1.0 / len : 1.0;
+            map.normals[i] = glm::vec3(float(v[0] * s), float(v[1] * s), float(v[2] * s));
         }
-        const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        if (!rg) {
-            lengthSum += len;
-            if (std::abs(len - 1.0) > kOffLengthTolerance) ++diag.offLengthTexels;
-        }
-        if (v[2] < 0.0) ++diag.negativeZTexels;
-        if (len < kMinDecodedLength) {
-            ++diag.zeroLengthTexels;
-            map.normals[i] = kFlat;
-            continue;
-        }
-        const double s = options.renormalize ? 1.0 / len : 1.0;
-        map.normals[i] = glm::vec3(float(v[0] * s), float(v[1] * s), float(v[2] * s));
+    });
+    double lengthSum = 0.0;
+    for (const BlockTally& tally : tallies) {
+        lengthSum += tally.lengthSum;
+        diag.nonFiniteTexels += tally.nonFinite;
+        diag.offLengthTexels += tally.offLength;
+        diag.negativeZTexels += tally.negativeZ;
+        diag.zeroLengthTexels += tally.zeroLength;
     }
     const size_t valid = diag.texels - diag.nonFiniteTexels;
     if (!rg && valid > 0) diag.meanStoredLength = lengthSum / static_cast<double>(valid);

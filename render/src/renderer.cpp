@@ -63,7 +63,8 @@ Result<GpuBaked> uploadBaked(const BakedTexture& baked) {
     std::vector<TextureLevel> levels;
     levels.reserve(baked.mips.size());
     for (const auto& mip : baked.mips)
-        levels.push_back(TextureLevel{mip.width, mip.height, mip.texels});
+        levels.push_back(
+            TextureLevel{mip.width, mip.height, std::vector<float>(mip.texels.begin(), mip.texels.end())});
     // Hardware trilinear filtering over the baked chain is what the methods were baked for.
     auto texture = Texture2D::create(levels, baked.channels, TextureFilter::LinearMipLinear, true);
     if (!texture) return Error{"uploading the '" + baked.role + "' texture: " + texture.error()};

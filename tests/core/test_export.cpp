@@ -316,8 +316,8 @@ TEST(Export, DdsMipCountFollowsAShortChain) {
 }
 
 TEST(Export, EncodeDdsRejectsBadChains) {
-    TextureMip top{8, 8, std::vector<float>(64, 0.5f)};
-    TextureMip wrong{3, 4, std::vector<float>(12, 0.5f)};
+    TextureMip top{8, 8, TexelVector(64, 0.5f)};
+    TextureMip wrong{3, 4, TexelVector(12, 0.5f)};
     const auto r = encodeDds({top, wrong}, 1, DdsCompression::Bc4);
     ASSERT_FALSE(r);
     EXPECT_NE(r.error().find("not half"), std::string::npos) << r.error();

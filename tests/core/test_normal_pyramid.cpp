@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 using namespace burnish;
@@ -229,4 +230,57 @@ TEST(NormalPyramid, RowStreamingMatchesPerTexelFiltering) {
                     EXPECT_EQ(seen, 1); // every row exactly once
             }
         }
+}
+
+// A pyramid of a moment subset (what the bake builds for one method) holds, for the moments in
+// the set, exactly the bits of the full pyramid, in the box levels and the filtered rows; the
+// moments left out are NormalMoments' defaults. Sizes 37×29 (uneven footprints) and 64×64.
+TEST(NormalPyramid, MomentSubsetsEqualTheFullPyramidBitForBit) {
+    auto same = [](float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+    for (const auto& [w, h] : {std::pair{37, 29}, std::pair{64, 64}}) {
+        const auto map = shared(makeNormalMap(w, h, randomNormals(w * h, 0.4f, 11)));
+        for (const FilterKernel kernel : {FilterKernel::Box, FilterKernel::Tent, FilterKernel::Gaussian}) {
+            const auto full = NormalPyramid::build(map, {BorderMode::Wrap, kernel, kMomentsAll});
+            for (const unsigned set :
+                 {unsigned(kMomentsMean), unsigned(kMomentsCov), unsigned(kMomentsSlope)}) {
+                const auto part = NormalPyramid::build(map, {BorderMode::Wrap, kernel, set});
+                ASSERT_EQ(part.levelCount(), full.levelCount());
+                auto check = [&](const NormalMoments& a, const NormalMoments& b, int k, int x, int y,
+                                 bool boxLevel0) {
+                    SCOPED_TRACE(testing::Message()
+                                 << "set " << set << " level " << k << " texel " << x << "," << y);
+                    for (int c = 0; c < 3; ++c)
+                        ASSERT_TRUE(same(a.mean[c], b.mean[c]));
+                    for (int c = 0; c < 6; ++c)
+                        ASSERT_TRUE((set & kMomentsCov) ? same(a.cov[size_t(c)], b.cov[size_t(c)])
+                                                        : a.cov[size_t(c)] == 0.0f);
+                    // Level 0's box moments come from the normal itself, slopes included.
+                    const bool slopes = (set & kMomentsSlope) || boxLevel0;
+                    for (int c = 0; c < 2; ++c)
+                        ASSERT_TRUE(slopes ? same(a.slope[c], b.slope[c]) : a.slope[c] == 0.0f);
+                    for (int c = 0; c < 3; ++c)
+                        ASSERT_TRUE(slopes ? same(a.slopeCov[size_t(c)], b.slopeCov[size_t(c)])
+                                           : a.slopeCov[size_t(c)] == 0.0f);
+                };
+                for (int k = 0; k < full.levelCount(); ++k) {
+                    const PyramidLevel& l = full.level(k);
+                    for (int y = 0; y < l.height; ++y)
+                        for (int x = 0; x < l.width; ++x)
+                            check(part.boxMoments(k, x, y), full.boxMoments(k, x, y), k, x, y, k == 0);
+                    std::vector<std::vector<NormalMoments>> rowsFull(size_t(l.height)),
+                        rowsPart(size_t(l.height));
+                    full.forEachMomentRow(k, [&](int y, const NormalMoments* r) {
+                        rowsFull[size_t(y)].assign(r, r + l.width);
+                    });
+                    part.forEachMomentRow(k, [&](int y, const NormalMoments* r) {
+                        rowsPart[size_t(y)].assign(r, r + l.width);
+                    });
+                    for (int y = 0; y < l.height; ++y)
+                        for (int x = 0; x < l.width; ++x)
+                            check(rowsPart[size_t(y)][size_t(x)], rowsFull[size_t(y)][size_t(x)], k, x, y,
+                                  kernel == FilterKernel::Box && k == 0);
+                }
+            }
+        }
+    }
 }

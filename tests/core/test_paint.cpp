@@ -57,7 +57,7 @@ PaintStroke stroke(PaintLayer& l, const Brush& b, BorderMode border = BorderMode
     return std::move(s).value();
 }
 
-bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
+template <class A, class B> bool sameBits(const A& a, const B& b) {
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 

@@ -10,6 +10,7 @@
 #include <burnish/core/normal_map.h>
 #include <burnish/core/normal_pyramid.h>
 #include <burnish/core/result.h>
+#include <burnish/core/texel_vector.h>
 
 #include <optional>
 #include <string>
@@ -20,7 +21,7 @@ namespace burnish {
 struct TextureMip {
     int width = 0;
     int height = 0;
-    std::vector<float> texels; // row-major, `channels` per texel, each in [0, 1]
+    TexelVector texels; // row-major, `channels` per texel, each in [0, 1]
 };
 
 /// How a stored channel decodes to its physical value: value = stored·scale + bias.

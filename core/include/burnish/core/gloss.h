@@ -70,6 +70,8 @@ private:
     double m_nMin;
     double m_nMax;
     double m_logRange; // log(nMax/nMin), computed once: value() runs per texel in the bake
+    double m_minPower; // minPower() and maxPower(), computed once for the same reason
+    double m_maxPower;
     std::string m_name;
     std::string m_formula;
 };

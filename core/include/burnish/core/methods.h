@@ -76,6 +76,18 @@ struct TexelLobe {
 /// zero variance and s up to kMaxPower.
 TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, const MethodParams& params = {});
 
+/// methodLobe(...).power alone, without the lobe's normal (what a gloss texture stores).
+double methodPower(Method method, const NormalMoments& moments, double s, const MethodParams& params = {});
+
+/// LEAN's slope covariance Σ = M − BBᵀ + I/s (xx, yy, xy) for base power s (clamped as
+/// methodLobe clamps it): what methodLobe gives a LEAN lobe, without the rest of the lobe.
+std::array<double, 3> leanSlopeCovariance(const NormalMoments& moments, double s);
+
+/// The moments methodLobe and the method's stored textures read (MomentSet flags): the mean
+/// alone for naive, Toksvig, the Toksvig map and vMF; the covariance for variance-to-gloss; the
+/// slopes for LEAN and CLEAN.
+unsigned momentsNeeded(Method method);
+
 /// The method's NDF at tangent-space half vector h (unit, z up), in projected-area normalization:
 /// normalized Blinn-Phong (p+2)/(2π)(n̄·h)^p for the isotropic methods; for LEAN/CLEAN the
 /// slope-space Gaussian exp(−½ dᵀΣ⁻¹d)/(2π√detΣ) / h_z⁴ with d = h.xy/h.z − B. 0 for h_z <= 0.

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <burnish/core/normal_map.h>
+#include <burnish/core/texel_vector.h>
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -47,7 +48,10 @@ struct NormalMoments {
     float projectedVariance() const;
     /// LEAN's second slope moments M = E[bbᵀ] (xx, yy, xy).
     // Olano & Baker 2010, "LEAN Mapping": M = (B.x², B.y², B.x·B.y) filtered
-    std::array<float, 3> slopeSecondMoments() const;
+    std::array<float, 3> slopeSecondMoments() const {
+        return {slopeCov[0] + slope.x * slope.x, slopeCov[1] + slope.y * slope.y,
+                slopeCov[2] + slope.x * slope.y};
+    }
 
     /// Moments of a single unit normal.
     static NormalMoments ofNormal(const glm::vec3& n);
@@ -77,9 +81,26 @@ KernelTaps kernelTaps(FilterKernel kernel);
 /// Index i mapped into [0, size) by the border mode.
 int borderIndex(int i, int size, BorderMode border);
 
+/// Which moments a pyramid computes, as bit flags; the mean normal Na always. A method reads only
+/// some (momentsNeeded in methods.h), and the rest cost most of the work: the naive and Toksvig
+/// methods need 3 of the 17 values. Moments not computed keep NormalMoments' defaults (zero
+/// spread, zero slope); those computed are bit for bit what a full pyramid holds.
+enum MomentSet : unsigned {
+    kMomentsMean = 0,
+    kMomentsCov = 1u,   // central second moments of n (projected variance)
+    kMomentsSlope = 2u, // slope mean B and slope covariance (LEAN, CLEAN)
+    kMomentsAll = 3u,
+};
+
+/// Floats per texel of a level's packed box moments for a moment set.
+constexpr int momentStride(unsigned set) {
+    return 3 + ((set & kMomentsCov) ? 6 : 0) + ((set & kMomentsSlope) ? 5 : 0);
+}
+
 struct PyramidOptions {
     BorderMode border = BorderMode::Wrap;
     FilterKernel kernel = FilterKernel::Tent;
+    unsigned moments = kMomentsAll; // MomentSet flags
 };
 
 /// One level's extent and where its footprints lie in the finest level.
@@ -90,7 +111,11 @@ struct PyramidLevel {
     std::vector<int> yStart; // finest row where row y's footprint starts; size height+1
     std::vector<int> xChild; // first column of level k−1 under column x; size width+1 (level 0: identity)
     std::vector<int> yChild; // first row of level k−1 under row y; size height+1
-    std::vector<NormalMoments> box; // box moments, row-major (empty for level 0: see NormalPyramid)
+    /// Box moments, row-major, packed as momentStride(set) floats per texel: Na, then the
+    /// covariance and then B and the slope covariance when the set holds them (a mean-only
+    /// level takes 12 bytes a texel instead of a NormalMoments' 68). Empty for level 0: see
+    /// NormalPyramid::boxMoments.
+    TexelVector box;
 };
 
 class NormalPyramid {

@@ -1,0 +1,33 @@
+// A parallel, deterministic PNG encoder (private to core): the filtered scanlines are cut into
+// fixed segments of rows, each deflated on its own and joined into one zlib stream (the pigz
+// technique), so a large PNG no longer compresses on a single core.
+#pragma once
+
+#include <burnish/core/result.h>
+
+#include <cstddef>
+#include <string>
+
+namespace burnish {
+
+/// Pixels to encode, row-major and interleaved, top row first.
+struct PngPixels {
+    int width = 0, height = 0;
+    int channels = 0;           // 1 grey, 2 grey+alpha, 3 RGB, 4 RGBA
+    int bitDepth = 8;           // 8 or 16
+    const void* data = nullptr; // uint8_t, or uint16_t in host byte order
+};
+
+/// The PNG file's bytes: IHDR, the image data in IDAT chunks (each at most 1 MiB), IEND; no colour or
+/// gamma chunks (the files hold data, not colour). Every row is filtered with Sub (filter type 1), the
+/// zlib level is `level` (0-9). The bytes depend only on the pixels and `level`, never on the number of
+/// threads or their scheduling. Errors (not exceptions): sizes of 0 or over 2^31-1, channels outside
+/// 1-4, a depth other than 8 or 16, null data, a level outside 0-9, byte counts that overflow, zlib or
+/// allocation failures.
+Result<std::string> encodePng(const PngPixels& pixels, int level = 3);
+
+/// Rows per independently deflated segment for rows of `filteredRowBytes` bytes (filter byte
+/// included): about 1 MiB of filtered bytes, at least 1 row. Exposed so tests can check the layout.
+std::size_t pngRowsPerSegment(std::size_t filteredRowBytes);
+
+} // namespace burnish

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace burnish {
@@ -199,22 +200,15 @@ std::string describe(const TestImage& image) {
 }
 
 TEST(PngEncode, RoundTripsEveryChannelCountAndDepth) {
-    // 37×23: primes, so no row or image size is a multiple of anything the encoder might assume.
+    // 37×23: primes, so no row or image size is a multiple of anything the encoder might assume;
+    // 1×1: the smallest image, one row of one texel.
     unsigned seed = 1;
-    for (int bitDepth : {8, 16})
-        for (int channels = 1; channels <= 4; ++channels) {
-            const TestImage image = randomImage(37, 23, channels, bitDepth, seed++);
-            expectDecodesTo(encodeOrFail(image), image, describe(image));
-        }
-}
-
-TEST(PngEncode, RoundTripsOnePixel) {
-    unsigned seed = 100;
-    for (int bitDepth : {8, 16})
-        for (int channels = 1; channels <= 4; ++channels) {
-            const TestImage image = randomImage(1, 1, channels, bitDepth, seed++);
-            expectDecodesTo(encodeOrFail(image), image, describe(image));
-        }
+    for (const auto& [width, height] : {std::pair{37, 23}, std::pair{1, 1}})
+        for (int bitDepth : {8, 16})
+            for (int channels = 1; channels <= 4; ++channels) {
+                const TestImage image = randomImage(width, height, channels, bitDepth, seed++);
+                expectDecodesTo(encodeOrFail(image), image, describe(image));
+            }
 }
 
 TEST(PngEncode, HeaderAndChunkLayout) {

@@ -217,6 +217,12 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
         out.textures.push_back(makeTexture("clean", "CLEAN: B and (M.xx + M.yy)/2 with 1/s added",
                                            {{"B.x", 2 * sB, -sB}, {"B.y", 2 * sB, -sB}, {"M.avg", sM, 0.0}},
                                            true));
+    if (options.roles) {
+        const auto& wanted = *options.roles;
+        std::erase_if(out.textures, [&](const BakedTexture& t) {
+            return std::find(wanted.begin(), wanted.end(), t.role) == wanted.end();
+        });
+    }
     for (auto& tex : out.textures)
         tex.mips.resize(size_t(levels));
 
@@ -234,11 +240,12 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     // Without a gloss map the stored gloss of the non-adjusting methods is the base power's at
     // every texel: encoded once, with its clamp counts added per texel below.
     const bool constantGloss = !adjustedGloss && !base;
+    const bool producesGloss = std::find(roles.begin(), roles.end(), Role::Gloss) != roles.end();
     const double glossMinPower = options.encoding.minPower(), glossMaxPower = options.encoding.maxPower();
     const float baseGloss = unit(options.encoding.value(options.basePower));
     for (int k = 0; k < levels; ++k) {
         const PyramidLevel& level = pyramid.level(k);
-        if (constantGloss && std::find(roles.begin(), roles.end(), Role::Gloss) != roles.end()) {
+        if (constantGloss && producesGloss) {
             const size_t texels = size_t(level.width) * size_t(level.height);
             if (options.basePower < glossMinPower) out.stats.glossClampedLow += texels;
             if (options.basePower > glossMaxPower) out.stats.glossClampedHigh += texels;
@@ -264,7 +271,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
             // Only the adjusted gloss reads the lobe; the other roles store moments or the base
             // power directly.
             thread_local std::vector<double> lobePowers;
-            if (adjustedGloss) {
+            if (adjustedGloss && producesGloss) {
                 lobePowers.resize(size_t(width));
                 for (int x = 0; x < width; ++x)
                     lobePowers[size_t(x)] =

@@ -147,6 +147,15 @@ Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
 
     job.bake.method = job.method;
     job.bake.encoding = job.preset.encoding;
+    // Only the textures the preset's files read are baked (LEAN's preset, for one, stores no
+    // normal texture: it is rebuilt from B).
+    std::vector<std::string> roles;
+    for (const auto& file : job.preset.files)
+        for (const auto& ch : file.channels)
+            if (ch.kind == PresetChannel::Kind::Baked &&
+                std::find(roles.begin(), roles.end(), ch.role) == roles.end())
+                roles.push_back(ch.role);
+    job.bake.roles = std::move(roles);
     if (spec.power) job.bake.basePower = *spec.power;
     if (spec.kernel) {
         const auto k = choice<FilterKernel>(

@@ -216,3 +216,31 @@ TEST(Bake, IsDeterministic) {
                 EXPECT_EQ(a->textures[t].mips[k].texels, b->textures[t].mips[k].texels);
     }
 }
+
+// A bake limited to some roles (what an export's files read) produces exactly those textures,
+// each equal bit for bit to the same texture of a full bake; the others are absent.
+TEST(Bake, RoleSubsetsProduceTheSameTexturesAsAFullBake) {
+    const NormalMap map = gaussianField(32, 0.2, 0.1, 9);
+    for (Method m : allMethods()) {
+        BakeOptions options;
+        options.method = m;
+        auto full = bake(map, options);
+        ASSERT_TRUE(full.ok());
+        for (const auto& kept : full->textures) {
+            options.roles = std::vector<std::string>{kept.role};
+            auto part = bake(map, options);
+            ASSERT_TRUE(part.ok());
+            ASSERT_EQ(part->textures.size(), 1u) << methodName(m) << " " << kept.role;
+            const BakedTexture& t = part->textures[0];
+            EXPECT_EQ(t.role, kept.role);
+            ASSERT_EQ(t.mips.size(), kept.mips.size());
+            for (size_t k = 0; k < t.mips.size(); ++k)
+                EXPECT_EQ(t.mips[k].texels, kept.mips[k].texels)
+                    << methodName(m) << " " << kept.role << " mip " << k;
+        }
+        options.roles = std::vector<std::string>{};
+        auto none = bake(map, options);
+        ASSERT_TRUE(none.ok());
+        EXPECT_TRUE(none->textures.empty());
+    }
+}

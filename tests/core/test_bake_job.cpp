@@ -142,6 +142,32 @@ TEST(BakeJob, BakesTheBuiltInSampleByName) {
     EXPECT_EQ(run->summary["input"].get<std::string>(), spec.input);
 }
 
+// A job bakes only the textures its preset's files read: LEAN's preset stores B, M and the
+// compact gloss, and rebuilds the normal from B, so no normal texture is baked.
+TEST(BakeJob, BakesOnlyTheTexturesThePresetReads) {
+    test::TempDir dir;
+    BakeJobSpec spec = specFor(dir.path());
+    spec.input = writeSmallNormalMap(dir.path() / "small.png").string();
+    spec.preset = "lean";
+    const auto job = resolveBakeJob(spec);
+    ASSERT_TRUE(job) << job.error();
+    const auto run = runBakeJob(*job);
+    ASSERT_TRUE(run) << run.error();
+    std::vector<std::string> read;
+    for (const auto& file : job->preset.files)
+        for (const auto& ch : file.channels)
+            if (ch.kind == PresetChannel::Kind::Baked) read.push_back(ch.role);
+    ASSERT_FALSE(read.empty());
+    EXPECT_EQ(std::count(read.begin(), read.end(), "normal"), 0)
+        << "the LEAN preset no longer skips the normal";
+    EXPECT_EQ(run->baked.find("normal"), nullptr);
+    for (const auto& t : run->baked.textures)
+        EXPECT_NE(std::find(read.begin(), read.end(), t.role), read.end())
+            << t.role << " was baked but not read";
+    for (const auto& role : read)
+        EXPECT_NE(run->baked.find(role), nullptr) << role << " is read but was not baked";
+}
+
 // A job on a small map with --report, baking into <dir>/out.
 BakeJobSpec smallReportSpec(const fs::path& dir) {
     BakeJobSpec spec = specFor(dir / "out");

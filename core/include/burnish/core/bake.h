@@ -53,6 +53,9 @@ struct BakeOptions {
     MethodParams params;
     /// Number of mip levels to produce (0 = all, down to 1×1).
     int mipCount = 0;
+    /// Only the textures of these roles are produced (the ones an export's files read); all of
+    /// the method's when unset. Each texture produced is the same whatever the others are.
+    std::optional<std::vector<std::string>> roles;
 };
 
 struct BakeStats {

@@ -110,8 +110,8 @@ inline constexpr std::string_view kBakeReportFiles[] = {
 /// beyond a chain, a fade beyond the detail map's levels —, glossClampedLow/High, pyramidSeconds,
 /// methodSeconds, seconds, warnings, detail when baked, report (the evaluate.md path) with spec.report).
 struct BakeJobResult {
-    NormalMap map; // the decoded input
-    BakeOutput baked;
+    NormalMap map;    // the decoded input
+    BakeOutput baked; // the textures the preset's files read
     ExportResult exported;
     nlohmann::json summary;
 };

@@ -16,11 +16,14 @@
 #include <QDockWidget>
 #include <QFileDialog>
 #include <QFileInfo>
+#include <QGuiApplication>
 #include <QLabel>
 #include <QMenuBar>
 #include <QMimeData>
+#include <QScreen>
 #include <QScrollArea>
 #include <QSettings>
+#include <QShowEvent>
 #include <QSplitter>
 #include <QStatusBar>
 #include <QTimer>
@@ -95,7 +98,6 @@ MainWindow::MainWindow(QWidget* parent)
     m_historyDock->setObjectName("historyDock");
     m_historyDock->setWidget(history);
     addDockWidget(Qt::RightDockWidgetArea, m_historyDock);
-    resizeDocks({m_materialDock, m_historyDock}, {560, 180}, Qt::Vertical);
 
     // The environment lighting of the viewport, tabbed with the history. The library lists the HDR
     // files of $BURNISH_ENVIRONMENTS (the repository's shared data folder holds courtyard and studio).
@@ -109,7 +111,11 @@ MainWindow::MainWindow(QWidget* parent)
     m_historyDock->raise();
 
     // The charts (specular colour, gloss, BRDF plots, error vs cost) under the central pane.
+    // The right column runs the window's full height, so the Material panel is not squeezed above
+    // the charts.
+    setCorner(Qt::BottomRightCorner, Qt::RightDockWidgetArea);
     auto* charts = new ChartsPanel(m_doc, this);
+    m_chartsDock = charts;
     addDockWidget(Qt::BottomDockWidgetArea, charts);
 
     m_statusPower = new QLabel(this);
@@ -423,10 +429,35 @@ void MainWindow::dropEvent(QDropEvent* event) {
 
 void MainWindow::restoreSettings() {
     QSettings settings;
-    if (settings.contains("window/geometry"))
+    if (settings.contains("window/geometry")) {
         restoreGeometry(settings.value("window/geometry").toByteArray());
+    } else if (const QScreen* screen = QGuiApplication::primaryScreen()) {
+        // First run: most of the screen, up to 1600×1000 (the charts' labels need about 1000
+        // rows beside the views), centred.
+        const QRect free = screen->availableGeometry();
+        const QSize size(std::min(1600, free.width() * 9 / 10), std::min(1000, free.height() * 9 / 10));
+        resize(size);
+        move(free.center() - QPoint(size.width() / 2, size.height() / 2));
+    }
     if (settings.contains("window/state")) restoreState(settings.value("window/state").toByteArray());
+    m_defaultLayoutPending = !settings.contains("window/state");
     setAutosaveInterval(settings.value("autosaveSeconds", kDefaultAutosaveSeconds).toInt());
+}
+
+void MainWindow::showEvent(QShowEvent* event) {
+    QMainWindow::showEvent(event);
+    if (!m_defaultLayoutPending) return;
+    m_defaultLayoutPending = false;
+    // After the first layout pass, when the docks have their real extents to share.
+    QTimer::singleShot(0, this, [this] { applyDefaultDockSizes(); });
+}
+
+void MainWindow::applyDefaultDockSizes() {
+    const int h = height();
+    // Material 70% of the right column, its history and environment tabs the rest; the charts
+    // half the height under the views (the gloss spheres and their power labels fit at 880).
+    resizeDocks({m_materialDock, m_historyDock}, {h * 7 / 10, h * 3 / 10}, Qt::Vertical);
+    resizeDocks({m_chartsDock}, {h / 2}, Qt::Vertical);
 }
 
 void MainWindow::saveSettings() {

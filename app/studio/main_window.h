@@ -64,6 +64,7 @@ protected:
     void closeEvent(QCloseEvent* event) override;
     void dragEnterEvent(QDragEnterEvent* event) override;
     void dropEvent(QDropEvent* event) override;
+    void showEvent(QShowEvent* event) override;
 
 private:
     void buildMenus();
@@ -80,6 +81,9 @@ private:
     void removeAutosave();
     void restoreSettings();
     void saveSettings();
+    /// The first-run proportions of the docks, for the window's actual size: the Material panel
+    /// gets most of the right column, the charts under the views enough height for their labels.
+    void applyDefaultDockSizes();
 
     MaterialDocument* m_doc;
     QSplitter* m_central;
@@ -87,6 +91,8 @@ private:
     MaterialPanel* m_panel;
     QDockWidget* m_materialDock;
     QDockWidget* m_historyDock;
+    QDockWidget* m_chartsDock;
+    bool m_defaultLayoutPending = false; // no saved layout: size the docks once shown
     PaintTool* m_paintTool;
     QDockWidget* m_paintDock;
     BakeDialog* m_bakeDialog = nullptr;

@@ -3,6 +3,10 @@
 #include <burnish/core/atomic_file.h>
 
 #include <OpenImageIO/imageio.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cstdint>
 
 #include <system_error>
 
@@ -55,10 +59,50 @@ Result<Image> readImage(const fs::path& path) {
     } catch (const std::bad_alloc&) {
         return Error{"not enough memory to read image '" + path.string() + "'"};
     }
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+    auto readFailed = [&]() -> Error {
         std::string why = in->geterror();
         if (why.empty()) why = "corrupt or truncated data";
         return Error{"cannot read image '" + path.string() + "': " + why};
+    };
+    if (spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16) {
+        // 8- and 16-bit images are read as stored and converted on every core through a table
+        // that OpenImageIO fills with its own conversion, so each float is bit for bit what
+        // read_image(FLOAT) gives, without its single-threaded conversion of every sample.
+        const bool eightBit = spec.format == OIIO::TypeDesc::UINT8;
+        const size_t codes = eightBit ? 256 : 65536;
+        std::vector<std::uint16_t> allCodes(codes);
+        std::vector<std::uint8_t> allBytes(eightBit ? codes : 0);
+        for (size_t c = 0; c < codes; ++c) {
+            allCodes[c] = std::uint16_t(c);
+            if (eightBit) allBytes[c] = std::uint8_t(c);
+        }
+        std::vector<float> table(codes);
+        const void* codeData = eightBit ? static_cast<const void*>(allBytes.data()) : allCodes.data();
+        if (!OIIO::convert_pixel_values(spec.format, codeData, OIIO::TypeDesc::FLOAT, table.data(),
+                                        int(codes)))
+            return Error{"cannot read image '" + path.string() + "': no conversion from " +
+                         std::string(spec.format.c_str())};
+        const size_t samples = image.pixels.size();
+        std::vector<std::uint8_t> raw8;
+        std::vector<std::uint16_t> raw16;
+        try {
+            if (eightBit)
+                raw8.resize(samples);
+            else
+                raw16.resize(samples);
+        } catch (const std::bad_alloc&) {
+            return Error{"not enough memory to read image '" + path.string() + "'"};
+        }
+        void* raw = eightBit ? static_cast<void*>(raw8.data()) : static_cast<void*>(raw16.data());
+        if (!in->read_image(0, 0, 0, spec.nchannels, spec.format, raw)) return readFailed();
+        constexpr size_t kBlock = size_t(1) << 16;
+        tbb::parallel_for(size_t(0), (samples + kBlock - 1) / kBlock, [&](size_t block) {
+            const size_t end = std::min(samples, (block + 1) * kBlock);
+            for (size_t i = block * kBlock; i < end; ++i)
+                image.pixels[i] = table[eightBit ? raw8[i] : raw16[i]];
+        });
+    } else if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+        return readFailed();
     }
     in->close();
     return image;

@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <random>
 
@@ -225,4 +227,42 @@ TEST(ImageIo, AlphaIsNotPremultipliedIntoTheColour) {
     ASSERT_TRUE(image.ok()) << image.error();
     EXPECT_NEAR(image->at(0, 0, 2), 1.0f, 1e-6f);
     EXPECT_NEAR(image->at(0, 0, 3), 64.0f / 255.0f, 1e-6f);
+}
+
+// readImage converts 8- and 16-bit files itself, in parallel through a table: every code of both
+// depths (as PNG and TIFF, 1 to 4 channels) must read bit for bit as OpenImageIO's own float read.
+TEST(ReadImage, IntegerFilesReadBitForBitAsOpenImageIOsFloatRead) {
+    test::TempDir dir;
+    for (const OIIO::TypeDesc type : {OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT16})
+        for (const char* ext : {"png", "tif"})
+            for (int channels = 1; channels <= 4; ++channels) {
+                const bool eight = type == OIIO::TypeDesc::UINT8;
+                const int codes = eight ? 256 : 65536;
+                const int width = 256, height = codes * 1 / 256; // every code once per channel
+                std::vector<std::uint16_t> values(size_t(width) * size_t(height) * size_t(channels));
+                for (size_t i = 0; i < values.size(); ++i)
+                    values[i] =
+                        std::uint16_t((i / size_t(channels) + 97 * (i % size_t(channels))) % size_t(codes));
+                std::vector<std::uint8_t> bytes(values.begin(), values.end());
+                const std::string path = (dir.path() / ("codes." + std::string(ext))).string();
+                OIIO::ImageSpec spec(width, height, channels, type);
+                spec.attribute("oiio:UnassociatedAlpha", 1);
+                auto out = OIIO::ImageOutput::create(path);
+                ASSERT_TRUE(
+                    out && out->open(path, spec) &&
+                    out->write_image(type, eight ? static_cast<const void*>(bytes.data()) : values.data()) &&
+                    out->close());
+                const auto image = readImage(path);
+                ASSERT_TRUE(image) << image.error();
+                OIIO::ImageSpec config;
+                config.attribute("oiio:UnassociatedAlpha", 1);
+                auto in = OIIO::ImageInput::open(path, &config);
+                ASSERT_TRUE(in);
+                std::vector<float> expected(values.size());
+                ASSERT_TRUE(in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, expected.data()));
+                ASSERT_EQ(image->pixels.size(), expected.size());
+                EXPECT_EQ(std::memcmp(image->pixels.data(), expected.data(), expected.size() * sizeof(float)),
+                          0)
+                    << ext << " " << channels << " channels, " << (eight ? 8 : 16) << "-bit";
+            }
 }

@@ -275,7 +275,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                 lobePowers.resize(size_t(width));
                 for (int x = 0; x < width; ++x)
                     lobePowers[size_t(x)] =
-                        methodLobe(method, row[x], basePowers[size_t(x)], options.params).power;
+                        methodPower(method, row[x], basePowers[size_t(x)], options.params);
             }
             // 1/s per texel for the slope textures; sB and sM are powers of two, so multiplying by
             // their reciprocals is exact.
@@ -323,11 +323,10 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                 case Role::Clean:
                     for (int x = 0; x < width; ++x, px += 3) {
                         const NormalMoments& m = row[x];
-                        px[0] = unit(double(m.slope.x) / (2 * sB) + 0.5);
-                        px[1] = unit(double(m.slope.y) / (2 * sB) + 0.5);
+                        px[0] = unit(double(m.slope.x) * invB2 + 0.5);
+                        px[1] = unit(double(m.slope.y) * invB2 + 0.5);
                         const auto M = m.slopeSecondMoments();
-                        px[2] =
-                            unit((0.5 * (double(M[0]) + double(M[1])) + 1.0 / basePowers[size_t(x)]) / sM);
+                        px[2] = unit((0.5 * (double(M[0]) + double(M[1])) + invBase[size_t(x)]) * invM);
                     }
                     break;
                 case Role::LeanM:

@@ -41,16 +41,17 @@ struct Source {
 /// the bake when each level is encoded, so no packed copy of the bake is ever held.
 struct PlannedFile {
     ExportedFile info;
-    int channels = 0;
     std::vector<Source> sources;
 
-    /// Level k's values, `channels` per texel (what the DDS encoder takes).
+    int channels() const { return int(sources.size()); }
+
+    /// Level k's values, channels() per texel (what the DDS encoder takes).
     TextureMip packedLevel(size_t k) const {
         TextureMip mip;
         mip.width = info.mipSizes[k].first;
         mip.height = info.mipSizes[k].second;
         const size_t n = size_t(mip.width) * size_t(mip.height);
-        mip.texels.resize(n * size_t(channels));
+        mip.texels.resize(n * sources.size());
         for (size_t t = 0; t < n; ++t)
             for (size_t c = 0; c < sources.size(); ++c)
                 mip.texels[t * sources.size() + c] = sources[c].at(k, t);
@@ -282,8 +283,7 @@ Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const Export
                 "DirectX convention (-Y): y-odd channels are stored flipped (1 - v) and decode "
                 "to the DirectX value");
 
-        pf.channels = int(sources.size());
-        pf.info.storedChannels = storedChannelCount(format, pf.info.compression, pf.channels);
+        pf.info.storedChannels = storedChannelCount(format, pf.info.compression, pf.channels());
         pf.info.storage = storageName(format, pf.info.compression);
 
         // The file's mip chain is its textures' own (the detail map tiles at its resolution); a
@@ -431,24 +431,8 @@ PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat f
             const size_t end = std::min(n, (block + 1) * kBlock);
             for (size_t c = 0; c < size_t(stored); ++c) {
                 auto* o = out + c;
-                if (c >= channels) {
-                    for (size_t t = block * kBlock; t < end; ++t)
-                        o[t * size_t(stored)] = code(0.0f);
-                    continue;
-                }
-                const Source& src = file.sources[c];
-                if (!src.texture) {
-                    for (size_t t = block * kBlock; t < end; ++t)
-                        o[t * size_t(stored)] = code(src.value);
-                    continue;
-                }
-                // A baked channel: strided reads of one texture, clamped and flipped as Source::at.
-                const size_t tc = size_t(src.texture->channels);
-                const float* in = src.texture->mips[k].texels.data() + size_t(src.index);
-                for (size_t t = block * kBlock; t < end; ++t) {
-                    const float v = std::clamp(in[t * tc], 0.0f, 1.0f);
-                    o[t * size_t(stored)] = code(src.flip ? 1.0f - v : v);
-                }
+                for (size_t t = block * kBlock; t < end; ++t)
+                    o[t * size_t(stored)] = code(c < channels ? file.sources[c].at(k, t) : 0.0f);
             }
         });
     };
@@ -679,7 +663,7 @@ Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, co
             std::vector<TextureMip> mips;
             for (size_t k = 0; k < t.file->info.mipSizes.size(); ++k)
                 mips.push_back(t.file->packedLevel(k));
-            const auto bytes = encodeDds(mips, t.file->channels, *t.file->info.compression);
+            const auto bytes = encodeDds(mips, t.file->channels(), *t.file->info.compression);
             s = bytes ? writeFileAtomic(staging, *bytes, Overwrite::Refuse)
                       : Status(Error{"cannot write '" + t.path.string() + "': " + bytes.error()});
         } else if (t.file->info.format == ExportFormat::Png8 || t.file->info.format == ExportFormat::Png16) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <numeric>
 
 #include <system_error>
 
@@ -70,14 +71,12 @@ Result<Image> readImage(const fs::path& path) {
         // read_image(FLOAT) gives, without its single-threaded conversion of every sample.
         const bool eightBit = spec.format == OIIO::TypeDesc::UINT8;
         const size_t codes = eightBit ? 256 : 65536;
-        std::vector<std::uint16_t> allCodes(codes);
-        std::vector<std::uint8_t> allBytes(eightBit ? codes : 0);
-        for (size_t c = 0; c < codes; ++c) {
-            allCodes[c] = std::uint16_t(c);
-            if (eightBit) allBytes[c] = std::uint8_t(c);
-        }
+        std::vector<std::uint8_t> codes8(eightBit ? codes : 0);
+        std::vector<std::uint16_t> codes16(eightBit ? 0 : codes);
+        std::iota(codes8.begin(), codes8.end(), std::uint8_t(0));
+        std::iota(codes16.begin(), codes16.end(), std::uint16_t(0));
         std::vector<float> table(codes);
-        const void* codeData = eightBit ? static_cast<const void*>(allBytes.data()) : allCodes.data();
+        const void* codeData = eightBit ? static_cast<const void*>(codes8.data()) : codes16.data();
         if (!OIIO::convert_pixel_values(spec.format, codeData, OIIO::TypeDesc::FLOAT, table.data(),
                                         int(codes)))
             return Error{"cannot read image '" + path.string() + "': no conversion from " +

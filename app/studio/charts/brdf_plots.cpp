@@ -1,4 +1,5 @@
 #include "charts/brdf_plots.h"
+#include "charts/chart_axes.h"
 
 #include <burnish/core/color.h>
 #include <burnish/core/fresnel.h>
@@ -82,15 +83,6 @@ QLineSeries* addCurve(QChart* chart, const QString& id, const QString& label,
     }
     chart->addSeries(s);
     return s;
-}
-
-void attach(QChart* chart, QAbstractAxis* x, QAbstractAxis* y) {
-    chart->addAxis(x, Qt::AlignBottom);
-    chart->addAxis(y, Qt::AlignLeft);
-    for (QAbstractSeries* s : chart->series()) {
-        s->attachAxis(x);
-        s->attachAxis(y);
-    }
 }
 
 QLogValueAxis* logAxis(const QString& title, double lo, double hi) {
@@ -213,7 +205,7 @@ void BrdfPlots::buildNdf() {
     const double peak = blinnPhongNdfNorm(n);
     auto* x = valueAxis("half-vector angle θh (degrees)", 0.0, thetaMax);
     x->applyNiceNumbers(); // round tick values; the range only grows
-    attach(chart, x, logAxis("D (1/sr)", peak * std::pow(10.0, -kNdfDecades), peak * 2.0));
+    attachAxes(chart, x, logAxis("D (1/sr)", peak * std::pow(10.0, -kNdfDecades), peak * 2.0));
     setChart(m_ndf, chart);
 }
 
@@ -279,7 +271,7 @@ void BrdfPlots::buildFresnel() {
         0.0, 90.0, false);
     auto* x = valueAxis("angle of incidence θ (degrees)", 0.0, 90.0, "%.0f");
     x->setTickCount(10);
-    attach(chart, x, valueAxis("F", 0.0, 1.0, "%.2f"));
+    attachAxes(chart, x, valueAxis("F", 0.0, 1.0, "%.2f"));
     setChart(m_fresnel, chart);
 }
 
@@ -315,7 +307,7 @@ void BrdfPlots::buildVisibility() {
     // Schlick–Smith and Smith fall below 1 at grazing angles for rough lobes: half a decade of room.
     auto* x = valueAxis("n·v", 0.0, 1.0, "%.1f");
     x->setTickCount(11); // every 0.1
-    attach(chart, x, logAxis("V", 0.3, hi * 1.5));
+    attachAxes(chart, x, logAxis("V", 0.3, hi * 1.5));
     setChart(m_visibility, chart);
 }
 
@@ -341,8 +333,8 @@ void BrdfPlots::buildGloss() {
         lo = std::min(lo, p.y());
         hi = std::max(hi, p.y());
     }
-    attach(chart, valueAxis("stored gloss g", 0.0, 1.0, "%.1f"),
-           logAxis("Blinn-Phong power n", lo / 2.0, hi * 2.0));
+    attachAxes(chart, valueAxis("stored gloss g", 0.0, 1.0, "%.1f"),
+               logAxis("Blinn-Phong power n", lo / 2.0, hi * 2.0));
     setChart(m_gloss, chart);
 }
 

@@ -1,4 +1,5 @@
 #include "charts/error_cost_chart.h"
+#include "charts/chart_axes.h"
 
 #include <QChart>
 #include <QChartView>
@@ -67,15 +68,6 @@ QLogValueAxis* decadeAxis(const QString& title, double lo, double hi) {
     if (a1 <= a0) a1 = a0 * 10.0;
     a->setRange(a0, a1);
     return a;
-}
-
-void attachAll(QChart* chart, QAbstractAxis* x, QAbstractAxis* y) {
-    chart->addAxis(x, Qt::AlignBottom);
-    chart->addAxis(y, Qt::AlignLeft);
-    for (QAbstractSeries* s : chart->series()) {
-        s->attachAxis(x);
-        s->attachAxis(y);
-    }
 }
 
 } // namespace
@@ -446,8 +438,8 @@ void ErrorCostChart::showMethods() {
     } else if (!m_evaluating && m_status->text().isEmpty()) {
         m_status->setText("not evaluated yet: shows when the panel is visible, or press Evaluate now");
     }
-    attachAll(chart, decadeAxis(ns ? "ns per lobe evaluation" : "bytes per texel", xLo, xHi),
-              decadeAxis("relative L1 error", yLo, yHi));
+    attachAxes(chart, decadeAxis(ns ? "ns per lobe evaluation" : "bytes per texel", xLo, xHi),
+               decadeAxis("relative L1 error", yLo, yHi));
     setChart(m_methodsView, chart);
 }
 
@@ -496,8 +488,8 @@ void ErrorCostChart::showApproximations() {
                 .arg(QString::fromStdString(m_approximations->cpuModel))
                 .arg(QString::fromStdString(m_approximations->compiler)));
     }
-    attachAll(chart, decadeAxis("ns per evaluation (float kernel)", xLo, xHi),
-              decadeAxis("headline error (max abs or max rel)", yLo, yHi));
+    attachAxes(chart, decadeAxis("ns per evaluation (float kernel)", xLo, xHi),
+               decadeAxis("headline error (max abs or max rel)", yLo, yHi));
     setChart(m_approxView, chart);
 }
 

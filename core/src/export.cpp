@@ -401,8 +401,11 @@ Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const Export
 
 // Round to nearest integer code of an unsigned normalized format: x + 0.5 truncated is
 // lround(x) for x >= 0 (x = v·maxCode is exact in double), without lround's call.
+// The clamp is written as selects (NaN gives 0) so that conversion loops vectorise.
 template <class T> T quantize(float v, double maxCode) {
-    return static_cast<T>(double(std::clamp(v, 0.0f, 1.0f)) * maxCode + 0.5);
+    v = v > 0.0f ? v : 0.0f;
+    v = v < 1.0f ? v : 1.0f;
+    return static_cast<T>(static_cast<std::int32_t>(double(v) * maxCode + 0.5));
 }
 
 // The level's values in the type the format stores (OpenImageIO converts half itself).
@@ -425,14 +428,40 @@ PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat f
     PixelData p;
     const size_t n = size_t(file.info.mipSizes[k].first) * size_t(file.info.mipSizes[k].second);
     const size_t channels = file.sources.size();
+    // Does the file store one baked texture's channels unchanged and in order?
+    bool contiguous = channels == size_t(stored) && channels > 0 && file.sources[0].texture &&
+                      file.sources[0].texture->channels == stored;
+    for (size_t c = 0; contiguous && c < channels; ++c)
+        contiguous = file.sources[c].texture == file.sources[0].texture &&
+                     file.sources[c].index == int(c) && !file.sources[c].flip;
     auto convert = [&](auto* out, auto&& code) {
         constexpr size_t kBlock = size_t(1) << 14; // texels per task: large enough to amortise
         tbb::parallel_for(size_t(0), (n + kBlock - 1) / kBlock, [&](size_t block) {
-            const size_t end = std::min(n, (block + 1) * kBlock);
+            const size_t begin = block * kBlock, end = std::min(n, (block + 1) * kBlock);
+            if (contiguous) { // one texture's channels in order: a flat loop the compiler vectorises
+                const float* in = file.sources[0].texture->mips[k].texels.data();
+                for (size_t i = begin * size_t(stored); i < end * size_t(stored); ++i)
+                    out[i] = code(in[i]); // code clamps
+                return;
+            }
             for (size_t c = 0; c < size_t(stored); ++c) {
                 auto* o = out + c;
-                for (size_t t = block * kBlock; t < end; ++t)
-                    o[t * size_t(stored)] = code(c < channels ? file.sources[c].at(k, t) : 0.0f);
+                const Source* source = c < channels ? &file.sources[c] : nullptr;
+                if (!source || !source->texture) { // a constant channel, or the format's padding
+                    const auto constant = code(source ? source->at(k, 0) : 0.0f);
+                    for (size_t t = begin; t < end; ++t)
+                        o[t * size_t(stored)] = constant;
+                    continue;
+                }
+                // Source::at with its texture and stride hoisted out of the loop (same values).
+                const size_t stride = size_t(source->texture->channels);
+                const float* in = source->texture->mips[k].texels.data() + size_t(source->index);
+                if (source->flip)
+                    for (size_t t = begin; t < end; ++t)
+                        o[t * size_t(stored)] = code(1.0f - std::clamp(in[t * stride], 0.0f, 1.0f));
+                else
+                    for (size_t t = begin; t < end; ++t)
+                        o[t * size_t(stored)] = code(std::clamp(in[t * stride], 0.0f, 1.0f));
             }
         });
     };
@@ -447,7 +476,7 @@ PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat f
     } else {
         p.type = OIIO::TypeDesc::FLOAT;
         p.f32.resize(n * size_t(stored));
-        convert(p.f32.data(), [](float v) { return v; });
+        convert(p.f32.data(), [](float v) { return std::clamp(v, 0.0f, 1.0f); });
     }
     return p;
 }

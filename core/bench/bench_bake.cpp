@@ -1,5 +1,6 @@
 // Benchmarks of the bake and the ground-truth evaluation (figures, not pass/fail):
-//   BM_Bake/<method>   in-memory bake of a 4096² normal map, all mips (pyramid included)
+//   BM_Bake/<method>/<roles>  in-memory bake of a 4096² normal map, all mips (pyramid included):
+//                      every texture of the method (0), or those its preset's files read (1)
 //   BM_Pyramid         the normal pyramid alone, 4096²
 //   BM_MomentRows/<k>  the tent-filtered moment rows of level k alone (forEachMomentRow), 4096²
 //   BM_Evaluate        `burnish evaluate`'s core on a 1024² map, mips 1-4, one power, all methods
@@ -7,6 +8,7 @@
 // deterministic synthetic bumpy map. Run: build/core/burnish_bench --benchmark_filter='Bake|Pyramid|Evaluate'
 #include <burnish/core/bake.h>
 #include <burnish/core/evaluate.h>
+#include <burnish/core/presets.h>
 
 #include <benchmark/benchmark.h>
 #include <glm/geometric.hpp>
@@ -62,20 +64,40 @@ const NormalMap& benchMap(int size, std::string& label) {
     return cache.emplace(size, makeNormalMap(size, size, std::move(normals))).first->second;
 }
 
+// BM_Bake/<method>/<roles>: roles 0 bakes every texture the method has; roles 1 only those the
+// preset core/bench/bake_vs_maketx.sh uses for the method reads (its own preset for the Toksvig
+// map, LEAN and CLEAN, else blackops), with the preset's encoding: what that `burnish bake` bakes.
 void BM_Bake(benchmark::State& state) {
     std::string label;
     const NormalMap& map = benchMap(4096, label);
     BakeOptions options;
     options.method = allMethods()[size_t(state.range(0))];
+    std::string roles = "every texture";
+    if (state.range(1) == 1) {
+        const Method m = options.method;
+        const bool own = m == Method::ToksvigMap || m == Method::Lean || m == Method::Clean;
+        const auto preset = findPreset(own ? methodName(m) : "blackops");
+        if (!preset) {
+            state.SkipWithError(preset.error().c_str());
+            return;
+        }
+        options.encoding = preset->encoding;
+        options.roles = presetRoles(*preset);
+        roles = "preset " + preset->name + "'s textures";
+    }
     for (auto _ : state) {
         auto out = bake(map, options);
         benchmark::DoNotOptimize(out);
     }
-    state.SetLabel(std::string(methodName(options.method)) + ", " + label);
+    state.SetLabel(std::string(methodName(options.method)) + ", " + roles + ", " + label);
     state.counters["Mtexels/s"] =
         benchmark::Counter(double(map.texelCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_Bake)->DenseRange(0, 6)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
+BENCHMARK(BM_Bake)
+    ->ArgsProduct({benchmark::CreateDenseRange(0, 6, 1), {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(2)
+    ->UseRealTime();
 
 void BM_Pyramid(benchmark::State& state) {
     std::string label;

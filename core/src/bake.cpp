@@ -1,6 +1,8 @@
 #include <burnish/core/bake.h>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <chrono>
@@ -153,31 +155,29 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     const bool unnormalized = method == Method::Toksvig;
     const bool adjustedGloss = method == Method::VarianceToGloss || method == Method::Vmf;
 
-    // Binary scales for the slope textures, so their [0, 1] storage covers every mip. Filtered
-    // moments are convex combinations of box moments, so the box moments bound them.
+    // Binary scales for the slope textures, so their [0, 1] storage covers every mip. Every box
+    // moment is a mean of finest-level values (and filtered moments means of box moments), so the
+    // finest level's largest |b| and b² bound every level; a value a rounding above them is
+    // clamped by unit(). Level 0's moments are NormalMoments::ofNormal's: b = n.xy / max(n.z,
+    // kMinSlopeZ) in float, M = b² (its slope covariance is zero).
     double sB = 1.0, sM = 1.0;
     if (slopeMethod) {
-        double maxB = 0.0, maxM = 0.0;
-        // Row maxima in parallel, then their maximum: max is exact, so any order gives the same.
-        for (int k = 0; k < levels; ++k) {
-            const PyramidLevel& level = pyramid.level(k);
-            std::vector<double> rowB(size_t(level.height), 0.0), rowM(size_t(level.height), 0.0);
-            tbb::parallel_for(0, level.height, [&](int y) {
-                double b = 0.0, mm = 0.0;
-                for (int x = 0; x < level.width; ++x) {
-                    const NormalMoments m = pyramid.boxMoments(k, x, y);
-                    const auto M = m.slopeSecondMoments();
-                    b = std::max({b, std::abs(double(m.slope.x)), std::abs(double(m.slope.y))});
-                    mm = std::max({mm, double(M[0]), double(M[1])});
+        const std::vector<glm::vec3>& normals = map.normals;
+        const float maxSlope = tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, normals.size(), size_t(1) << 15), 0.0f,
+            [&](const tbb::blocked_range<size_t>& r, float b) {
+                for (size_t i = r.begin(); i != r.end(); ++i) {
+                    const glm::vec3& n = normals[i];
+                    const float z = std::max(n.z, kMinSlopeZ);
+                    const float bx = std::abs(n.x / z), by = std::abs(n.y / z);
+                    b = bx > b ? bx : b;
+                    b = by > b ? by : b;
                 }
-                rowB[size_t(y)] = b;
-                rowM[size_t(y)] = mm;
-            });
-            for (int y = 0; y < level.height; ++y) {
-                maxB = std::max(maxB, rowB[size_t(y)]);
-                maxM = std::max(maxM, rowM[size_t(y)]);
-            }
-        }
+                return b;
+            },
+            [](float a, float b) { return std::max(a, b); }); // max is exact: any order gives the same
+        const double maxB = double(maxSlope);
+        const double maxM = double(maxSlope * maxSlope);
         double minPower = options.basePower;
         if (options.authoredGloss)
             for (float g : *options.authoredGloss)
@@ -338,16 +338,24 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                         px[2] = unit(double(M[2]) * invM2 + 0.5);
                     }
                     break;
-                case Role::LeanGloss:
-                    for (int x = 0; x < width; ++x, px += 3) {
-                        // The lobe's Σ = slope covariance + I/s, as methodLobe builds it.
+                case Role::LeanGloss: {
+                    // The lobe's Σ = slope covariance + I/s, as methodLobe builds it; the variances'
+                    // logarithms in a second loop without calls, which the compiler vectorises.
+                    thread_local std::vector<double> variances;
+                    variances.resize(2 * size_t(width));
+                    for (int x = 0; x < width; ++x) {
                         const auto S = leanSlopeCovariance(row[x], basePowers[size_t(x)]);
-                        px[0] = unit(encodeLogVariance(S[0]));
-                        px[1] = unit(encodeLogVariance(S[1]));
+                        variances[2 * size_t(x)] = S[0];
+                        variances[2 * size_t(x) + 1] = S[1];
                         const double rho = S[2] / std::sqrt(std::max(S[0] * S[1], 1e-300));
-                        px[2] = unit(0.5 * std::clamp(rho, -1.0, 1.0) + 0.5);
+                        px[3 * x + 2] = unit(0.5 * std::clamp(rho, -1.0, 1.0) + 0.5);
+                    }
+                    for (int x = 0; x < width; ++x) {
+                        px[3 * x] = float(encodeLogVariance(variances[2 * size_t(x)])); // in [0, 1]
+                        px[3 * x + 1] = float(encodeLogVariance(variances[2 * size_t(x) + 1]));
                     }
                     break;
+                }
                 }
             }
         });

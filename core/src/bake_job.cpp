@@ -149,13 +149,7 @@ Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
     job.bake.encoding = job.preset.encoding;
     // Only the textures the preset's files read are baked (LEAN's preset, for one, stores no
     // normal texture: it is rebuilt from B).
-    std::vector<std::string> roles;
-    for (const auto& file : job.preset.files)
-        for (const auto& ch : file.channels)
-            if (ch.kind == PresetChannel::Kind::Baked &&
-                std::find(roles.begin(), roles.end(), ch.role) == roles.end())
-                roles.push_back(ch.role);
-    job.bake.roles = std::move(roles);
+    job.bake.roles = presetRoles(job.preset);
     if (spec.power) job.bake.basePower = *spec.power;
     if (spec.kernel) {
         const auto k = choice<FilterKernel>(
@@ -257,6 +251,7 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
     if (!step(0, "reading")) return cancelled;
     auto map = loadBakeInput(job.spec.input, job.normalMap);
     if (!map) return Error{map.error()};
+    const double readSeconds = std::chrono::duration<double>(Clock::now() - start).count();
 
     BakeOptions options = job.bake;
     if (job.spec.authoredGloss) {
@@ -344,7 +339,9 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
     record.diagnostics = map->diagnostics;
     record.detail = detailRecord;
 
+    const auto exportStart = Clock::now();
     auto exported = exportBake(*baked, job.preset, job.exportOptions, job.spec.out, record);
+    const double exportSeconds = std::chrono::duration<double>(Clock::now() - exportStart).count();
     if (!exported) {
         std::string message = exported.error();
         if (message.rfind("refusing to overwrite", 0) == 0) message += " (use --force to replace the set)";
@@ -372,8 +369,10 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
                       {"notes", notes},
                       {"glossClampedLow", baked->stats.glossClampedLow},
                       {"glossClampedHigh", baked->stats.glossClampedHigh},
+                      {"readSeconds", readSeconds},
                       {"pyramidSeconds", baked->stats.pyramidSeconds},
                       {"methodSeconds", baked->stats.methodSeconds},
+                      {"exportSeconds", exportSeconds},
                       {"seconds", seconds},
                       {"warnings", map->diagnostics.warnings}};
     if (detailRecord)

@@ -207,11 +207,6 @@ double convertToksvigFactor(double ft, double fixedS, double s) {
     return denom > 0.0 ? std::min(ft / denom, 1.0) : 1.0;
 }
 
-double encodeLogVariance(double sigma2) {
-    sigma2 = sigma2 > 0.0 ? sigma2 : kMinVariance;
-    return clampUnit(std::log2(1.0 / sigma2) / 13.0);
-}
-
 double decodeLogVariance(double g) {
     return std::exp2(-13.0 * clampUnit(g));
 }

@@ -558,6 +558,16 @@ Result<Preset> loadPresetFile(const std::filesystem::path& path) {
     return parsePreset(*text, "'" + path.string() + "'");
 }
 
+std::vector<std::string> presetRoles(const Preset& preset) {
+    std::vector<std::string> roles;
+    for (const auto& file : preset.files)
+        for (const auto& ch : file.channels)
+            if (ch.kind == PresetChannel::Kind::Baked &&
+                std::find(roles.begin(), roles.end(), ch.role) == roles.end())
+                roles.push_back(ch.role);
+    return roles;
+}
+
 const std::vector<Preset>& builtinPresets() {
     return builtins().presets;
 }

@@ -253,6 +253,36 @@ TEST(Variance, LogVarianceRoundTrip) {
     EXPECT_EQ(decodeLogVariance(1.0), std::exp2(-13.0));
 }
 
+TEST(Variance, LogVarianceEndsAreExactAndPositive) {
+    // Σ = 1 is +0 (never −0, whose sign bit a float texture would keep), 2^-13 and below exactly 1,
+    // an infinite variance 0.
+    EXPECT_FALSE(std::signbit(encodeLogVariance(1.0)));
+    EXPECT_EQ(encodeLogVariance(1.0), 0.0);
+    EXPECT_EQ(encodeLogVariance(std::exp2(-13.0)), 1.0);
+    EXPECT_EQ(encodeLogVariance(std::numeric_limits<double>::infinity()), 0.0);
+    EXPECT_EQ(encodeLogVariance(-1.0), 1.0);
+    EXPECT_EQ(encodeLogVariance(std::numeric_limits<double>::denorm_min()), 1.0);
+}
+
+TEST(Numeric, Log2PositiveMatchesStdLog2) {
+    // Within 2e-14 of std::log2 over every binade a double holds and densely over [2^-13, 1] (the
+    // log-variance range), exact at powers of two.
+    double worst = 0.0;
+    for (int e = -1022; e <= 1023; ++e)
+        for (int i = 0; i < 64; ++i) {
+            const double x = std::ldexp(1.0 + i / 64.0 + 1.0 / 4099.0, e);
+            worst = std::max(worst, std::abs(log2Positive(x) - std::log2(x)));
+        }
+    for (int i = 0; i <= 1 << 20; ++i) {
+        const double x = std::exp2(-13.0 * i / double(1 << 20)) * (1.0 + 1e-9 * (i % 7));
+        worst = std::max(worst, std::abs(log2Positive(x) - std::log2(x)));
+    }
+    EXPECT_LT(worst, 2e-14);
+    for (int e = -1022; e <= 1023; ++e)
+        EXPECT_EQ(log2Positive(std::ldexp(1.0, e)), double(e)) << e;
+    EXPECT_EQ(log2Positive(std::numeric_limits<double>::max()), std::log2(std::numeric_limits<double>::max()));
+}
+
 TEST(Variance, VarianceToGloss) {
     // v = 0 leaves the gloss unchanged: 1/(1/(n+1)) − 1 = n up to round-off, then value(n). Measured
     // worst 1.4e-16 over every encoding; 1e-12 as in the round trip above.

@@ -107,8 +107,9 @@ inline constexpr std::string_view kBakeReportFiles[] = {
 
 /// What a finished job produced: the bake and export results and a JSON summary (input, out,
 /// preset, method, format, files, bakeJson, width, height, mipCount, mipsRequested, notes — a --mips
-/// beyond a chain, a fade beyond the detail map's levels —, glossClampedLow/High, pyramidSeconds,
-/// methodSeconds, seconds, warnings, detail when baked, report (the evaluate.md path) with spec.report).
+/// beyond a chain, a fade beyond the detail map's levels —, glossClampedLow/High, the stage times
+/// readSeconds, pyramidSeconds, methodSeconds and exportSeconds, seconds (the whole job before any
+/// report), warnings, detail when baked, report (the evaluate.md path) with spec.report).
 struct BakeJobResult {
     NormalMap map;    // the decoded input
     BakeOutput baked; // the textures the preset's files read

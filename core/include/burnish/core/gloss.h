@@ -107,8 +107,14 @@ double convertToksvigFactor(double ft, double fixedS, double s);
 
 /// The two-value log-space encoding of a per-axis slope variance: g = log2(1/Σ)/13, clamped to [0, 1]
 /// (so Σ in [2^-13, 1]).
+/// Σ is clamped to [2^-13, 1] first (NaN and Σ <= 0 give 1), which is the clamp of g, so the
+/// logarithm is log2Positive's and a row of them vectorises.
 // Baker & Hill 2012, "Rock-Solid Shading": store log2(1/Σ_{x,y})/13
-double encodeLogVariance(double sigma2);
+inline double encodeLogVariance(double sigma2) {
+    sigma2 = sigma2 > 0x1p-13 ? sigma2 : 0x1p-13; // NaN fails the test
+    sigma2 = sigma2 < 1.0 ? sigma2 : 1.0;
+    return (0.0 - log2Positive(sigma2)) / 13.0; // 0 − x: +0, not −0, at Σ = 1
+}
 /// Inverse of encodeLogVariance: Σ = 2^(−13g).
 double decodeLogVariance(double g);
 

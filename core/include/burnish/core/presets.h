@@ -123,6 +123,9 @@ std::vector<std::string> builtinPresetNames();
 /// list the known ones.
 Result<Preset> findPreset(std::string_view nameOrPath);
 
+/// The baked roles the preset's files read, in first-use order: what a bake for it must produce.
+std::vector<std::string> presetRoles(const Preset& preset);
+
 /// The roles a method bakes, each with its channels' decode names, in bake order.
 struct MethodRole {
     std::string role;

@@ -1,6 +1,8 @@
 // Benchmarks of the bake and the ground-truth evaluation (figures, not pass/fail):
 //   BM_Bake/<method>/<roles>  in-memory bake of a 4096² normal map, all mips (pyramid included):
 //                      every texture of the method (0), or those its preset's files read (1)
+//   BM_ReadImage       reading that map as an 8-bit RGB PNG (written once to the temp folder)
+//   BM_DecodeNormalMap decoding the read floats into unit normals, with the diagnostics
 //   BM_Pyramid         the normal pyramid alone, 4096²
 //   BM_MomentRows/<k>  the tent-filtered moment rows of level k alone (forEachMomentRow), 4096²
 //   BM_Evaluate        `burnish evaluate`'s core on a 1024² map, mips 1-4, one power, all methods
@@ -8,6 +10,7 @@
 // deterministic synthetic bumpy map. Run: build/core/burnish_bench --benchmark_filter='Bake|Pyramid|Evaluate'
 #include <burnish/core/bake.h>
 #include <burnish/core/evaluate.h>
+#include <burnish/core/image.h>
 #include <burnish/core/presets.h>
 
 #include <benchmark/benchmark.h>
@@ -15,6 +18,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <random>
@@ -98,6 +102,56 @@ BENCHMARK(BM_Bake)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2)
     ->UseRealTime();
+
+// The benchmark map stored as an 8-bit RGB PNG (as `burnish bake` gets it), written once.
+const std::filesystem::path& benchPng(std::string& label) {
+    static std::filesystem::path path;
+    const NormalMap& map = benchMap(4096, label);
+    if (path.empty()) {
+        std::vector<float> rgb(map.texelCount() * 3);
+        for (size_t i = 0; i < map.texelCount(); ++i)
+            for (int c = 0; c < 3; ++c)
+                rgb[3 * i + size_t(c)] = 0.5f * map.normals[i][c] + 0.5f;
+        const auto target = std::filesystem::temp_directory_path() / "burnish_bench_4096.png";
+        ImageWriteOptions options;
+        options.type = StoredType::UInt8;
+        if (writeImageAtomic(target, map.width, map.height, 3, rgb, options)) path = target;
+    }
+    return path;
+}
+
+// Reading the 4096² 8-bit PNG into floats (OpenImageIO's decode plus core's conversion).
+void BM_ReadImage(benchmark::State& state) {
+    std::string label;
+    const auto& path = benchPng(label);
+    if (path.empty()) {
+        state.SkipWithError("cannot write the benchmark PNG");
+        return;
+    }
+    for (auto _ : state) {
+        auto image = readImage(path);
+        benchmark::DoNotOptimize(image);
+    }
+    state.SetLabel(label);
+}
+BENCHMARK(BM_ReadImage)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
+
+// Decoding those floats into unit normals with the plausibility diagnostics.
+void BM_DecodeNormalMap(benchmark::State& state) {
+    std::string label;
+    const auto& path = benchPng(label);
+    auto image = path.empty() ? Result<Image>(Error{"no PNG"}) : readImage(path);
+    if (!image) {
+        state.SkipWithError(image.error().c_str());
+        return;
+    }
+    for (auto _ : state) {
+        auto map = decodeNormalMap(*image);
+        benchmark::DoNotOptimize(map);
+    }
+    state.SetLabel(label);
+}
+BENCHMARK(BM_DecodeNormalMap)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
 
 void BM_Pyramid(benchmark::State& state) {
     std::string label;

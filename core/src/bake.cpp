@@ -18,8 +18,9 @@ double seconds(Clock::time_point since) {
     return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
+// Clamped to [0, 1] with selects (NaN gives 0), so row loops over it need no branches.
 float unit(double v) {
-    return float(std::clamp(v, 0.0, 1.0));
+    return float(saturate(v));
 }
 
 // Smallest power of two >= x (and >= 2^-4), so stored ranges are exact binary scales.
@@ -167,11 +168,12 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
             tbb::blocked_range<size_t>(0, normals.size(), size_t(1) << 15), 0.0f,
             [&](const tbb::blocked_range<size_t>& r, float b) {
                 for (size_t i = r.begin(); i != r.end(); ++i) {
+                    // max(|x|/z, |y|/z) = max(|x|, |y|)/z exactly: rounding is monotonic.
                     const glm::vec3& n = normals[i];
                     const float z = std::max(n.z, kMinSlopeZ);
-                    const float bx = std::abs(n.x / z), by = std::abs(n.y / z);
-                    b = bx > b ? bx : b;
-                    b = by > b ? by : b;
+                    const float ax = std::abs(n.x), ay = std::abs(n.y);
+                    const float slope = (ax > ay ? ax : ay) / z;
+                    b = slope > b ? slope : b;
                 }
                 return b;
             },
@@ -339,20 +341,24 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                     }
                     break;
                 case Role::LeanGloss: {
-                    // The lobe's Σ = slope covariance + I/s, as methodLobe builds it; the variances'
-                    // logarithms in a second loop without calls, which the compiler vectorises.
-                    thread_local std::vector<double> variances;
-                    variances.resize(2 * size_t(width));
+                    // The lobe's Σ = slope covariance + I/s, as methodLobe builds it; then the
+                    // logarithms, square roots and divisions in a loop without calls or branches,
+                    // which the compiler vectorises.
+                    thread_local std::vector<double> sigma;
+                    sigma.resize(3 * size_t(width));
                     for (int x = 0; x < width; ++x) {
                         const auto S = leanSlopeCovariance(row[x], basePowers[size_t(x)]);
-                        variances[2 * size_t(x)] = S[0];
-                        variances[2 * size_t(x) + 1] = S[1];
-                        const double rho = S[2] / std::sqrt(std::max(S[0] * S[1], 1e-300));
-                        px[3 * x + 2] = unit(0.5 * std::clamp(rho, -1.0, 1.0) + 0.5);
+                        std::copy(S.begin(), S.end(), &sigma[3 * size_t(x)]);
                     }
                     for (int x = 0; x < width; ++x) {
-                        px[3 * x] = float(encodeLogVariance(variances[2 * size_t(x)])); // in [0, 1]
-                        px[3 * x + 1] = float(encodeLogVariance(variances[2 * size_t(x) + 1]));
+                        const double* S = &sigma[3 * size_t(x)];
+                        px[3 * x] = float(encodeLogVariance(S[0])); // in [0, 1]
+                        px[3 * x + 1] = float(encodeLogVariance(S[1]));
+                        const double product = S[0] * S[1];
+                        double rho = S[2] / std::sqrt(product > 1e-300 ? product : 1e-300);
+                        rho = rho > -1.0 ? rho : -1.0;
+                        rho = rho < 1.0 ? rho : 1.0;
+                        px[3 * x + 2] = unit(0.5 * rho + 0.5);
                     }
                     break;
                 }

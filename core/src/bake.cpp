@@ -163,7 +163,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     // kMinSlopeZ) in float, M = b² (its slope covariance is zero).
     double sB = 1.0, sM = 1.0;
     if (slopeMethod) {
-        const std::vector<glm::vec3>& normals = map.normals;
+        const NormalVector& normals = map.normals;
         const float maxSlope = tbb::parallel_reduce(
             tbb::blocked_range<size_t>(0, normals.size(), size_t(1) << 15), 0.0f,
             [&](const tbb::blocked_range<size_t>& r, float b) {

@@ -432,8 +432,8 @@ PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat f
     bool contiguous = channels == size_t(stored) && channels > 0 && file.sources[0].texture &&
                       file.sources[0].texture->channels == stored;
     for (size_t c = 0; contiguous && c < channels; ++c)
-        contiguous = file.sources[c].texture == file.sources[0].texture &&
-                     file.sources[c].index == int(c) && !file.sources[c].flip;
+        contiguous = file.sources[c].texture == file.sources[0].texture && file.sources[c].index == int(c) &&
+                     !file.sources[c].flip;
     auto convert = [&](auto* out, auto&& code) {
         constexpr size_t kBlock = size_t(1) << 14; // texels per task: large enough to amortise
         tbb::parallel_for(size_t(0), (n + kBlock - 1) / kBlock, [&](size_t block) {

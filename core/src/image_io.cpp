@@ -82,8 +82,8 @@ Result<Image> readImage(const fs::path& path) {
             return Error{"cannot read image '" + path.string() + "': no conversion from " +
                          std::string(spec.format.c_str())};
         const size_t samples = image.pixels.size();
-        std::vector<std::uint8_t> raw8;
-        std::vector<std::uint16_t> raw16;
+        std::vector<std::uint8_t, TexelAllocator<std::uint8_t>> raw8; // filled by OpenImageIO
+        std::vector<std::uint16_t, TexelAllocator<std::uint16_t>> raw16;
         try {
             if (eightBit)
                 raw8.resize(samples);

@@ -177,7 +177,7 @@ NormalMap makeNormalMap(int width, int height, std::vector<glm::vec3> normals) {
     NormalMap map;
     map.width = width;
     map.height = height;
-    map.normals = std::move(normals);
+    map.normals.assign(normals.begin(), normals.end());
     map.diagnostics.texels = map.normals.size();
     for (auto& n : map.normals) {
         const float len = glm::length(n);

@@ -280,7 +280,8 @@ TEST(Numeric, Log2PositiveMatchesStdLog2) {
     EXPECT_LT(worst, 2e-14);
     for (int e = -1022; e <= 1023; ++e)
         EXPECT_EQ(log2Positive(std::ldexp(1.0, e)), double(e)) << e;
-    EXPECT_EQ(log2Positive(std::numeric_limits<double>::max()), std::log2(std::numeric_limits<double>::max()));
+    EXPECT_EQ(log2Positive(std::numeric_limits<double>::max()),
+              std::log2(std::numeric_limits<double>::max()));
 }
 
 TEST(Variance, VarianceToGloss) {

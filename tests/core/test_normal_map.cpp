@@ -27,7 +27,7 @@ Image makeImage(int w, int h, int c, const std::vector<float>& pixels, bool isFl
     image.width = w;
     image.height = h;
     image.channels = c;
-    image.pixels = pixels;
+    image.pixels.assign(pixels.begin(), pixels.end());
     image.source.isFloat = isFloat;
     return image;
 }

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <burnish/core/result.h>
+#include <burnish/core/texel_vector.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -24,12 +25,13 @@ struct ImageSourceInfo {
     std::string colorSpace; // the file's tag ("sRGB", "Linear", ...) — informative only
 };
 
-/// A tightly packed float image, row-major, top row first, `channels` floats per pixel.
+/// A tightly packed float image, row-major, top row first, `channels` floats per pixel. The pixels
+/// are a TexelVector: resize() leaves them uninitialised, so write every one.
 struct Image {
     int width = 0;
     int height = 0;
     int channels = 0;
-    std::vector<float> pixels;
+    TexelVector pixels;
     ImageSourceInfo source;
 
     size_t texelCount() const { return static_cast<size_t>(width) * static_cast<size_t>(height); }

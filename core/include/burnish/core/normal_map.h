@@ -5,6 +5,7 @@
 
 #include <burnish/core/image.h>
 #include <burnish/core/result.h>
+#include <burnish/core/texel_vector.h>
 
 #include <glm/vec3.hpp>
 
@@ -52,11 +53,15 @@ struct NormalMapDiagnostics {
     std::vector<std::string> warnings;
 };
 
+/// Normals whose new elements are uninitialised on resize (texel_vector.h): decoding writes every
+/// one from parallel blocks instead of after a serial zero-fill of the whole array.
+using NormalVector = std::vector<glm::vec3, TexelAllocator<glm::vec3>>;
+
 /// Unit tangent-space normals (OpenGL convention), row-major, top row first.
 struct NormalMap {
     int width = 0;
     int height = 0;
-    std::vector<glm::vec3> normals;
+    NormalVector normals;
     NormalMapDiagnostics diagnostics;
     ImageSourceInfo source;
 

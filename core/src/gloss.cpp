@@ -142,6 +142,24 @@ double GlossEncoding::value(double n) const {
     return 0.0;
 }
 
+void GlossEncoding::values(const double* powers, float* out, size_t count) const {
+    if (m_kind != GlossKind::LogPower) {
+        for (size_t i = 0; i < count; ++i)
+            out[i] = float(value(powers[i]));
+        return;
+    }
+    // value()'s LogPower case with selects for its clamps; n/nMin >= 1 is a normal double.
+    const double lo = m_minPower, hi = m_maxPower, nMin = m_nMin, scale = kLn2<double> / m_logRange;
+    for (size_t i = 0; i < count; ++i) {
+        double n = clampPower(powers[i]);
+        n = n > lo ? n : lo;
+        n = n < hi ? n : hi;
+        double g = log2Positive(n / nMin) * scale;
+        g = g > 0.0 ? g : 0.0;
+        out[i] = float(g < 1.0 ? g : 1.0);
+    }
+}
+
 double GlossEncoding::minPower() const {
     return m_minPower;
 }

@@ -39,9 +39,6 @@ const MethodInfo& info(Method method) {
     return kMethods[0];
 }
 
-// Base powers below this are treated as this, so 1/s stays finite (s = 0 is a flat-white lobe).
-constexpr double kMinBasePower = 1e-6;
-
 glm::vec3 normalOfSlope(const glm::dvec2& b) {
     return glm::vec3(glm::normalize(glm::dvec3(b.x, b.y, 1.0)));
 }
@@ -104,10 +101,8 @@ double methodPower(Method method, const NormalMoments& moments, double s, const 
             std::round(toksvigFactor(double(moments.lengthNa()), params.toksvigMapPower) * 255.0) / 255.0;
         return convertToksvigFactor(ft, params.toksvigMapPower, s) * s;
     }
-    case Method::VarianceToGloss: {
-        const double v = moments.projectedVariance();
-        return clampPower(1.0 / (v + 1.0 / (s + 1.0)) - 1.0);
-    }
+    case Method::VarianceToGloss:
+        return varianceToGlossPower(moments.projectedVariance(), s);
     case Method::Vmf: {
         const double kappa = vmfKappa(double(moments.lengthNa()));
         return kappa > 0.0 ? clampPower(1.0 / (1.0 / s + 1.0 / kappa)) : 0.0;

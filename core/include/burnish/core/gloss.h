@@ -58,6 +58,10 @@ public:
     double power(double v) const;
     /// Stored value for a power; n is clamped to [powerAtMin(), powerAtMax()] in power order.
     double value(double n) const;
+    /// value() of `count` powers as floats (a bake's row). The log-power encodings run a loop
+    /// without calls that the compiler vectorises, its logarithm log2Positive's (within 2e-14 of
+    /// std::log2), so a float differs from value()'s only when that moves it across a rounding.
+    void values(const double* powers, float* out, size_t count) const;
     /// The powers the encoding can represent (lowest and highest).
     double minPower() const;
     double maxPower() const;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <burnish/core/normal_pyramid.h>
+#include <burnish/core/numeric.h>
 #include <burnish/core/result.h>
 
 #include <glm/vec2.hpp>
@@ -78,6 +79,19 @@ TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, cons
 
 /// methodLobe(...).power alone, without the lobe's normal (what a gloss texture stores).
 double methodPower(Method method, const NormalMoments& moments, double s, const MethodParams& params = {});
+
+/// Base powers below this are treated as this, so 1/s stays finite (s = 0 is a flat-white lobe).
+inline constexpr double kMinBasePower = 1e-6;
+
+/// Variance-to-gloss's power for projected variance v and base power s: 1/(v + 1/(s+1)) − 1, s
+/// clamped to [kMinBasePower, kMaxPower], the result to [0, kMaxPower]. Branch-free (selects), so
+/// the bake's rows of it vectorise; methodPower's VarianceToGloss case.
+// Lazarov 2011, "Physically-based lighting in Call of Duty: Black Ops": v' = v + 1/(n+1)
+inline double varianceToGlossPower(double v, double s) {
+    s = clampPower(s);
+    s = s > kMinBasePower ? s : kMinBasePower;
+    return clampPower(1.0 / (v + 1.0 / (s + 1.0)) - 1.0);
+}
 
 /// LEAN's slope covariance Σ = M − BBᵀ + I/s (xx, yy, xy) for base power s (clamped as
 /// methodLobe clamps it): what methodLobe gives a LEAN lobe, without the rest of the lobe.

@@ -264,6 +264,33 @@ TEST(Variance, LogVarianceEndsAreExactAndPositive) {
     EXPECT_EQ(encodeLogVariance(std::numeric_limits<double>::denorm_min()), 1.0);
 }
 
+TEST(GlossEncodings, ValuesOfARowMatchValue) {
+    // The bake's row form: value() per power as a float, within a float rounding (the log-power
+    // kinds take their logarithm from log2Positive), exact at the range ends, clamped outside it,
+    // and 0 (not NaN) for a NaN power.
+    std::vector<double> powers = {
+        0.0,    1e-9,   0.5, 1.0, 2.0,  10.0, 100.0,
+        2048.0, 8192.0, 1e5, 1e9, 1e12, -3.0, std::numeric_limits<double>::quiet_NaN()};
+    for (int i = 0; i <= 4096; ++i)
+        powers.push_back(std::exp2(i / 4096.0 * 14.0));
+    for (const auto& name : GlossEncoding::presetNames()) {
+        const auto encoding = GlossEncoding::fromName(name);
+        ASSERT_TRUE(encoding) << name;
+        std::vector<float> row(powers.size(), -1.0f);
+        encoding->values(powers.data(), row.data(), powers.size());
+        for (size_t i = 0; i < powers.size(); ++i) {
+            const double expected = encoding->value(powers[i]);
+            ASSERT_TRUE(std::isfinite(row[i])) << name << " n = " << powers[i];
+            EXPECT_NEAR(row[i], expected, 1e-7) << name << " n = " << powers[i];
+        }
+        std::vector<double> ends = {encoding->minPower(), encoding->maxPower()};
+        std::vector<float> endValues(2);
+        encoding->values(ends.data(), endValues.data(), 2);
+        EXPECT_EQ(endValues[0], float(encoding->value(ends[0]))) << name;
+        EXPECT_EQ(endValues[1], float(encoding->value(ends[1]))) << name;
+    }
+}
+
 TEST(Numeric, Log2PositiveMatchesStdLog2) {
     // Within 2e-14 of std::log2 over every binade a double holds and densely over [2^-13, 1] (the
     // log-variance range), exact at powers of two.

@@ -453,7 +453,8 @@ PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat f
                         o[t * size_t(stored)] = constant;
                     continue;
                 }
-                // Source::at with its texture and stride hoisted out of the loop (same values).
+                // Source::at with its texture and stride hoisted out of the loop (same values; code
+                // clamps, and a flipped value is clamped before 1 − v as at() does).
                 const size_t stride = size_t(source->texture->channels);
                 const float* in = source->texture->mips[k].texels.data() + size_t(source->index);
                 if (source->flip)
@@ -461,7 +462,7 @@ PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat f
                         o[t * size_t(stored)] = code(1.0f - std::clamp(in[t * stride], 0.0f, 1.0f));
                 else
                     for (size_t t = begin; t < end; ++t)
-                        o[t * size_t(stored)] = code(std::clamp(in[t * stride], 0.0f, 1.0f));
+                        o[t * size_t(stored)] = code(in[t * stride]);
             }
         });
     };

@@ -34,7 +34,7 @@ GlossEncoding::GlossEncoding(GlossKind kind, double nMin, double nMax, std::stri
     : m_kind(kind)
     , m_nMin(nMin)
     , m_nMax(nMax)
-    , m_logRange(kind == GlossKind::LogPower ? std::log(nMax / nMin) : 0.0)
+    , m_log2Range(kind == GlossKind::LogPower ? log2Positive(nMax / nMin) : 0.0)
     , m_minPower(nMin)
     , m_maxPower(nMax)
     , m_name(std::move(name))
@@ -130,7 +130,7 @@ double GlossEncoding::value(double n) const {
     n = std::clamp(clampPower(n), minPower(), maxPower());
     switch (m_kind) {
     case GlossKind::LogPower:
-        return clampUnit(std::log(n / m_nMin) / m_logRange);
+        return logPowerValue(n);
     case GlossKind::GgxRoughness:
         return clampUnit(std::sqrt(ggxAlphaFromPower(n)));
     case GlossKind::GgxAlpha:
@@ -148,16 +148,8 @@ void GlossEncoding::values(const double* powers, float* out, size_t count) const
             out[i] = float(value(powers[i]));
         return;
     }
-    // value()'s LogPower case with selects for its clamps; n/nMin >= 1 is a normal double.
-    const double lo = m_minPower, hi = m_maxPower, nMin = m_nMin, scale = kLn2<double> / m_logRange;
-    for (size_t i = 0; i < count; ++i) {
-        double n = clampPower(powers[i]);
-        n = n > lo ? n : lo;
-        n = n < hi ? n : hi;
-        double g = log2Positive(n / nMin) * scale;
-        g = g > 0.0 ? g : 0.0;
-        out[i] = float(g < 1.0 ? g : 1.0);
-    }
+    for (size_t i = 0; i < count; ++i)
+        out[i] = float(logPowerValue(powers[i]));
 }
 
 double GlossEncoding::minPower() const {

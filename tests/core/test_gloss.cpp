@@ -265,9 +265,9 @@ TEST(Variance, LogVarianceEndsAreExactAndPositive) {
 }
 
 TEST(GlossEncodings, ValuesOfARowMatchValue) {
-    // The bake's row form: value() per power as a float, within a float rounding (the log-power
-    // kinds take their logarithm from log2Positive), exact at the range ends, clamped outside it,
-    // and 0 (not NaN) for a NaN power.
+    // The bake's row form is value() per power as a float, exactly: at and beyond the range's
+    // ends, for negative powers and for a NaN power (0's value, not NaN). The log-power kinds are
+    // also within 1e-14 of the closed form log(n/nMin)/log(nMax/nMin) and exact at both ends.
     std::vector<double> powers = {
         0.0,    1e-9,   0.5, 1.0, 2.0,  10.0, 100.0,
         2048.0, 8192.0, 1e5, 1e9, 1e12, -3.0, std::numeric_limits<double>::quiet_NaN()};
@@ -280,14 +280,18 @@ TEST(GlossEncodings, ValuesOfARowMatchValue) {
         encoding->values(powers.data(), row.data(), powers.size());
         for (size_t i = 0; i < powers.size(); ++i) {
             const double expected = encoding->value(powers[i]);
-            ASSERT_TRUE(std::isfinite(row[i])) << name << " n = " << powers[i];
-            EXPECT_NEAR(row[i], expected, 1e-7) << name << " n = " << powers[i];
+            ASSERT_TRUE(std::isfinite(expected)) << name << " n = " << powers[i];
+            EXPECT_EQ(row[i], float(expected)) << name << " n = " << powers[i];
         }
-        std::vector<double> ends = {encoding->minPower(), encoding->maxPower()};
-        std::vector<float> endValues(2);
-        encoding->values(ends.data(), endValues.data(), 2);
-        EXPECT_EQ(endValues[0], float(encoding->value(ends[0]))) << name;
-        EXPECT_EQ(endValues[1], float(encoding->value(ends[1]))) << name;
+        if (encoding->kind() != GlossKind::LogPower) continue;
+        const double lo = encoding->minPower(), hi = encoding->maxPower();
+        EXPECT_EQ(encoding->value(lo), 0.0) << name;
+        EXPECT_EQ(encoding->value(hi), 1.0) << name;
+        for (int i = 0; i <= 1000; ++i) {
+            const double n = lo * std::pow(hi / lo, i / 1000.0);
+            EXPECT_NEAR(encoding->value(n), std::log(n / lo) / std::log(hi / lo), 1e-14)
+                << name << " n = " << n;
+        }
     }
 }
 

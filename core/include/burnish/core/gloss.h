@@ -58,9 +58,8 @@ public:
     double power(double v) const;
     /// Stored value for a power; n is clamped to [powerAtMin(), powerAtMax()] in power order.
     double value(double n) const;
-    /// value() of `count` powers as floats (a bake's row). The log-power encodings run a loop
-    /// without calls that the compiler vectorises, its logarithm log2Positive's (within 2e-14 of
-    /// std::log2), so a float differs from value()'s only when that moves it across a rounding.
+    /// value() of `count` powers as floats (a bake's row); for the log-power encodings a loop
+    /// without calls that the compiler vectorises.
     void values(const double* powers, float* out, size_t count) const;
     /// The powers the encoding can represent (lowest and highest).
     double minPower() const;
@@ -69,12 +68,22 @@ public:
 
 private:
     GlossEncoding(GlossKind kind, double nMin, double nMax, std::string name, std::string formula);
+    /// value() of the log-power kind: g = log2(n/nMin)/log2(nMax/nMin), n clamped to the range with
+    /// selects and the logarithms log2Positive's (within 2e-14 of std::log2), so g is exactly 0
+    /// and 1 at the range's ends and a row of it vectorises.
+    double logPowerValue(double n) const {
+        n = clampPower(n);
+        n = n > m_minPower ? n : m_minPower;
+        n = n < m_maxPower ? n : m_maxPower;
+        const double g = log2Positive(n / m_nMin) / m_log2Range; // n/nMin >= 1: a normal double
+        return g < 1.0 ? g : 1.0;
+    }
 
     GlossKind m_kind;
     double m_nMin;
     double m_nMax;
-    double m_logRange; // log(nMax/nMin), computed once: value() runs per texel in the bake
-    double m_minPower; // minPower() and maxPower(), computed once for the same reason
+    double m_log2Range; // log2(nMax/nMin), computed once: value() runs per texel in the bake
+    double m_minPower;  // minPower() and maxPower(), computed once for the same reason
     double m_maxPower;
     std::string m_name;
     std::string m_formula;
@@ -109,9 +118,8 @@ double toksvigPower(double lenNa, double s);
 // Hill 2011, "Specular Showdown in the Wild West": ft /= lerp(s/fixed_s, 1, ft)
 double convertToksvigFactor(double ft, double fixedS, double s);
 
-/// The two-value log-space encoding of a per-axis slope variance: g = log2(1/Σ)/13, clamped to [0, 1]
-/// (so Σ in [2^-13, 1]).
-/// Σ is clamped to [2^-13, 1] first (NaN and Σ <= 0 give 1), which is the clamp of g, so the
+/// The two-value log-space encoding of a per-axis slope variance: g = log2(1/Σ)/13 in [0, 1]. Σ is
+/// clamped to [2^-13, 1] first (NaN and Σ <= 0 give g = 1), which is the clamp of g, so the
 /// logarithm is log2Positive's and a row of them vectorises.
 // Baker & Hill 2012, "Rock-Solid Shading": store log2(1/Σ_{x,y})/13
 inline double encodeLogVariance(double sigma2) {

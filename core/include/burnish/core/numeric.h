@@ -67,7 +67,7 @@ inline double log2Positive(double x) {
     double series = 1.0 / 15;
     for (const double c : {1.0 / 13, 1.0 / 11, 1.0 / 9, 1.0 / 7, 1.0 / 5, 1.0 / 3, 1.0})
         series = c + s2 * series;
-    return e + (2.0 / 0.693147180559945309417232121458176568) * s * series;
+    return e + (2.0 / kLn2<double>)*s * series;
 }
 
 /// True when x is neither NaN nor infinite.

@@ -522,11 +522,7 @@ Status writePng(const PlannedFile& file, size_t k, const fs::path& target, const
     png.channels = file.info.storedChannels;
     png.bitDepth = format == ExportFormat::Png16 ? 16 : 8;
     png.data = pixels.data();
-    // zlib level 1: on baked 4096² maps (8-bit normal and gloss, 16-bit LEAN moments) its files
-    // are 0.1-1.4% larger than level 3's and deflate 15-25% faster; levels above 3 cost 1.5x the
-    // time for 3-5% smaller files.
-    constexpr int kPngLevel = 1;
-    const auto bytes = encodePng(png, kPngLevel);
+    const auto bytes = encodePng(png);
     if (!bytes) return Error{"cannot write '" + target.string() + "': " + bytes.error()};
     return writeFileAtomic(staging, *bytes, Overwrite::Refuse);
 }

@@ -19,12 +19,12 @@ struct PngPixels {
 };
 
 /// The PNG file's bytes: IHDR, the image data in IDAT chunks (each at most 1 MiB), IEND; no colour or
-/// gamma chunks (the files hold data, not colour). Every row is filtered with Sub (filter type 1), the
-/// zlib level is `level` (0-9). The bytes depend only on the pixels and `level`, never on the number of
-/// threads or their scheduling. Errors (not exceptions): sizes of 0 or over 2^31-1, channels outside
-/// 1-4, a depth other than 8 or 16, null data, a level outside 0-9, byte counts that overflow, zlib or
-/// allocation failures.
-Result<std::string> encodePng(const PngPixels& pixels, int level = 3);
+/// gamma chunks (the files hold data, not colour). Every row is filtered with Sub (filter type 1) and
+/// deflated by ISA-L's igzip at its level 3. The bytes depend only on the pixels (and on the ISA-L
+/// build), never on the number of threads or their scheduling. Errors (not exceptions): sizes of 0 or
+/// over 2^31-1, channels outside 1-4, a depth other than 8 or 16, null data, byte counts that
+/// overflow, deflate or allocation failures.
+Result<std::string> encodePng(const PngPixels& pixels);
 
 /// Rows per independently deflated segment for rows of `filteredRowBytes` bytes (filter byte
 /// included): about 1 MiB of filtered bytes, at least 1 row. Exposed so tests can check the layout.

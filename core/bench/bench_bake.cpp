@@ -3,6 +3,7 @@
 //                      every texture of the method (0), or those its preset's files read (1)
 //   BM_ReadImage       reading that map as an 8-bit RGB PNG (written once to the temp folder)
 //   BM_DecodeNormalMap decoding the read floats into unit normals, with the diagnostics
+//   BM_LoadNormalMap   that PNG straight to unit normals (what `burnish bake` does; no float image)
 //   BM_Pyramid         the normal pyramid alone, 4096²
 //   BM_MomentRows/<k>  the tent-filtered moment rows of level k alone (forEachMomentRow), 4096²
 //   BM_Evaluate        `burnish evaluate`'s core on a 1024² map, mips 1-4, one power, all methods

@@ -16,6 +16,7 @@
 #include <map>
 #include <mutex>
 #include <sstream>
+#include <type_traits>
 #include <vector>
 
 namespace burnish::render {
@@ -28,6 +29,46 @@ namespace {
 // every epoxy dispatch pointer (the exported data symbols `epoxy_glFoo`) is pointed at OSMesa's own
 // entry point, and put back when an EGL or host context is made current again. The names come from
 // libepoxy's dynamic symbol table, so every function epoxy knows is covered.
+
+// ---------------------------------------------------------------------------------------------
+// libOSMesa is opened on first use instead of being linked: it pulls in LLVM (Mesa's llvmpipe),
+// whose symbol lookups every start of `burnish` paid, even for commands that never render.
+
+struct OsMesaApi {
+    void* library = nullptr;
+    decltype(&OSMesaCreateContextAttribs) createContextAttribs = nullptr;
+    decltype(&OSMesaMakeCurrent) makeCurrent = nullptr;
+    decltype(&OSMesaGetCurrentContext) getCurrentContext = nullptr;
+    decltype(&OSMesaDestroyContext) destroyContext = nullptr;
+    decltype(&OSMesaGetProcAddress) getProcAddress = nullptr;
+};
+
+// The library and its five entry points, opened once (never closed: contexts may outlive callers).
+Result<const OsMesaApi*> osMesaApi() {
+    static const Result<OsMesaApi> api = []() -> Result<OsMesaApi> {
+        OsMesaApi a;
+        std::string why;
+        for (const char* name : {"libOSMesa.so.8", "libOSMesa.so.6"}) {
+            a.library = dlopen(name, RTLD_NOW | RTLD_LOCAL);
+            if (a.library) break;
+            if (const char* error = dlerror()) why = error;
+        }
+        if (!a.library) return Error{"OSMesa: cannot load libOSMesa (" + why + ")"};
+        auto bind = [&](auto& fn, const char* symbol) {
+            fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(dlsym(a.library, symbol));
+            return fn != nullptr;
+        };
+        if (!bind(a.createContextAttribs, "OSMesaCreateContextAttribs") ||
+            !bind(a.makeCurrent, "OSMesaMakeCurrent") ||
+            !bind(a.getCurrentContext, "OSMesaGetCurrentContext") ||
+            !bind(a.destroyContext, "OSMesaDestroyContext") ||
+            !bind(a.getProcAddress, "OSMesaGetProcAddress"))
+            return Error{"OSMesa: libOSMesa lacks an entry point Burnish needs"};
+        return a;
+    }();
+    if (!api) return Error{api.error()};
+    return &*api;
+}
 
 struct EpoxyPointer {
     void** slot = nullptr; // &epoxy_glFoo: the pointer the `glFoo` macro calls through
@@ -111,17 +152,16 @@ Status bindEpoxyToOsMesa() {
         }
         g_epoxyPointersListed = true;
     }
-    void* osmesa = dlopen("libOSMesa.so.8", RTLD_LAZY | RTLD_NOLOAD);
-    if (!osmesa) osmesa = dlopen("libOSMesa.so.6", RTLD_LAZY | RTLD_NOLOAD);
+    const auto api = osMesaApi();
+    if (!api) return Error{api.error()};
     for (auto& pointer : g_epoxyPointers) {
         pointer.saved = *pointer.slot;
         // The library's exported entry point first: OSMesaGetProcAddress would mint a dispatch
         // stub for every unknown name it is asked about.
-        void* entry = osmesa ? dlsym(osmesa, pointer.glName.c_str()) : nullptr;
-        if (!entry) entry = reinterpret_cast<void*>(OSMesaGetProcAddress(pointer.glName.c_str()));
+        void* entry = dlsym((*api)->library, pointer.glName.c_str());
+        if (!entry) entry = reinterpret_cast<void*>((*api)->getProcAddress(pointer.glName.c_str()));
         if (entry) *pointer.slot = entry;
     }
-    if (osmesa) dlclose(osmesa);
     g_epoxyBinding = EpoxyBinding::OsMesa;
     return {};
 }
@@ -376,29 +416,33 @@ Result<std::unique_ptr<EglContext>> createEglContext(int minVersion) {
 
 class OsMesaContext final : public GlContext {
 public:
-    explicit OsMesaContext(OSMesaContext context)
-        : m_context(context) {}
+    OsMesaContext(const OsMesaApi& api, OSMesaContext context)
+        : m_api(api)
+        , m_context(context) {}
     ~OsMesaContext() override {
-        if (OSMesaGetCurrentContext() == m_context) OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);
-        OSMesaDestroyContext(m_context);
+        if (m_api.getCurrentContext() == m_context) m_api.makeCurrent(nullptr, nullptr, 0, 0, 0);
+        m_api.destroyContext(m_context);
     }
     ContextKind kind() const override { return ContextKind::OsMesa; }
     using GlContext::setDescription;
     Status makeCurrent() override {
         // A 1×1 default framebuffer: OSMesa needs one to make a context current, and the renderer
         // always draws into its own framebuffer objects.
-        if (!OSMesaMakeCurrent(m_context, m_pixel, GL_UNSIGNED_BYTE, 1, 1)) {
+        if (!m_api.makeCurrent(m_context, m_pixel, GL_UNSIGNED_BYTE, 1, 1)) {
             return Error{"OSMesa: OSMesaMakeCurrent failed"};
         }
         return bindEpoxyToOsMesa();
     }
 
 private:
+    const OsMesaApi& m_api;
     OSMesaContext m_context;
     unsigned char m_pixel[4] = {0, 0, 0, 0};
 };
 
 Result<std::unique_ptr<OsMesaContext>> createOsMesaContext(int minVersion) {
+    const auto api = osMesaApi();
+    if (!api) return Error{api.error()};
     std::string lastFailure;
     for (const int version : {45, minVersion}) {
         if (version < minVersion) continue;
@@ -415,13 +459,13 @@ Result<std::unique_ptr<OsMesaContext>> createOsMesaContext(int minVersion) {
                                OSMESA_CONTEXT_MINOR_VERSION,
                                version % 10,
                                0};
-        OSMesaContext context = OSMesaCreateContextAttribs(attribs, nullptr);
+        OSMesaContext context = (*api)->createContextAttribs(attribs, nullptr);
         if (!context) {
             lastFailure = "OSMesaCreateContextAttribs(OpenGL " + std::to_string(version / 10) + "." +
                           std::to_string(version % 10) + " core) failed";
             continue;
         }
-        auto result = std::make_unique<OsMesaContext>(context);
+        auto result = std::make_unique<OsMesaContext>(**api, context);
         if (auto status = result->makeCurrent(); !status) return Error{status.error()};
         if (auto status = checkCurrentGl(minVersion); !status) return Error{status.error()};
         result->setDescription("OSMesa, " + currentGlDescription());

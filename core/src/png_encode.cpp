@@ -69,29 +69,28 @@ void appendU32(std::string& out, uint32_t v) {
 }
 
 // PNG 1.2 §6.3, filter type 1 (Sub): Sub(x) = Raw(x) - Raw(x - bpp) mod 256, Raw(x < 0) = 0.
-// Writes the filter-type byte and the filtered row of y to out.
-void filterRowSub(const PngPixels& pixels, std::size_t y, unsigned char* out) {
-    const std::size_t channels = std::size_t(pixels.channels);
-    const std::size_t samplesPerRow = std::size_t(pixels.width) * channels;
+// Writes the filter-type byte and the filtered row `raw` (samplesPerRow samples) to out.
+void filterRowSub(const void* raw, std::size_t samplesPerRow, std::size_t channels, int bitDepth,
+                  unsigned char* out) {
     out[0] = 1;
     unsigned char* sub = out + 1;
-    if (pixels.bitDepth == 8) {
-        const auto* raw = static_cast<const uint8_t*>(pixels.data) + y * samplesPerRow;
+    if (bitDepth == 8) {
+        const auto* row = static_cast<const uint8_t*>(raw);
         for (std::size_t k = 0; k < channels; ++k)
-            sub[k] = raw[k];
+            sub[k] = row[k];
         for (std::size_t k = channels; k < samplesPerRow; ++k)
-            sub[k] = uint8_t(raw[k] - raw[k - channels]);
+            sub[k] = uint8_t(row[k] - row[k - channels]);
         return;
     }
     // 16-bit samples are stored big-endian (PNG 1.2 §2.1); the byte bpp to the left of each byte is
     // the same byte of the sample one pixel to the left, so the high and low bytes subtract apart.
-    const auto* raw = static_cast<const uint16_t*>(pixels.data) + y * samplesPerRow;
+    const auto* row = static_cast<const uint16_t*>(raw);
     for (std::size_t k = 0; k < channels; ++k) {
-        sub[2 * k] = uint8_t(raw[k] >> 8);
-        sub[2 * k + 1] = uint8_t(raw[k]);
+        sub[2 * k] = uint8_t(row[k] >> 8);
+        sub[2 * k + 1] = uint8_t(row[k]);
     }
     for (std::size_t k = channels; k < samplesPerRow; ++k) {
-        const uint16_t v = raw[k], left = raw[k - channels];
+        const uint16_t v = row[k], left = row[k - channels];
         sub[2 * k] = uint8_t((v >> 8) - (left >> 8));
         sub[2 * k + 1] = uint8_t(v - left);
     }
@@ -99,6 +98,7 @@ void filterRowSub(const PngPixels& pixels, std::size_t y, unsigned char* out) {
 
 // Per-thread buffers, reused from segment to segment.
 struct Scratch {
+    std::vector<unsigned char> raw; // the segment's rows, when PngPixels::rows makes them
     std::vector<unsigned char> filtered;
     std::vector<unsigned char> compressed;
     std::vector<uint8_t> levelBuffer; // ISA-L's hash tables and tokens for kIsalLevel
@@ -192,8 +192,18 @@ Result<std::string> encodeChecked(const PngPixels& pixels) {
         const std::size_t y0 = s * rowsPerSegment, y1 = std::min(height, y0 + rowsPerSegment);
         const std::size_t bytes = (y1 - y0) * filteredRowBytes;
         if (scratch.filtered.size() < bytes) scratch.filtered.resize(bytes);
+        const unsigned char* raw = nullptr;
+        if (pixels.data) {
+            raw = static_cast<const unsigned char*>(pixels.data) + y0 * rowBytes;
+        } else {
+            if (scratch.raw.size() < (y1 - y0) * rowBytes) scratch.raw.resize((y1 - y0) * rowBytes);
+            pixels.rows(y0, y1, scratch.raw.data());
+            raw = scratch.raw.data();
+        }
+        const std::size_t samplesPerRow = std::size_t(pixels.width) * std::size_t(pixels.channels);
         for (std::size_t y = y0; y < y1; ++y)
-            filterRowSub(pixels, y, scratch.filtered.data() + (y - y0) * filteredRowBytes);
+            filterRowSub(raw + (y - y0) * rowBytes, samplesPerRow, std::size_t(pixels.channels),
+                         pixels.bitDepth, scratch.filtered.data() + (y - y0) * filteredRowBytes);
         Segment& segment = segments[s];
         segment.filteredBytes = bytes;
         segment.adler = isal_adler32(segment.adler, scratch.filtered.data(), bytes);
@@ -301,7 +311,7 @@ Result<std::string> encodePng(const PngPixels& pixels) {
                      std::to_string(pixels.channels)};
     if (pixels.bitDepth != 8 && pixels.bitDepth != 16)
         return Error{"PNG encoding supports 8 or 16 bits per sample, got " + std::to_string(pixels.bitDepth)};
-    if (!pixels.data) return Error{"PNG encoding failed: no pixel data"};
+    if (!pixels.data && !pixels.rows) return Error{"PNG encoding failed: no pixel data"};
     // Only allocation can throw below (a huge image or output); it becomes an error value.
     try {
         return encodeChecked(pixels);

@@ -23,6 +23,54 @@ float unit(double v) {
     return float(saturate(v));
 }
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+// The slope roles' row loops get a 256-bit AVX2 copy, picked when the program loads on CPUs that
+// have it. FMA is not enabled (it is not part of "avx2"), so no multiply-add is fused: both copies
+// do the same IEEE operations lane by lane and give the same bits.
+#define BURNISH_ROW_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define BURNISH_ROW_CLONES
+#endif
+
+// The compact LEAN gloss of a row from the slope covariance (xx, yy, xy) and LEAN's 1/s: the lobe's
+// Σ = slope covariance + I/s, as leanSlopeCovariance builds it; then the logarithms, square roots
+// and divisions without calls or branches, which the compiler vectorises.
+BURNISH_ROW_CLONES void leanGlossRow(const double* cxx, const double* cyy, const double* cxy,
+                                     const double* invLean, int width, float* px) {
+    for (int x = 0; x < width; ++x) {
+        const double sx = cxx[x] + invLean[x];
+        const double sy = cyy[x] + invLean[x];
+        px[3 * x] = float(encodeLogVariance(sx)); // in [0, 1]
+        px[3 * x + 1] = float(encodeLogVariance(sy));
+        const double product = sx * sy;
+        double rho = cxy[x] / std::sqrt(product > 1e-300 ? product : 1e-300);
+        rho = rho > -1.0 ? rho : -1.0;
+        rho = rho < 1.0 ? rho : 1.0;
+        px[3 * x + 2] = unit(0.5 * rho + 0.5);
+    }
+}
+
+// LEAN's second moments M with 1/s on the diagonal, scaled into [0, 1] (invM = 1/sM, invM2 =
+// 1/(2 sM)).
+BURNISH_ROW_CLONES void leanMRow(const double* mxx, const double* myy, const double* mxy,
+                                 const double* invBase, double invM, double invM2, int width, float* px) {
+    for (int x = 0; x < width; ++x) {
+        const double invS = invBase[x];
+        px[3 * x] = unit((mxx[x] + invS) * invM);
+        px[3 * x + 1] = unit((myy[x] + invS) * invM);
+        px[3 * x + 2] = unit(mxy[x] * invM2 + 0.5);
+    }
+}
+
+// LEAN's slope mean B scaled into [0, 1] (invB2 = 1/(2 sB)), `stride` floats a texel.
+BURNISH_ROW_CLONES void slopeMeanRow(const double* bx, const double* by, double invB2, int width, int stride,
+                                     float* px) {
+    for (int x = 0; x < width; ++x) {
+        px[stride * x] = unit(bx[x] * invB2 + 0.5);
+        px[stride * x + 1] = unit(by[x] * invB2 + 0.5);
+    }
+}
+
 // Smallest power of two >= x (and >= 2^-4), so stored ranges are exact binary scales.
 double binaryScale(double x) {
     return std::exp2(std::ceil(std::log2(std::max(x, 1.0 / 16.0))));
@@ -292,11 +340,34 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
             // 1/s per texel for the slope textures; sB and sM are powers of two, so multiplying by
             // their reciprocals is exact.
             thread_local std::vector<double> invBase;
+            // The slope moments as rows of doubles (structure of arrays), read from the moments once
+            // for all the slope roles, so each role's loop is a flat one the compiler vectorises: B,
+            // the second moments M (in float, as slopeSecondMoments gives them), the slope covariance
+            // and LEAN's 1/s (leanInverseBasePower, clamped as the lobe clamps s).
+            thread_local std::vector<double> bx, by, mxx, myy, mxy, cxx, cyy, cxy, invLean;
             if (slopeMethod) {
                 invBase.resize(size_t(width));
+                invLean.resize(size_t(width));
                 const double invConstant = 1.0 / options.basePower;
-                for (int x = 0; x < width; ++x)
+                const double invLeanConstant = leanInverseBasePower(options.basePower);
+                for (int x = 0; x < width; ++x) {
                     invBase[size_t(x)] = base ? 1.0 / basePowers[size_t(x)] : invConstant;
+                    invLean[size_t(x)] = base ? leanInverseBasePower(basePowers[size_t(x)]) : invLeanConstant;
+                }
+                for (auto* v : {&bx, &by, &mxx, &myy, &mxy, &cxx, &cyy, &cxy})
+                    v->resize(size_t(width));
+                for (int x = 0; x < width; ++x) {
+                    const NormalMoments& m = row[x];
+                    const auto M = m.slopeSecondMoments();
+                    bx[size_t(x)] = m.slope.x;
+                    by[size_t(x)] = m.slope.y;
+                    mxx[size_t(x)] = M[0];
+                    myy[size_t(x)] = M[1];
+                    mxy[size_t(x)] = M[2];
+                    cxx[size_t(x)] = m.slopeCov[0];
+                    cyy[size_t(x)] = m.slopeCov[1];
+                    cxy[size_t(x)] = m.slopeCov[2];
+                }
             }
             const double invB2 = 1.0 / (2 * sB), invM = 1.0 / sM, invM2 = 1.0 / (2 * sM);
             for (size_t r = 0; r < roles.size(); ++r) {
@@ -332,51 +403,20 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                         px[x] = unit(toksvigFactor(row[x].lengthNa(), options.params.toksvigMapPower));
                     break;
                 case Role::LeanB:
-                    for (int x = 0; x < width; ++x, px += 2) {
-                        px[0] = unit(double(row[x].slope.x) * invB2 + 0.5);
-                        px[1] = unit(double(row[x].slope.y) * invB2 + 0.5);
-                    }
+                    slopeMeanRow(bx.data(), by.data(), invB2, width, 2, px);
                     break;
                 case Role::Clean:
-                    for (int x = 0; x < width; ++x, px += 3) {
-                        const NormalMoments& m = row[x];
-                        px[0] = unit(double(m.slope.x) * invB2 + 0.5);
-                        px[1] = unit(double(m.slope.y) * invB2 + 0.5);
-                        const auto M = m.slopeSecondMoments();
-                        px[2] = unit((0.5 * (double(M[0]) + double(M[1])) + invBase[size_t(x)]) * invM);
-                    }
+                    slopeMeanRow(bx.data(), by.data(), invB2, width, 3, px);
+                    for (int x = 0; x < width; ++x)
+                        px[3 * x + 2] =
+                            unit((0.5 * (mxx[size_t(x)] + myy[size_t(x)]) + invBase[size_t(x)]) * invM);
                     break;
                 case Role::LeanM:
-                    for (int x = 0; x < width; ++x, px += 3) {
-                        const auto M = row[x].slopeSecondMoments();
-                        const double invS = invBase[size_t(x)];
-                        px[0] = unit((double(M[0]) + invS) * invM);
-                        px[1] = unit((double(M[1]) + invS) * invM);
-                        px[2] = unit(double(M[2]) * invM2 + 0.5);
-                    }
+                    leanMRow(mxx.data(), myy.data(), mxy.data(), invBase.data(), invM, invM2, width, px);
                     break;
-                case Role::LeanGloss: {
-                    // The lobe's Σ = slope covariance + I/s, as methodLobe builds it; then the
-                    // logarithms, square roots and divisions in a loop without calls or branches,
-                    // which the compiler vectorises.
-                    thread_local std::vector<double> sigma;
-                    sigma.resize(3 * size_t(width));
-                    for (int x = 0; x < width; ++x) {
-                        const auto S = leanSlopeCovariance(row[x], basePowers[size_t(x)]);
-                        std::copy(S.begin(), S.end(), &sigma[3 * size_t(x)]);
-                    }
-                    for (int x = 0; x < width; ++x) {
-                        const double* S = &sigma[3 * size_t(x)];
-                        px[3 * x] = float(encodeLogVariance(S[0])); // in [0, 1]
-                        px[3 * x + 1] = float(encodeLogVariance(S[1]));
-                        const double product = S[0] * S[1];
-                        double rho = S[2] / std::sqrt(product > 1e-300 ? product : 1e-300);
-                        rho = rho > -1.0 ? rho : -1.0;
-                        rho = rho < 1.0 ? rho : 1.0;
-                        px[3 * x + 2] = unit(0.5 * rho + 0.5);
-                    }
+                case Role::LeanGloss:
+                    leanGlossRow(cxx.data(), cyy.data(), cxy.data(), invLean.data(), width, px);
                     break;
-                }
                 }
             }
         });

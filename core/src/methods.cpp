@@ -79,13 +79,6 @@ double vmfKappa(double r) {
     return std::clamp(r * (3.0 - r * r) / oneMinusR2, 0.0, kMaxPower);
 }
 
-std::array<double, 3> leanSlopeCovariance(const NormalMoments& moments, double s) {
-    // Olano & Baker 2010, "LEAN Mapping": Σ = M − BBᵀ + I/s
-    const double invS = 1.0 / std::max(clampPower(s), kMinBasePower);
-    return {double(moments.slopeCov[0]) + invS, double(moments.slopeCov[1]) + invS,
-            double(moments.slopeCov[2])};
-}
-
 double methodPower(Method method, const NormalMoments& moments, double s, const MethodParams& params) {
     if (method == Method::Lean || method == Method::Clean)
         return methodLobe(method, moments, s, params).power;

@@ -197,10 +197,17 @@ struct SoaRow {
         return (set & kMomentsSlope) != 0;
     }
 
+    // Padded position p holds texel p − radius, border-mapped: the identity inside the row, so only
+    // the 2·radius positions at the ends pay for borderIndex's division.
+    int sourceIndex(int p, BorderMode border) const {
+        const int x = p - radius;
+        return x >= 0 && x < width ? x : borderIndex(x, width, border);
+    }
+
     void fillFinest(const NormalMap& map, int y, BorderMode border) {
         const bool slopes = (set & kMomentsSlope) != 0;
         for (int p = 0; p < width + 2 * radius; ++p) {
-            const glm::vec3& n = map.at(borderIndex(p - radius, width, border), y);
+            const glm::vec3& n = map.at(sourceIndex(p, border), y);
             c[0][size_t(p)] = n.x;
             c[1][size_t(p)] = n.y;
             c[2][size_t(p)] = n.z;
@@ -218,7 +225,7 @@ struct SoaRow {
         const bool slopes = (set & kMomentsSlope) != 0, covs = (set & kMomentsCov) != 0;
         const int stride = momentStride(set);
         for (int p = 0; p < width + 2 * radius; ++p) {
-            const int x = borderIndex(p - radius, width, border);
+            const int x = sourceIndex(p, border);
             const float* m = &l.box[(size_t(y) * size_t(width) + size_t(x)) * size_t(stride)];
             const size_t i = size_t(p);
             c[0][i] = m[0];

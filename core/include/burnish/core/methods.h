@@ -10,6 +10,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <algorithm>
 #include <array>
 #include <string>
 #include <string_view>
@@ -93,9 +94,19 @@ inline double varianceToGlossPower(double v, double s) {
     return clampPower(1.0 / (v + 1.0 / (s + 1.0)) - 1.0);
 }
 
+/// 1/s for LEAN's lobe, s clamped as methodLobe clamps it (to [kMinBasePower, kMaxPower]).
+inline double leanInverseBasePower(double s) {
+    return 1.0 / std::max(clampPower(s), kMinBasePower);
+}
+
 /// LEAN's slope covariance Σ = M − BBᵀ + I/s (xx, yy, xy) for base power s (clamped as
 /// methodLobe clamps it): what methodLobe gives a LEAN lobe, without the rest of the lobe.
-std::array<double, 3> leanSlopeCovariance(const NormalMoments& moments, double s);
+// Olano & Baker 2010, "LEAN Mapping": Σ = M − BBᵀ + I/s
+inline std::array<double, 3> leanSlopeCovariance(const NormalMoments& moments, double s) {
+    const double invS = leanInverseBasePower(s);
+    return {double(moments.slopeCov[0]) + invS, double(moments.slopeCov[1]) + invS,
+            double(moments.slopeCov[2])};
+}
 
 /// The moments methodLobe and the method's stored textures read (MomentSet flags): the mean
 /// alone for naive, Toksvig, the Toksvig map and vMF; the covariance for variance-to-gloss; the

@@ -291,6 +291,9 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     // every texel: encoded once, with its clamp counts added per texel below.
     const bool constantGloss = !adjustedGloss && !base;
     const bool producesGloss = std::find(roles.begin(), roles.end(), Role::Gloss) != roles.end();
+    const bool producesNormal = std::find(roles.begin(), roles.end(), Role::Normal) != roles.end();
+    const bool needDirections =
+        (producesNormal && !unnormalized) || (producesGloss && method == Method::VarianceToGloss);
     const double glossMinPower = options.encoding.minPower(), glossMaxPower = options.encoding.maxPower();
     const float baseGloss = unit(options.encoding.value(options.basePower));
     for (int k = 0; k < levels; ++k) {
@@ -321,13 +324,20 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
             // Only the adjusted gloss reads the lobe; the other roles store moments or the base
             // power directly.
             thread_local std::vector<double> lobePowers;
+            // The mean directions, once for the normal texture and variance-to-gloss's variances.
+            thread_local std::vector<glm::vec3> directions;
+            if (needDirections) {
+                directions.resize(size_t(width));
+                for (int x = 0; x < width; ++x)
+                    directions[size_t(x)] = row[x].meanDirection();
+            }
             if (adjustedGloss && producesGloss) {
                 lobePowers.resize(size_t(width));
                 if (method == Method::VarianceToGloss) {
-                    // methodPower's formula in two loops: the variances, then the powers in a loop
-                    // without calls or branches, which the compiler vectorises.
+                    // methodPower's formula in two loops: the variances (projectedVariance), then the
+                    // powers in a loop without calls or branches, which the compiler vectorises.
                     for (int x = 0; x < width; ++x)
-                        lobePowers[size_t(x)] = row[x].projectedVariance();
+                        lobePowers[size_t(x)] = row[x].projectedVarianceAbout(directions[size_t(x)]);
                     for (int x = 0; x < width; ++x)
                         lobePowers[size_t(x)] =
                             varianceToGlossPower(lobePowers[size_t(x)], basePowers[size_t(x)]);
@@ -376,7 +386,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                 switch (roles[r]) {
                 case Role::Normal:
                     for (int x = 0; x < width; ++x, px += 3) {
-                        const glm::vec3 n = unnormalized ? row[x].mean : row[x].meanDirection();
+                        const glm::vec3 n = unnormalized ? row[x].mean : directions[size_t(x)];
                         for (int c = 0; c < 3; ++c)
                             px[c] = unit(0.5 * double(n[c]) + 0.5);
                     }

@@ -417,24 +417,6 @@ KernelTaps kernelTaps(FilterKernel kernel) {
     return {0, {1, 0, 0, 0, 0}};
 }
 
-float NormalMoments::lengthNa() const {
-    return std::min(glm::length(mean), 1.0f);
-}
-
-glm::vec3 NormalMoments::meanDirection() const {
-    const float len = glm::length(mean);
-    return len > 0.0f && std::isfinite(len) ? mean / len : glm::vec3(0.0f, 0.0f, 1.0f);
-}
-
-float NormalMoments::projectedVariance() const {
-    const glm::vec3 n = meanDirection();
-    const double trace = double(cov[0]) + double(cov[1]) + double(cov[2]);
-    const double nCn =
-        double(n.x) * n.x * cov[0] + double(n.y) * n.y * cov[1] + double(n.z) * n.z * cov[2] +
-        2.0 * (double(n.x) * n.y * cov[3] + double(n.x) * n.z * cov[4] + double(n.y) * n.z * cov[5]);
-    return float(std::clamp(trace - nCn, 0.0, 1.0));
-}
-
 NormalMoments NormalMoments::ofNormal(const glm::vec3& n) {
     NormalMoments m;
     m.mean = n;

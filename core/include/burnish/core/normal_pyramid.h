@@ -16,10 +16,13 @@
 #include <burnish/core/normal_map.h>
 #include <burnish/core/texel_vector.h>
 
+#include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <string_view>
@@ -39,13 +42,24 @@ struct NormalMoments {
     std::array<float, 3> slopeCov{};  // E[(b−B)(b−B)ᵀ]: xx, yy, xy
 
     /// |Na|, in [0, 1].
-    float lengthNa() const;
-    /// Na/|Na|, or +z when |Na| is 0.
-    glm::vec3 meanDirection() const;
+    float lengthNa() const { return std::min(glm::length(mean), 1.0f); }
+    /// Na/|Na|, or +z when |Na| is 0 (or not finite).
+    glm::vec3 meanDirection() const {
+        const float len = glm::length(mean);
+        return len > 0.0f && std::isfinite(len) ? mean / len : glm::vec3(0.0f, 0.0f, 1.0f);
+    }
     /// Projected variance about the mean direction, E[1 − (n_i·n̂a)²], computed from the central
     /// moments without cancellation (tr C − n̂ᵀCn̂), in [0, 1].
     // Lazarov 2011: v = (1/K) Σ (1 − (n_i·n̄)²)
-    float projectedVariance() const;
+    float projectedVariance() const { return projectedVarianceAbout(meanDirection()); }
+    /// The same about a given unit direction n (projectedVariance with n = meanDirection()).
+    float projectedVarianceAbout(const glm::vec3& n) const {
+        const double trace = double(cov[0]) + double(cov[1]) + double(cov[2]);
+        const double nCn =
+            double(n.x) * n.x * cov[0] + double(n.y) * n.y * cov[1] + double(n.z) * n.z * cov[2] +
+            2.0 * (double(n.x) * n.y * cov[3] + double(n.x) * n.z * cov[4] + double(n.y) * n.z * cov[5]);
+        return float(std::clamp(trace - nCn, 0.0, 1.0));
+    }
     /// LEAN's second slope moments M = E[bbᵀ] (xx, yy, xy).
     // Olano & Baker 2010, "LEAN Mapping": M = (B.x², B.y², B.x·B.y) filtered
     std::array<float, 3> slopeSecondMoments() const {

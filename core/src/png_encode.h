@@ -24,8 +24,9 @@ struct PngPixels {
 
 /// The PNG file's bytes: IHDR, the image data in IDAT chunks (each at most 1 MiB), IEND; no colour or
 /// gamma chunks (the files hold data, not colour). Every row is filtered with Sub (filter type 1) and
-/// deflated by ISA-L's igzip at its level 3. The bytes depend only on the pixels (and on the ISA-L
-/// build), never on the number of threads or their scheduling. Errors (not exceptions): sizes of 0 or
+/// deflated by ISA-L's igzip at its level 3. The bytes depend only on the pixels and on ISA-L (its
+/// version, and the instruction set it picks at run time), never on the number of threads or their
+/// scheduling. Errors (not exceptions): sizes of 0 or
 /// over 2^31-1, channels outside 1-4, a depth other than 8 or 16, neither data nor rows, byte counts that
 /// overflow, deflate or allocation failures.
 Result<std::string> encodePng(const PngPixels& pixels);

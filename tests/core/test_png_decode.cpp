@@ -104,6 +104,10 @@ struct Sample {
     int width = 0, height = 0, channels = 0, bitDepth = 8;
     std::vector<uint8_t> raw; // rows as stored (16-bit big-endian)
     std::size_t bpp() const { return std::size_t(channels * bitDepth / 8); }
+    void pushCode(int code) { // as stored: one byte, or two big-endian
+        if (bitDepth == 16) raw.push_back(uint8_t(code >> 8));
+        raw.push_back(uint8_t(code & 0xFF));
+    }
     std::size_t rowBytes() const { return std::size_t(width) * bpp(); }
 };
 
@@ -116,13 +120,7 @@ Sample makeSample(int width, int height, int channels, int bitDepth, unsigned se
         for (int x = 0; x < width; ++x)
             for (int c = 0; c < channels; ++c) {
                 const int base = (x * 37 + y * 11 + c * 70) % (maxCode + 1);
-                const int v = std::clamp(base + noise(rng) * (bitDepth == 8 ? 1 : 257), 0, maxCode);
-                if (bitDepth == 8) {
-                    s.raw.push_back(uint8_t(v));
-                } else {
-                    s.raw.push_back(uint8_t(v >> 8));
-                    s.raw.push_back(uint8_t(v & 0xFF));
-                }
+                s.pushCode(std::clamp(base + noise(rng) * (bitDepth == 8 ? 1 : 257), 0, maxCode));
             }
     return s;
 }
@@ -450,14 +448,8 @@ Sample normalSample(int width, int height, int channels, int bitDepth, int blue 
             const double nz = std::sqrt(std::max(0.0, 1.0 - nx * nx - ny * ny));
             const double v[4] = {nx, ny, nz, 0.5};
             for (int c = 0; c < channels; ++c) {
-                int code = int(std::lround((0.5 * v[c] + 0.5) * maxCode));
-                if (c == 2 && blue >= 0) code = blue;
-                if (bitDepth == 8) {
-                    s.raw.push_back(uint8_t(code));
-                } else {
-                    s.raw.push_back(uint8_t(code >> 8));
-                    s.raw.push_back(uint8_t(code & 0xFF));
-                }
+                const int code = int(std::lround((0.5 * v[c] + 0.5) * maxCode));
+                s.pushCode(c == 2 && blue >= 0 ? blue : code);
             }
         }
     return s;

@@ -1,4 +1,5 @@
-// burnish-studio [PROJECT]: the material-authoring studio. Opens PROJECT or the built-in sample.
+// burnish-studio [PROJECT|IMAGE]: the material-authoring studio. Opens PROJECT, or the built-in
+// sample with IMAGE as its normal map, or the built-in sample.
 // --screenshot FILE renders the main window once the UI has settled, saves it and exits (CI).
 // --help and --version print without a display.
 #include "main_window.h"
@@ -30,7 +31,7 @@ int main(int argc, char** argv) {
     burnish::studio::addStudioOptions(parser);
     parser.process(app);
     if (parser.positionalArguments().size() > 1) {
-        std::fprintf(stderr, "burnish-studio: give at most one project\n");
+        std::fprintf(stderr, "burnish-studio: give at most one project or image\n");
         return 2;
     }
 
@@ -42,7 +43,7 @@ int main(int argc, char** argv) {
                 std::fprintf(stderr, "burnish-studio: %s\n", qPrintable(text));
             };
         }
-        if (!window.openProject(parser.positionalArguments().first()) && shooting) return 1;
+        if (!window.openFile(parser.positionalArguments().first()) && shooting) return 1;
     }
     window.show();
     if (shooting) {

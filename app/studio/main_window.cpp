@@ -300,6 +300,11 @@ bool MainWindow::openProject(const QString& path) {
     return true;
 }
 
+bool MainWindow::openFile(const QString& path) {
+    if (isProjectFile(path)) return openProject(path);
+    return m_panel->loadMap(MapSlot::Normal, path);
+}
+
 bool MainWindow::save() {
     return m_projectPath.isEmpty() ? saveAs() : saveProjectAs(m_projectPath);
 }
@@ -419,12 +424,9 @@ void MainWindow::dropEvent(QDropEvent* event) {
     if (urls.isEmpty() || !urls.first().isLocalFile()) return;
     const QString path = urls.first().toLocalFile();
     event->acceptProposedAction();
-    if (isProjectFile(path)) {
-        if (maybeSave()) openProject(path);
-    } else {
-        // An image dropped anywhere but on a slot goes to the normal slot.
-        m_panel->loadMap(MapSlot::Normal, path);
-    }
+    // A project replaces the document (after asking about unsaved changes); an image dropped
+    // anywhere but on a slot goes to the normal slot.
+    if (!isProjectFile(path) || maybeSave()) openFile(path);
 }
 
 void MainWindow::restoreSettings() {

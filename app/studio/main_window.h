@@ -43,6 +43,9 @@ public:
 
     /// Opens a project: on any error the message is shown and the document stays as it was.
     bool openProject(const QString& path);
+    /// A .burnish project is opened; any other file is loaded as the normal map of the current
+    /// document (what dropping it on the window does). False, with the message shown, on an error.
+    bool openFile(const QString& path);
     bool saveProjectAs(const QString& path);
     /// New document (the built-in sample), after asking about unsaved changes.
     bool newDocument();

@@ -248,18 +248,21 @@ MapSlotWidget* MaterialPanel::slotWidget(MapSlot slot) const {
     return m_slots[int(slot)];
 }
 
-void MaterialPanel::loadMap(MapSlot slot, const QString& requested) {
+bool MaterialPanel::loadMap(MapSlot slot, const QString& requested) {
     QString path = requested;
     if (path.isEmpty()) {
         QSettings settings;
         path = QFileDialog::getOpenFileName(this, QString("Load %1 map").arg(mapSlotName(slot)),
                                             settings.value("folders/maps").toString(), kImageFilter);
-        if (path.isEmpty()) return;
+        if (path.isEmpty()) return false;
         settings.setValue("folders/maps", QFileInfo(path).absolutePath());
     }
-    if (const Status st = m_doc->loadMap(slot, QFileInfo(path).absoluteFilePath()); !st)
+    if (const Status st = m_doc->loadMap(slot, QFileInfo(path).absoluteFilePath()); !st) {
         emit errorOccurred(QString("Cannot load the %1 map").arg(mapSlotName(slot)),
                            QString::fromStdString(st.error()));
+        return false;
+    }
+    return true;
 }
 
 void MaterialPanel::chooseCustomSpecular() {

@@ -56,8 +56,9 @@ public:
     QDoubleSpinBox* glossSpin() const { return m_glossSpin; }
     MapSlotWidget* slotWidget(MapSlot slot) const;
 
-    /// Loads a map into a slot; errors go to errorOccurred and change nothing.
-    void loadMap(MapSlot slot, const QString& path);
+    /// Loads a map into a slot (a file dialog when path is empty). False when it is not loaded: an
+    /// error (sent to errorOccurred, nothing changes) or a cancelled dialog.
+    bool loadMap(MapSlot slot, const QString& path);
 
     /// Slider steps across the gloss range [0, 1].
     static constexpr int kGlossSteps = 1000;

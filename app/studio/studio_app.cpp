@@ -46,8 +46,10 @@ void addStudioOptions(QCommandLineParser& parser) {
     parser.addVersionOption();
     parser.addOption(
         QCommandLineOption(kScreenshotOption, "Save a picture of the main window to FILE and exit.", "FILE"));
-    parser.addPositionalArgument("project", "A .burnish project to open (default: the built-in sample).",
-                                 "[PROJECT]");
+    parser.addPositionalArgument("file",
+                                 "A .burnish project to open, or an image to load as the normal map of "
+                                 "the built-in sample (default: the built-in sample).",
+                                 "[PROJECT|IMAGE]");
 }
 
 bool commandLineOnlyPrints(int argc, const char* const* argv) {

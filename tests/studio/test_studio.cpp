@@ -304,6 +304,31 @@ TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
     }
 }
 
+TEST(MainWindow, OpenFileTakesAProjectOrAnImageAsTheNormalMap) {
+    // What `burnish-studio FILE` and a drop on the window do: an image becomes the normal map of
+    // the current document, a .burnish file replaces the document, and a bad file changes nothing.
+    test::TempDir dir;
+    TestWindow w;
+    ASSERT_TRUE(w.window.openFile(kNormalMap)) << w.messages.join("\n").toStdString();
+    EXPECT_EQ(w.window.document()->settings().normalMapPath, QFileInfo(kNormalMap).absoluteFilePath());
+    EXPECT_EQ(w.window.document()->maps().normal->width, 512);
+    EXPECT_TRUE(w.messages.isEmpty());
+
+    const QString broken = q(dir / "broken.png");
+    ASSERT_TRUE(writeFileAtomic(broken.toStdString(), std::string("\x89PNG\r\n\x1a\n not a png")));
+    const MaterialSettings before = w.window.document()->settings();
+    EXPECT_FALSE(w.window.openFile(broken));
+    ASSERT_EQ(w.messages.size(), 1);
+    EXPECT_TRUE(w.messages[0].contains("broken.png")) << w.messages[0].toStdString();
+    EXPECT_EQ(w.window.document()->settings(), before);
+
+    const QString project = q(dir / "m.burnish");
+    ASSERT_TRUE(w.window.saveProjectAs(project)) << w.messages.join("\n").toStdString();
+    TestWindow other;
+    ASSERT_TRUE(other.window.openFile(project)) << other.messages.join("\n").toStdString();
+    EXPECT_EQ(other.window.document()->settings(), before);
+}
+
 TEST(Project, AutosaveIsWrittenAndOfferedForRecovery) {
     test::TempDir dir;
     const QString file = q(dir / "a.burnish");
@@ -456,7 +481,7 @@ TEST(StudioCommandLine, HelpAndVersionNeedNoDisplay) {
     EXPECT_EQ(help.exitCode, 0) << help.err;
     EXPECT_NE(help.out.find("Burnish Studio"), std::string::npos) << help.out;
     EXPECT_NE(help.out.find("--screenshot <FILE>"), std::string::npos) << help.out;
-    EXPECT_NE(help.out.find("[PROJECT]"), std::string::npos) << help.out;
+    EXPECT_NE(help.out.find("[PROJECT|IMAGE]"), std::string::npos) << help.out;
 
     const StudioRun shortHelp = runStudioWithoutDisplay("-h");
     EXPECT_EQ(shortHelp.exitCode, 0) << shortHelp.err;

@@ -32,14 +32,14 @@ float unit(double v) {
 #define BURNISH_ROW_CLONES
 #endif
 
-// The compact LEAN gloss of a row from the slope covariance (xx, yy, xy) and LEAN's 1/s: the lobe's
+// The compact LEAN gloss of a row from the slope covariance (xx, yy, xy) and 1/s: the lobe's
 // Σ = slope covariance + I/s, as leanSlopeCovariance builds it; then the logarithms, square roots
 // and divisions without calls or branches, which the compiler vectorises.
 BURNISH_ROW_CLONES void leanGlossRow(const double* cxx, const double* cyy, const double* cxy,
-                                     const double* invLean, int width, float* px) {
+                                     const double* invBase, int width, float* px) {
     for (int x = 0; x < width; ++x) {
-        const double sx = cxx[x] + invLean[x];
-        const double sy = cyy[x] + invLean[x];
+        const double sx = cxx[x] + invBase[x];
+        const double sy = cyy[x] + invBase[x];
         px[3 * x] = float(encodeLogVariance(sx)); // in [0, 1]
         px[3 * x + 1] = float(encodeLogVariance(sy));
         const double product = sx * sy;
@@ -62,7 +62,7 @@ BURNISH_ROW_CLONES void leanMRow(const double* mxx, const double* myy, const dou
     }
 }
 
-// LEAN's slope mean B scaled into [0, 1] (invB2 = 1/(2 sB)), `stride` floats a texel.
+// The slope mean B (LEAN, CLEAN) scaled into [0, 1] (invB2 = 1/(2 sB)), `stride` floats a texel.
 BURNISH_ROW_CLONES void slopeMeanRow(const double* bx, const double* by, double invB2, int width, int stride,
                                      float* px) {
     for (int x = 0; x < width; ++x) {
@@ -347,23 +347,17 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                             methodPower(method, row[x], basePowers[size_t(x)], options.params);
                 }
             }
-            // 1/s per texel for the slope textures; sB and sM are powers of two, so multiplying by
-            // their reciprocals is exact.
-            thread_local std::vector<double> invBase;
             // The slope moments as rows of doubles (structure of arrays), read from the moments once
             // for all the slope roles, so each role's loop is a flat one the compiler vectorises: B,
-            // the second moments M (in float, as slopeSecondMoments gives them), the slope covariance
-            // and LEAN's 1/s (leanInverseBasePower, clamped as the lobe clamps s).
-            thread_local std::vector<double> bx, by, mxx, myy, mxy, cxx, cyy, cxy, invLean;
+            // the second moments M (in float, as slopeSecondMoments gives them), the slope covariance,
+            // and 1/s per texel as the lobe adds it (slopeInverseBasePower). sB and sM are powers of
+            // two, so multiplying by their reciprocals is exact.
+            thread_local std::vector<double> bx, by, mxx, myy, mxy, cxx, cyy, cxy, invBase;
             if (slopeMethod) {
                 invBase.resize(size_t(width));
-                invLean.resize(size_t(width));
-                const double invConstant = 1.0 / options.basePower;
-                const double invLeanConstant = leanInverseBasePower(options.basePower);
-                for (int x = 0; x < width; ++x) {
-                    invBase[size_t(x)] = base ? 1.0 / basePowers[size_t(x)] : invConstant;
-                    invLean[size_t(x)] = base ? leanInverseBasePower(basePowers[size_t(x)]) : invLeanConstant;
-                }
+                const double invConstant = slopeInverseBasePower(options.basePower);
+                for (int x = 0; x < width; ++x)
+                    invBase[size_t(x)] = base ? slopeInverseBasePower(basePowers[size_t(x)]) : invConstant;
                 for (auto* v : {&bx, &by, &mxx, &myy, &mxy, &cxx, &cyy, &cxy})
                     v->resize(size_t(width));
                 for (int x = 0; x < width; ++x) {
@@ -425,7 +419,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                     leanMRow(mxx.data(), myy.data(), mxy.data(), invBase.data(), invM, invM2, width, px);
                     break;
                 case Role::LeanGloss:
-                    leanGlossRow(cxx.data(), cyy.data(), cxy.data(), invLean.data(), width, px);
+                    leanGlossRow(cxx.data(), cyy.data(), cxy.data(), invBase.data(), width, px);
                     break;
                 }
             }

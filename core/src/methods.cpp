@@ -114,14 +114,13 @@ TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, cons
         lobe.power = methodPower(method, moments, s, params);
         return lobe;
     }
-    s = std::max(clampPower(s), kMinBasePower);
     switch (method) {
     case Method::Lean:
     case Method::Clean: {
         lobe.slopeGaussian = true;
         lobe.slopeMean = glm::dvec2(moments.slope);
         lobe.normal = normalOfSlope(lobe.slopeMean);
-        const double invS = 1.0 / s;
+        const double invS = slopeInverseBasePower(s);
         if (method == Method::Lean) {
             lobe.slopeCov = leanSlopeCovariance(moments, s);
         } else {

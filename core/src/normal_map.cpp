@@ -134,6 +134,20 @@ bool autoCandidate(int channels, const NormalMapOptions& options) {
     return options.layout == NormalLayout::Auto && channels >= 3;
 }
 
+/// The settings both decoders start from: RG when forced or for 2 channels (the auto layout's
+/// constant-blue test may still switch it), signed only when asked (decodeNormalMap also detects
+/// signed float images).
+DecodeSettings initialSettings(int channels, const NormalMapOptions& options,
+                               const NormalMapDiagnostics& diag) {
+    DecodeSettings settings;
+    settings.rg = options.layout == NormalLayout::Rg || channels == 2;
+    settings.isSigned = options.encoding == NormalValueEncoding::Signed;
+    settings.greenFlipped = diag.greenFlipped;
+    settings.renormalize = options.renormalize;
+    settings.stride = size_t(channels);
+    return settings;
+}
+
 void setLayout(NormalMap& map, bool rg, bool constantBlue) {
     if (constantBlue)
         map.diagnostics.warnings.push_back(
@@ -205,13 +219,8 @@ std::optional<Result<NormalMap>> loadPngNormalMap(const OpenedImage& opened,
         return Result<NormalMap>(Error{"not enough memory to read image '" + opened.path.string() + "'"});
     }
 
-    DecodeSettings settings;
-    settings.rg = options.layout == NormalLayout::Rg || channels == 2;
     // Integer files are unsigned unless the caller says otherwise (decodeNormalMap's rule).
-    settings.isSigned = options.encoding == NormalValueEncoding::Signed;
-    settings.greenFlipped = map.diagnostics.greenFlipped;
-    settings.renormalize = options.renormalize;
-    settings.stride = size_t(channels);
+    DecodeSettings settings = initialSettings(channels, options, map.diagnostics);
 
     PngCodes codes;
     const std::vector<float>& table = opened.table;
@@ -268,21 +277,16 @@ Result<NormalMap> decodeNormalMap(const Image& image, const NormalMapOptions& op
     auto sample = [&image](size_t i) { return image.pixels[i]; };
     const size_t texels = image.texelCount();
 
-    DecodeSettings settings;
-    settings.rg = options.layout == NormalLayout::Rg || image.channels == 2;
+    DecodeSettings settings = initialSettings(image.channels, options, map.diagnostics);
     const bool constantBlue = autoCandidate(image.channels, options) &&
                               channelConstant(sample, texels, image.channels, 2) &&
                               !(channelConstant(sample, texels, image.channels, 0) &&
                                 channelConstant(sample, texels, image.channels, 1));
     if (constantBlue) settings.rg = true;
     setLayout(map, settings.rg, constantBlue);
-    settings.isSigned = options.encoding == NormalValueEncoding::Signed;
     if (options.encoding == NormalValueEncoding::Auto)
         settings.isSigned = image.source.isFloat && anyNegative(image, settings.rg ? 2 : 3);
     map.diagnostics.signedValues = settings.isSigned;
-    settings.greenFlipped = map.diagnostics.greenFlipped;
-    settings.renormalize = options.renormalize;
-    settings.stride = static_cast<size_t>(image.channels);
 
     map.normals.resize(texels);
     std::vector<BlockTally> tallies((texels + kBlock - 1) / kBlock);

@@ -94,8 +94,9 @@ inline double varianceToGlossPower(double v, double s) {
     return clampPower(1.0 / (v + 1.0 / (s + 1.0)) - 1.0);
 }
 
-/// 1/s for LEAN's lobe, s clamped as methodLobe clamps it (to [kMinBasePower, kMaxPower]).
-inline double leanInverseBasePower(double s) {
+/// 1/s for the slope-space lobes (LEAN, CLEAN), s clamped as methodLobe clamps it (to
+/// [kMinBasePower, kMaxPower]): the I/s their covariance adds.
+inline double slopeInverseBasePower(double s) {
     return 1.0 / std::max(clampPower(s), kMinBasePower);
 }
 
@@ -103,7 +104,7 @@ inline double leanInverseBasePower(double s) {
 /// methodLobe clamps it): what methodLobe gives a LEAN lobe, without the rest of the lobe.
 // Olano & Baker 2010, "LEAN Mapping": Σ = M − BBᵀ + I/s
 inline std::array<double, 3> leanSlopeCovariance(const NormalMoments& moments, double s) {
-    const double invS = leanInverseBasePower(s);
+    const double invS = slopeInverseBasePower(s);
     return {double(moments.slopeCov[0]) + invS, double(moments.slopeCov[1]) + invS,
             double(moments.slopeCov[2])};
 }

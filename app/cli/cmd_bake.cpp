@@ -6,11 +6,11 @@
 #include "command.h"
 #include "common.h"
 
-#include <burnish/core/bake_job.h>
-#include <burnish/core/bake_ninja.h>
-#include <burnish/core/export.h>
-#include <burnish/core/methods.h>
-#include <burnish/core/presets.h>
+#include <burnish/core/bake/bake_job.h>
+#include <burnish/core/bake/bake_ninja.h>
+#include <burnish/core/bake/export.h>
+#include <burnish/core/bake/presets.h>
+#include <burnish/core/prefilter/methods.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

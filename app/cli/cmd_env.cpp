@@ -3,10 +3,13 @@
 #include "command.h"
 #include "common.h"
 
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/env_sampling.h>
-#include <burnish/core/environment.h>
-#include <burnish/core/sh.h>
+#include <burnish/core/env/cube.h>
+#include <burnish/core/env/prefilter.h>
+#include <burnish/core/env/sampling.h>
+#include <burnish/core/env/storage.h>
+#include <burnish/core/io/cube_dds.h>
+#include <burnish/core/shading/sh.h>
+#include <burnish/core/util/files.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -74,6 +77,132 @@ std::string reportMarkdown(const ReferenceComparison& c, LobeModel lobe, int fac
     return md;
 }
 
+// The source cube: six face files (reduced to --face-size through the box chain), an
+// equirectangular image, or the procedural studio.
+Result<EnvironmentSource> readSource(const EnvCliOptions& o) {
+    EnvironmentSource source;
+    if (!o.faces.empty()) {
+        std::array<fs::path, kCubeFaces> paths;
+        for (int f = 0; f < kCubeFaces; ++f)
+            paths[size_t(f)] = o.faces[size_t(f)];
+        auto loaded = loadCubeFaceEnvironment(paths);
+        if (!loaded) return Error{loaded.error()};
+        source = std::move(loaded.value());
+        // The faces set the size unless --face-size asks for a smaller one: then the box-filtered level.
+        if (o.faceSizeGiven && o.faceSize != source.cube.faceSize()) {
+            if (!isPowerOfTwo(o.faceSize) || o.faceSize > source.cube.faceSize())
+                return Error{fmt::format("--face-size {} must be a power of two no larger than the faces' {}",
+                                         o.faceSize, source.cube.faceSize())};
+            buildBoxMips(source.cube);
+            const int level = fullMipCount(source.cube.faceSize()) - fullMipCount(o.faceSize);
+            CubeLevel kept = std::move(source.cube.levels[size_t(level)]);
+            source.cube.levels.assign(1, std::move(kept));
+        }
+    } else if (!o.input.empty()) {
+        auto loaded = loadEquirectEnvironment(o.input, o.faceSize);
+        if (!loaded) return Error{loaded.error()};
+        source = std::move(loaded.value());
+    } else {
+        auto studio = proceduralStudioEnvironment(o.faceSize);
+        if (!studio) return Error{studio.error()};
+        source.cube = std::move(studio.value());
+        source.description = "procedural studio";
+    }
+
+    return source;
+}
+
+// The radiance and irradiance cubes in the asked formats and sh.json; the names written.
+Result<std::vector<std::string>> writeCubes(const EnvCliOptions& o, const fs::path& dir,
+                                            const CubeMap& radiance, const CubeMap& irradiance, const Sh9& sh,
+                                            const std::optional<glm::dvec3>& divisor) {
+    std::vector<std::string> files;
+    if (o.format == "dds" || o.format == "both") {
+        if (const Status s = writeCubeDds(radiance, dir / "radiance.dds"); !s) return Error{s.error()};
+        if (const Status s = writeCubeDds(irradiance, dir / "irradiance.dds"); !s) return Error{s.error()};
+        files.insert(files.end(), {"radiance.dds", "irradiance.dds"});
+    }
+    if (o.format == "exr" || o.format == "both") {
+        for (const auto& [cube, stem] : {std::pair{&radiance, "radiance"}, {&irradiance, "irradiance"}}) {
+            auto names = writeCubeExrFaces(*cube, dir, stem);
+            if (!names) return Error{names.error()};
+            files.insert(files.end(), names->begin(), names->end());
+        }
+    }
+    Json shJson = sh9Json(sh);
+    if (divisor) shJson["normalizedBy"] = vec3Json(*divisor);
+    if (const Status s = writeFileAtomic(dir / "sh.json", shJson.dump(2) + "\n"); !s) return Error{s.error()};
+    files.push_back("sh.json");
+
+    return files;
+}
+
+// What the run made: the source, every mip's power and source level, the files (with timings).
+Json envSummary(const EnvCliOptions& o, const EnvironmentSource& source,
+                const PrefilteredEnvironment& filtered, const PrefilterOptions& prefilter, const Sh9& sh,
+                const std::optional<glm::dvec3>& divisor, const std::vector<std::string>& files,
+                double computeSeconds) {
+    Json mips = Json::array();
+    for (int m = 0; m < filtered.radiance.mipCount(); ++m)
+        mips.push_back({{"mip", m},
+                        {"size", filtered.radiance.levels[size_t(m)].size},
+                        {"power", filtered.powers[size_t(m)]},
+                        {"sourceLevel", filtered.sourceLevels[size_t(m)]},
+                        {"seconds", filtered.seconds[size_t(m)]}});
+    return Json{
+        {"source", source.description},
+        {"replacedTexels", source.replacedTexels},
+        {"faceSize", filtered.radiance.faceSize()},
+        {"lobe", lobeModelName(filtered.lobe)},
+        {"powerRule", prefilter.encoding ? "gloss encoding " + prefilter.encoding->name() + " (" +
+                                               prefilter.encoding->formula() + "), g = 1 - mip/(mips-1)"
+                                         : fmt::format("drop: {:g} * {:g}^mip", o.topPower, o.powerDrop)},
+        {"mips", mips},
+        {"irradianceSize", o.irradianceSize},
+        {"averageDiffuse", vec3Json(averageDiffuse(sh))},
+        {"normalizedBy", divisor ? vec3Json(*divisor) : Json(nullptr)},
+        {"layout", "GL cube faces +X -X +Y -Y +Z -Z; row j holds t = (j+0.5)/size; DDS RGBA16F (alpha 1), "
+                   "EXR half RGB; values clamped to 65504"},
+        {"seconds", computeSeconds},
+        {"files", files},
+    };
+}
+
+// --report: the prefilter against brute force per mip, written as report.json and report.md.
+Result<std::pair<Json, std::string>> writeReport(const EnvCliOptions& o, const fs::path& dir,
+                                                 const PrefilteredEnvironment& filtered,
+                                                 const CubeMap& source) {
+    // Compare against the source as filtered (normalized when asked), so only the prefilter's error
+    // shows.
+    auto comparison = compareWithReference(filtered, source, o.directions, o.samples);
+    if (!comparison) return Error{comparison.error()};
+    Json rows = Json::array();
+    for (const MipError& r : comparison->mips)
+        rows.push_back({{"mip", r.mip},
+                        {"size", r.size},
+                        {"power", r.power},
+                        {"sourceLevel", r.sourceLevel},
+                        {"prefilterSeconds", r.prefilterSeconds},
+                        {"relativeRms", r.relativeRms},
+                        {"maxRelativeToMean", r.maxRelativeToMean},
+                        {"lookupRelativeRms", r.lookupRelativeRms},
+                        {"referenceSeconds", r.referenceSeconds},
+                        {"fisSamples", r.fisSamples},
+                        {"fisRelativeRms", r.fisRelativeRms},
+                        {"fisSeconds", r.fisSeconds},
+                        {"fisSamplesToMatch", r.fisSamplesToMatch}});
+    Json report{{"directions", comparison->directions},
+                {"fisTolerance", comparison->fisTolerance},
+                {"lobe", lobeModelName(filtered.lobe)},
+                {"faceSize", filtered.radiance.faceSize()},
+                {"mips", rows}};
+    if (const Status s = writeFileAtomic(dir / "report.json", report.dump(2) + "\n"); !s)
+        return Error{s.error()};
+    const std::string md = reportMarkdown(*comparison, filtered.lobe, filtered.radiance.faceSize());
+    if (const Status s = writeFileAtomic(dir / "report.md", md); !s) return Error{s.error()};
+    return std::pair{std::move(report), md};
+}
+
 int runEnv(const EnvCliOptions& o) {
     if (o.out.empty()) return fail("--out DIR is required");
     if (!o.input.empty() && !o.faces.empty()) return fail("give either an input file or --faces, not both");
@@ -90,35 +219,9 @@ int runEnv(const EnvCliOptions& o) {
 
     ProgressBar progress("env");
     progress.update(0.0, "reading");
-    EnvironmentSource source;
-    if (!o.faces.empty()) {
-        std::array<fs::path, kCubeFaces> paths;
-        for (int f = 0; f < kCubeFaces; ++f)
-            paths[size_t(f)] = o.faces[size_t(f)];
-        auto loaded = loadCubeFaceEnvironment(paths);
-        if (!loaded) return fail(loaded.error());
-        source = std::move(loaded.value());
-        // The faces set the size unless --face-size asks for a smaller one: then the box-filtered level.
-        if (o.faceSizeGiven && o.faceSize != source.cube.faceSize()) {
-            if (!isPowerOfTwo(o.faceSize) || o.faceSize > source.cube.faceSize())
-                return fail(fmt::format("--face-size {} must be a power of two no larger than the faces' {}",
-                                        o.faceSize, source.cube.faceSize()));
-            buildBoxMips(source.cube);
-            const int level = fullMipCount(source.cube.faceSize()) - fullMipCount(o.faceSize);
-            CubeLevel kept = std::move(source.cube.levels[size_t(level)]);
-            source.cube.levels.assign(1, std::move(kept));
-        }
-    } else if (!o.input.empty()) {
-        auto loaded = loadEquirectEnvironment(o.input, o.faceSize);
-        if (!loaded) return fail(loaded.error());
-        source = std::move(loaded.value());
-    } else {
-        auto studio = proceduralStudioEnvironment(o.faceSize);
-        if (!studio) return fail(studio.error());
-        source.cube = std::move(studio.value());
-        source.description = "procedural studio";
-    }
-
+    auto read = readSource(o);
+    if (!read) return fail(read.error());
+    EnvironmentSource source = std::move(read).value();
     const auto start = std::chrono::steady_clock::now();
     Sh9 sh = projectSh9(source.cube);
     std::optional<glm::dvec3> divisor;
@@ -137,50 +240,11 @@ int runEnv(const EnvCliOptions& o) {
     if (ec) return fail("cannot create '" + o.out + "': " + ec.message());
     const fs::path dir(o.out);
     progress.update(0.87, "writing");
-    std::vector<std::string> files;
-    if (o.format == "dds" || o.format == "both") {
-        if (const Status s = writeCubeDds(filtered->radiance, dir / "radiance.dds"); !s)
-            return fail(s.error());
-        if (const Status s = writeCubeDds(*irradiance, dir / "irradiance.dds"); !s) return fail(s.error());
-        files.insert(files.end(), {"radiance.dds", "irradiance.dds"});
-    }
-    if (o.format == "exr" || o.format == "both") {
-        for (const auto& [cube, stem] :
-             {std::pair{&filtered->radiance, "radiance"}, {&irradiance.value(), "irradiance"}}) {
-            auto names = writeCubeExrFaces(*cube, dir, stem);
-            if (!names) return fail(names.error());
-            files.insert(files.end(), names->begin(), names->end());
-        }
-    }
-    Json shJson = sh9Json(sh);
-    if (divisor) shJson["normalizedBy"] = vec3Json(*divisor);
-    if (const Status s = writeFileAtomic(dir / "sh.json", shJson.dump(2) + "\n"); !s) return fail(s.error());
-    files.push_back("sh.json");
+    const auto written = writeCubes(o, dir, filtered->radiance, *irradiance, sh, divisor);
+    if (!written) return fail(written.error());
+    const std::vector<std::string>& files = *written;
 
-    Json mips = Json::array();
-    for (int m = 0; m < filtered->radiance.mipCount(); ++m)
-        mips.push_back({{"mip", m},
-                        {"size", filtered->radiance.levels[size_t(m)].size},
-                        {"power", filtered->powers[size_t(m)]},
-                        {"sourceLevel", filtered->sourceLevels[size_t(m)]},
-                        {"seconds", filtered->seconds[size_t(m)]}});
-    Json summary{
-        {"source", source.description},
-        {"replacedTexels", source.replacedTexels},
-        {"faceSize", filtered->radiance.faceSize()},
-        {"lobe", lobeModelName(filtered->lobe)},
-        {"powerRule", prefilter.encoding ? "gloss encoding " + prefilter.encoding->name() + " (" +
-                                               prefilter.encoding->formula() + "), g = 1 - mip/(mips-1)"
-                                         : fmt::format("drop: {:g} * {:g}^mip", o.topPower, o.powerDrop)},
-        {"mips", mips},
-        {"irradianceSize", o.irradianceSize},
-        {"averageDiffuse", vec3Json(averageDiffuse(sh))},
-        {"normalizedBy", divisor ? vec3Json(*divisor) : Json(nullptr)},
-        {"layout", "GL cube faces +X -X +Y -Y +Z -Z; row j holds t = (j+0.5)/size; DDS RGBA16F (alpha 1), "
-                   "EXR half RGB; values clamped to 65504"},
-        {"seconds", computeSeconds},
-        {"files", files},
-    };
+    Json summary = envSummary(o, source, *filtered, prefilter, sh, divisor, files, computeSeconds);
     // Timings vary run to run; env.json keeps only what the inputs determine, so reruns write the same bytes.
     Json manifest = summary;
     manifest.erase("seconds");
@@ -191,35 +255,10 @@ int runEnv(const EnvCliOptions& o) {
 
     if (o.report) {
         progress.update(0.9, "comparing with brute force");
-        // Compare against the source as filtered (normalized when asked), so only the prefilter's error
-        // shows.
-        auto comparison = compareWithReference(*filtered, source.cube, o.directions, o.samples);
-        if (!comparison) return fail(comparison.error());
-        Json rows = Json::array();
-        for (const MipError& r : comparison->mips)
-            rows.push_back({{"mip", r.mip},
-                            {"size", r.size},
-                            {"power", r.power},
-                            {"sourceLevel", r.sourceLevel},
-                            {"prefilterSeconds", r.prefilterSeconds},
-                            {"relativeRms", r.relativeRms},
-                            {"maxRelativeToMean", r.maxRelativeToMean},
-                            {"lookupRelativeRms", r.lookupRelativeRms},
-                            {"referenceSeconds", r.referenceSeconds},
-                            {"fisSamples", r.fisSamples},
-                            {"fisRelativeRms", r.fisRelativeRms},
-                            {"fisSeconds", r.fisSeconds},
-                            {"fisSamplesToMatch", r.fisSamplesToMatch}});
-        Json report{{"directions", comparison->directions},
-                    {"fisTolerance", comparison->fisTolerance},
-                    {"lobe", lobeModelName(filtered->lobe)},
-                    {"faceSize", filtered->radiance.faceSize()},
-                    {"mips", rows}};
-        if (const Status s = writeFileAtomic(dir / "report.json", report.dump(2) + "\n"); !s)
-            return fail(s.error());
-        const std::string md = reportMarkdown(*comparison, filtered->lobe, filtered->radiance.faceSize());
-        if (const Status s = writeFileAtomic(dir / "report.md", md); !s) return fail(s.error());
-        summary["report"] = report;
+        auto report = writeReport(o, dir, *filtered, source.cube);
+        if (!report) return fail(report.error());
+        const std::string& md = report->second;
+        summary["report"] = report->first;
         summary["files"].push_back("report.json");
         summary["files"].push_back("report.md");
         if (!o.json) std::fputs(md.c_str(), stdout);

@@ -3,10 +3,10 @@
 #include "command.h"
 #include "common.h"
 
-#include <burnish/core/bake.h>
-#include <burnish/core/evaluate_report.h>
-#include <burnish/core/gloss.h>
-#include <burnish/core/image.h>
+#include <burnish/core/bake/bake.h>
+#include <burnish/core/eval/evaluate_report.h>
+#include <burnish/core/io/image.h>
+#include <burnish/core/prefilter/gloss.h>
 
 #include <nlohmann/json.hpp>
 

@@ -1,8 +1,8 @@
 // `burnish fit`: derive the reference texts' constants by least squares and compare.
 #include "command.h"
 
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/fit.h>
+#include <burnish/core/eval/fit.h>
+#include <burnish/core/util/files.h>
 
 #include <fmt/format.h>
 

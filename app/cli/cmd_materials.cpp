@@ -1,8 +1,8 @@
 // `burnish materials`: the calibrated specular-colour table, and the check of one colour against it.
 #include "command.h"
 
-#include <burnish/core/color.h>
-#include <burnish/core/materials.h>
+#include <burnish/core/shading/color.h>
+#include <burnish/core/shading/materials.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

@@ -4,14 +4,14 @@
 #include "command.h"
 #include "common.h"
 
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/bake.h>
-#include <burnish/core/env_sampling.h>
-#include <burnish/core/gloss.h>
-#include <burnish/core/image.h>
-#include <burnish/core/materials.h>
-#include <burnish/core/presets.h>
-#include <burnish/core/sample_maps.h>
+#include <burnish/core/bake/bake.h>
+#include <burnish/core/bake/presets.h>
+#include <burnish/core/env/sampling.h>
+#include <burnish/core/io/image.h>
+#include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/sample_maps.h>
+#include <burnish/core/shading/materials.h>
+#include <burnish/core/util/files.h>
 #include <burnish/render/context.h>
 #include <burnish/render/gpu_resources.h>
 #include <burnish/render/renderer.h>

@@ -2,7 +2,7 @@
 // error and its measured cost (Markdown table on stdout; .md, .json and .png in --out).
 #include "command.h"
 
-#include <burnish/core/approximations.h>
+#include <burnish/core/eval/approximations.h>
 
 #include <chrono>
 #include <cstdio>

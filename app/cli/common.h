@@ -1,7 +1,7 @@
 // Pieces several `burnish` subcommands share: normal-map import options and a terminal progress bar.
 #pragma once
 
-#include <burnish/core/normal_map.h>
+#include <burnish/core/prefilter/normal_map.h>
 
 #include <CLI/CLI.hpp>
 

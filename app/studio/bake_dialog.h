@@ -5,7 +5,7 @@
 
 #include "material_document.h"
 
-#include <burnish/core/bake_job.h>
+#include <burnish/core/bake/bake_job.h>
 
 #include <QDialog>
 #include <QObject>

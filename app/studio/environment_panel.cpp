@@ -1,6 +1,6 @@
 #include "environment_panel.h"
 
-#include <burnish/core/env_sampling.h>
+#include <burnish/core/env/sampling.h>
 
 #include <QCheckBox>
 #include <QComboBox>

@@ -1,8 +1,8 @@
 #include "material_document.h"
 
-#include <burnish/core/bake.h>
-#include <burnish/core/env_sampling.h>
-#include <burnish/core/sample_maps.h>
+#include <burnish/core/bake/bake.h>
+#include <burnish/core/env/sampling.h>
+#include <burnish/core/prefilter/sample_maps.h>
 
 #include <QUndoCommand>
 
@@ -57,7 +57,7 @@ private:
 };
 
 LinearRgb clamped(const LinearRgb& c) {
-    return {clamp01(c.r), clamp01(c.g), clamp01(c.b)};
+    return {saturate(c.r), saturate(c.g), saturate(c.b)};
 }
 
 bool finiteRgb(const LinearRgb& c) {
@@ -234,7 +234,7 @@ void MaterialDocument::setAlbedo(const LinearRgb& albedo) {
 
 void MaterialDocument::setGloss(double gloss, bool merge) {
     MaterialSettings s = m_settings;
-    s.gloss = clamp01(gloss);
+    s.gloss = saturate(gloss);
     push(s, m_maps, QString("Gloss %1").arg(s.gloss, 0, 'f', 3), merge ? kGlossField : kNoMerge);
 }
 

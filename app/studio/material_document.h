@@ -3,15 +3,16 @@
 // document's stack; views listen to changed() and never keep their own copy.
 #pragma once
 
-#include <burnish/core/color.h>
-#include <burnish/core/environment.h>
-#include <burnish/core/image.h>
-#include <burnish/core/materials.h>
-#include <burnish/core/methods.h>
-#include <burnish/core/normal_map.h>
-#include <burnish/core/paint.h>
-#include <burnish/core/presets.h>
-#include <burnish/core/result.h>
+#include <burnish/core/bake/paint.h>
+#include <burnish/core/bake/presets.h>
+#include <burnish/core/env/cube.h>
+#include <burnish/core/env/prefilter.h>
+#include <burnish/core/io/image.h>
+#include <burnish/core/prefilter/methods.h>
+#include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/shading/color.h>
+#include <burnish/core/shading/materials.h>
+#include <burnish/core/util/result.h>
 
 #include <QObject>
 #include <QString>

@@ -8,7 +8,7 @@
 
 #include "material_document.h"
 
-#include <burnish/core/paint.h>
+#include <burnish/core/bake/paint.h>
 
 #include <QImage>
 #include <QPointF>

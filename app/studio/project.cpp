@@ -1,7 +1,7 @@
 #include "project.h"
 
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/env_sampling.h>
+#include <burnish/core/env/sampling.h>
+#include <burnish/core/util/files.h>
 
 #include <nlohmann/json.hpp>
 

@@ -24,7 +24,7 @@
 
 #include "material_document.h"
 
-#include <burnish/core/result.h>
+#include <burnish/core/util/result.h>
 
 #include <QString>
 

@@ -1,6 +1,6 @@
 #include "scene_from_document.h"
 
-#include <burnish/core/bake.h>
+#include <burnish/core/bake/bake.h>
 
 #include <string>
 

@@ -4,7 +4,7 @@
 
 #include "material_document.h"
 
-#include <burnish/core/result.h>
+#include <burnish/core/util/result.h>
 #include <burnish/render/scene.h>
 
 #include <memory>

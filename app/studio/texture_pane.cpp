@@ -47,9 +47,9 @@ QImage bakedChannelImage(const TextureMip& mip, int channels, int channel) {
 }
 
 const BakedTexture* displayedBakedTexture(const BakeOutput& output) {
-    if (const BakedTexture* gloss = output.find("gloss")) return gloss;
+    if (const BakedTexture* gloss = output.find(TextureRole::Gloss)) return gloss;
     for (const auto& t : output.textures)
-        if (t.role != "normal") return &t;
+        if (t.role != TextureRole::Normal) return &t;
     return output.textures.empty() ? nullptr : &output.textures.front();
 }
 
@@ -229,7 +229,7 @@ void TexturePane::showBaked() {
     m_mipSpin->setRange(0, mipCount - 1);
     const int mip = std::min(m_mip, mipCount - 1);
     const TextureMip& level = texture->mips[size_t(mip)];
-    const int channel = texture->role == "normal" ? -1 : 0;
+    const int channel = texture->role == TextureRole::Normal ? -1 : 0;
     if (channel < 0) {
         NormalMap shown;
         shown.width = level.width;
@@ -241,14 +241,15 @@ void TexturePane::showBaked() {
     } else {
         m_view->setImage(bakedChannelImage(level, texture->channels, channel));
     }
-    m_info->setText(QString("%1 · %2 (%3) · mip %4: %5×%6")
-                        .arg(QString::fromUtf8(methodName(m_baked->method).data(),
-                                               int(methodName(m_baked->method).size())),
-                             QString::fromStdString(texture->role),
-                             QString::fromStdString(texture->decode.empty() ? "" : texture->decode[0].name))
-                        .arg(mip)
-                        .arg(level.width)
-                        .arg(level.height));
+    m_info->setText(
+        QString("%1 · %2 (%3) · mip %4: %5×%6")
+            .arg(QString::fromUtf8(methodName(m_baked->method).data(),
+                                   int(methodName(m_baked->method).size())),
+                 QString::fromUtf8(roleName(texture->role).data(), int(roleName(texture->role).size())),
+                 QString::fromStdString(texture->decode.empty() ? "" : texture->decode[0].name))
+            .arg(mip)
+            .arg(level.width)
+            .arg(level.height));
     emit imageUpdated();
 }
 

@@ -7,7 +7,7 @@
 #include "material_document.h"
 #include "texture_view.h"
 
-#include <burnish/core/bake.h>
+#include <burnish/core/bake/bake.h>
 
 #include <QImage>
 #include <QWidget>

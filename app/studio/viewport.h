@@ -11,8 +11,8 @@
 
 #include "material_document.h"
 
-#include <burnish/core/methods.h>
-#include <burnish/core/result.h>
+#include <burnish/core/prefilter/methods.h>
+#include <burnish/core/util/result.h>
 #include <burnish/render/features.h>
 #include <burnish/render/scene.h>
 

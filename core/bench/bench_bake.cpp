@@ -9,10 +9,10 @@
 //   BM_Evaluate        `burnish evaluate`'s core on a 1024² map, mips 1-4, one power, all methods
 // The map is BURNISH_BENCH_NORMAL_MAP (any normal map, tiled to the size) when set, else a
 // deterministic synthetic bumpy map. Run: build/core/burnish_bench --benchmark_filter='Bake|Pyramid|Evaluate'
-#include <burnish/core/bake.h>
-#include <burnish/core/evaluate.h>
-#include <burnish/core/image.h>
-#include <burnish/core/presets.h>
+#include <burnish/core/bake/bake.h>
+#include <burnish/core/bake/presets.h>
+#include <burnish/core/eval/evaluate.h>
+#include <burnish/core/io/image.h>
 
 #include <benchmark/benchmark.h>
 #include <glm/geometric.hpp>

@@ -1,8 +1,9 @@
 // Environment prefiltering: a 2048×1024 equirect (BURNISH_BENCH_ENV, or the procedural studio) to
 // 256² faces with the full mip chain; counters give its error against the brute-force reference and
 // the FIS taps that match the prefiltered map within 2%. Peak memory: run under /usr/bin/time -v.
-#include <burnish/core/env_sampling.h>
-#include <burnish/core/environment.h>
+#include <burnish/core/env/cube.h>
+#include <burnish/core/env/prefilter.h>
+#include <burnish/core/env/sampling.h>
 
 #include <benchmark/benchmark.h>
 

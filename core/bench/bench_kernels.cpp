@@ -2,7 +2,7 @@
 // approximation, "<id>/approx" and "<id>/exact" on the same inputs. s/eval is the time per
 // evaluation (items_per_second counts evaluations; the Phong pair counts each light).
 // Run: burnish_bench --benchmark_filter=fresnel  (this file holds the target's main).
-#include <burnish/core/approximations.h>
+#include <burnish/core/eval/approximations.h>
 
 #include <benchmark/benchmark.h>
 

@@ -124,62 +124,6 @@ std::string_view environmentName(EnvironmentKind kind) {
     return "off";
 }
 
-std::string_view ndfTermName(NdfTerm term) {
-    switch (term) {
-    case NdfTerm::BlinnPhong:
-        return "blinn-phong";
-    case NdfTerm::Beckmann:
-        return "beckmann";
-    case NdfTerm::Ggx:
-        return "ggx";
-    }
-    return "blinn-phong";
-}
-
-std::string_view fresnelTermName(FresnelTerm term) {
-    switch (term) {
-    case FresnelTerm::None:
-        return "none";
-    case FresnelTerm::Schlick:
-        return "schlick";
-    case FresnelTerm::SchlickSg:
-        return "schlick-sg";
-    case FresnelTerm::SchlickSgQuadratic:
-        return "schlick-sg-quadratic";
-    }
-    return "none";
-}
-
-std::string_view visibilityTermName(VisibilityTerm term) {
-    switch (term) {
-    case VisibilityTerm::None:
-        return "none";
-    case VisibilityTerm::Kelemen:
-        return "kelemen";
-    case VisibilityTerm::SchlickSmith:
-        return "schlick-smith";
-    case VisibilityTerm::CookTorrance:
-        return "cook-torrance";
-    case VisibilityTerm::SmithBeckmann:
-        return "smith-beckmann";
-    case VisibilityTerm::SmithGgxCorrelated:
-        return "smith-ggx-correlated";
-    }
-    return "none";
-}
-
-std::string_view specularAaName(SpecularAa aa) {
-    switch (aa) {
-    case SpecularAa::None:
-        return "none";
-    case SpecularAa::KaplanyanValient:
-        return "kaplanyan-valient";
-    case SpecularAa::TokuyoshiKaplanyan:
-        return "tokuyoshi-kaplanyan";
-    }
-    return "none";
-}
-
 std::string_view debugViewName(DebugView view) {
     switch (view) {
     case DebugView::None:

@@ -1,6 +1,6 @@
 #include <burnish/render/mesh.h>
 
-#include <burnish/core/numeric.h>
+#include <burnish/core/util/numeric.h>
 
 #include <epoxy/gl.h>
 

@@ -1,9 +1,10 @@
 #include <burnish/render/renderer.h>
 
-#include <burnish/core/bake.h>
-#include <burnish/core/detail.h>
-#include <burnish/core/env_sampling.h>
-#include <burnish/core/sh.h>
+#include <burnish/core/bake/bake.h>
+#include <burnish/core/env/sampling.h>
+#include <burnish/core/prefilter/detail.h>
+#include <burnish/core/shading/sh.h>
+#include <burnish/core/util/low_discrepancy.h>
 #include <burnish/render/cubemap.h>
 #include <burnish/render/gpu_resources.h>
 #include <burnish/render/mesh.h>
@@ -25,14 +26,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Texture units of material.frag's samplers.
+// Texture units of material.frag's samplers: a baked texture's unit is its role's index in the method
+// table (methods.h), the detail map's and the others' follow.
 enum TextureUnit : int {
-    kUnitNormal = 0,
-    kUnitGloss = 1,
-    kUnitToksvig = 2,
-    kUnitLeanB = 3,
-    kUnitLeanM = 4,
-    kUnitClean = 5,
+    kUnitNormal = int(TextureRole::Normal),
+    kUnitGloss = int(TextureRole::Gloss),
     kUnitDetail = 6,
     kUnitSpecular = 7,
     kUnitEnvironment = 8,
@@ -67,7 +65,8 @@ Result<GpuBaked> uploadBaked(const BakedTexture& baked) {
             TextureLevel{mip.width, mip.height, std::vector<float>(mip.texels.begin(), mip.texels.end())});
     // Hardware trilinear filtering over the baked chain is what the methods were baked for.
     auto texture = Texture2D::create(levels, baked.channels, TextureFilter::LinearMipLinear, true);
-    if (!texture) return Error{"uploading the '" + baked.role + "' texture: " + texture.error()};
+    if (!texture)
+        return Error{"uploading the '" + std::string(roleName(baked.role)) + "' texture: " + texture.error()};
     GpuBaked out{std::move(texture).value()};
     for (size_t c = 0; c < baked.decode.size() && c < 4; ++c) {
         out.scale[int(c)] = float(baked.decode[c].scale);
@@ -145,16 +144,9 @@ bool usesEnvironmentMap(EnvironmentKind kind) {
 } // namespace
 
 void haltonPoint(int index, float& x, float& y) {
-    auto radicalInverse = [](int i, int base) {
-        double f = 1.0, r = 0.0;
-        for (; i > 0; i /= base) {
-            f /= base;
-            r += f * (i % base);
-        }
-        return float(r);
-    };
-    x = radicalInverse(std::max(index, 0), 2);
-    y = radicalInverse(std::max(index, 0), 3);
+    const auto i = std::uint32_t(std::max(index, 0));
+    x = float(radicalInverse(i, 2));
+    y = float(radicalInverse(i, 3));
 }
 
 struct Renderer::Impl {
@@ -177,7 +169,7 @@ struct Renderer::Impl {
 
     // Method bake.
     std::optional<BakeKey> bakeKey;
-    std::map<std::string, GpuBaked> baked;
+    std::map<TextureRole, GpuBaked> baked;
     int bakes = 0;
     // The reference's finest normals and authored gloss, level 0 only.
     std::shared_ptr<const NormalMap> finestFor;
@@ -274,8 +266,8 @@ Status Renderer::Impl::prepareBake() {
         baked.clear();
         bakeKey.reset();
         for (const BakedTexture& t : out->textures) {
-            // The compact LEAN gloss is for export only: the shader reads B and M.
-            if (t.role == "lean-gloss") continue;
+            // Textures the shader does not sample (the compact LEAN gloss is for export) stay on the CPU.
+            if (textureSpec(t.role).sampler.empty()) continue;
             auto gpu = uploadBaked(t);
             if (!gpu) return Error{gpu.error()};
             baked.emplace(t.role, std::move(gpu).value());
@@ -469,18 +461,20 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
     if (m.normalMap)
         p.set("uNormalMapSize", glm::vec2(float(m.normalMap->width), float(m.normalMap->height)));
 
-    auto bindBaked = [&](const char* role, int unit, const char* sampler, const char* scale, const char* bias,
-                         int channels) {
-        const auto it = baked.find(role);
-        if (it == baked.end()) return;
-        it->second.texture.bind(unit);
-        p.set(sampler, unit);
-        if (channels == 2) {
-            p.set(scale, glm::vec2(it->second.scale));
-            p.set(bias, glm::vec2(it->second.bias));
-        } else if (channels == 3) {
-            p.set(scale, glm::vec3(it->second.scale));
-            p.set(bias, glm::vec3(it->second.bias));
+    // A baked texture at its role's unit, with its decode uniforms as its table row names them.
+    auto bindBaked = [&](TextureRole role, const GpuBaked& gpu) {
+        const TextureSpec& spec = textureSpec(role);
+        const int unit = int(role);
+        const std::string sampler(spec.sampler), scale(spec.scaleUniform), bias(spec.biasUniform);
+        gpu.texture.bind(unit);
+        p.set(sampler.c_str(), unit);
+        if (scale.empty()) return;
+        if (spec.channels.size() == 2) {
+            p.set(scale.c_str(), glm::vec2(gpu.scale));
+            p.set(bias.c_str(), glm::vec2(gpu.bias));
+        } else if (spec.channels.size() == 3) {
+            p.set(scale.c_str(), glm::vec3(gpu.scale));
+            p.set(bias.c_str(), glm::vec3(gpu.bias));
         }
     };
     if (reference) {
@@ -496,12 +490,9 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
             p.set("uGlossMap", int(kUnitGloss));
         }
     } else {
-        bindBaked("normal", kUnitNormal, "uNormalMap", "uNormalScale", "uNormalBias", 3);
-        bindBaked("gloss", kUnitGloss, "uGlossMap", "", "", 1);
-        bindBaked("toksvig", kUnitToksvig, "uToksvigMap", "", "", 1);
-        bindBaked("lean-b", kUnitLeanB, "uLeanB", "uLeanBScale", "uLeanBBias", 2);
-        bindBaked("lean-m", kUnitLeanM, "uLeanM", "uLeanMScale", "uLeanMBias", 3);
-        bindBaked("clean", kUnitClean, "uClean", "uCleanScale", "uCleanBias", 3);
+        // In role order, as the named calls did before (normal, gloss, toksvig, B, M, CLEAN).
+        for (const auto& [role, gpu] : baked)
+            bindBaked(role, gpu);
     }
     if (detail && f.detailMap) {
         detail->texture.bind(kUnitDetail);

@@ -1,7 +1,7 @@
 #include <burnish/render/scene.h>
 
-#include <burnish/core/materials.h>
-#include <burnish/core/sample_maps.h>
+#include <burnish/core/prefilter/sample_maps.h>
+#include <burnish/core/shading/materials.h>
 
 #include <glm/gtc/matrix_transform.hpp>
 

@@ -1,4 +1,4 @@
-// Fresnel terms: the GLSL twin of core/include/burnish/core/fresnel.h, for one channel (float c)
+// Fresnel terms: the GLSL twin of core/include/burnish/core/shading/fresnel.h, for one channel (float c)
 // and for an RGB specular colour (vec3 c). c is F0 (linear), x a cosine clamped to [0, 1].
 #include "common_math.glsl"
 

@@ -1,5 +1,5 @@
 // Normal distribution functions, normalization factors and the power ↔ roughness bridges: the GLSL
-// twin of core/include/burnish/core/ndf.h. NoH = n·h; powers clamped to [0, kMaxPower]; cosines
+// twin of core/include/burnish/core/shading/ndf.h. NoH = n·h; powers clamped to [0, kMaxPower]; cosines
 // outside [0, 1] give a zero lobe; nothing here returns NaN or Inf.
 #include "common_math.glsl"
 

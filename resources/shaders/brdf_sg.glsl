@@ -1,5 +1,5 @@
 // Spherical-Gaussian approximations of cosine-power lobes: the GLSL twin of
-// core/include/burnish/core/spherical_gaussian.h (the fitted offset curve stays on the CPU; pass
+// core/include/burnish/core/shading/spherical_gaussian.h (the fitted offset curve stays on the CPU; pass
 // its value for the material's power as x).
 #include "common_math.glsl"
 

@@ -1,5 +1,5 @@
 // Visibility terms V = G/((n·l)(n·v)), so the specular BRDF is F·V·D/4: the GLSL twin of
-// core/include/burnish/core/visibility.h. Dividing cosines are clamped to [kMinCosine, 1].
+// core/include/burnish/core/shading/visibility.h. Dividing cosines are clamped to [kMinCosine, 1].
 #include "common_math.glsl"
 
 // Lazarov 2011

@@ -1,8 +1,8 @@
-// Colour encodings and the display tone curve: the GLSL twins of core/include/burnish/core/color.h
-// (srgbToLinear, linearToSrgb) and core/include/burnish/core/tonemap.h (tonemapFilmic). Same names,
+// Colour encodings and the display tone curve: the GLSL twins of core/include/burnish/core/shading/color.h
+// (srgbToLinear, linearToSrgb) and core/include/burnish/core/shading/tonemap.h (tonemapFilmic). Same names,
 // same clamping: every function accepts any input and returns values in [0, 1].
 
-// Clamps to [0, 1]; NaN becomes 0 (the comparison fails), as core's clamp01.
+// Clamps to [0, 1]; NaN becomes 0 (the comparison fails), as core's saturate (util/numeric.h).
 float clamp01(float x) {
     return x > 0.0 ? min(x, 1.0) : 0.0;
 }

@@ -1,5 +1,5 @@
 // Constants and guarded elementary functions shared by every shading snippet: the GLSL twin of
-// core/include/burnish/core/numeric.h (same names, same guards, float instead of double).
+// core/include/burnish/core/util/numeric.h (same names, same guards, float instead of double).
 
 const float kPi = 3.14159265358979;
 const float kInvPi = 0.318309886183791;

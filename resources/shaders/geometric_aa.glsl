@@ -1,6 +1,6 @@
 // Geometric anti-aliasing: the GLSL twin of the inline functions of
-// core/include/burnish/core/geometric_aa.h (diffuse cone of normals, Kaplanyan–Valient cone
-// angles) and of core/include/burnish/core/specular_aa.h (normal-based NDF filtering).
+// core/include/burnish/core/shading/geometric_aa.h (diffuse cone of normals, Kaplanyan–Valient cone
+// angles) and of core/include/burnish/core/shading/specular_aa.h (normal-based NDF filtering).
 #include "common_math.glsl"
 #include "brdf_ndf.glsl"
 

@@ -1,5 +1,5 @@
 // Gloss encodings (what a texture channel stores ↔ Blinn-Phong power): the GLSL twin of
-// GlossEncoding::power/value and varianceToGloss in core/include/burnish/core/gloss.h. kind is
+// GlossEncoding::power/value and varianceToGloss in core/include/burnish/core/prefilter/gloss.h. kind is
 // int(GlossKind); nMin and nMax are used by GLOSS_KIND_LOG_POWER only.
 #include "common_math.glsl"
 #include "brdf_ndf.glsl"

@@ -1,5 +1,5 @@
 // What each prefiltering method's shader does with its stored values: the GLSL twin of
-// core/include/burnish/core/methods.h, core/src/methods.cpp and the Toksvig functions of gloss.h.
+// core/include/burnish/core/prefilter/methods.h, core/src/prefilter/methods.cpp and the Toksvig functions of gloss.h.
 // Every guard of core is here too: |Na| → 0, zero variance, det Σ → 0, h_z <= 0.
 #include "common_math.glsl"
 #include "brdf_ndf.glsl"

@@ -1,8 +1,8 @@
 // End to end: `burnish bake` run as a process on a small synthetic normal map written by the test.
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/gloss.h>
-#include <burnish/core/normal_map.h>
-#include <burnish/core/presets.h>
+#include <burnish/core/bake/presets.h>
+#include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/util/files.h>
 
 #include "temp_dir.h"
 

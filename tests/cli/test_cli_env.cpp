@@ -3,8 +3,9 @@
 #include "cli_run.h"
 #include "temp_dir.h"
 
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/environment.h>
+#include <burnish/core/env/cube.h>
+#include <burnish/core/io/cube_dds.h>
+#include <burnish/core/util/files.h>
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

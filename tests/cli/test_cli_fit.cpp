@@ -1,7 +1,7 @@
 // End-to-end tests of `burnish fit`.
 #include "cli_run.h"
 
-#include <burnish/core/atomic_file.h>
+#include <burnish/core/util/files.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

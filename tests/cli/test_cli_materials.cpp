@@ -1,7 +1,7 @@
 // End to end: `burnish materials` run as a process.
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/color.h>
-#include <burnish/core/materials.h>
+#include <burnish/core/shading/color.h>
+#include <burnish/core/shading/materials.h>
+#include <burnish/core/util/files.h>
 
 #include "cli_run.h"
 

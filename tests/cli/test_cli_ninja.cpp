@@ -1,7 +1,7 @@
 // End to end: `burnish bake --manifest M --ninja FILE` writes a Ninja build file; `ninja` runs it
 // (when the binary is installed), produces the bytes of a direct bake, and does nothing the second
 // time.
-#include <burnish/core/atomic_file.h>
+#include <burnish/core/util/files.h>
 
 #include "cli_run.h"
 #include "normal_map_files.h"

@@ -1,7 +1,7 @@
 // End to end: `burnish render` run as a process (headless OpenGL on Mesa llvmpipe). Sizes are
 // small so the software rasterizer keeps every case under a few seconds.
-#include <burnish/core/image.h>
-#include <burnish/core/methods.h>
+#include <burnish/core/io/image.h>
+#include <burnish/core/prefilter/methods.h>
 
 #include "cli_run.h"
 #include "temp_dir.h"

@@ -2,7 +2,7 @@
 #include "cli_run.h"
 
 #include <OpenImageIO/imagebuf.h>
-#include <burnish/core/atomic_file.h>
+#include <burnish/core/util/files.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -1,11 +1,11 @@
 // The approximations report: its metrics on toy inputs with known answers, the Pareto flag, the
 // measured entries (finite, plausible errors, positive costs), the glossy Fresnel reference
 // against an independent integration, and the text outputs (never NaN/Inf).
-#include <burnish/core/approximations.h>
-#include <burnish/core/fresnel.h>
-#include <burnish/core/ndf.h>
-#include <burnish/core/report.h>
-#include <burnish/core/visibility.h>
+#include <burnish/core/eval/approximations.h>
+#include <burnish/core/shading/fresnel.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/shading/visibility.h>
+#include <burnish/core/util/report.h>
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Atomic file output (atomic_file.h): write and replace, refuse to overwrite, clear errors, and no
 // temporary file left behind whatever happens.
-#include <burnish/core/atomic_file.h>
+#include <burnish/core/util/files.h>
 
 #include <gtest/gtest.h>
 

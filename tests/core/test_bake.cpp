@@ -1,6 +1,6 @@
-#include <burnish/core/bake.h>
+#include <burnish/core/bake/bake.h>
 
-#include <burnish/core/ndf.h>
+#include <burnish/core/shading/ndf.h>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -29,7 +29,7 @@ double decode(const BakedTexture& t, int mip, int x, int y, int c) {
 }
 
 double meanGlossPower(const BakeOutput& out, const GlossEncoding& enc, int mip) {
-    const BakedTexture* g = out.find("gloss");
+    const BakedTexture* g = out.find(TextureRole::Gloss);
     double sum = 0;
     const auto& m = g->mips[size_t(mip)];
     for (float v : m.texels)
@@ -88,8 +88,8 @@ TEST(Bake, GaussianSlopeFieldBakesItsVariance) {
     auto lean = bake(map, options);
     ASSERT_TRUE(lean.ok());
     const int top = lean->stats.mipCount - 1;
-    const BakedTexture* M = lean->find("lean-m");
-    const BakedTexture* B = lean->find("lean-b");
+    const BakedTexture* M = lean->find(TextureRole::LeanM);
+    const BakedTexture* B = lean->find(TextureRole::LeanB);
     ASSERT_TRUE(M && B);
     const double bx = decode(*B, top, 0, 0, 0), by = decode(*B, top, 0, 0, 1);
     const double varX = decode(*M, top, 0, 0, 0) - 1.0 / 1e4 - bx * bx;
@@ -121,17 +121,17 @@ TEST(Bake, GroovedMapIsAnisotropicOnlyForLean) {
     options.method = Method::Lean;
     auto lean = bake(map, options);
     ASSERT_TRUE(lean.ok());
-    const BakedTexture* M = lean->find("lean-m");
+    const BakedTexture* M = lean->find(TextureRole::LeanM);
     const double mxx = decode(*M, 1, 0, 0, 0), myy = decode(*M, 1, 0, 0, 1);
     EXPECT_NEAR(mxx, 0.09 + 1e-4, 1e-3);
     EXPECT_NEAR(myy, 1e-4, 1e-4);
-    const BakedTexture* compact = lean->find("lean-gloss");
+    const BakedTexture* compact = lean->find(TextureRole::LeanGloss);
     EXPECT_LT(decode(*compact, 1, 0, 0, 0), decode(*compact, 1, 0, 0, 1)); // rougher along x
 
     options.method = Method::Clean;
     auto clean = bake(map, options);
     ASSERT_TRUE(clean.ok());
-    const double avg = decode(*clean->find("clean"), 1, 0, 0, 2);
+    const double avg = decode(*clean->find(TextureRole::Clean), 1, 0, 0, 2);
     EXPECT_NEAR(avg, 0.5 * (0.09 + 2e-4), 1e-3); // one isotropic value: the mean of both axes
 }
 
@@ -147,7 +147,7 @@ TEST(Bake, BimodalCheckerOfTwoTiltsRoughensAndKeepsTheMeanNormal) {
     options.basePower = 2048;
     auto out = bake(makeNormalMap(8, 8, n), options);
     ASSERT_TRUE(out.ok());
-    const BakedTexture* normal = out->find("normal");
+    const BakedTexture* normal = out->find(TextureRole::Normal);
     // Mean of the two tilts points along (0, 0.1, 1) renormalized.
     const glm::dvec3 expected = glm::normalize(glm::dvec3(a + b));
     for (int c = 0; c < 3; ++c)
@@ -179,7 +179,7 @@ TEST(Bake, OddSizesNanTexelsAndTwoChannelMapsBake) {
         for (const auto& t : out->textures)
             for (const auto& mip : t.mips)
                 for (float v : mip.texels)
-                    EXPECT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << t.role;
+                    EXPECT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << roleName(t.role);
     }
 }
 
@@ -227,18 +227,18 @@ TEST(Bake, RoleSubsetsProduceTheSameTexturesAsAFullBake) {
         auto full = bake(map, options);
         ASSERT_TRUE(full.ok());
         for (const auto& kept : full->textures) {
-            options.roles = std::vector<std::string>{kept.role};
+            options.roles = std::vector<TextureRole>{kept.role};
             auto part = bake(map, options);
             ASSERT_TRUE(part.ok());
-            ASSERT_EQ(part->textures.size(), 1u) << methodName(m) << " " << kept.role;
+            ASSERT_EQ(part->textures.size(), 1u) << methodName(m) << " " << roleName(kept.role);
             const BakedTexture& t = part->textures[0];
             EXPECT_EQ(t.role, kept.role);
             ASSERT_EQ(t.mips.size(), kept.mips.size());
             for (size_t k = 0; k < t.mips.size(); ++k)
                 EXPECT_EQ(t.mips[k].texels, kept.mips[k].texels)
-                    << methodName(m) << " " << kept.role << " mip " << k;
+                    << methodName(m) << " " << roleName(kept.role) << " mip " << k;
         }
-        options.roles = std::vector<std::string>{};
+        options.roles = std::vector<TextureRole>{};
         auto none = bake(map, options);
         ASSERT_TRUE(none.ok());
         EXPECT_TRUE(none->textures.empty());

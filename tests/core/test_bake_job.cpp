@@ -1,10 +1,10 @@
 // The shared "resolve → bake → export" job of `burnish bake` and the studio's Bake & Export dialog,
 // its manifest reader, and the Ninja build file that runs many jobs as one command each.
-#include <burnish/core/bake_job.h>
+#include <burnish/core/bake/bake_job.h>
 
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/bake_ninja.h>
-#include <burnish/core/numeric.h>
+#include <burnish/core/bake/bake_ninja.h>
+#include <burnish/core/util/files.h>
+#include <burnish/core/util/numeric.h>
 
 #include "temp_dir.h"
 
@@ -160,12 +160,12 @@ TEST(BakeJob, BakesOnlyTheTexturesThePresetReads) {
     ASSERT_FALSE(read.empty());
     EXPECT_EQ(std::count(read.begin(), read.end(), "normal"), 0)
         << "the LEAN preset no longer skips the normal";
-    EXPECT_EQ(run->baked.find("normal"), nullptr);
+    EXPECT_EQ(run->baked.find(TextureRole::Normal), nullptr);
     for (const auto& t : run->baked.textures)
-        EXPECT_NE(std::find(read.begin(), read.end(), t.role), read.end())
-            << t.role << " was baked but not read";
+        EXPECT_NE(std::find(read.begin(), read.end(), roleName(t.role)), read.end())
+            << roleName(t.role) << " was baked but not read";
     for (const auto& role : read)
-        EXPECT_NE(run->baked.find(role), nullptr) << role << " is read but was not baked";
+        EXPECT_NE(run->baked.find(*roleFromName(role)), nullptr) << role << " is read but was not baked";
 }
 
 // A job on a small map with --report, baking into <dir>/out.

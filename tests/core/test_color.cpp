@@ -1,5 +1,5 @@
 // sRGB transfer functions, their gamma approximations, 8-bit helpers and luminance.
-#include <burnish/core/color.h>
+#include <burnish/core/shading/color.h>
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
-#include <burnish/core/evaluate.h>
+#include <burnish/core/eval/evaluate.h>
 
-#include <burnish/core/approximations.h>
-#include <burnish/core/evaluate_report.h>
-#include <burnish/core/ndf.h>
+#include <burnish/core/eval/approximations.h>
+#include <burnish/core/eval/evaluate_report.h>
+#include <burnish/core/shading/ndf.h>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

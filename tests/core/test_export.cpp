@@ -1,10 +1,10 @@
 // Export: round trips through every format (read back with OpenImageIO), DDS block compression
 // within its tolerance, full mip chains, the presets' documented conversions, precision and
 // Toksvig refusals, all-or-nothing writes and byte-identical output.
-#include <burnish/core/export.h>
+#include <burnish/core/bake/export.h>
 
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/detail.h>
+#include <burnish/core/prefilter/detail.h>
+#include <burnish/core/util/files.h>
 
 #include "temp_dir.h"
 
@@ -115,7 +115,7 @@ std::vector<ReadMip> readExported(const fs::path& dir, const ExportedFile& file)
 // The value an exported channel should hold at texel t of level k.
 double expectedStored(const BakeOutput& b, const Preset& p, const ExportedChannel& c, size_t k, size_t t) {
     if (c.value) return *c.value;
-    const BakedTexture* tex = b.find(c.role);
+    const BakedTexture* tex = b.find(*roleFromName(c.role));
     int index = 0;
     while (tex->decode[size_t(index)].name != c.source)
         ++index;
@@ -304,7 +304,7 @@ TEST(Export, DdsMipCountFollowsAShortChain) {
     ASSERT_TRUE(b);
     // Every compression that holds the one-channel gloss.
     for (DdsCompression c : {DdsCompression::Bc4, DdsCompression::Bc3, DdsCompression::Rgba8}) {
-        const std::vector<TextureMip>& mips = b->find("gloss")->mips;
+        const std::vector<TextureMip>& mips = b->find(TextureRole::Gloss)->mips;
         const auto bytes = encodeDds(mips, 1, c);
         ASSERT_TRUE(bytes) << bytes.error();
         TempDir dir;
@@ -391,7 +391,7 @@ TEST(Export, DirectXPresetFlipsGreenOnly) {
     ASSERT_TRUE(r) << r.error();
     const auto mips = readExported(dir.path(), r->files[0]);
     ASSERT_FALSE(mips.empty());
-    const auto& baked = b.find("normal")->mips[0].texels;
+    const auto& baked = b.find(TextureRole::Normal)->mips[0].texels;
     double worstX = 0.0, worstY = 0.0;
     for (size_t t = 0; t < size_t(mips[0].width * mips[0].height); ++t) {
         // Decoded with the file's own rule, y is the OpenGL y negated; x is unchanged.

@@ -2,12 +2,12 @@
 // geometric_aa.h and gloss.h is evaluated over powers, cosines, mean-normal lengths, roughnesses and
 // variances at and beyond the ends of their ranges, in float and double: every result must be
 // finite. Then half-float and 8-bit storage of gloss and variance.
-#include <burnish/core/fresnel.h>
-#include <burnish/core/geometric_aa.h>
-#include <burnish/core/gloss.h>
-#include <burnish/core/ndf.h>
-#include <burnish/core/spherical_gaussian.h>
-#include <burnish/core/visibility.h>
+#include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/shading/fresnel.h>
+#include <burnish/core/shading/geometric_aa.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/shading/spherical_gaussian.h>
+#include <burnish/core/shading/visibility.h>
 
 #include <Imath/half.h>
 #include <gtest/gtest.h>

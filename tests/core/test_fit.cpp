@@ -1,9 +1,9 @@
 // Least-squares fits of the published constants (fit.h).
-#include <burnish/core/fit.h>
+#include <burnish/core/eval/fit.h>
 
-#include <burnish/core/fresnel.h>
-#include <burnish/core/geometric_aa.h>
-#include <burnish/core/numeric.h>
+#include <burnish/core/shading/fresnel.h>
+#include <burnish/core/shading/geometric_aa.h>
+#include <burnish/core/util/numeric.h>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

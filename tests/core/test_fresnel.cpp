@@ -1,6 +1,6 @@
 // Fresnel terms of fresnel.h: Schlick and its variants at known points, against the exact dielectric
 // Fresnel, and the spherical-Gaussian approximations of (1−x)^5 with their published constants.
-#include <burnish/core/fresnel.h>
+#include <burnish/core/shading/fresnel.h>
 
 #include <gtest/gtest.h>
 

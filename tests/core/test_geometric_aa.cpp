@@ -1,6 +1,6 @@
 // Diffuse AA (the cone-of-normals integral and its LUT-free curve) and Kaplanyan–Valient cone-angle
 // specular AA, from geometric_aa.h.
-#include <burnish/core/geometric_aa.h>
+#include <burnish/core/shading/geometric_aa.h>
 
 #include <gtest/gtest.h>
 

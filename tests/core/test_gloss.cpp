@@ -1,6 +1,6 @@
 // Gloss encodings and the power / variance / Toksvig conversions of gloss.h.
-#include <burnish/core/gloss.h>
-#include <burnish/core/ndf.h>
+#include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/shading/ndf.h>
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // The calibrated materials table: the built-in copy, its values against their sources, every
 // validation error, classification, chart positions and nearest materials.
-#include <burnish/core/materials.h>
+#include <burnish/core/shading/materials.h>
 
-#include <burnish/core/atomic_file.h>
+#include <burnish/core/util/files.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

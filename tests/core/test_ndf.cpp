@@ -1,7 +1,7 @@
 // NDFs and normalization factors of ndf.h, checked by numerical integration (white furnace), and the
 // bridges between Blinn-Phong power and Beckmann / GGX roughness.
-#include <burnish/core/ndf.h>
-#include <burnish/core/quadrature.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/util/quadrature.h>
 
 #include <gtest/gtest.h>
 

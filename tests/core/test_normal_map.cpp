@@ -1,4 +1,4 @@
-#include <burnish/core/normal_map.h>
+#include <burnish/core/prefilter/normal_map.h>
 
 #include "temp_dir.h"
 

@@ -1,4 +1,4 @@
-#include <burnish/core/normal_pyramid.h>
+#include <burnish/core/prefilter/normal_pyramid.h>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
-#include <burnish/core/paint.h>
+#include <burnish/core/bake/paint.h>
 
-#include <burnish/core/sample_maps.h>
+#include <burnish/core/prefilter/sample_maps.h>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -261,8 +261,9 @@ TEST(Paint, RebakeRegionEqualsAFullBakeBitForBit) {
                 ASSERT_TRUE(live) << live.error();
                 auto full0 = bake(*map, options);
                 ASSERT_TRUE(full0) << full0.error();
-                for (size_t k = 0; k < full0->find("gloss")->mips.size(); ++k)
-                    ASSERT_TRUE(sameBits(live->gloss().mips[k].texels, full0->find("gloss")->mips[k].texels))
+                for (size_t k = 0; k < full0->find(TextureRole::Gloss)->mips.size(); ++k)
+                    ASSERT_TRUE(sameBits(live->gloss().mips[k].texels,
+                                         full0->find(TextureRole::Gloss)->mips[k].texels))
                         << "initial mip " << k;
 
                 // Two strokes: one across the left border (wraps with Wrap), one inside.
@@ -285,7 +286,7 @@ TEST(Paint, RebakeRegionEqualsAFullBakeBitForBit) {
                     options.authoredGloss = authored;
                     auto full = bake(*map, options);
                     ASSERT_TRUE(full) << full.error();
-                    const BakedTexture* g = full->find("gloss");
+                    const BakedTexture* g = full->find(TextureRole::Gloss);
                     ASSERT_EQ(g->mips.size(), live->gloss().mips.size());
                     for (size_t k = 0; k < g->mips.size(); ++k)
                         ASSERT_TRUE(sameBits(live->gloss().mips[k].texels, g->mips[k].texels)) << "mip " << k;

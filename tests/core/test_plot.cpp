@@ -1,6 +1,6 @@
 // The plotting module: a PNG that OpenImageIO reads back at the requested size, not blank, with
 // text where labels go; clear errors instead of unlabeled plots.
-#include <burnish/core/plot.h>
+#include <burnish/core/util/plot.h>
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>

@@ -1,14 +1,14 @@
-// Core's PNG decoder (core/src/png_decode.h) and the imports built on it: PNGs built here byte by
+// Core's PNG decoder (core/src/io/png_decode.h) and the imports built on it: PNGs built here byte by
 // byte (every filter type, channel count and depth, IDAT split anywhere, several row batches) decode
 // to exactly the samples they hold; readImage gives bit for bit OpenImageIO's own read_image(FLOAT)
 // for them and for the files left to libpng (interlaced, palette, tRNS, 4-bit); loadNormalMap's
 // direct PNG path gives bit for bit decodeNormalMap(readImage(...)); corrupt and truncated files
 // are errors that say what is wrong, and data past the last row or a cut-off trailer lose nothing.
-#include "../../core/src/png_decode.h"
+#include "../../core/src/io/png_decode.h"
 
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/image.h>
-#include <burnish/core/normal_map.h>
+#include <burnish/core/io/image.h>
+#include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/util/files.h>
 
 #include "temp_dir.h"
 

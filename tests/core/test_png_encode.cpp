@@ -1,10 +1,10 @@
-// The parallel PNG encoder (core/src/png_encode.h): bit-exact round trips through OpenImageIO for
+// The parallel PNG encoder (core/src/io/png_encode.h): bit-exact round trips through OpenImageIO for
 // every channel count and depth, the chunk layout, a zlib stream that really is made of independent
 // segments and holds exactly the Sub-filtered rows, bytes independent of the thread count, and errors
 // for bad input.
-#include "../../core/src/png_encode.h"
+#include "../../core/src/io/png_encode.h"
 
-#include <burnish/core/atomic_file.h>
+#include <burnish/core/util/files.h>
 
 #include "temp_dir.h"
 

@@ -1,6 +1,6 @@
 // Engine presets: the embedded set loads and validates, broken preset files give one clear line,
 // and method compatibility is derived from what each method bakes.
-#include <burnish/core/presets.h>
+#include <burnish/core/bake/presets.h>
 
 #include <gtest/gtest.h>
 
@@ -193,10 +193,10 @@ TEST(Presets, MethodRolesComeFromTheBake) {
     const auto roles = methodRoles(Method::Lean);
     std::set<std::string> names;
     for (const auto& r : roles)
-        names.insert(r.role);
+        names.insert(std::string(roleName(r.role)));
     EXPECT_TRUE(names.count("lean-b") && names.count("lean-m") && names.count("lean-gloss"));
     for (const auto& r : roles)
-        if (r.role == "lean-m") {
+        if (r.role == TextureRole::LeanM) {
             EXPECT_TRUE(r.needsHighPrecision);
             EXPECT_EQ(r.channels, (std::vector<std::string>{"M.xx", "M.yy", "M.xy"}));
         }

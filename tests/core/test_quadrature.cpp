@@ -1,7 +1,7 @@
 // The quadrature behind every reference integral: known integrals, and the lobe-width splitting
 // that keeps stiff lobes (power 1e6) accurate where a plain rule is not.
-#include <burnish/core/ndf.h>
-#include <burnish/core/quadrature.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/util/quadrature.h>
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include <burnish/core/sample_maps.h>
+#include <burnish/core/prefilter/sample_maps.h>
 
 #include <gtest/gtest.h>
 

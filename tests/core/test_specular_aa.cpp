@@ -1,5 +1,5 @@
 // Normal-based NDF filtering for geometric specular AA (Tokuyoshi & Kaplanyan 2019), specular_aa.h.
-#include <burnish/core/specular_aa.h>
+#include <burnish/core/shading/specular_aa.h>
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // Spherical-Gaussian lobes of spherical_gaussian.h: convergence to the cosine power, the exp2 GPU
 // form, Lagarde's 0.775 offset, the normalized lobe's furnace integral, and SgOffsetCurve.
-#include <burnish/core/ndf.h>
-#include <burnish/core/quadrature.h>
-#include <burnish/core/spherical_gaussian.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/shading/spherical_gaussian.h>
+#include <burnish/core/util/quadrature.h>
 
 #include <gtest/gtest.h>
 

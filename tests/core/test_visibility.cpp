@@ -1,7 +1,7 @@
 // Visibility terms of visibility.h (V = G/((n·l)(n·v))): formulas at known points, Kelemen from
 // vectors, Schlick–Smith against exact Smith–Beckmann, and the height-correlated GGX relation.
-#include <burnish/core/ndf.h>
-#include <burnish/core/visibility.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/shading/visibility.h>
 
 #include <gtest/gtest.h>
 

@@ -3,11 +3,13 @@
 // and SH irradiance against core, GLSL FIS against core's CPU FIS and against the prefiltered lookup
 // (the sample count where they agree), no environment code in an Off program, no NaN/Inf from a sun
 // texel stored as half floats, and the prefilter cache.
-#include <burnish/core/env_sampling.h>
-#include <burnish/core/environment.h>
-#include <burnish/core/gloss.h>
-#include <burnish/core/sample_maps.h>
-#include <burnish/core/sh.h>
+#include <burnish/core/env/cube.h>
+#include <burnish/core/env/prefilter.h>
+#include <burnish/core/env/sampling.h>
+#include <burnish/core/env/storage.h>
+#include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/sample_maps.h>
+#include <burnish/core/shading/sh.h>
 #include <burnish/render/context.h>
 #include <burnish/render/cubemap.h>
 #include <burnish/render/gpu_resources.h>

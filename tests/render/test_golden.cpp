@@ -19,8 +19,8 @@
 //    missing highlight, a changed debug ramp.
 // NVIDIA or other GPUs differ by more than rounding (their derivatives and texture filtering are
 // not llvmpipe's); the goldens are not meant for them.
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/sample_maps.h>
+#include <burnish/core/prefilter/sample_maps.h>
+#include <burnish/core/util/files.h>
 #include <burnish/render/context.h>
 #include <burnish/render/renderer.h>
 

@@ -1,7 +1,7 @@
 // Framebuffers (exact 32F read-back, orientation, MSAA resolve), textures (round trip through a
 // draw, mip levels, bad input), and tonemap.frag against its core twins (color.h, tonemap.h).
-#include <burnish/core/color.h>
-#include <burnish/core/tonemap.h>
+#include <burnish/core/shading/color.h>
+#include <burnish/core/shading/tonemap.h>
 #include <burnish/render/context.h>
 #include <burnish/render/gpu_resources.h>
 #include <burnish/render/program.h>

@@ -8,7 +8,7 @@
 
 #include "temp_dir.h"
 
-#include <burnish/core/atomic_file.h>
+#include <burnish/core/util/files.h>
 
 #include <epoxy/gl.h>
 #include <glm/geometric.hpp>

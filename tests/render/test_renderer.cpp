@@ -1,6 +1,6 @@
 // The scene renderer, headless: every method draws, the extremes stay finite, the supersampled
 // reference converges, and at a distance the prefiltering methods are closer to it than naive.
-#include <burnish/core/sample_maps.h>
+#include <burnish/core/prefilter/sample_maps.h>
 #include <burnish/render/context.h>
 #include <burnish/render/gpu_resources.h>
 #include <burnish/render/renderer.h>

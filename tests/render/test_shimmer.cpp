@@ -16,7 +16,7 @@
 // A reference shimmer must be read against its noise floor (ShimmerOptions::estimateReferenceNoise):
 // where thousands of finest texels fall in a pixel, N jittered samples land on new glints every
 // frame and the measured "shimmer" is Monte Carlo noise (ReferenceShimmerIsNoiseWhereItIsNotConverged).
-#include <burnish/core/sample_maps.h>
+#include <burnish/core/prefilter/sample_maps.h>
 #include <burnish/render/context.h>
 #include <burnish/render/renderer.h>
 #include <burnish/render/shimmer.h>

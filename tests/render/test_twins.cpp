@@ -8,15 +8,15 @@
 // into an absolute one: E up to ~88 in magnitude with a relative error of a few ε gives ~1e-5, and
 // llvmpipe's exp/log polynomials add a few ULPs. Values spanning decades are compared relative to
 // |core| above a named floor and absolutely below it.
-#include <burnish/core/fresnel.h>
-#include <burnish/core/geometric_aa.h>
-#include <burnish/core/gloss.h>
-#include <burnish/core/methods.h>
-#include <burnish/core/ndf.h>
-#include <burnish/core/numeric.h>
-#include <burnish/core/specular_aa.h>
-#include <burnish/core/spherical_gaussian.h>
-#include <burnish/core/visibility.h>
+#include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/methods.h>
+#include <burnish/core/shading/fresnel.h>
+#include <burnish/core/shading/geometric_aa.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/shading/specular_aa.h>
+#include <burnish/core/shading/spherical_gaussian.h>
+#include <burnish/core/shading/visibility.h>
+#include <burnish/core/util/numeric.h>
 #include <burnish/render/context.h>
 #include <burnish/render/gpu_resources.h>
 #include <burnish/render/program.h>

@@ -8,13 +8,13 @@
 #include "charts/specular_chart.h"
 #include "main_window.h"
 
-#include <burnish/core/fresnel.h>
-#include <burnish/core/materials.h>
-#include <burnish/core/methods.h>
-#include <burnish/core/ndf.h>
-#include <burnish/core/sample_maps.h>
-#include <burnish/core/spherical_gaussian.h>
-#include <burnish/core/visibility.h>
+#include <burnish/core/prefilter/methods.h>
+#include <burnish/core/prefilter/sample_maps.h>
+#include <burnish/core/shading/fresnel.h>
+#include <burnish/core/shading/materials.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/shading/spherical_gaussian.h>
+#include <burnish/core/shading/visibility.h>
 
 #include "temp_dir.h"
 

@@ -13,7 +13,7 @@
 #include "cli_run.h"
 #include "temp_dir.h"
 
-#include <burnish/core/atomic_file.h>
+#include <burnish/core/util/files.h>
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -84,7 +84,7 @@ QImage coreBakedGloss(const MaterialDocument& doc, int mip) {
     const auto baked = bake(*doc.maps().normal, options);
     EXPECT_TRUE(baked) << baked.error();
     if (!baked) return {};
-    const BakedTexture* gloss = baked->find("gloss");
+    const BakedTexture* gloss = baked->find(TextureRole::Gloss);
     EXPECT_NE(gloss, nullptr);
     return gloss ? bakedChannelImage(gloss->mips[size_t(mip)], gloss->channels, 0) : QImage();
 }

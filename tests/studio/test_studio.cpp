@@ -9,7 +9,7 @@
 #include "studio_app.h"
 #include "texture_pane.h"
 
-#include <burnish/core/atomic_file.h>
+#include <burnish/core/util/files.h>
 
 #include "cli_run.h"
 #include "temp_dir.h"

@@ -5,9 +5,9 @@
 // actual and diff images are written as PNGs and the message names them.
 #pragma once
 
-#include <burnish/core/atomic_file.h>
-#include <burnish/core/image.h>
-#include <burnish/core/result.h>
+#include <burnish/core/io/image.h>
+#include <burnish/core/util/files.h>
+#include <burnish/core/util/result.h>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>

@@ -1,13 +1,13 @@
 #include "charts/brdf_plots.h"
 #include "charts/chart_axes.h"
 
-#include <burnish/core/color.h>
-#include <burnish/core/fresnel.h>
-#include <burnish/core/gloss.h>
-#include <burnish/core/methods.h>
-#include <burnish/core/ndf.h>
-#include <burnish/core/spherical_gaussian.h>
-#include <burnish/core/visibility.h>
+#include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/methods.h>
+#include <burnish/core/shading/color.h>
+#include <burnish/core/shading/fresnel.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/shading/spherical_gaussian.h>
+#include <burnish/core/shading/visibility.h>
 
 #include <QChart>
 #include <QChartView>
@@ -180,7 +180,7 @@ double BrdfPlots::ndfAngleRangeDegrees(double n) {
 }
 
 double BrdfPlots::plottedF0() const {
-    return clamp01(luminance(m_doc->settings().specular));
+    return saturate(luminance(m_doc->settings().specular));
 }
 
 void BrdfPlots::refresh() {

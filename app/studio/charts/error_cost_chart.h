@@ -8,8 +8,8 @@
 
 #include "material_document.h"
 
-#include <burnish/core/approximations.h>
-#include <burnish/core/evaluate_report.h>
+#include <burnish/core/eval/approximations.h>
+#include <burnish/core/eval/evaluate_report.h>
 
 #include <QList>
 #include <QPointer>

@@ -1,6 +1,6 @@
 #include "charts/gloss_chart.h"
 
-#include <burnish/core/color.h>
+#include <burnish/core/shading/color.h>
 #include <burnish/render/context.h>
 #include <burnish/render/renderer.h>
 
@@ -235,10 +235,10 @@ Status GlossChart::renderSpheres() {
             auto* line = reinterpret_cast<QRgb*>(image.scanLine(y));
             for (int x = 0; x < kSphereSize; ++x) {
                 const size_t k = 4 * (size_t(y) * kSphereSize + size_t(x));
-                // Display images are sRGB-encoded in [0, 1]; clamp01 also turns a stray NaN into 0.
-                line[x] = qRgb(int(std::lround(255.0 * clamp01(rgba[k]))),
-                               int(std::lround(255.0 * clamp01(rgba[k + 1]))),
-                               int(std::lround(255.0 * clamp01(rgba[k + 2]))));
+                // Display images are sRGB-encoded in [0, 1]; saturate also turns a stray NaN into 0.
+                line[x] = qRgb(int(std::lround(255.0 * saturate(rgba[k]))),
+                               int(std::lround(255.0 * saturate(rgba[k + 1]))),
+                               int(std::lround(255.0 * saturate(rgba[k + 2]))));
             }
         }
         images[size_t(i)] = image;

@@ -11,7 +11,7 @@
 
 #include "material_document.h"
 
-#include <burnish/core/result.h>
+#include <burnish/core/util/result.h>
 
 #include <QImage>
 #include <QWidget>

@@ -1,7 +1,7 @@
 #include "charts/specular_chart.h"
 
-#include <burnish/core/color.h>
-#include <burnish/core/materials.h>
+#include <burnish/core/shading/color.h>
+#include <burnish/core/shading/materials.h>
 
 #include <QMouseEvent>
 #include <QPainter>

@@ -3,7 +3,7 @@
 // renderer only uses while the host keeps it current. OpenGL 3.3 core or later, through libepoxy.
 #pragma once
 
-#include <burnish/core/result.h>
+#include <burnish/core/util/result.h>
 
 #include <memory>
 #include <string>

@@ -2,8 +2,9 @@
 // with seamless filtering across face edges (GL_TEXTURE_CUBE_MAP_SEAMLESS). Needs a current context.
 #pragma once
 
-#include <burnish/core/environment.h>
-#include <burnish/core/result.h>
+#include <burnish/core/env/cube.h>
+#include <burnish/core/env/storage.h>
+#include <burnish/core/util/result.h>
 
 #include <cstdint>
 

@@ -3,7 +3,11 @@
 // feature that is off emits no define, so its code (and its uniforms and samplers) is compiled out.
 #pragma once
 
-#include <burnish/core/methods.h>
+#include <burnish/core/prefilter/methods.h>
+#include <burnish/core/shading/fresnel.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/shading/specular_aa.h>
+#include <burnish/core/shading/visibility.h>
 #include <burnish/render/shader_source.h>
 
 #include <string>
@@ -19,12 +23,16 @@ enum class MeshKind { Sphere, Plane, Torus, Obj };
 /// irradiance (the mip read from the lobe's power), or filtered importance sampling of the
 /// box-filtered source chain at shading time (Scene::environmentMap.fisSamples taps) with SH9 irradiance.
 enum class EnvironmentKind { Off, ConstantAmbient, Prefiltered, FilteredImportanceSampling };
-enum class NdfTerm { BlinnPhong, Beckmann, Ggx };
-/// Fresnel terms of core/fresnel.h: None uses F0 unchanged.
-enum class FresnelTerm { None, Schlick, SchlickSg, SchlickSgQuadratic };
-/// Visibility terms of core/visibility.h.
-enum class VisibilityTerm { None, Kelemen, SchlickSmith, CookTorrance, SmithBeckmann, SmithGgxCorrelated };
-enum class SpecularAa { None, KaplanyanValient, TokuyoshiKaplanyan };
+// The shading terms are core's (shading/ndf.h, fresnel.h, visibility.h, specular_aa.h), named here too.
+using burnish::FresnelTerm;
+using burnish::fresnelTermName;
+using burnish::NdfTerm;
+using burnish::ndfTermName;
+using burnish::SpecularAa;
+using burnish::specularAaName;
+using burnish::VisibilityTerm;
+using burnish::visibilityTermName;
+
 enum class DebugView {
     None,
     LightingOnly, // white diffuse albedo: the lighting without the material's colour
@@ -65,10 +73,6 @@ struct FeatureSet {
 
 std::string_view meshKindName(MeshKind kind);
 std::string_view environmentName(EnvironmentKind kind);
-std::string_view ndfTermName(NdfTerm term);
-std::string_view fresnelTermName(FresnelTerm term);
-std::string_view visibilityTermName(VisibilityTerm term);
-std::string_view specularAaName(SpecularAa aa);
 std::string_view debugViewName(DebugView view);
 
 /// The #defines of a feature set: the numbered constants (METHOD_LEAN 4, ...), the switches

@@ -2,7 +2,7 @@
 // and its tests share. All need a current context.
 #pragma once
 
-#include <burnish/core/result.h>
+#include <burnish/core/util/result.h>
 
 #include <cstdint>
 #include <vector>

@@ -2,7 +2,7 @@
 // normal, tangent (xyz + handedness in w, MikkTSpace-style per-vertex averaging), and UV.
 #pragma once
 
-#include <burnish/core/result.h>
+#include <burnish/core/util/result.h>
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>

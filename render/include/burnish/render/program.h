@@ -2,7 +2,7 @@
 // cache keyed by file names and defines so each feature set is compiled once.
 #pragma once
 
-#include <burnish/core/result.h>
+#include <burnish/core/util/result.h>
 #include <burnish/render/shader_source.h>
 
 #include <glm/mat3x3.hpp>

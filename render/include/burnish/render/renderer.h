@@ -3,7 +3,7 @@
 // Everything here needs the OpenGL context the Renderer was created in to be current.
 #pragma once
 
-#include <burnish/core/result.h>
+#include <burnish/core/util/result.h>
 #include <burnish/render/features.h>
 #include <burnish/render/program.h>
 #include <burnish/render/scene.h>

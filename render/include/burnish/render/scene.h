@@ -4,11 +4,12 @@
 // bakes only what changed.
 #pragma once
 
-#include <burnish/core/environment.h>
-#include <burnish/core/gloss.h>
-#include <burnish/core/methods.h>
-#include <burnish/core/normal_map.h>
-#include <burnish/core/result.h>
+#include <burnish/core/env/cube.h>
+#include <burnish/core/env/prefilter.h>
+#include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/methods.h>
+#include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/util/result.h>
 #include <burnish/render/features.h>
 
 #include <glm/mat4x4.hpp>

@@ -4,7 +4,7 @@
 // splice so compiler messages give the right file and line).
 #pragma once
 
-#include <burnish/core/result.h>
+#include <burnish/core/util/result.h>
 
 #include <optional>
 #include <string>

@@ -4,7 +4,7 @@
 // frames, and their ratio says how much of the method's flicker is aliasing rather than motion.
 #pragma once
 
-#include <burnish/core/result.h>
+#include <burnish/core/util/result.h>
 #include <burnish/render/renderer.h>
 #include <burnish/render/scene.h>
 

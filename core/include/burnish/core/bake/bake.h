@@ -1,0 +1,88 @@
+// The bake: a normal map (plus an optional authored gloss map) through the normal pyramid and a
+// prefiltering method into the textures, with full mip chains, that the method's shader reads.
+// Values are returned as stored in an unsigned texture channel, in [0, 1], with the decode rule
+// for each channel; writing them to files is export.h's job. Deterministic: the same inputs and
+// options give the same values, bit for bit, on any thread count.
+#pragma once
+
+#include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/methods.h>
+#include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/prefilter/normal_pyramid.h>
+#include <burnish/core/util/result.h>
+#include <burnish/core/util/texel_vector.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace burnish {
+
+struct TextureMip {
+    int width = 0;
+    int height = 0;
+    TexelVector texels; // row-major, `channels` per texel, each in [0, 1]
+};
+
+/// How a stored channel decodes to its physical value: value = stored·scale + bias.
+struct ChannelDecode {
+    std::string name; // "normal.x", "gloss", "B.x", "M.xx", ...
+    double scale = 1.0;
+    double bias = 0.0;
+};
+
+/// The decode of each channel of a texture row under the bake's scales (the table's channel names).
+std::vector<ChannelDecode> textureDecode(TextureRole role, const ChannelScales& scales);
+
+struct BakedTexture {
+    TextureRole role = TextureRole::Normal; // its row in the method table (methods.h)
+    std::string description;
+    int channels = 0;
+    std::vector<ChannelDecode> decode;
+    /// Needs 16-bit or float storage to keep the method's accuracy (LEAN's second moments).
+    bool needsHighPrecision = false;
+    std::vector<TextureMip> mips;
+};
+
+struct BakeOptions {
+    Method method = Method::VarianceToGloss;
+    /// Encoding of the authored gloss input and of every gloss channel written.
+    GlossEncoding encoding = GlossEncoding::blackOps();
+    /// Authored power when there is no gloss map.
+    double basePower = 1024.0;
+    /// Authored gloss per finest texel, in `encoding` (size = the normal map's texel count).
+    std::optional<std::vector<float>> authoredGloss;
+    PyramidOptions pyramid{BorderMode::Wrap, FilterKernel::Tent};
+    MethodParams params;
+    /// Number of mip levels to produce (0 = all, down to 1×1).
+    int mipCount = 0;
+    /// Only the textures of these roles are produced (the ones an export's files read); all of
+    /// the method's when unset. Each texture produced is the same whatever the others are.
+    std::optional<std::vector<TextureRole>> roles;
+};
+
+struct BakeStats {
+    int mipCount = 0;
+    /// Texels whose lobe power fell outside the gloss encoding's range and were clamped to it.
+    size_t glossClampedLow = 0;
+    size_t glossClampedHigh = 0;
+    double pyramidSeconds = 0.0;
+    double methodSeconds = 0.0;
+};
+
+struct BakeOutput {
+    Method method = Method::Naive;
+    std::vector<BakedTexture> textures;
+    BakeStats stats;
+    const BakedTexture* find(TextureRole role) const;
+};
+
+/// Bakes the method's textures. Errors: an authored gloss map of the wrong size or with
+/// non-finite values, a non-positive base power.
+Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options);
+
+/// The authored gloss channel of an image (first channel, or the luminance-free first channel of
+/// a grey image), checked against the normal map's size.
+Result<std::vector<float>> glossFromImage(const Image& image, int width, int height);
+
+} // namespace burnish

@@ -1,0 +1,131 @@
+// One bake as a user describes it (names as text, as `burnish bake` and the studio's Bake & Export
+// dialog take them): resolve the names → read the inputs → bake → export (→ the ground-truth
+// report). Both front ends call these functions, so a bake started from a button and from the command
+// line write identical bytes. Many jobs come from a manifest (readBakeManifest); bake_ninja.h turns
+// resolved jobs into a Ninja build file.
+#pragma once
+
+#include <burnish/core/bake/bake.h>
+#include <burnish/core/bake/export.h>
+#include <burnish/core/bake/presets.h>
+#include <burnish/core/prefilter/detail.h>
+#include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/util/result.h>
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace burnish {
+
+/// Input name prefix of a built-in sample map instead of a file: "sample:hammered" bakes
+/// makeSampleNormalMap(Hammered, kSampleBakeSize) with the file stem "hammered".
+inline constexpr std::string_view kSampleInputPrefix = "sample:";
+/// Size of a sample map baked through a job (the studio's default document size).
+inline constexpr int kSampleBakeSize = 512;
+/// Whether a job input names a built-in sample ("sample:<kind>") rather than a file.
+inline bool isSampleBakeInput(std::string_view input) {
+    return input.substr(0, kSampleInputPrefix.size()) == kSampleInputPrefix;
+}
+
+/// A bake as the user described it: every name still text, every option optional.
+struct BakeJobSpec {
+    std::string input; // a normal-map file, or "sample:<kind>"
+    std::string out;   // output folder (created if missing)
+    std::string preset;
+    std::optional<std::string> method;
+    std::optional<double> power;
+    std::optional<std::string> gloss; // authored gloss map file
+    /// An authored gloss held in memory instead of a file (the studio's painted layers composited
+    /// over its gloss map or base gloss): one value per texel of the normal map, row-major, in the
+    /// preset's gloss encoding; values are clamped to [0, 1] as a gloss file's are. It overrides
+    /// `gloss` (that file is then not read, only named in bake.json as what was painted over), and
+    /// bake.json records inputs.gloss = {"source": kPaintedGlossSource, "paintedOver", "fnv1a64"}
+    /// in place of inputs.glossMap. Null: none. Not expressible in a manifest or a Ninja file.
+    std::shared_ptr<const std::vector<float>> authoredGloss;
+    std::optional<std::string> format;
+    std::optional<std::string> compression;
+    std::optional<std::string> kernel;
+    std::optional<std::string> border;
+    std::optional<std::string> green;
+    std::optional<std::string> layout;
+    std::optional<double> metallic;
+    /// Mip levels to write (absent = the whole chain down to 1×1); must be >= 1.
+    std::optional<int> mips;
+    /// Detail normal map baked beside the method's textures (detail.h), and its fade "START:END".
+    std::optional<std::string> detail;
+    std::optional<std::string> detailFade;
+    bool force = false;
+    bool allowImplausible = false;
+    bool allowEightBit = false;
+    /// Also measure every method against the ground truth for this map, power (or the gloss map's
+    /// per-texel powers) and border, and write the report into <out>/report/ (`--report`).
+    bool report = false;
+};
+
+/// bake.json's inputs.gloss.source for a job with an in-memory authored gloss.
+inline constexpr std::string_view kPaintedGlossSource = "painted layers";
+
+/// A job with every name resolved and checked: nothing of it is read or written yet.
+struct BakeJob {
+    BakeJobSpec spec;
+    Preset preset;
+    Method method = Method::VarianceToGloss;
+    BakeOptions bake;
+    NormalMapOptions normalMap;
+    ExportOptions exportOptions;
+    DetailOptions detail; // used when spec.detail is set
+};
+
+/// Resolves and checks every name and value of a spec. Errors name the option as the command line
+/// spells it ("--method: ...", "--compression bc4 applies to --format dds only ...").
+Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec);
+
+/// Reads a manifest, {"version": 1, "jobs": [{"input": ..., "out": ..., <any option by its long
+/// command-line name>}]}, into one spec per job: each starts from `defaults` (the options given on the
+/// command line) and takes the job's fields; relative paths (input, out, gloss, detail, a preset
+/// *.json) are taken from the manifest's folder. Nothing is resolved yet. Errors name the manifest,
+/// the job (1-based) and the field: unreadable file, invalid JSON, unknown or mistyped fields, no jobs.
+Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const BakeJobSpec& defaults);
+
+/// Called between the stages with the fraction done (0..1) and the stage ("reading", "baking",
+/// "writing", with spec.report "evaluating", then "done"); returning false cancels the job before its
+/// next stage (nothing is written when writing has not started; the export itself is all-or-nothing;
+/// a job cancelled at "evaluating" keeps its exported set but writes no report). While evaluating it
+/// is also called with the evaluation's own progress, its answer then ignored.
+using BakeJobProgress = std::function<bool(double fraction, std::string_view stage)>;
+
+/// The files of the ground-truth report (spec.report) in <out>/report/.
+inline constexpr std::string_view kBakeReportFolder = "report";
+inline constexpr std::string_view kBakeReportFiles[] = {
+    "evaluate.md", "evaluate.json", "evaluate-error-per-mip.png", "evaluate-error-vs-cost.png"};
+
+/// What a finished job produced: the bake and export results and a JSON summary (input, out,
+/// preset, method, format, files, bakeJson, width, height, mipCount, mipsRequested, notes — a --mips
+/// beyond a chain, a fade beyond the detail map's levels —, glossClampedLow/High, the stage times
+/// readSeconds, pyramidSeconds, methodSeconds and exportSeconds, seconds (the whole job before any
+/// report), warnings, detail when baked, report (the evaluate.md path) with spec.report).
+struct BakeJobResult {
+    NormalMap map;    // the decoded input
+    BakeOutput baked; // the textures the preset's files read
+    ExportResult exported;
+    nlohmann::json summary;
+};
+
+/// Reads the input (and authored gloss map and detail map), bakes and exports into spec.out, then
+/// with spec.report writes the ground-truth report. Errors: unreadable or implausible inputs, a gloss
+/// map of the wrong size ("--gloss ..."), an in-memory authored gloss of the wrong size or with a
+/// non-finite value ("authored gloss: ..."), a bad detail map ("--detail ..."), an existing output set
+/// without force ("refusing to overwrite ... (use --force to replace the set)"), a failed report
+/// ("--report: ..."), "cancelled" when progress returned false.
+Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& progress = {});
+
+/// The normal map a job reads: a file through loadNormalMap, or the built-in sample it names.
+Result<NormalMap> loadBakeInput(const std::string& input, const NormalMapOptions& options);
+
+} // namespace burnish

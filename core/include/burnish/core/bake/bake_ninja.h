@@ -1,0 +1,31 @@
+// A Ninja build file for many bake jobs (`burnish bake --manifest M --ninja FILE`): one build
+// statement per job, running that job as one `burnish bake` command, with the job's exact outputs
+// (named by export's plan, nothing baked) and its inputs (maps, preset file, manifest).
+#pragma once
+
+#include <burnish/core/bake/bake_job.h>
+#include <burnish/core/util/result.h>
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace burnish {
+
+/// The `burnish bake` command line (argv, `exe` first) that runs one resolved job on its own: every
+/// option spelled out as resolved, file paths absolute, --force so a rebuild replaces the previous
+/// outputs, --report when the spec asks for it. Options whose absence means "each file's own choice"
+/// or "none" (compression, metallic, mips, gloss, detail) stay absent when the spec leaves them out.
+std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& job);
+
+/// Writes (atomically, replacing any previous file) a Ninja build file at `path` with one
+/// `burnish_bake` build statement per job (restat, so unchanged outputs stop the rebuild), run by
+/// `exe`. `manifest` is the file the jobs came from: each job depends on it. Reads each input's
+/// extent, bakes nothing. Returns {"ninja": path, "jobs": count, "outputs": [absolute paths]}.
+/// Errors ("manifest job N (input): ..."): an unreadable input, two jobs writing one file, a path
+/// Ninja cannot express (a line break); "--ninja: ..." when the file cannot be written.
+Result<nlohmann::json> writeBakeNinja(const std::vector<BakeJob>& jobs, const std::string& manifest,
+                                      const std::string& path, const std::string& exe);
+
+} // namespace burnish

@@ -1,0 +1,26 @@
+// Storing environment cubes as files: one half-float OpenEXR per face and mip (the DDS cube is
+// io/cube_dds.h), and the scale an intensity applies before storage.
+#pragma once
+
+#include <burnish/core/env/cube.h>
+#include <burnish/core/util/result.h>
+
+#include <glm/vec3.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace burnish {
+
+/// Writes one half-float RGB OpenEXR per face and mip, "<stem>_m<k>_<face>.exr" (or
+/// "<stem>_<face>.exr" for a single-level cube), each atomically; returns the names written.
+Result<std::vector<std::string>> writeCubeExrFaces(const CubeMap& cube, const std::filesystem::path& dir,
+                                                   const std::string& stem);
+/// The largest finite half float; larger values are stored as this.
+inline constexpr float kHalfMax = 65504.0f;
+
+/// Multiplies every texel of every level by `scale` per channel.
+void scaleCube(CubeMap& cube, const glm::dvec3& scale);
+
+} // namespace burnish

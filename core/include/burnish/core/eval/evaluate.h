@@ -1,0 +1,129 @@
+// Ground truth and the error of every prefiltering method against it, per mip.
+//
+// The ground truth is the texts' experiment (render big, downsample) done in texture space:
+// for mip k, a texel's footprint is its block of finest texels (the aligned 2^k×2^k block for
+// power-of-two maps; see normal_pyramid.h for other sizes), and
+//   GT = mean over the footprint of D_s(n_i·h)·max(0, n_i·l)
+// with D_s the normalized Blinn-Phong NDF of the base power s. A method's value is its own NDF
+// (methods.h) times max(0, n̄·l) with the method's normal n̄, using box-footprint moments.
+// Directions: the view at `viewAngle` from the macro normal (azimuth 0); half vectors at the
+// polar angles `halfAngles` and `azimuths` evenly spaced azimuths (one at 0); pairs whose light
+// is within `horizon` of the horizon are dropped.
+//
+// Authored gloss (texelPowers): each finest texel has its own power s_i, and
+//   GT = mean over the footprint of D_{s_i}(n_i·h)·max(0, n_i·l).
+// Every method gets the block's power the way the bake (bake.cpp) feeds it to every method:
+// 1/s averaged over the footprint, s = 1/mean(1/s_i) (Baker & Hill 2012: "storing power as 1/s
+// will cause MIP filter to operate correctly"), with the kernel applied for tent/Gaussian
+// variants. The harmonic mean keeps the spread of a mixture of lobes, not its peak: on a flat map
+// the peak D(1) ∝ s + 2 of a mixture is that of the arithmetic mean power, so no single lobe
+// matches a mixture of very different powers (test_evaluate.cpp measures both).
+#pragma once
+
+#include <burnish/core/prefilter/methods.h>
+#include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/prefilter/normal_pyramid.h>
+#include <burnish/core/util/result.h>
+
+#include <glm/vec3.hpp>
+
+#include <atomic>
+#include <functional>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+namespace burnish {
+
+/// The message of the Error a cancelled evaluation or measurement returns (and nothing else).
+inline constexpr std::string_view kCancelledMessage = "cancelled";
+/// Whether an error is the one a cancelled run returns.
+inline bool isCancelled(const Error& error) {
+    return error.message == kCancelledMessage;
+}
+
+struct EvaluateOptions {
+    std::vector<double> basePowers{512.0};
+    int firstMip = 1;
+    int lastMip = 4; // clamped to the map's last level
+    double viewAngleDeg = 30.0;
+    std::vector<double> halfAnglesDeg{0.0, 2.5, 5.0, 10.0, 15.0, 20.0, 30.0};
+    int azimuths = 8;
+    double horizonDeg = 3.0;
+    std::vector<Method> methods = allMethods();
+    /// Footprint moments each method is evaluated with: Box is the definition above; Tent and
+    /// Gaussian use the kernel-filtered moments a bake stores, and are reported beside it.
+    std::vector<FilterKernel> kernels{FilterKernel::Box};
+    MethodParams params;
+    BorderMode border = BorderMode::Wrap;
+    /// Keep per-texel error maps (relative L1 per texel: Σ_dir|M − GT| / Σ_dir GT).
+    bool errorMaps = false;
+    /// Authored power per finest texel (row-major, the map's texel count, each in (0, 1e9]). When
+    /// set, it replaces basePowers: the evaluation runs once, and results carry the arithmetic
+    /// mean of the powers as their basePower label.
+    std::optional<std::vector<double>> texelPowers;
+};
+
+/// One light/view pair in tangent space.
+struct DirectionPair {
+    glm::dvec3 l;
+    glm::dvec3 v;
+    glm::dvec3 h;
+};
+
+/// The direction pairs the options define, in a fixed order.
+std::vector<DirectionPair> evaluationDirections(const EvaluateOptions& options);
+
+struct MipError {
+    Method method;
+    double basePower;
+    int mip;
+    double relativeL1;  // Σ|M − GT| / Σ GT over texels and directions
+    double energyRatio; // Σ M / Σ GT
+    FilterKernel kernel = FilterKernel::Box;
+};
+
+struct ErrorMap {
+    Method method;
+    double basePower;
+    int mip;
+    int width;
+    int height;
+    std::vector<float> relativeError; // per texel, row-major
+    FilterKernel kernel = FilterKernel::Box;
+};
+
+struct EvaluationResult {
+    std::vector<MipError> errors;
+    std::vector<ErrorMap> maps;
+    std::vector<DirectionPair> directions;
+    int firstMip = 0;
+    int lastMip = 0;
+    double seconds = 0.0;
+    /// The powers the results are labelled with: options.basePowers, or with texelPowers their mean.
+    std::vector<double> basePowers;
+};
+
+/// Ground truth of one texel's footprint for one direction pair (the brute-force definition,
+/// used by tests and by evaluateMethods' hierarchical sums).
+double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s,
+                        const DirectionPair& d);
+
+/// The same with each finest texel's own power (texelPowers, row-major over the finest level).
+double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,
+                        const std::vector<double>& texelPowers, const DirectionPair& d);
+
+/// A method's value for one texel and direction.
+double methodValue(const TexelLobe& lobe, const DirectionPair& d);
+
+/// Errors of every requested method, power and mip. Fails on bad options (no directions left,
+/// empty power list, non-positive power, mip range outside the map, texelPowers of the wrong size
+/// or with a power outside (0, 1e9]). `progress` (if set) is called with the fraction done,
+/// non-decreasing, ending at exactly 1 on success. `cancel` (if set) may be raised from another
+/// thread: it is read before the work starts and between direction pairs and mips, and a raised
+/// flag returns the Error kCancelledMessage and no partial result.
+Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOptions& options,
+                                         const std::function<void(double)>& progress = {},
+                                         const std::atomic<bool>* cancel = nullptr);
+
+} // namespace burnish

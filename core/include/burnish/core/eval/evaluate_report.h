@@ -1,0 +1,69 @@
+// The evaluation report: each method's error against the ground truth per mip (evaluate.h) next
+// to what it costs — bake time, measured shading time per lobe evaluation, texture fetches and
+// bytes per texel stored — as Markdown, JSON, PNG plots and per-texel EXR error maps.
+#pragma once
+
+#include <burnish/core/eval/evaluate.h>
+#include <burnish/core/util/plot.h>
+#include <burnish/core/util/report.h>
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace burnish {
+
+/// What a method stores and fetches per shaded pixel: its method-table row's storage (methods.h).
+MethodStorage methodStorage(Method method);
+
+struct MethodCost {
+    Method method;
+    double bakeSeconds = 0.0; // median over the runs of an in-memory bake (pyramid included)
+    double nsPerLobe = 0.0;   // median ns per lobe evaluation (NDF × n·l, double, one core)
+    MethodStorage storage;
+};
+
+struct EvaluationReport {
+    std::string input;
+    int width = 0;
+    int height = 0;
+    EvaluateOptions options;
+    EvaluationResult result;
+    std::vector<MethodCost> costs;
+    int bakeRuns = 0;
+    MachineInfo machine;
+};
+
+struct EvaluationReportOptions {
+    EvaluateOptions evaluate;
+    int bakeRuns = 3;
+    std::string inputName;
+};
+
+/// Runs the evaluation and the cost measurements. `progress` (if set): the fraction done,
+/// non-decreasing, ending at 1. `cancel` (if set, raised from any thread) is checked as in
+/// evaluateMethods and between the methods' bake runs: a raised flag returns the Error
+/// kCancelledMessage (evaluate.h) and no report.
+Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const EvaluationReportOptions& options,
+                                               const std::function<void(double)>& progress = {},
+                                               const std::atomic<bool>* cancel = nullptr);
+
+std::string evaluationMarkdown(const EvaluationReport& report);
+nlohmann::json evaluationJson(const EvaluationReport& report);
+/// Error per mip for each method (one series per method and base power).
+PlotSpec evaluationErrorPerMipPlot(const EvaluationReport& report);
+/// Error at the last evaluated mip against measured shading cost, Pareto front marked.
+PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& report);
+
+/// Writes evaluate.md, evaluate.json, evaluate-error-per-mip.png, evaluate-error-vs-cost.png and,
+/// when the result holds error maps, errors/<method>-s<power>-mip<k>.exr (one float channel),
+/// every file atomically. Creates `dir` and `dir/errors` when missing.
+Status writeEvaluationReport(const EvaluationReport& report, const std::filesystem::path& dir);
+
+/// Writes a one-channel float EXR atomically.
+Status writeFloatExr(const std::filesystem::path& path, int width, int height,
+                     const std::vector<float>& values);
+
+} // namespace burnish

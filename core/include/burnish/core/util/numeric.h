@@ -1,0 +1,85 @@
+// Constants and guarded elementary functions shared by every shading formula.
+// Everything here is header-only and templated on the float type so the same code
+// serves double-precision references and float kernels that the compiler can vectorize.
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+namespace burnish {
+
+template <class T> inline constexpr T kPi = T(3.141592653589793238462643383279502884L);
+template <class T> inline constexpr T kInvPi = T(0.318309886183790671537767526745028724L);
+template <class T> inline constexpr T kLn2 = T(0.693147180559945309417232121458176568L);
+
+/// Largest specular power any Burnish function produces or accepts; larger inputs are clamped.
+/// 1e9 keeps the normalized Blinn-Phong peak (n+2)/(2π) ≈ 1.6e8 far from float overflow and
+/// its reciprocal (a variance of 1e-9) a normal float.
+inline constexpr double kMaxPower = 1e9;
+/// Smallest variance: the variance of kMaxPower under the 1/n convention.
+inline constexpr double kMinVariance = 1.0 / kMaxPower;
+/// Cosines below this are treated as this value in divisions (visibility terms, Beckmann):
+/// bounds 1/cos at 1e6 while changing no result that has a visible effect.
+inline constexpr double kMinCosine = 1e-6;
+
+/// Clamps to [0, 1]: NaN becomes 0 (so a NaN cosine or channel value can never travel further),
+/// +Inf 1, −Inf and −0 become 0. Selects, no branches: loops of it vectorise. The one [0, 1] clamp
+/// of core (bake and paint rows, gloss channels, cube coordinates, colour encodings).
+template <class T> constexpr T saturate(T x) {
+    return x > T(0) ? (x < T(1) ? x : T(1)) : T(0);
+}
+
+/// Smallest GGX alpha / Beckmann m: the roughness of kMaxPower under α² = m² = 2/(n+2)
+/// (the lower bound of beckmannNdf's m, ggxNdf's alpha and the gloss encodings' roughness).
+// Lazarov 2011: m = sqrt(2/(n+2))
+inline const double kMinRoughness = std::sqrt(2.0 / (kMaxPower + 2.0));
+
+/// Clamps a power to [0, kMaxPower]; NaN becomes 0.
+template <class T> constexpr T clampPower(T n) {
+    return n > T(0) ? std::min(n, T(kMaxPower)) : T(0); // NaN fails n > 0
+}
+
+/// max(c, 0)^n evaluated as exp(n·log c), the overflow- and NaN-free form of pow for lobes:
+/// returns 1 for n == 0 (the limit, also at c == 0), 0 for c <= 0 and n > 0, and never NaN.
+template <class T> inline T powCos(T c, T n) {
+    n = clampPower(n);
+    if (n == T(0)) return T(1);
+    if (!(c > T(0))) return T(0);
+    if (c >= T(1)) return T(1);
+    return std::exp(n * std::log(c));
+}
+
+/// x^p for x in [0, 1] and p >= 0 (Fresnel-style powers), never NaN: 0^0 = 1, 0^p = 0.
+template <class T> inline T powUnit(T x, T p) {
+    return powCos(x, p);
+}
+
+/// log2(x) for a positive, normal, finite double, without branches or calls so that loops over it
+/// vectorise. x = m·2^e with m in [√½, √2); log2(m) = (2/ln 2)·atanh(s), s = (m − 1)/(m + 1),
+/// |s| <= 0.1716, by its odd series to s^15: the truncation is below 2e-14, so the result is
+/// within 2e-14 of std::log2 (tested) and exact at powers of two. Zero, negative, subnormal,
+/// infinite and NaN inputs give meaningless (finite or not) values: clamp x first.
+inline double log2Positive(double x) {
+    const std::uint64_t bits = std::bit_cast<std::uint64_t>(x);
+    // The biased exponent as a double, exactly: OR it into 2^52's mantissa and subtract 2^52.
+    const double biased = std::bit_cast<double>((bits >> 52) | 0x4330000000000000ull) - 0x1p52;
+    double m = std::bit_cast<double>((bits & 0x000fffffffffffffull) | 0x3ff0000000000000ull); // [1, 2)
+    const bool high = m > 1.4142135623730951;
+    m = high ? 0.5 * m : m;
+    const double e = (high ? biased + 1.0 : biased) - 1023.0;
+    const double s = (m - 1.0) / (m + 1.0), s2 = s * s;
+    double series = 1.0 / 15;
+    for (const double c : {1.0 / 13, 1.0 / 11, 1.0 / 9, 1.0 / 7, 1.0 / 5, 1.0 / 3, 1.0})
+        series = c + s2 * series;
+    return e + (2.0 / kLn2<double>)*s * series;
+}
+
+/// True when x is neither NaN nor infinite.
+template <class T> constexpr bool isFinite(T x) {
+    return std::isfinite(x);
+}
+
+} // namespace burnish

@@ -1,0 +1,72 @@
+// A small plotting module: renders line and scatter series on linear or logarithmic axes into an
+// OpenImageIO ImageBuf (RGB float, white background) with ticks, tick labels, a title, axis labels
+// and a legend, and saves it as PNG through writeFileAtomic. Used by the approximations report
+// (error against cost) and the bake report (error per mip).
+#pragma once
+
+#include <burnish/core/util/result.h>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace burnish {
+
+enum class AxisScale { Linear, Log };
+
+struct PlotAxis {
+    std::string label; // with units, e.g. "cost (ns per evaluation)"
+    AxisScale scale = AxisScale::Linear;
+    /// Range; when unset, fitted to the data (whole decades on a log axis, nice steps on a linear one).
+    std::optional<double> min;
+    std::optional<double> max;
+};
+
+/// Linear RGB in [0, 1].
+using PlotColor = std::array<float, 3>;
+
+enum class MarkerShape { None, Square, HollowSquare, OutlinedSquare };
+
+struct PlotSeries {
+    std::string name; // legend text; an empty name keeps the series out of the legend
+    std::vector<double> x;
+    std::vector<double> y;
+    PlotColor color = {0.0f, 0.0f, 0.0f};
+    bool line = false; // join consecutive points in the given order
+    int lineWidth = 2; // pixels
+    MarkerShape marker = MarkerShape::Square;
+    int markerSize = 7; // pixels, edge of the square
+    /// Optional text drawn beside each point (same length as x, or empty).
+    std::vector<std::string> pointLabels;
+};
+
+struct PlotSpec {
+    std::string title;
+    PlotAxis x;
+    PlotAxis y;
+    std::vector<PlotSeries> series;
+    int width = 1100;
+    int height = 720;
+    int fontSize = 16;
+    std::string fontName = "DejaVuSans";
+};
+
+/// Renders the plot. Points with a NaN/Inf coordinate, or a non-positive one on a log axis, are
+/// skipped (they cannot be placed). Fails with a message when the font cannot be found (no plot
+/// is ever produced without its labels), when x and y lengths differ, or when the size is < 200 px.
+Result<OIIO::ImageBuf> renderPlot(const PlotSpec& spec);
+
+/// Encodes an image as 8-bit PNG in memory and writes it with writeFileAtomic.
+Status savePng(const OIIO::ImageBuf& image, const std::filesystem::path& path);
+
+/// renderPlot then savePng.
+Status savePlotPng(const PlotSpec& spec, const std::filesystem::path& path);
+
+/// A qualitative palette of `index`-th distinct colour (cycles after 10).
+PlotColor plotPalette(size_t index);
+
+} // namespace burnish

@@ -1,0 +1,419 @@
+#include <burnish/core/bake/bake.h>
+
+#include <burnish/core/bake/base_variance.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace burnish {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::time_point since) {
+    return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// Clamped to [0, 1] with selects (NaN gives 0), so row loops over it need no branches.
+float unit(double v) {
+    return float(saturate(v));
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+// The slope roles' row loops get a 256-bit AVX2 copy, picked when the program loads on CPUs that
+// have it. FMA is not enabled (it is not part of "avx2"), so no multiply-add is fused: both copies
+// do the same IEEE operations lane by lane and give the same bits.
+#define BURNISH_ROW_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define BURNISH_ROW_CLONES
+#endif
+
+// The compact LEAN gloss of a row from the slope covariance (xx, yy, xy) and 1/s: the lobe's
+// Σ = slope covariance + I/s, as leanSlopeCovariance builds it; then the logarithms, square roots
+// and divisions without calls or branches, which the compiler vectorises.
+BURNISH_ROW_CLONES void leanGlossRow(const double* cxx, const double* cyy, const double* cxy,
+                                     const double* invBase, int width, float* px) {
+    for (int x = 0; x < width; ++x) {
+        const double sx = cxx[x] + invBase[x];
+        const double sy = cyy[x] + invBase[x];
+        px[3 * x] = float(encodeLogVariance(sx)); // in [0, 1]
+        px[3 * x + 1] = float(encodeLogVariance(sy));
+        const double product = sx * sy;
+        double rho = cxy[x] / std::sqrt(product > 1e-300 ? product : 1e-300);
+        rho = rho > -1.0 ? rho : -1.0;
+        rho = rho < 1.0 ? rho : 1.0;
+        px[3 * x + 2] = unit(0.5 * rho + 0.5);
+    }
+}
+
+// LEAN's second moments M with 1/s on the diagonal, scaled into [0, 1] (invM = 1/sM, invM2 =
+// 1/(2 sM)).
+BURNISH_ROW_CLONES void leanMRow(const double* mxx, const double* myy, const double* mxy,
+                                 const double* invBase, double invM, double invM2, int width, float* px) {
+    for (int x = 0; x < width; ++x) {
+        const double invS = invBase[x];
+        px[3 * x] = unit((mxx[x] + invS) * invM);
+        px[3 * x + 1] = unit((myy[x] + invS) * invM);
+        px[3 * x + 2] = unit(mxy[x] * invM2 + 0.5);
+    }
+}
+
+// The slope mean B (LEAN, CLEAN) scaled into [0, 1] (invB2 = 1/(2 sB)), `stride` floats a texel.
+BURNISH_ROW_CLONES void slopeMeanRow(const double* bx, const double* by, double invB2, int width, int stride,
+                                     float* px) {
+    for (int x = 0; x < width; ++x) {
+        px[stride * x] = unit(bx[x] * invB2 + 0.5);
+        px[stride * x + 1] = unit(by[x] * invB2 + 0.5);
+    }
+}
+
+// Smallest power of two >= x (and >= 2^-4), so stored ranges are exact binary scales.
+double binaryScale(double x) {
+    return std::exp2(std::ceil(std::log2(std::max(x, 1.0 / 16.0))));
+}
+
+// A description from the method table with its placeholders filled in.
+std::string describe(std::string_view text, const BakeOptions& options) {
+    std::string out(text);
+    auto fill = [&out](std::string_view key, const std::string& value) {
+        if (const auto at = out.find(key); at != std::string::npos) out.replace(at, key.size(), value);
+    };
+    fill("{encoding}", options.encoding.formula());
+    fill("{toksvig-power}", std::to_string(options.params.toksvigMapPower));
+    return out;
+}
+
+// The textures the method's table row names (those of options.roles when given), described, with
+// their decodes under the bake's slope scales and no mips yet.
+std::vector<BakedTexture> planTextures(const BakeOptions& options, const ChannelScales& scales) {
+    std::vector<BakedTexture> textures;
+    for (const MethodTexture& m : methodSpec(options.method).textures) {
+        if (options.roles &&
+            std::find(options.roles->begin(), options.roles->end(), m.role) == options.roles->end())
+            continue;
+        const TextureSpec& spec = textureSpec(m.role);
+        BakedTexture t;
+        t.role = m.role;
+        t.description = describe(m.description, options);
+        t.decode = textureDecode(m.role, scales);
+        t.channels = int(t.decode.size());
+        t.needsHighPrecision = spec.needsHighPrecision;
+        textures.push_back(std::move(t));
+    }
+    return textures;
+}
+
+} // namespace
+
+std::vector<ChannelDecode> textureDecode(TextureRole role, const ChannelScales& scales) {
+    std::vector<ChannelDecode> decode;
+    for (const ChannelSpec& c : textureSpec(role).channels) {
+        const ChannelDecodeRule rule = channelDecode(c.range, scales);
+        decode.push_back({std::string(c.name), rule.scale, rule.bias});
+    }
+    return decode;
+}
+
+const BakedTexture* BakeOutput::find(TextureRole role) const {
+    for (const auto& t : textures)
+        if (t.role == role) return &t;
+    return nullptr;
+}
+
+Result<std::vector<float>> glossFromImage(const Image& image, int width, int height) {
+    if (image.width != width || image.height != height)
+        return Error{"gloss map is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                     " but the normal map is " + std::to_string(width) + "x" + std::to_string(height)};
+    std::vector<float> gloss(image.texelCount());
+    for (size_t i = 0; i < gloss.size(); ++i) {
+        const float v = image.pixels[i * size_t(image.channels)];
+        if (!std::isfinite(v))
+            return Error{"gloss map has a NaN or infinite texel at index " + std::to_string(i)};
+        gloss[i] = std::clamp(v, 0.0f, 1.0f);
+    }
+    return gloss;
+}
+
+namespace {
+
+Status checkBakeInput(const NormalMap& map, const BakeOptions& options) {
+    if (map.texelCount() == 0) return Error{"the normal map is empty"};
+    if (!(options.basePower > 0.0) || !(options.basePower <= kMaxPower))
+        return Error{"base power must lie in (0, 1e9]"};
+    if (options.authoredGloss) {
+        if (options.authoredGloss->size() != map.texelCount())
+            return Error{"authored gloss has " + std::to_string(options.authoredGloss->size()) +
+                         " texels, the normal map " + std::to_string(map.texelCount())};
+        for (float g : *options.authoredGloss)
+            if (!std::isfinite(g)) return Error{"authored gloss has a NaN or infinite texel"};
+    }
+    return {};
+}
+
+// Binary scales for the slope textures, so their [0, 1] storage covers every mip. Every box moment
+// is a mean of finest-level values (and filtered moments means of box moments), so the finest
+// level's largest |b| and b² bound every level; a value a rounding above them is clamped by unit().
+// Level 0's moments are NormalMoments::ofNormal's: b = n.xy / max(n.z, kMinSlopeZ) in float, M = b²
+// (its slope covariance is zero).
+ChannelScales slopeScales(const NormalMap& map, const BakeOptions& options) {
+    const NormalVector& normals = map.normals;
+    const float maxSlope = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, normals.size(), size_t(1) << 15), 0.0f,
+        [&](const tbb::blocked_range<size_t>& r, float b) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                // max(|x|/z, |y|/z) = max(|x|, |y|)/z exactly: rounding is monotonic.
+                const glm::vec3& n = normals[i];
+                const float z = std::max(n.z, kMinSlopeZ);
+                const float ax = std::abs(n.x), ay = std::abs(n.y);
+                const float slope = (ax > ay ? ax : ay) / z;
+                b = slope > b ? slope : b;
+            }
+            return b;
+        },
+        [](float a, float b) { return std::max(a, b); }); // max is exact: any order gives the same
+    const double maxB = double(maxSlope);
+    const double maxM = double(maxSlope * maxSlope);
+    double minPower = options.basePower;
+    if (options.authoredGloss)
+        for (float g : *options.authoredGloss)
+            minPower = std::min(minPower, options.encoding.power(g));
+    return {binaryScale(maxB), binaryScale(maxM + 1.0 / std::max(minPower, 1e-6)), 1.0};
+}
+
+// What every row of one bake shares: the method's row in the table as flags, the textures' roles,
+// the slope scales and the authored base powers.
+struct RowPlan {
+    const BakeOptions& options;
+    const BaseVariancePyramid* base; // the authored gloss as variances, or none (options.basePower)
+    std::vector<TextureRole> roles;  // of the textures produced, in order
+    ChannelScales scales;
+    bool slopeMethod = false;
+    bool unnormalized = false;
+    bool adjustedGloss = false;
+    // Without a gloss map the stored gloss of the non-adjusting methods is the base power's at
+    // every texel: encoded once, with its clamp counts added per level.
+    bool constantGloss = false;
+    bool producesGloss = false;
+    bool needDirections = false;
+    double glossMinPower = 0.0, glossMaxPower = 0.0;
+    float baseGloss = 0.0f;
+
+    RowPlan(const BakeOptions& o, const BaseVariancePyramid* b, const std::vector<BakedTexture>& textures,
+            const ChannelScales& s)
+        : options(o)
+        , base(b)
+        , scales(s) {
+        const MethodSpec& spec = methodSpec(o.method);
+        for (const auto& tex : textures)
+            roles.push_back(tex.role);
+        auto produces = [&](TextureRole r) {
+            return std::find(roles.begin(), roles.end(), r) != roles.end();
+        };
+        slopeMethod = storesSlopes(o.method);
+        unnormalized = spec.unnormalizedNormal;
+        adjustedGloss = spec.adjustsGloss;
+        constantGloss = !adjustedGloss && !base;
+        producesGloss = produces(TextureRole::Gloss);
+        needDirections = (produces(TextureRole::Normal) && !unnormalized) ||
+                         (producesGloss && o.method == Method::VarianceToGloss);
+        glossMinPower = o.encoding.minPower();
+        glossMaxPower = o.encoding.maxPower();
+        baseGloss = unit(o.encoding.value(o.basePower));
+    }
+};
+
+// One row's values that several roles read, computed once per row (structure of arrays).
+struct RowValues {
+    std::vector<double> basePowers;    // the base power per texel (authored, filtered as variance)
+    std::vector<double> lobePowers;    // the adjusted gloss's power (variance-to-gloss, vMF)
+    std::vector<glm::vec3> directions; // mean directions: the normal texture, variance-to-gloss
+    // The slope moments as rows of doubles, read from the moments once for all the slope roles, so
+    // each role's loop is a flat one the compiler vectorises: B, the second moments M (in float, as
+    // slopeSecondMoments gives them), the slope covariance, and 1/s per texel as the lobe adds it
+    // (slopeInverseBasePower).
+    std::vector<double> bx, by, mxx, myy, mxy, cxx, cyy, cxy, invBase;
+
+    void fill(const RowPlan& plan, int k, int y, const NormalMoments* row, int width) {
+        const BakeOptions& o = plan.options;
+        basePowers.resize(size_t(width));
+        for (int x = 0; x < width; ++x)
+            basePowers[size_t(x)] = plan.base ? plan.base->power(k, x, y) : o.basePower;
+        if (plan.needDirections) {
+            directions.resize(size_t(width));
+            for (int x = 0; x < width; ++x)
+                directions[size_t(x)] = row[x].meanDirection();
+        }
+        // Only the adjusted gloss reads the lobe; the other roles store moments or the base power.
+        if (plan.adjustedGloss && plan.producesGloss) {
+            lobePowers.resize(size_t(width));
+            if (o.method == Method::VarianceToGloss) {
+                // methodPower's formula in two loops: the variances (projectedVariance), then the
+                // powers in a loop without calls or branches, which the compiler vectorises.
+                for (int x = 0; x < width; ++x)
+                    lobePowers[size_t(x)] = row[x].projectedVarianceAbout(directions[size_t(x)]);
+                for (int x = 0; x < width; ++x)
+                    lobePowers[size_t(x)] =
+                        varianceToGlossPower(lobePowers[size_t(x)], basePowers[size_t(x)]);
+            } else {
+                for (int x = 0; x < width; ++x)
+                    lobePowers[size_t(x)] = methodPower(o.method, row[x], basePowers[size_t(x)], o.params);
+            }
+        }
+        if (!plan.slopeMethod) return;
+        invBase.resize(size_t(width));
+        const double invConstant = slopeInverseBasePower(o.basePower);
+        for (int x = 0; x < width; ++x)
+            invBase[size_t(x)] = plan.base ? slopeInverseBasePower(basePowers[size_t(x)]) : invConstant;
+        for (auto* v : {&bx, &by, &mxx, &myy, &mxy, &cxx, &cyy, &cxy})
+            v->resize(size_t(width));
+        for (int x = 0; x < width; ++x) {
+            const NormalMoments& m = row[x];
+            const auto M = m.slopeSecondMoments();
+            bx[size_t(x)] = m.slope.x;
+            by[size_t(x)] = m.slope.y;
+            mxx[size_t(x)] = M[0];
+            myy[size_t(x)] = M[1];
+            mxy[size_t(x)] = M[2];
+            cxx[size_t(x)] = m.slopeCov[0];
+            cyy[size_t(x)] = m.slopeCov[1];
+            cxy[size_t(x)] = m.slopeCov[2];
+        }
+    }
+};
+
+struct ClampCounts {
+    size_t low = 0, high = 0;
+};
+
+// One role's texels of a row into `px` (`channels` floats a texel); the gloss role counts the powers
+// it clamps to the encoding's range. sB and sM are powers of two, so multiplying by their
+// reciprocals is exact.
+ClampCounts writeRoleRow(const RowPlan& plan, TextureRole role, const NormalMoments* row, const RowValues& v,
+                         int width, float* px) {
+    const BakeOptions& o = plan.options;
+    const double sB = plan.scales.slope, sM = plan.scales.moment;
+    const double invB2 = 1.0 / (2 * sB), invM = 1.0 / sM, invM2 = 1.0 / (2 * sM);
+    ClampCounts counts;
+    switch (role) {
+    case TextureRole::Normal:
+        for (int x = 0; x < width; ++x, px += 3) {
+            const glm::vec3 n = plan.unnormalized ? row[x].mean : v.directions[size_t(x)];
+            for (int c = 0; c < 3; ++c)
+                px[c] = unit(0.5 * double(n[c]) + 0.5);
+        }
+        break;
+    case TextureRole::Gloss: {
+        if (plan.constantGloss) {
+            std::fill(px, px + width, plan.baseGloss); // the base power's gloss, encoded once
+            break;
+        }
+        const double* powers = plan.adjustedGloss ? v.lobePowers.data() : v.basePowers.data();
+        for (int x = 0; x < width; ++x) {
+            counts.low += powers[x] < plan.glossMinPower ? 1 : 0;
+            counts.high += powers[x] > plan.glossMaxPower ? 1 : 0;
+        }
+        o.encoding.values(powers, px, size_t(width));
+        break;
+    }
+    case TextureRole::Toksvig:
+        for (int x = 0; x < width; ++x)
+            px[x] = unit(toksvigFactor(row[x].lengthNa(), o.params.toksvigMapPower));
+        break;
+    case TextureRole::LeanB:
+        slopeMeanRow(v.bx.data(), v.by.data(), invB2, width, 2, px);
+        break;
+    case TextureRole::Clean:
+        slopeMeanRow(v.bx.data(), v.by.data(), invB2, width, 3, px);
+        for (int x = 0; x < width; ++x)
+            px[3 * x + 2] = unit((0.5 * (v.mxx[size_t(x)] + v.myy[size_t(x)]) + v.invBase[size_t(x)]) * invM);
+        break;
+    case TextureRole::LeanM:
+        leanMRow(v.mxx.data(), v.myy.data(), v.mxy.data(), v.invBase.data(), invM, invM2, width, px);
+        break;
+    case TextureRole::LeanGloss:
+        leanGlossRow(v.cxx.data(), v.cyy.data(), v.cxy.data(), v.invBase.data(), width, px);
+        break;
+    case TextureRole::Detail: // no method's row names it: detail.cpp bakes it
+        break;
+    }
+    return counts;
+}
+
+// Level k of every texture, each row from its filtered moments as they stream out of the pyramid,
+// one role at a time, so each inner loop does one texture's arithmetic.
+void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOutput& out) {
+    const PyramidLevel& level = pyramid.level(k);
+    const BakeOptions& o = plan.options;
+    if (plan.constantGloss && plan.producesGloss) {
+        const size_t texels = size_t(level.width) * size_t(level.height);
+        if (o.basePower < plan.glossMinPower) out.stats.glossClampedLow += texels;
+        if (o.basePower > plan.glossMaxPower) out.stats.glossClampedHigh += texels;
+    }
+    for (auto& tex : out.textures) {
+        auto& mip = tex.mips[size_t(k)];
+        mip.width = level.width;
+        mip.height = level.height;
+        mip.texels.resize(size_t(level.width) * size_t(level.height) * size_t(tex.channels));
+    }
+    std::vector<ClampCounts> rowCounts(size_t(level.height));
+    pyramid.forEachMomentRow(k, [&](int y, const NormalMoments* row) {
+        const int width = level.width;
+        const size_t first = size_t(y) * size_t(width);
+        thread_local RowValues values;
+        values.fill(plan, k, y, row, width);
+        for (size_t r = 0; r < plan.roles.size(); ++r) {
+            BakedTexture& tex = out.textures[r];
+            float* px = &tex.mips[size_t(k)].texels[first * size_t(tex.channels)];
+            const ClampCounts c = writeRoleRow(plan, plan.roles[r], row, values, width, px);
+            rowCounts[size_t(y)].low += c.low;
+            rowCounts[size_t(y)].high += c.high;
+        }
+    });
+    for (const ClampCounts& c : rowCounts) {
+        out.stats.glossClampedLow += c.low;
+        out.stats.glossClampedHigh += c.high;
+    }
+}
+
+} // namespace
+
+Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
+    if (const Status s = checkBakeInput(map, options); !s) return Error{s.error()};
+
+    BakeOutput out;
+    out.method = options.method;
+    auto start = Clock::now();
+    const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
+    // Only the moments the method reads: the rest are most of the pyramid's work.
+    PyramidOptions pyramidOptions = options.pyramid;
+    pyramidOptions.moments = momentsNeeded(options.method);
+    const NormalPyramid pyramid = NormalPyramid::build(borrowed, pyramidOptions);
+    std::optional<BaseVariancePyramid> base;
+    if (options.authoredGloss) {
+        base.emplace(pyramid);
+        base->build(*options.authoredGloss, options.encoding);
+    }
+    out.stats.pyramidSeconds = seconds(start);
+    start = Clock::now();
+
+    const int levels =
+        options.mipCount > 0 ? std::min(options.mipCount, pyramid.levelCount()) : pyramid.levelCount();
+    out.stats.mipCount = levels;
+    const ChannelScales scales = storesSlopes(options.method) ? slopeScales(map, options) : ChannelScales{};
+    out.textures = planTextures(options, scales);
+    for (auto& tex : out.textures)
+        tex.mips.resize(size_t(levels));
+    const RowPlan plan(options, base ? &*base : nullptr, out.textures, scales);
+    for (int k = 0; k < levels; ++k)
+        bakeLevel(plan, pyramid, k, out);
+    out.stats.methodSeconds = seconds(start);
+    return out;
+}
+
+} // namespace burnish

@@ -1,0 +1,513 @@
+#include <burnish/core/bake/bake_job.h>
+
+#include <burnish/core/eval/evaluate_report.h>
+#include <burnish/core/io/image.h>
+#include <burnish/core/prefilter/sample_maps.h>
+#include <burnish/core/util/files.h>
+#include <burnish/core/util/numeric.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <initializer_list>
+#include <utility>
+#include <vector>
+
+namespace burnish {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+template <class T>
+Result<T> choice(const char* option, const std::string& value,
+                 std::initializer_list<std::pair<const char*, T>> choices) {
+    std::string names;
+    for (const auto& [name, v] : choices) {
+        if (value == name) return v;
+        names += (names.empty() ? "" : ", ") + std::string(name);
+    }
+    return Error{fmt::format("{} '{}' is not known (known: {})", option, value, names)};
+}
+
+std::string joined(const std::vector<std::string>& names) {
+    std::string out;
+    for (const auto& n : names)
+        out += (out.empty() ? "" : ", ") + n;
+    return out;
+}
+
+/// An in-memory authored gloss checked and clamped as glossFromImage treats a gloss file's values,
+/// so painted values and the same values read back from a float file bake the same bytes.
+Result<std::vector<float>> checkedAuthoredGloss(const std::vector<float>& values, int width, int height) {
+    const size_t texels = size_t(width) * size_t(height);
+    if (values.size() != texels)
+        return Error{fmt::format("authored gloss: {} values for a {}x{} normal map ({} texels)",
+                                 values.size(), width, height, texels)};
+    std::vector<float> gloss(texels);
+    for (size_t i = 0; i < texels; ++i) {
+        const float v = values[i];
+        if (!std::isfinite(v))
+            return Error{fmt::format("authored gloss: a NaN or infinite value at index {}", i)};
+        // The gloss encodings are defined on [0, 1]; a file's values are clamped the same way.
+        gloss[i] = std::clamp(v, 0.0f, 1.0f);
+    }
+    return gloss;
+}
+
+/// FNV-1a (64-bit) of the values' bytes, as 16 hex digits: names which painted gloss made a set.
+// Fowler, Noll & Vo, "FNV-1a": offset basis 14695981039346656037, prime 1099511628211
+std::string fnv1a64(const std::vector<float>& values) {
+    uint64_t hash = 14695981039346656037ull;
+    for (float v : values) {
+        unsigned char bytes[sizeof(float)];
+        std::memcpy(bytes, &v, sizeof v);
+        for (unsigned char b : bytes) {
+            hash ^= b;
+            hash *= 1099511628211ull;
+        }
+    }
+    return fmt::format("{:016x}", hash);
+}
+
+/// The file stem of the outputs: the input's file stem, or the sample's name.
+std::string inputStem(const std::string& input) {
+    if (isSampleBakeInput(input)) return input.substr(kSampleInputPrefix.size());
+    return fs::path(input).stem().string();
+}
+
+} // namespace
+
+Result<NormalMap> loadBakeInput(const std::string& input, const NormalMapOptions& options) {
+    if (!isSampleBakeInput(input)) return loadNormalMap(input, options);
+    const auto kind = sampleMapFromName(input.substr(kSampleInputPrefix.size()));
+    if (!kind) return Error{"input '" + input + "': " + kind.error()};
+    return makeSampleNormalMap(*kind, kSampleBakeSize);
+}
+
+Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
+    BakeJob job;
+    job.spec = spec;
+    if (spec.input.empty()) return Error{"no input normal map given"};
+    if (spec.out.empty()) return Error{"no output folder given (--out DIR)"};
+    if (spec.authoredGloss && spec.authoredGloss->empty()) return Error{"authored gloss: no values given"};
+    if (spec.preset.empty())
+        return Error{"no preset given (--preset P; known: " + joined(builtinPresetNames()) + ")"};
+    if (isSampleBakeInput(spec.input)) {
+        const auto kind = sampleMapFromName(spec.input.substr(kSampleInputPrefix.size()));
+        if (!kind) return Error{"input '" + spec.input + "': " + kind.error()};
+    }
+
+    auto preset = findPreset(spec.preset);
+    if (!preset) return Error{preset.error()};
+    job.preset = std::move(preset.value());
+
+    job.method = job.preset.method;
+    if (spec.method) {
+        const auto m = methodFromName(*spec.method);
+        if (!m) return Error{"--method: " + m.error()};
+        job.method = *m;
+    }
+    if (const Status s = checkPresetMethod(job.preset, job.method); !s) return Error{s.error()};
+
+    if (spec.format) {
+        const auto f = exportFormatFromName(*spec.format);
+        if (!f) return Error{"--format: " + f.error()};
+        job.exportOptions.format = *f;
+    }
+    if (spec.compression) {
+        const auto c = ddsCompressionFromName(*spec.compression);
+        if (!c) return Error{"--compression: " + c.error()};
+        if (job.exportOptions.format.value_or(job.preset.format) != ExportFormat::Dds)
+            return Error{
+                "--compression " + *spec.compression + " applies to --format dds only (the format is " +
+                std::string(exportFormatName(job.exportOptions.format.value_or(job.preset.format))) + ")"};
+        job.exportOptions.compression = *c;
+    }
+    if (spec.metallic) {
+        if (!job.preset.findParameter("metallic")) {
+            std::vector<std::string> with;
+            for (const auto& p : builtinPresets())
+                if (p.findParameter("metallic")) with.push_back(p.name);
+            return Error{"--metallic: preset '" + job.preset.name +
+                         "' stores no metallic channel (presets with one: " + joined(with) + ")"};
+        }
+        job.exportOptions.parameters["metallic"] = *spec.metallic;
+    }
+    // The power range every core formula accepts (numeric.h): above kMaxPower lobes are clamped.
+    if (spec.power && !(*spec.power > 0.0 && *spec.power <= kMaxPower))
+        return Error{fmt::format("--power {:g} must lie in (0, {:g}]", *spec.power, kMaxPower)};
+
+    job.bake.method = job.method;
+    job.bake.encoding = job.preset.encoding;
+    // Only the textures the preset's files read are baked (LEAN's preset, for one, stores no
+    // normal texture: it is rebuilt from B).
+    job.bake.roles = presetRoles(job.preset);
+    if (spec.power) job.bake.basePower = *spec.power;
+    if (spec.kernel) {
+        const auto k = choice<FilterKernel>(
+            "--kernel", *spec.kernel,
+            {{"box", FilterKernel::Box}, {"tent", FilterKernel::Tent}, {"gaussian", FilterKernel::Gaussian}});
+        if (!k) return Error{k.error()};
+        job.bake.pyramid.kernel = *k;
+    }
+    if (spec.border) {
+        const auto b = choice<BorderMode>("--border", *spec.border,
+                                          {{"wrap", BorderMode::Wrap}, {"clamp", BorderMode::Clamp}});
+        if (!b) return Error{b.error()};
+        job.bake.pyramid.border = *b;
+    }
+    if (spec.green) {
+        const auto g = choice<GreenConvention>(
+            "--green", *spec.green,
+            {{"opengl", GreenConvention::OpenGL}, {"directx", GreenConvention::DirectX}});
+        if (!g) return Error{g.error()};
+        job.normalMap.green = *g;
+    }
+    if (spec.layout) {
+        const auto l = choice<NormalLayout>(
+            "--layout", *spec.layout,
+            {{"auto", NormalLayout::Auto}, {"rgb", NormalLayout::Rgb}, {"rg", NormalLayout::Rg}});
+        if (!l) return Error{l.error()};
+        job.normalMap.layout = *l;
+    }
+    if (spec.mips) {
+        if (*spec.mips < 1) return Error{fmt::format("--mips {} must be at least 1", *spec.mips)};
+        job.bake.mipCount = *spec.mips;
+    }
+    if (spec.detailFade && !spec.detail) return Error{"--detail-fade needs a detail map (--detail FILE)"};
+    if (spec.detail) {
+        if (spec.detail->empty()) return Error{"--detail: no file given"};
+        job.detail.pyramid = job.bake.pyramid;
+        job.detail.mipCount = job.bake.mipCount;
+        if (spec.detailFade) {
+            const std::string& f = *spec.detailFade;
+            const auto colon = f.find(':');
+            int start = -1, end = -1;
+            const bool ok =
+                colon != std::string::npos &&
+                std::from_chars(f.data(), f.data() + colon, start).ptr == f.data() + colon &&
+                std::from_chars(f.data() + colon + 1, f.data() + f.size(), end).ptr == f.data() + f.size();
+            if (!ok || start < 0 || end < start)
+                return Error{"--detail-fade '" + f +
+                             "' must be START:END mips with 0 <= START <= END (e.g. 3:6)"};
+            job.detail.fadeStartMip = start;
+            job.detail.fadeEndMip = end;
+        }
+    }
+    job.normalMap.allowImplausible = spec.allowImplausible;
+    job.exportOptions.allowEightBit = spec.allowEightBit;
+    job.exportOptions.overwrite = spec.force ? Overwrite::Allow : Overwrite::Refuse;
+    job.exportOptions.stem = inputStem(spec.input);
+    if (job.exportOptions.stem.empty()) return Error{"input '" + spec.input + "' has no file name"};
+    return job;
+}
+
+namespace {
+
+/// The ground-truth report for the same map, power and border: how far each method is from the
+/// truth per mip, next to its cost (as `burnish evaluate`), written into <out>/report. Returns the
+/// path of its evaluate.md.
+Result<std::string> writeBakeReport(const BakeJob& job, const NormalMap& map, const BakeOptions& options,
+                                    const std::function<void(double)>& progress) {
+    EvaluationReportOptions evaluation;
+    evaluation.inputName = fs::path(job.spec.input).filename().string();
+    evaluation.evaluate.basePowers = {options.basePower};
+    evaluation.evaluate.border = options.pyramid.border;
+    evaluation.evaluate.params = options.params;
+    if (options.authoredGloss) {
+        // The ground truth with each texel's authored power, decoded as the bake decodes it.
+        std::vector<double> powers(options.authoredGloss->size());
+        for (size_t i = 0; i < powers.size(); ++i)
+            powers[i] = options.encoding.power((*options.authoredGloss)[i]);
+        evaluation.evaluate.texelPowers = std::move(powers);
+    }
+    auto built = buildEvaluationReport(map, evaluation, progress);
+    if (!built) return Error{"--report: " + built.error()};
+    const fs::path dir = fs::path(job.spec.out) / kBakeReportFolder;
+    if (auto st = writeEvaluationReport(*built, dir); !st) return Error{"--report: " + st.error()};
+    return (dir / kBakeReportFiles[0]).string();
+}
+
+} // namespace
+
+Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& progress) {
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    // reading, baking, writing (and evaluating): each stage one equal share of the fraction done.
+    const int steps = job.spec.report ? 4 : 3;
+    auto step = [&](double done, std::string_view stage) {
+        return !progress || progress(done / steps, stage);
+    };
+    const Error cancelled{"cancelled"};
+
+    if (!step(0, "reading")) return cancelled;
+    auto map = loadBakeInput(job.spec.input, job.normalMap);
+    if (!map) return Error{map.error()};
+    const double readSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+
+    BakeOptions options = job.bake;
+    if (job.spec.authoredGloss) {
+        // The in-memory gloss overrides the file: spec.gloss is only recorded, not read.
+        auto gloss = checkedAuthoredGloss(*job.spec.authoredGloss, map->width, map->height);
+        if (!gloss) return Error{gloss.error()};
+        options.authoredGloss = std::move(gloss.value());
+    } else if (job.spec.gloss) {
+        const auto image = readImage(*job.spec.gloss);
+        if (!image) return Error{"--gloss: " + image.error()};
+        auto gloss = glossFromImage(*image, map->width, map->height);
+        if (!gloss) return Error{"--gloss '" + *job.spec.gloss + "': " + gloss.error()};
+        options.authoredGloss = std::move(gloss.value());
+    }
+
+    if (!step(1, "baking")) return cancelled;
+    auto baked = bake(*map, options);
+    if (!baked) return Error{baked.error()};
+    // What the summary should point out: a --mips beyond a chain, a fade beyond the detail's levels.
+    Json notes = Json::array();
+    if (job.spec.mips && *job.spec.mips > baked->stats.mipCount)
+        notes.push_back(fmt::format("--mips {} exceeds the {}-level chain of a {}x{} map: {} levels written",
+                                    *job.spec.mips, baked->stats.mipCount, map->width, map->height,
+                                    baked->stats.mipCount));
+
+    std::optional<DetailRecord> detailRecord;
+    if (job.spec.detail) {
+        const auto detailMap = loadNormalMap(*job.spec.detail, job.normalMap);
+        if (!detailMap) return Error{"--detail: " + detailMap.error()};
+        auto detail = bakeDetail(*detailMap, job.detail);
+        if (!detail) return Error{"--detail '" + *job.spec.detail + "': " + detail.error()};
+        const int levels = int(detail->texture.mips.size());
+        if (job.spec.mips && *job.spec.mips > levels)
+            notes.push_back(fmt::format("--mips {} exceeds the {}-level chain of the {}x{} detail map: {} "
+                                        "detail levels written",
+                                        *job.spec.mips, levels, detailMap->width, detailMap->height, levels));
+        if (job.detail.fadeEndMip >= levels)
+            notes.push_back(fmt::format("the detail fade ends at mip {}, beyond the detail map's {} stored "
+                                        "levels: its last level is not fully faded to the constant variance",
+                                        job.detail.fadeEndMip, levels));
+        detailRecord = DetailRecord{*job.spec.detail, detail->constantVariance, job.detail.fadeStartMip,
+                                    job.detail.fadeEndMip};
+        baked.value().textures.push_back(std::move(detail.value().texture));
+    }
+
+    if (!step(2, "writing")) return cancelled;
+    std::error_code ec;
+    fs::create_directories(job.spec.out, ec);
+    if (ec) return Error{"cannot create output folder '" + job.spec.out + "': " + ec.message()};
+
+    BakeRecord record;
+    record.inputs = {{"normalMap", job.spec.input},
+                     {"glossMap", job.spec.gloss ? Json(*job.spec.gloss) : Json(nullptr)},
+                     {"detailMap", job.spec.detail ? Json(*job.spec.detail) : Json(nullptr)},
+                     {"width", map->width},
+                     {"height", map->height},
+                     {"source",
+                      {{"format", map->source.formatName},
+                       {"channelType", map->source.channelType},
+                       {"bitsPerChannel", map->source.bitsPerChannel}}}};
+    if (job.spec.authoredGloss) {
+        // Not a file: say where the gloss came from and which values it held, instead of a path.
+        record.inputs.erase("glossMap");
+        record.inputs["gloss"] = {{"source", std::string(kPaintedGlossSource)},
+                                  {"paintedOver", job.spec.gloss ? Json(*job.spec.gloss) : Json(nullptr)},
+                                  {"fnv1a64", fnv1a64(*options.authoredGloss)}};
+    }
+    const ExportFormat format = job.exportOptions.format.value_or(job.preset.format);
+    record.options = {
+        {"preset", job.spec.preset},
+        {"method", std::string(methodName(job.method))},
+        {"power", options.authoredGloss ? Json(nullptr) : Json(options.basePower)},
+        {"format", std::string(exportFormatName(format))},
+        {"compression", job.exportOptions.compression
+                            ? Json(std::string(ddsCompressionName(*job.exportOptions.compression)))
+                            : Json(nullptr)},
+        {"kernel", job.spec.kernel.value_or("tent")},
+        {"border", job.spec.border.value_or("wrap")},
+        {"green", job.spec.green.value_or("opengl")},
+        {"layout", job.spec.layout.value_or("auto")},
+        {"mips", job.spec.mips ? Json(*job.spec.mips) : Json(nullptr)},
+        {"allow8bit", job.spec.allowEightBit},
+        {"allowImplausible", job.spec.allowImplausible}};
+    if (detailRecord) record.options["detailFade"] = {detailRecord->fadeStartMip, detailRecord->fadeEndMip};
+    record.diagnostics = map->diagnostics;
+    record.detail = detailRecord;
+
+    const auto exportStart = Clock::now();
+    auto exported = exportBake(*baked, job.preset, job.exportOptions, job.spec.out, record);
+    const double exportSeconds = std::chrono::duration<double>(Clock::now() - exportStart).count();
+    if (!exported) {
+        std::string message = exported.error();
+        if (message.rfind("refusing to overwrite", 0) == 0) message += " (use --force to replace the set)";
+        return Error{message};
+    }
+    // The time of the bake and its export; the report's evaluation (its own timed bakes) is not in it.
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+
+    Json files = Json::array();
+    for (const auto& f : exported->files)
+        for (const auto& p : f.paths)
+            files.push_back((fs::path(job.spec.out) / p).string());
+    BakeJobResult result;
+    result.summary = {{"input", job.spec.input},
+                      {"out", job.spec.out},
+                      {"preset", job.preset.name},
+                      {"method", std::string(methodName(job.method))},
+                      {"format", std::string(exportFormatName(format))},
+                      {"files", files},
+                      {"bakeJson", (fs::path(job.spec.out) / exported->manifestPath).string()},
+                      {"width", map->width},
+                      {"height", map->height},
+                      {"mipCount", baked->stats.mipCount},
+                      {"mipsRequested", job.spec.mips ? Json(*job.spec.mips) : Json(nullptr)},
+                      {"notes", notes},
+                      {"glossClampedLow", baked->stats.glossClampedLow},
+                      {"glossClampedHigh", baked->stats.glossClampedHigh},
+                      {"readSeconds", readSeconds},
+                      {"pyramidSeconds", baked->stats.pyramidSeconds},
+                      {"methodSeconds", baked->stats.methodSeconds},
+                      {"exportSeconds", exportSeconds},
+                      {"seconds", seconds},
+                      {"warnings", map->diagnostics.warnings}};
+    if (detailRecord)
+        result.summary["detail"] = {{"file", exported->manifest["detail"]["file"]},
+                                    {"constantVariance", detailRecord->constantVariance},
+                                    {"fade", {detailRecord->fadeStartMip, detailRecord->fadeEndMip}}};
+
+    if (job.spec.report) {
+        if (!step(3, "evaluating")) return cancelled;
+        // The evaluation cannot stop midway: its progress only moves the fraction within the step.
+        auto report = writeBakeReport(job, *map, options, [&](double f) { step(3 + f, "evaluating"); });
+        if (!report) return Error{report.error()};
+        result.summary["report"] = *report;
+    }
+    step(steps, "done");
+
+    result.map = std::move(map.value());
+    result.baked = std::move(baked.value());
+    result.exported = std::move(exported.value());
+    return result;
+}
+
+// Manifest: {"version": 1, "jobs": [{"input": ..., "out": ..., <any option by its long name>}]}.
+// Relative paths are relative to the manifest's folder; options on the command line are defaults.
+Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const BakeJobSpec& defaults) {
+    const auto text = readFile(path);
+    if (!text) return Error{"--manifest: " + text.error()};
+    Json root;
+    try {
+        root = Json::parse(*text);
+    } catch (const Json::parse_error& e) {
+        return Error{"manifest '" + path + "': invalid JSON: " + e.what()};
+    }
+    const std::string where = "manifest '" + path + "'";
+    if (!root.is_object() || !root.contains("jobs") || !root["jobs"].is_array())
+        return Error{where + ": expected an object with a \"jobs\" array"};
+    for (const auto& [key, value] : root.items())
+        if (key != "jobs" && key != "version")
+            return Error{where + ": unknown field '" + key + "' (known: version, jobs)"};
+    if (root.contains("version") && !(root["version"].is_number_integer() && root["version"].get<int>() == 1))
+        return Error{where + ": version must be 1"};
+    const fs::path base = fs::path(path).parent_path();
+    auto rebase = [&](const std::string& p) {
+        return fs::path(p).is_absolute() ? p : (base / p).lexically_normal().string();
+    };
+
+    std::vector<BakeJobSpec> jobs;
+    const auto& list = root["jobs"];
+    if (list.empty()) return Error{where + ": \"jobs\" is empty"};
+    for (size_t i = 0; i < list.size(); ++i) {
+        const Json& j = list[i];
+        const std::string at = where + " job " + std::to_string(i + 1);
+        if (!j.is_object()) return Error{at + ": must be an object"};
+        BakeJobSpec spec = defaults;
+        for (const auto& [key, value] : j.items()) {
+            auto str = [&](std::string& dest) -> Status {
+                if (!value.is_string()) return Error{at + ": '" + key + "' must be a string"};
+                dest = value.get<std::string>();
+                return {};
+            };
+            auto optStr = [&](std::optional<std::string>& dest) -> Status {
+                if (!value.is_string()) return Error{at + ": '" + key + "' must be a string"};
+                dest = value.get<std::string>();
+                return {};
+            };
+            auto num = [&](std::optional<double>& dest) -> Status {
+                if (!value.is_number()) return Error{at + ": '" + key + "' must be a number"};
+                dest = value.get<double>();
+                return {};
+            };
+            auto flag = [&](bool& dest) -> Status {
+                if (!value.is_boolean()) return Error{at + ": '" + key + "' must be true or false"};
+                dest = value.get<bool>();
+                return {};
+            };
+            Status s;
+            if (key == "input")
+                s = str(spec.input);
+            else if (key == "out")
+                s = str(spec.out);
+            else if (key == "preset")
+                s = str(spec.preset);
+            else if (key == "method")
+                s = optStr(spec.method);
+            else if (key == "power")
+                s = num(spec.power);
+            else if (key == "gloss")
+                s = optStr(spec.gloss);
+            else if (key == "format")
+                s = optStr(spec.format);
+            else if (key == "compression")
+                s = optStr(spec.compression);
+            else if (key == "kernel")
+                s = optStr(spec.kernel);
+            else if (key == "border")
+                s = optStr(spec.border);
+            else if (key == "green")
+                s = optStr(spec.green);
+            else if (key == "layout")
+                s = optStr(spec.layout);
+            else if (key == "metallic")
+                s = num(spec.metallic);
+            else if (key == "mips") {
+                if (!value.is_number_integer())
+                    s = Error{at + ": 'mips' must be an integer"};
+                else
+                    spec.mips = value.get<int>();
+            } else if (key == "detail")
+                s = optStr(spec.detail);
+            else if (key == "detail-fade")
+                s = optStr(spec.detailFade);
+            else if (key == "force")
+                s = flag(spec.force);
+            else if (key == "allow-implausible")
+                s = flag(spec.allowImplausible);
+            else if (key == "allow-8bit")
+                s = flag(spec.allowEightBit);
+            else
+                s = Error{at + ": unknown field '" + key +
+                          "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
+                          "border, "
+                          "green, layout, metallic, mips, detail, detail-fade, force, allow-implausible, "
+                          "allow-8bit)"};
+            if (!s) return Error{s.error()};
+        }
+        if (j.contains("input") && !isSampleBakeInput(spec.input)) spec.input = rebase(spec.input);
+        if (j.contains("out")) spec.out = rebase(spec.out);
+        if (j.contains("gloss") && spec.gloss) spec.gloss = rebase(*spec.gloss);
+        if (j.contains("detail") && spec.detail) spec.detail = rebase(*spec.detail);
+        if (j.contains("preset") && spec.preset.size() > 5 &&
+            spec.preset.substr(spec.preset.size() - 5) == ".json")
+            spec.preset = rebase(spec.preset);
+        jobs.push_back(std::move(spec));
+    }
+    return jobs;
+}
+
+} // namespace burnish

@@ -1,0 +1,199 @@
+#include <burnish/core/bake/bake_ninja.h>
+
+#include <burnish/core/io/image.h>
+#include <burnish/core/util/files.h>
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <map>
+#include <utility>
+
+namespace burnish {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+std::string absolutePath(const std::string& p) {
+    return fs::absolute(fs::path(p)).lexically_normal().string();
+}
+
+/// A job's input as a command names it: a file absolute, a built-in sample by its name.
+std::string inputArgument(const std::string& input) {
+    return isSampleBakeInput(input) ? input : absolutePath(input);
+}
+
+/// `text` quoted for /bin/sh (ninja runs commands through sh -c).
+std::string shellQuote(const std::string& text) {
+    std::string q = "'";
+    for (char c : text)
+        q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+/// A path in a ninja build line: '$', ' ' and ':' are escaped with '$'; a newline cannot be written.
+Result<std::string> ninjaPath(const std::string& p) {
+    std::string out;
+    for (char c : p) {
+        if (c == '\n' || c == '\r')
+            return Error{"path '" + p + "' holds a line break, which Ninja cannot express"};
+        if (c == '$' || c == ' ' || c == ':') out += '$';
+        out += c;
+    }
+    return out;
+}
+
+/// A variable's value in a ninja file: only '$' needs escaping (ninja expands it); commands hold no
+/// newline.
+std::string ninjaValue(const std::string& v) {
+    std::string out;
+    for (char c : v)
+        out += c == '$' ? std::string("$$") : std::string(1, c);
+    return out;
+}
+
+struct NinjaJob {
+    std::vector<std::string> outputs; // absolute
+    std::vector<std::string> inputs;  // absolute
+    std::string command;
+    std::string description;
+};
+
+/// The extent of a job's input: read from its file, or the size a sample is baked at.
+Result<std::pair<int, int>> inputExtent(const std::string& input) {
+    if (isSampleBakeInput(input)) return std::pair{kSampleBakeSize, kSampleBakeSize};
+    const auto image = readImage(input);
+    if (!image) return Error{image.error()};
+    return std::pair{image->width, image->height};
+}
+
+/// What one job reads and writes, without baking: the input's extent from its file, the file
+/// names from export's plan.
+Result<NinjaJob> planNinjaJob(const std::string& exe, const BakeJob& job, const std::string& manifest) {
+    const auto extent = inputExtent(job.spec.input);
+    if (!extent) return Error{extent.error()};
+    auto shape = bakeShape(job.bake, extent->first, extent->second);
+    if (!shape) return Error{shape.error()};
+    BakeRecord record;
+    if (job.spec.detail) {
+        const auto detailImage = readImage(*job.spec.detail);
+        if (!detailImage) return Error{"--detail: " + detailImage.error()};
+        auto detail = detailShape(detailImage->width, detailImage->height, job.detail);
+        if (!detail) return Error{"--detail: " + detail.error()};
+        shape.value().textures.push_back(std::move(detail.value()));
+        // The constant variance is not known before the bake; the plan names files only.
+        record.detail = DetailRecord{*job.spec.detail, 0.0, job.detail.fadeStartMip, job.detail.fadeEndMip};
+    }
+    const auto plan = planExport(*shape, job.preset, job.exportOptions, record);
+    if (!plan) return Error{plan.error()};
+
+    NinjaJob nj;
+    const fs::path out = absolutePath(job.spec.out);
+    for (const auto& f : plan->files)
+        for (const auto& p : f.paths)
+            nj.outputs.push_back((out / p).string());
+    nj.outputs.push_back((out / plan->manifestPath).string());
+    if (job.spec.report)
+        for (const auto f : kBakeReportFiles)
+            nj.outputs.push_back((out / kBakeReportFolder / f).string());
+    if (!isSampleBakeInput(job.spec.input)) nj.inputs.push_back(absolutePath(job.spec.input));
+    if (job.spec.gloss) nj.inputs.push_back(absolutePath(*job.spec.gloss));
+    if (job.spec.detail) nj.inputs.push_back(absolutePath(*job.spec.detail));
+    if (job.preset.origin != "built-in") nj.inputs.push_back(absolutePath(job.preset.origin));
+    nj.inputs.push_back(absolutePath(manifest));
+    for (const auto& a : bakeJobCommand(exe, job))
+        nj.command += (nj.command.empty() ? "" : " ") + shellQuote(a);
+    nj.description = "burnish bake " + fs::path(job.spec.input).filename().string() + " -> " + out.string();
+    return nj;
+}
+
+} // namespace
+
+std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& job) {
+    const BakeJobSpec& s = job.spec;
+    std::vector<std::string> args{
+        exe,
+        "bake",
+        inputArgument(s.input),
+        "--out",
+        absolutePath(s.out),
+        "--preset",
+        s.preset,
+        "--method",
+        std::string(methodName(job.method)),
+        "--power",
+        fmt::format("{}", job.bake.basePower),
+        "--format",
+        std::string(exportFormatName(job.exportOptions.format.value_or(job.preset.format))),
+        "--kernel",
+        s.kernel.value_or("tent"),
+        "--border",
+        s.border.value_or("wrap"),
+        "--green",
+        s.green.value_or("opengl"),
+        "--layout",
+        s.layout.value_or("auto"),
+        "--force"};
+    // Options whose absence means "each file's own choice" or "none" stay absent.
+    if (s.gloss) args.insert(args.end(), {"--gloss", absolutePath(*s.gloss)});
+    if (job.exportOptions.compression)
+        args.insert(args.end(),
+                    {"--compression", std::string(ddsCompressionName(*job.exportOptions.compression))});
+    if (s.metallic) args.insert(args.end(), {"--metallic", fmt::format("{}", *s.metallic)});
+    if (s.mips) args.insert(args.end(), {"--mips", std::to_string(*s.mips)});
+    if (s.detail)
+        args.insert(args.end(), {"--detail", absolutePath(*s.detail), "--detail-fade",
+                                 fmt::format("{}:{}", job.detail.fadeStartMip, job.detail.fadeEndMip)});
+    if (s.allowImplausible) args.emplace_back("--allow-implausible");
+    if (s.allowEightBit) args.emplace_back("--allow-8bit");
+    if (s.report) args.emplace_back("--report");
+    return args;
+}
+
+Result<nlohmann::json> writeBakeNinja(const std::vector<BakeJob>& jobs, const std::string& manifest,
+                                      const std::string& path, const std::string& exe) {
+    std::string text = "# Generated by `burnish bake --manifest " + fs::path(manifest).filename().string() +
+                       " --ninja`: one `burnish bake` per job.\n"
+                       "# Run with `ninja -f " +
+                       fs::path(path).filename().string() +
+                       " -j N`; a job reruns when one of its inputs (maps, preset file, manifest) "
+                       "changed.\n"
+                       "ninja_required_version = 1.3\n\n"
+                       "rule burnish_bake\n"
+                       "  command = $cmd\n"
+                       "  description = $desc\n"
+                       "  restat = 1\n";
+    std::map<std::string, size_t> owner; // output -> job number, to refuse two jobs writing one file
+    Json outputs = Json::array();
+    for (size_t i = 0; i < jobs.size(); ++i) {
+        const std::string at = "manifest job " + std::to_string(i + 1) + " (" + jobs[i].spec.input + "): ";
+        auto nj = planNinjaJob(exe, jobs[i], manifest);
+        if (!nj) return Error{at + nj.error()};
+        std::string line = "\nbuild";
+        for (const auto& o : nj->outputs) {
+            const auto [it, fresh] = owner.emplace(o, i + 1);
+            if (!fresh)
+                return Error{at + "writes '" + o + "', which job " + std::to_string(it->second) +
+                             " writes too"};
+            const auto e = ninjaPath(o);
+            if (!e) return Error{at + e.error()};
+            line += " " + *e;
+            outputs.push_back(o);
+        }
+        line += ": burnish_bake";
+        for (const auto& in : nj->inputs) {
+            const auto e = ninjaPath(in);
+            if (!e) return Error{at + e.error()};
+            line += " " + *e;
+        }
+        text += line + "\n  cmd = " + ninjaValue(nj->command) + "\n  desc = " + ninjaValue(nj->description) +
+                "\n";
+    }
+    if (const Status s = writeFileAtomic(path, text, Overwrite::Allow); !s)
+        return Error{"--ninja: " + s.error()};
+    return Json{{"ninja", path}, {"jobs", jobs.size()}, {"outputs", outputs}};
+}
+
+} // namespace burnish

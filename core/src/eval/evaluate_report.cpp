@@ -1,0 +1,352 @@
+#include <burnish/core/eval/evaluate_report.h>
+
+#include <burnish/core/io/image.h>
+
+#include <burnish/core/bake/bake.h>
+#include <burnish/core/util/files.h>
+#include <burnish/core/util/plot.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <sstream>
+
+namespace burnish {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Shading cost: evaluate the method's lobe (NDF × n̄·l) for every texel of the first evaluated mip
+// (up to kCostTexels) and every direction, several times, and keep the median time per evaluation.
+constexpr size_t kCostTexels = 1 << 16;
+constexpr int kCostRepetitions = 5;
+
+double measureShadingNs(const NormalPyramid& pyramid, int mip, Method method, double s,
+                        const EvaluateOptions& options, const std::vector<DirectionPair>& directions) {
+    const PyramidLevel& level = pyramid.level(mip);
+    std::vector<TexelLobe> lobes;
+    for (int y = 0; y < level.height && lobes.size() < kCostTexels; ++y)
+        for (int x = 0; x < level.width && lobes.size() < kCostTexels; ++x)
+            lobes.push_back(methodLobe(method, pyramid.boxMoments(mip, x, y), s, options.params));
+    std::vector<double> times;
+    volatile double sink = 0.0;
+    for (int r = 0; r < kCostRepetitions; ++r) {
+        const auto start = Clock::now();
+        double sum = 0.0;
+        for (const auto& d : directions)
+            for (const auto& lobe : lobes)
+                sum += methodValue(lobe, d);
+        const double ns = std::chrono::duration<double, std::nano>(Clock::now() - start).count();
+        sink = sink + sum;
+        times.push_back(ns / double(lobes.size() * directions.size()));
+    }
+    return median(times);
+}
+
+// "lean", or "lean (tent)" for a variant evaluated with kernel-filtered moments.
+std::string variantLabel(Method method, FilterKernel kernel) {
+    std::string label(methodName(method));
+    if (kernel != FilterKernel::Box) label += " (" + std::string(kernelName(kernel)) + ")";
+    return label;
+}
+
+std::string powerLabel(double s) {
+    std::ostringstream os;
+    os << s;
+    return os.str();
+}
+
+} // namespace
+
+MethodStorage methodStorage(Method method) {
+    return methodSpec(method).storage;
+}
+
+Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const EvaluationReportOptions& options,
+                                               const std::function<void(double)>& progress,
+                                               const std::atomic<bool>* cancel) {
+    if (options.bakeRuns < 1) return Error{"bake runs must be at least 1"};
+    auto cancelled = [cancel] { return cancel && cancel->load(std::memory_order_relaxed); };
+    auto evaluated = evaluateMethods(
+        map, options.evaluate,
+        [&](double f) {
+            if (progress) progress(0.8 * f);
+        },
+        cancel);
+    if (!evaluated) return Error{evaluated.error()};
+
+    EvaluationReport report;
+    report.input = options.inputName;
+    report.width = map.width;
+    report.height = map.height;
+    report.options = options.evaluate;
+    report.result = std::move(*evaluated);
+    // With an authored gloss map the results carry one label power (the map's mean).
+    report.options.basePowers = report.result.basePowers;
+    report.bakeRuns = options.bakeRuns;
+    report.machine = machineInfo();
+
+    const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
+    const NormalPyramid pyramid =
+        NormalPyramid::build(borrowed, {options.evaluate.border, FilterKernel::Box});
+    const double s = report.options.basePowers.front();
+    // The bake timed with the authored gloss map too (its variance pyramid costs time), stored in
+    // the bake's default encoding.
+    std::optional<std::vector<float>> authoredGloss;
+    if (options.evaluate.texelPowers) {
+        const GlossEncoding encoding = BakeOptions{}.encoding;
+        authoredGloss.emplace();
+        for (double p : *options.evaluate.texelPowers)
+            authoredGloss->push_back(float(encoding.value(p)));
+    }
+    const size_t methodCount = options.evaluate.methods.size();
+    for (size_t i = 0; i < methodCount; ++i) {
+        const Method method = options.evaluate.methods[i];
+        MethodCost cost;
+        cost.method = method;
+        cost.storage = methodStorage(method);
+        BakeOptions bakeOptions;
+        bakeOptions.method = method;
+        bakeOptions.basePower = s;
+        bakeOptions.params = options.evaluate.params;
+        bakeOptions.pyramid = {options.evaluate.border, FilterKernel::Box};
+        bakeOptions.mipCount = report.result.lastMip + 1;
+        bakeOptions.authoredGloss = authoredGloss;
+        std::vector<double> runs;
+        for (int r = 0; r < options.bakeRuns; ++r) {
+            if (cancelled()) return Error{std::string(kCancelledMessage)};
+            const auto start = Clock::now();
+            auto baked = bake(map, bakeOptions);
+            runs.push_back(std::chrono::duration<double>(Clock::now() - start).count());
+            if (!baked) return Error{baked.error()};
+        }
+        cost.bakeSeconds = median(runs);
+        if (cancelled()) return Error{std::string(kCancelledMessage)};
+        cost.nsPerLobe = measureShadingNs(pyramid, report.result.firstMip, method, s, options.evaluate,
+                                          report.result.directions);
+        report.costs.push_back(cost);
+        if (progress) progress(0.8 + 0.2 * double(i + 1) / double(methodCount));
+    }
+    if (cancelled()) return Error{std::string(kCancelledMessage)};
+    return report;
+}
+
+std::string evaluationMarkdown(const EvaluationReport& r) {
+    std::ostringstream md;
+    md << "# Burnish evaluation: " << (r.input.empty() ? std::string("normal map") : r.input) << "\n\n";
+    md << r.width << "x" << r.height << " texels; mips " << r.result.firstMip << ".." << r.result.lastMip
+       << "; view " << formatNumber(r.options.viewAngleDeg) << " deg from the macro normal; "
+       << r.result.directions.size() << " light/view pairs (half vectors at";
+    for (double a : r.options.halfAnglesDeg)
+        md << " " << formatNumber(a);
+    md << " deg x " << r.options.azimuths << " azimuths, lights within " << formatNumber(r.options.horizonDeg)
+       << " deg of the horizon dropped).\n\n";
+    if (r.options.texelPowers) {
+        const auto& p = *r.options.texelPowers;
+        const auto [lo, hi] = std::minmax_element(p.begin(), p.end());
+        md << "Authored gloss map: every finest texel has its own power s_i (" << formatNumber(*lo) << " to "
+           << formatNumber(*hi) << ", mean " << formatNumber(r.options.basePowers.front())
+           << ", the label of the tables below). The ground truth uses D_{s_i} per texel; every method "
+              "gets the block's power as the bake does, s = 1/mean(1/s_i) (variance averaged).\n\n";
+    }
+    md << "Ground truth: for mip k, the mean over the texel's footprint of finest texels of "
+          "D_s(n_i.h) max(0, n_i.l), D_s the normalized Blinn-Phong NDF of the base power s. "
+          "Each method: its own NDF times max(0, n.l) with its normal, from box-footprint moments. "
+          "Relative L1 = sum|M - GT| / sum GT; energy = sum M / sum GT (1 is exact). "
+          "Rows marked (tent) or (gaussian) use the kernel-filtered moments a bake stores instead of the "
+          "footprint's own, against the same ground truth.\n\n";
+
+    for (double s : r.options.basePowers) {
+        md << "## Base power " << powerLabel(s) << "\n\n";
+        std::vector<std::string> header{"method"};
+        for (int k = r.result.firstMip; k <= r.result.lastMip; ++k)
+            header.push_back("mip " + std::to_string(k));
+        std::vector<Align> align(header.size(), Align::Right);
+        align[0] = Align::Left;
+        MarkdownTable errors(header, align);
+        MarkdownTable energy(header, align);
+        for (FilterKernel kernel : r.options.kernels)
+            for (Method m : r.options.methods) {
+                std::vector<std::string> e{variantLabel(m, kernel)}, en{variantLabel(m, kernel)};
+                for (int k = r.result.firstMip; k <= r.result.lastMip; ++k)
+                    for (const auto& x : r.result.errors)
+                        if (x.method == m && x.kernel == kernel && x.basePower == s && x.mip == k) {
+                            e.push_back(formatNumber(x.relativeL1));
+                            en.push_back(formatNumber(x.energyRatio));
+                        }
+                errors.addRow(e);
+                energy.addRow(en);
+            }
+        md << "Relative L1 error against the ground truth:\n\n"
+           << errors.render() << "\nEnergy ratio:\n\n"
+           << energy.render() << "\n";
+    }
+
+    md << "## Cost\n\n";
+    MarkdownTable cost({"method", "bake (s, median of " + std::to_string(r.bakeRuns) + ")",
+                        "shading (ns/lobe)", "fetches", "bytes/texel", "storage"},
+                       {Align::Left, Align::Right, Align::Right, Align::Right, Align::Right, Align::Left});
+    for (const auto& c : r.costs)
+        cost.addRow({std::string(methodName(c.method)), formatNumber(c.bakeSeconds),
+                     formatNumber(c.nsPerLobe), std::to_string(c.storage.textureFetches),
+                     formatNumber(c.storage.bytesPerTexel), std::string(c.storage.layout)});
+    md << cost.render() << "\n";
+    md << "Bake: in-memory, pyramid included, to mip " << r.result.lastMip
+       << ". Shading: the method's lobe evaluated in double on one CPU core (a CPU proxy for its shader's "
+          "arithmetic; the renderer measures GPU frame times). Measured on "
+       << r.machine.cpuModel << " (" << r.machine.logicalCpus << " threads), " << r.machine.compiler
+       << "; evaluation took " << formatNumber(r.result.seconds) << " s.\n\n";
+    md << "Methods:\n\n";
+    for (Method m : r.options.methods)
+        md << "- `" << methodName(m) << "`: " << methodDescription(m) << "\n";
+    return md.str();
+}
+
+nlohmann::json evaluationJson(const EvaluationReport& r) {
+    nlohmann::json j;
+    j["input"] = r.input;
+    j["width"] = r.width;
+    j["height"] = r.height;
+    j["mips"] = {r.result.firstMip, r.result.lastMip};
+    j["view_angle_deg"] = r.options.viewAngleDeg;
+    j["half_angles_deg"] = r.options.halfAnglesDeg;
+    j["azimuths"] = r.options.azimuths;
+    j["horizon_deg"] = r.options.horizonDeg;
+    j["directions"] = r.result.directions.size();
+    j["base_powers"] = r.options.basePowers;
+    if (r.options.texelPowers) {
+        const auto& p = *r.options.texelPowers;
+        const auto [lo, hi] = std::minmax_element(p.begin(), p.end());
+        j["authored_gloss"] = {{"min_power", *lo},
+                               {"max_power", *hi},
+                               {"mean_power", r.options.basePowers.front()},
+                               {"method_power", "1/mean(1/s_i) over the footprint, as the bake"}};
+    }
+    j["evaluation_seconds"] = jsonNumber(r.result.seconds);
+    j["errors"] = nlohmann::json::array();
+    for (const auto& e : r.result.errors)
+        j["errors"].push_back({{"method", methodName(e.method)},
+                               {"kernel", kernelName(e.kernel)},
+                               {"base_power", e.basePower},
+                               {"mip", e.mip},
+                               {"relative_l1", jsonNumber(e.relativeL1)},
+                               {"energy_ratio", jsonNumber(e.energyRatio)}});
+    j["costs"] = nlohmann::json::array();
+    for (const auto& c : r.costs)
+        j["costs"].push_back({{"method", methodName(c.method)},
+                              {"bake_seconds_median", jsonNumber(c.bakeSeconds)},
+                              {"bake_runs", r.bakeRuns},
+                              {"shading_ns_per_lobe", jsonNumber(c.nsPerLobe)},
+                              {"texture_fetches", c.storage.textureFetches},
+                              {"bytes_per_texel", c.storage.bytesPerTexel},
+                              {"storage", std::string(c.storage.layout)}});
+    j["machine"] = {
+        {"cpu", r.machine.cpuModel}, {"threads", r.machine.logicalCpus}, {"compiler", r.machine.compiler}};
+    return j;
+}
+
+PlotSpec evaluationErrorPerMipPlot(const EvaluationReport& r) {
+    PlotSpec spec;
+    spec.title =
+        "Error against the ground truth per mip" + (r.input.empty() ? std::string() : " - " + r.input);
+    spec.x = {"mip level", AxisScale::Linear, double(r.result.firstMip) - 0.25,
+              double(r.result.lastMip) + 0.25};
+    spec.y = {"relative L1 error", AxisScale::Log, std::nullopt, std::nullopt};
+    size_t colour = 0;
+    for (double s : r.options.basePowers)
+        for (FilterKernel kernel : r.options.kernels)
+            for (Method m : r.options.methods) {
+                PlotSeries series;
+                series.name =
+                    variantLabel(m, kernel) + (r.options.basePowers.size() > 1 ? " s=" + powerLabel(s) : "");
+                series.color = plotPalette(colour++);
+                series.line = true;
+                for (const auto& e : r.result.errors)
+                    if (e.method == m && e.kernel == kernel && e.basePower == s) {
+                        series.x.push_back(e.mip);
+                        series.y.push_back(e.relativeL1);
+                    }
+                spec.series.push_back(std::move(series));
+            }
+    return spec;
+}
+
+PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& r) {
+    PlotSpec spec;
+    const double s = r.options.basePowers.front();
+    spec.title = "Error at mip " + std::to_string(r.result.lastMip) +
+                 " against shading cost (s=" + powerLabel(s) + ")";
+    spec.x = {"shading cost (ns per lobe evaluation, CPU)", AxisScale::Log, std::nullopt, std::nullopt};
+    spec.y = {"relative L1 error", AxisScale::Log, std::nullopt, std::nullopt};
+    std::vector<ParetoPoint> points;
+    std::vector<std::string> names;
+    for (const auto& c : r.costs)
+        for (const auto& e : r.result.errors)
+            if (e.method == c.method && e.kernel == FilterKernel::Box && e.basePower == s &&
+                e.mip == r.result.lastMip) {
+                points.push_back({"methods", c.nsPerLobe, e.relativeL1});
+                names.emplace_back(methodName(c.method));
+            }
+    const auto front = paretoFront(points);
+    PlotSeries all{"methods", {}, {}, {0.2f, 0.3f, 0.7f}, false, 2, MarkerShape::Square, 9, {}};
+    PlotSeries pareto{
+        "Pareto front", {}, {}, {0.85f, 0.2f, 0.15f}, true, 2, MarkerShape::HollowSquare, 15, {}};
+    std::vector<std::pair<double, double>> frontPoints;
+    for (size_t i = 0; i < points.size(); ++i) {
+        all.x.push_back(points[i].cost);
+        all.y.push_back(points[i].error);
+        all.pointLabels.push_back(names[i]);
+        if (front[i]) frontPoints.emplace_back(points[i].cost, points[i].error);
+    }
+    std::sort(frontPoints.begin(), frontPoints.end());
+    for (const auto& [x, y] : frontPoints) {
+        pareto.x.push_back(x);
+        pareto.y.push_back(y);
+    }
+    spec.series = {all, pareto};
+    return spec;
+}
+
+Status writeFloatExr(const fs::path& path, int width, int height, const std::vector<float>& values) {
+    return writeImageAtomic(path, width, height, 1, values, {StoredType::Float, {"Y"}, {}});
+}
+
+Status writeEvaluationReport(const EvaluationReport& r, const fs::path& dir) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) return Error{"cannot create folder '" + dir.string() + "': " + ec.message()};
+    if (auto st = writeFileAtomic(dir / "evaluate.md", evaluationMarkdown(r)); !st) return st;
+    if (auto st = writeFileAtomic(dir / "evaluate.json", evaluationJson(r).dump(2) + "\n"); !st) return st;
+    if (auto st = savePlotPng(evaluationErrorPerMipPlot(r), dir / "evaluate-error-per-mip.png"); !st)
+        return st;
+    if (auto st = savePlotPng(evaluationErrorVsCostPlot(r), dir / "evaluate-error-vs-cost.png"); !st)
+        return st;
+    if (!r.result.maps.empty()) {
+        fs::create_directories(dir / "errors", ec);
+        if (ec) return Error{"cannot create folder '" + (dir / "errors").string() + "': " + ec.message()};
+        for (const auto& m : r.result.maps) {
+            const std::string kernel =
+                m.kernel == FilterKernel::Box ? "" : "-" + std::string(kernelName(m.kernel));
+            const std::string name = std::string(methodName(m.method)) + kernel + "-s" +
+                                     powerLabel(m.basePower) + "-mip" + std::to_string(m.mip) + ".exr";
+            if (auto st = writeFloatExr(dir / "errors" / name, m.width, m.height, m.relativeError); !st)
+                return st;
+        }
+    }
+    return {};
+}
+
+} // namespace burnish

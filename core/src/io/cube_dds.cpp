@@ -1,0 +1,138 @@
+#include <burnish/core/io/cube_dds.h>
+
+#include <burnish/core/env/storage.h>
+#include <burnish/core/util/files.h>
+
+#include <Imath/half.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+namespace burnish {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+void put32(std::string& s, std::uint32_t v) {
+    for (int i = 0; i < 4; ++i)
+        s.push_back(char((v >> (8 * i)) & 0xFF));
+}
+
+std::uint32_t get32(std::string_view s, size_t at) {
+    std::uint32_t v = 0;
+    for (int i = 0; i < 4; ++i)
+        v |= std::uint32_t(std::uint8_t(s[at + size_t(i)])) << (8 * i);
+    return v;
+}
+
+// Microsoft, "DDS_HEADER structure" and "DDS_HEADER_DXT10 structure" (Direct3D 10+ DDS files)
+constexpr std::uint32_t kDdsMagic = 0x20534444; // "DDS "
+constexpr std::uint32_t kDdsHeaderSize = 124;
+constexpr std::uint32_t kDdsCaps = 0x1, kDdsHeight = 0x2, kDdsWidth = 0x4, kDdsPitch = 0x8;
+constexpr std::uint32_t kDdsPixelFormat = 0x1000, kDdsMipMapCount = 0x20000;
+constexpr std::uint32_t kDdpfFourCC = 0x4;
+constexpr std::uint32_t kFourCCDx10 = 0x30315844; // "DX10"
+constexpr std::uint32_t kCapsComplex = 0x8, kCapsTexture = 0x1000, kCapsMipMap = 0x400000;
+constexpr std::uint32_t kCaps2Cubemap = 0x200, kCaps2AllFaces = 0xFC00; // +X..−Z face bits
+constexpr std::uint32_t kDxgiR16G16B16A16Float = 10;
+constexpr std::uint32_t kD3d10ResourceTexture2D = 3;
+constexpr std::uint32_t kResourceMiscTextureCube = 0x4;
+constexpr size_t kDdsDataOffset = 4 + kDdsHeaderSize + 20;
+
+std::uint16_t toHalfBits(float v) {
+    // Finite and within half's range: above 65504 half would round to +Inf; a sun texel is stored at the
+    // largest finite half instead (NaN and negatives cannot reach here, but become 0 if they did).
+    const float clamped = std::isfinite(v) ? std::clamp(v, 0.0f, kHalfMax) : (v > 0.0f ? kHalfMax : 0.0f);
+    return Imath::half(clamped).bits();
+}
+
+} // namespace
+
+std::string encodeCubeDds(const CubeMap& cube) {
+    std::string s;
+    const std::uint32_t size = std::uint32_t(cube.faceSize());
+    const std::uint32_t mips = std::uint32_t(cube.mipCount());
+    put32(s, kDdsMagic);
+    put32(s, kDdsHeaderSize);
+    put32(s, kDdsCaps | kDdsHeight | kDdsWidth | kDdsPitch | kDdsPixelFormat | kDdsMipMapCount);
+    put32(s, size);     // height
+    put32(s, size);     // width
+    put32(s, size * 8); // pitch: 4 half channels per texel
+    put32(s, 0);        // depth
+    put32(s, mips);
+    for (int i = 0; i < 11; ++i)
+        put32(s, 0); // reserved
+    put32(s, 32);    // DDS_PIXELFORMAT size
+    put32(s, kDdpfFourCC);
+    put32(s, kFourCCDx10);
+    for (int i = 0; i < 5; ++i)
+        put32(s, 0); // RGB bit count and masks: unused with a FourCC
+    put32(s, kCapsComplex | kCapsTexture | (mips > 1 ? kCapsMipMap : 0));
+    put32(s, kCaps2Cubemap | kCaps2AllFaces);
+    put32(s, 0); // caps3
+    put32(s, 0); // caps4
+    put32(s, 0); // reserved2
+    put32(s, kDxgiR16G16B16A16Float);
+    put32(s, kD3d10ResourceTexture2D);
+    put32(s, kResourceMiscTextureCube);
+    put32(s, 1); // array size: one cube
+    put32(s, 0); // miscFlags2: alpha mode unknown
+    const std::uint16_t one = Imath::half(1.0f).bits();
+    for (int f = 0; f < kCubeFaces; ++f)
+        for (const CubeLevel& level : cube.levels) {
+            const std::vector<float>& face = level.faces[size_t(f)];
+            for (size_t i = 0; i < face.size() / 3; ++i) {
+                for (int c = 0; c < 4; ++c) {
+                    const std::uint16_t h = c < 3 ? toHalfBits(face[3 * i + size_t(c)]) : one;
+                    s.push_back(char(h & 0xFF));
+                    s.push_back(char(h >> 8));
+                }
+            }
+        }
+    return s;
+}
+
+Result<CubeMap> decodeCubeDds(std::string_view s) {
+    if (s.size() < kDdsDataOffset || get32(s, 0) != kDdsMagic || get32(s, 4) != kDdsHeaderSize)
+        return Error{"not a DDS file (no 'DDS ' header)"};
+    if (get32(s, 4 + 80) != kFourCCDx10 || get32(s, 4 + 124) != kDxgiR16G16B16A16Float)
+        return Error{"DDS is not a DX10 RGBA16F texture"};
+    if (!(get32(s, 4 + 108) & kCaps2Cubemap) || (get32(s, 4 + 108) & kCaps2AllFaces) != kCaps2AllFaces)
+        return Error{"DDS is not a cube map with all six faces"};
+    const std::uint32_t height = get32(s, 12), width = get32(s, 16);
+    const std::uint32_t mips = std::max<std::uint32_t>(1, get32(s, 28));
+    if (width != height || !isPowerOfTwo(int(std::min<std::uint32_t>(width, 1u << 30))) ||
+        mips > std::uint32_t(fullMipCount(int(width))))
+        return Error{fmt::format("DDS cube {}x{} with {} mips is not a square power-of-two chain", width,
+                                 height, mips)};
+    CubeMap cube = CubeMap::zeros(int(width), int(mips));
+    size_t at = kDdsDataOffset;
+    size_t need = at;
+    for (const CubeLevel& l : cube.levels)
+        need += size_t(kCubeFaces) * size_t(l.size) * size_t(l.size) * 8;
+    if (s.size() < need) return Error{fmt::format("DDS is truncated: {} bytes, {} needed", s.size(), need)};
+    for (int f = 0; f < kCubeFaces; ++f)
+        for (CubeLevel& level : cube.levels) {
+            std::vector<float>& face = level.faces[size_t(f)];
+            for (size_t i = 0; i < face.size() / 3; ++i) {
+                for (int c = 0; c < 4; ++c) {
+                    Imath::half h;
+                    h.setBits(std::uint16_t(std::uint8_t(s[at]) | (std::uint8_t(s[at + 1]) << 8)));
+                    at += 2;
+                    if (c < 3) face[3 * i + size_t(c)] = float(h);
+                }
+            }
+        }
+    return cube;
+}
+
+Status writeCubeDds(const CubeMap& cube, const fs::path& path) {
+    if (cube.levels.empty()) return Error{"cannot write an empty cube to '" + path.string() + "'"};
+    return writeFileAtomic(path, encodeCubeDds(cube));
+}
+
+} // namespace burnish

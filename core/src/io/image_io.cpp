@@ -1,0 +1,253 @@
+#include <burnish/core/io/image.h>
+
+#include <burnish/core/util/files.h>
+
+#include "io/image_read.h"
+#include "io/png_decode.h"
+
+#include <OpenImageIO/imageio.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
+#include <numeric>
+#include <optional>
+#include <string_view>
+#include <system_error>
+
+namespace burnish {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using FileBytes = std::vector<char, TexelAllocator<char>>;
+
+/// The whole file, read with plain reads into a buffer that is not zero-filled first.
+Result<FileBytes> readFileBytes(const fs::path& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return Error{std::strerror(errno)};
+    struct stat st {};
+    FileBytes bytes;
+    std::string error;
+    if (::fstat(fd, &st) != 0) {
+        error = std::strerror(errno);
+    } else {
+        bytes.resize(size_t(st.st_size));
+        size_t done = 0;
+        while (done < bytes.size()) {
+            const ssize_t got = ::read(fd, bytes.data() + done, bytes.size() - done);
+            if (got < 0 && errno == EINTR) continue;
+            if (got <= 0) {
+                error = got < 0 ? std::strerror(errno) : "the file shrank while it was read";
+                break;
+            }
+            done += size_t(got);
+        }
+    }
+    ::close(fd);
+    if (!error.empty()) return Error{error};
+    return bytes;
+}
+
+} // namespace
+
+Result<OpenedImage> openImage(const fs::path& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) return Error{"image '" + path.string() + "' does not exist"};
+    if (fs::is_directory(path, ec)) return Error{"'" + path.string() + "' is a folder, not an image"};
+
+    // Data maps are read as stored: OpenImageIO would otherwise premultiply the colour of PNG/TGA
+    // files by their alpha ("associated alpha"), scaling an RGBA normal map's vectors by the
+    // height map in its alpha.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    OpenedImage opened;
+    opened.path = path;
+    opened.input = OIIO::ImageInput::open(path.string(), &config);
+    if (!opened.input) {
+        std::string why = OIIO::geterror();
+        if (why.empty()) why = "unknown or unsupported format";
+        return Error{"cannot read image '" + path.string() + "': " + why};
+    }
+    const OIIO::ImageSpec& spec = opened.input->spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+        return Error{"image '" + path.string() + "' has no pixels"};
+    if (spec.width > kMaxImageSide || spec.height > kMaxImageSide ||
+        static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height) > kMaxImageTexels)
+        return Error{"image '" + path.string() + "' is " + std::to_string(spec.width) + "x" +
+                     std::to_string(spec.height) +
+                     ", larger than Burnish accepts (65536 on a side, 2^30 texels)"};
+    if (spec.nchannels > 4)
+        return Error{"image '" + path.string() + "' has " + std::to_string(spec.nchannels) +
+                     " channels; Burnish reads 1 to 4"};
+    if (spec.depth > 1)
+        return Error{"image '" + path.string() + "' is a volume texture; Burnish reads 2D images"};
+    opened.width = spec.width;
+    opened.height = spec.height;
+    opened.channels = spec.nchannels;
+    opened.source.path = path.string();
+    opened.source.formatName = opened.input->format_name();
+    opened.source.channelType = spec.format.c_str();
+    opened.source.bitsPerChannel = static_cast<int>(spec.format.size() * 8);
+    opened.source.isFloat = spec.format.is_floating_point();
+    opened.source.colorSpace = spec.get_string_attribute("oiio:ColorSpace");
+
+    if (spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16) {
+        // 8- and 16-bit images are read as stored and converted on every core through a table
+        // that OpenImageIO fills with its own conversion, so each float is bit for bit what
+        // read_image(FLOAT) gives, without its single-threaded conversion of every sample.
+        const bool eightBit = spec.format == OIIO::TypeDesc::UINT8;
+        const size_t codes = eightBit ? 256 : 65536;
+        std::vector<std::uint8_t> codes8(eightBit ? codes : 0);
+        std::vector<std::uint16_t> codes16(eightBit ? 0 : codes);
+        std::iota(codes8.begin(), codes8.end(), std::uint8_t(0));
+        std::iota(codes16.begin(), codes16.end(), std::uint16_t(0));
+        opened.table.resize(codes);
+        const void* codeData = eightBit ? static_cast<const void*>(codes8.data()) : codes16.data();
+        if (!OIIO::convert_pixel_values(spec.format, codeData, OIIO::TypeDesc::FLOAT, opened.table.data(),
+                                        int(codes)))
+            return Error{"cannot read image '" + path.string() + "': no conversion from " +
+                         std::string(spec.format.c_str())};
+        opened.bitDepth = eightBit ? 8 : 16;
+    }
+    return opened;
+}
+
+std::optional<Status> readPngCodes(const OpenedImage& opened, PngCodes& codes,
+                                   const std::function<void(int, int)>& rowsDone) {
+    if (opened.source.formatName != "png" || opened.bitDepth == 0) return std::nullopt;
+    const std::string name = opened.path.string();
+    auto file = readFileBytes(opened.path);
+    if (!file) return Status(Error{"cannot read image '" + name + "': " + file.error()});
+    auto layout = parsePng(std::string_view(file->data(), file->size()));
+    if (!layout) return Status(Error{"cannot read image '" + name + "': " + layout.error()});
+    if (!layout->decodable || layout->width != opened.width || layout->height != opened.height ||
+        layout->channels != opened.channels || layout->bitDepth != opened.bitDepth)
+        return std::nullopt;
+    codes.bitDepth = opened.bitDepth;
+    codes.rowSamples = size_t(opened.width) * size_t(opened.channels);
+    try {
+        codes.raw.resize(layout->rowBytes() * size_t(opened.height) + kPngDecodePadding);
+    } catch (const std::bad_alloc&) {
+        return Status(Error{"not enough memory to read image '" + name + "'"});
+    }
+    const Status decoded = decodePngRows(*layout, codes.raw.data(), rowsDone);
+    if (!decoded) return Status(Error{"cannot read image '" + name + "': " + decoded.error()});
+    return Status{};
+}
+
+Result<Image> readOpenedImage(OpenedImage&& opened) {
+    const fs::path& path = opened.path;
+    Image image;
+    image.width = opened.width;
+    image.height = opened.height;
+    image.channels = opened.channels;
+    image.source = opened.source;
+    try {
+        image.pixels.resize(image.texelCount() * static_cast<size_t>(image.channels));
+    } catch (const std::bad_alloc&) {
+        return Error{"not enough memory to read image '" + path.string() + "'"};
+    }
+    OIIO::ImageInput& in = *opened.input;
+    const OIIO::ImageSpec& spec = in.spec();
+    auto readFailed = [&]() -> Error {
+        std::string why = in.geterror();
+        if (why.empty()) why = "corrupt or truncated data";
+        return Error{"cannot read image '" + path.string() + "': " + why};
+    };
+    const std::vector<float>& table = opened.table;
+    if (opened.bitDepth != 0) {
+        // PNGs core decodes itself: each batch of rows is converted on the other cores while later
+        // rows decode (batches split further so both cores share the last ones).
+        PngCodes codes;
+        tbb::task_group converting;
+        auto convert = [&](int y0, int y1) {
+            tbb::parallel_for(y0, y1, [&](int y) {
+                const size_t first = size_t(y) * codes.rowSamples;
+                float* to = image.pixels.data() + first;
+                for (size_t i = 0; i < codes.rowSamples; ++i)
+                    to[i] = table[codes.code(first + i)];
+            });
+        };
+        auto fast = readPngCodes(
+            opened, codes, [&](int y0, int y1) { converting.run([&convert, y0, y1] { convert(y0, y1); }); });
+        converting.wait();
+        if (fast) {
+            if (!*fast) return Error{fast->error()};
+            in.close();
+            return image;
+        }
+
+        const size_t samples = image.pixels.size();
+        const bool eightBit = opened.bitDepth == 8;
+        std::vector<std::uint8_t, TexelAllocator<std::uint8_t>> raw8; // filled by OpenImageIO
+        std::vector<std::uint16_t, TexelAllocator<std::uint16_t>> raw16;
+        try {
+            if (eightBit)
+                raw8.resize(samples);
+            else
+                raw16.resize(samples);
+        } catch (const std::bad_alloc&) {
+            return Error{"not enough memory to read image '" + path.string() + "'"};
+        }
+        void* raw = eightBit ? static_cast<void*>(raw8.data()) : static_cast<void*>(raw16.data());
+        if (!in.read_image(0, 0, 0, spec.nchannels, spec.format, raw)) return readFailed();
+        constexpr size_t kBlock = size_t(1) << 16;
+        tbb::parallel_for(size_t(0), (samples + kBlock - 1) / kBlock, [&](size_t block) {
+            const size_t end = std::min(samples, (block + 1) * kBlock);
+            for (size_t i = block * kBlock; i < end; ++i)
+                image.pixels[i] = table[eightBit ? raw8[i] : raw16[i]];
+        });
+    } else if (!in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+        return readFailed();
+    }
+    in.close();
+    return image;
+}
+
+Result<Image> readImage(const fs::path& path) {
+    auto opened = openImage(path);
+    if (!opened) return Error{opened.error()};
+    return readOpenedImage(std::move(opened).value());
+}
+
+Status writeImageAtomic(const fs::path& path, int width, int height, int channels,
+                        const std::vector<float>& pixels, const ImageWriteOptions& options) {
+    if (width < 1 || height < 1 || channels < 1 ||
+        pixels.size() != size_t(width) * size_t(height) * size_t(channels))
+        return Error{"cannot write '" + path.string() + "': the pixels do not match a " +
+                     std::to_string(width) + "x" + std::to_string(height) + "x" + std::to_string(channels) +
+                     " image"};
+    auto out = OIIO::ImageOutput::create(path.string()); // the plugin chosen by the real name
+    if (!out) return Error{"cannot write '" + path.string() + "': " + OIIO::geterror()};
+    const OIIO::TypeDesc type = options.type == StoredType::UInt8  ? OIIO::TypeDesc::UINT8
+                                : options.type == StoredType::Half ? OIIO::TypeDesc::HALF
+                                                                   : OIIO::TypeDesc::FLOAT;
+    OIIO::ImageSpec spec(width, height, channels, type);
+    if (!options.channelNames.empty()) spec.channelnames = options.channelNames;
+    if (std::string(out->format_name()) == "openexr") spec.attribute("compression", "zip");
+    // No timestamp: OpenImageIO stamps the current time unless the attribute is present and empty.
+    spec.attribute("DateTime", "");
+    for (const auto& [name, value] : options.attributes)
+        spec.attribute(name, value);
+    const fs::path tmp = temporaryPathFor(path);
+    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) ||
+        !out->close()) {
+        const std::string why = out->geterror();
+        out.reset();
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        return Error{"cannot write '" + path.string() + "': " + why};
+    }
+    out.reset();
+    return commitTemporary(tmp, path);
+}
+
+} // namespace burnish

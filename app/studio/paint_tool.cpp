@@ -311,8 +311,7 @@ void PaintTool::rebuildLive() {
     BakeOptions options;
     // LEAN and CLEAN store no gloss texture: the live view shows variance-to-gloss for them, which
     // is also what the over-shine measure compares with.
-    options.method =
-        s.method == Method::Lean || s.method == Method::Clean ? Method::VarianceToGloss : s.method;
+    options.method = hasTexture(s.method, TextureRole::Gloss) ? s.method : Method::VarianceToGloss;
     options.encoding = m_doc->preset().encoding;
     options.basePower = m_doc->power();
     options.authoredGloss = currentAuthored();

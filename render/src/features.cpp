@@ -14,16 +14,7 @@ namespace {
 // Every enumeration the shader switches on, with its numbered constants. The numbers are part of
 // the contract with material.frag (which #if-tests them) and with the ubershader's int uniforms.
 // METHOD_* are int(burnish::Method), defined by methods.glsl (the twin of methods.h), so they are
-// named here but not injected.
-const std::pair<const char*, Method> kMethodDefines[] = {
-    {"METHOD_NAIVE", Method::Naive},
-    {"METHOD_TOKSVIG", Method::Toksvig},
-    {"METHOD_TOKSVIG_MAP", Method::ToksvigMap},
-    {"METHOD_VARIANCE_TO_GLOSS", Method::VarianceToGloss},
-    {"METHOD_LEAN", Method::Lean},
-    {"METHOD_CLEAN", Method::Clean},
-    {"METHOD_VMF", Method::Vmf},
-};
+// named here (by the method table's glslMacro) but not injected.
 const char* const kNdfDefines[] = {"NDF_BLINN_PHONG", "NDF_BECKMANN", "NDF_GGX"};
 const char* const kFresnelDefines[] = {"FRESNEL_NONE", "FRESNEL_SCHLICK", "FRESNEL_SCHLICK_SG",
                                        "FRESNEL_SCHLICK_SG_QUADRATIC"};
@@ -39,10 +30,8 @@ const char* const kDebugDefines[] = {
     "DEBUG_NONE",    "DEBUG_LIGHTING_ONLY", "DEBUG_DIFFUSE_ONLY", "DEBUG_SPECULAR_ONLY", "DEBUG_POWER",
     "DEBUG_NORMALS", "DEBUG_MIP_LEVEL",     "DEBUG_VARIANCE",     "DEBUG_ERROR_HEATMAP", "DEBUG_UV"};
 
-const char* methodDefine(Method method) {
-    for (const auto& [name, m] : kMethodDefines)
-        if (m == method) return name;
-    return kMethodDefines[0].first;
+std::string methodDefine(Method method) {
+    return std::string(methodSpec(method).glslMacro);
 }
 
 template <size_t N> void addConstants(ShaderDefines& out, const char* const (&names)[N]) {
@@ -154,7 +143,7 @@ ShaderDefines defines(const FeatureSet& f) {
     ShaderDefines out;
     addConstantTables(out);
     // The reference draws the finest normals with the base power: no method's lobe.
-    out.emplace_back("METHOD", f.referenceMode ? "METHOD_NAIVE" : methodDefine(f.method));
+    out.emplace_back("METHOD", methodDefine(f.referenceMode ? Method::Naive : f.method));
     out.emplace_back("NDF", kNdfDefines[int(f.ndf)]);
     out.emplace_back("FRESNEL", kFresnelDefines[int(f.fresnel)]);
     out.emplace_back("VISIBILITY", kVisibilityDefines[int(f.visibility)]);

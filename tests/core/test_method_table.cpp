@@ -84,9 +84,16 @@ TEST(MethodTable, ChannelDecodesFollowTheScales) {
             }
 }
 
-TEST(MethodTable, OnlyTheSlopeMethodsStoreSlopes) {
-    for (Method m : allMethods())
-        EXPECT_EQ(storesSlopes(m), m == Method::Lean || m == Method::Clean) << methodName(m);
+TEST(MethodTable, OnlyTheSlopeMethodsStoreSlopesAndHaveNoGlossTexture) {
+    for (Method m : allMethods()) {
+        const bool slope = m == Method::Lean || m == Method::Clean;
+        EXPECT_EQ(storesSlopes(m), slope) << methodName(m);
+        EXPECT_EQ(hasTexture(m, TextureRole::Gloss), !slope) << methodName(m);
+        EXPECT_TRUE(hasTexture(m, TextureRole::Normal)) << methodName(m);
+        EXPECT_EQ(methodSpec(m).unnormalizedNormal, m == Method::Toksvig) << methodName(m);
+        EXPECT_EQ(methodSpec(m).adjustsGloss, m == Method::VarianceToGloss || m == Method::Vmf)
+            << methodName(m);
+    }
 }
 
 TEST(MethodTable, TheBakeProducesExactlyTheRowsTextures) {
@@ -114,6 +121,16 @@ TEST(MethodTable, TheBakeProducesExactlyTheRowsTextures) {
         ASSERT_EQ(roles.size(), spec.textures.size());
         for (size_t i = 0; i < roles.size(); ++i)
             EXPECT_EQ(roles[i].role, spec.textures[i].role);
+    }
+}
+
+TEST(MethodTable, EachMethodsGlslMacroIsDefinedAsItsEnumValue) {
+    const std::string methods = readSource("resources/shaders/methods.glsl");
+    ASSERT_FALSE(methods.empty());
+    for (Method m : allMethods()) {
+        const std::string line =
+            "#define " + std::string(methodSpec(m).glslMacro) + " " + std::to_string(int(m)) + "\n";
+        EXPECT_NE(methods.find(line), std::string::npos) << line;
     }
 }
 

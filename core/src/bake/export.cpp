@@ -280,7 +280,7 @@ Result<PlannedFile> planFile(const BakeOutput& bake, const Preset& preset, const
                          " channels; bc5 holds two (a normal's x and y)"};
         // Hill 2011: run-time Toksvig reads the variance from |Na|; a two-channel normal rebuilds
         // a unit z and block compression changes the length.
-        if (bake.method == Method::Toksvig && holdsNormal && c != DdsCompression::Rgba8)
+        if (methodSpec(bake.method).unnormalizedNormal && holdsNormal && c != DdsCompression::Rgba8)
             return Error{"method toksvig reads the variance from the stored normal's length, which " + cname +
                          " destroys (Hill 2011); store the normal uncompressed (rgba8 or a non-DDS format)"};
         if (c == DdsCompression::Bc5 && zLast) {

@@ -333,7 +333,7 @@ Result<LiveGlossBake> LiveGlossBake::create(std::shared_ptr<const NormalMap> map
     if (!(options.basePower > 0.0) || !(options.basePower <= kMaxPower))
         return Error{"base power must lie in (0, 1e9]"};
     if (!options.authoredGloss) return Error{"the live gloss bake needs an authored gloss"};
-    if (options.method == Method::Lean || options.method == Method::Clean)
+    if (!hasTexture(options.method, TextureRole::Gloss))
         return Error{"method '" + std::string(methodName(options.method)) +
                      "' stores no gloss texture (its authored power lives in the moment textures)"};
     if (options.authoredGloss->size() != map->texelCount())

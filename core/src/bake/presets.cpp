@@ -486,54 +486,48 @@ std::vector<MethodRole> methodRoles(Method method) {
     return roles;
 }
 
-Status checkPresetMethod(const Preset& preset, Method method) {
+namespace {
+
+// Why the method's textures (its method-table row) do not fit the preset's files, or empty when they
+// do: every baked channel the preset stores must be one the method bakes, and every texture the
+// method bakes (except the normal, which slope methods carry in B) must be stored.
+std::string presetMismatch(const Preset& preset, Method method) {
     const auto roles = methodRoles(method);
-    const std::string name(methodName(method));
-    auto fail = [&](const std::string& what) -> Status {
-        std::vector<std::string> fits;
-        for (Method m : compatibleMethods(preset))
-            fits.emplace_back(methodName(m));
-        return Error{"preset '" + preset.name + "' cannot store method " + name + ": " + what +
-                     " (methods that fit: " + (fits.empty() ? std::string("none") : joinNames(fits)) + ")"};
-    };
     std::set<std::string> stored;
     for (const auto& file : preset.files)
         for (const auto& ch : file.channels) {
             if (ch.kind != PresetChannel::Kind::Baked) continue;
             const auto role = std::find_if(roles.begin(), roles.end(),
                                            [&](const auto& r) { return roleName(r.role) == ch.role; });
-            if (role == roles.end()) return fail("it bakes no '" + ch.role + "' texture");
+            if (role == roles.end()) return "it bakes no '" + ch.role + "' texture";
             if (std::find(role->channels.begin(), role->channels.end(), ch.channel) == role->channels.end())
-                return fail("its '" + ch.role + "' texture has no channel '" + ch.channel + "' (it has " +
-                            joinNames(role->channels) + ")");
+                return "its '" + ch.role + "' texture has no channel '" + ch.channel + "' (it has " +
+                       joinNames(role->channels) + ")";
             stored.insert(ch.role);
         }
     for (const auto& r : roles)
         if (r.role != TextureRole::Normal && !stored.count(std::string(roleName(r.role))))
-            return fail("the preset stores none of its '" + std::string(roleName(r.role)) + "' texture");
+            return "the preset stores none of its '" + std::string(roleName(r.role)) + "' texture";
     return {};
+}
+
+} // namespace
+
+Status checkPresetMethod(const Preset& preset, Method method) {
+    const std::string why = presetMismatch(preset, method);
+    if (why.empty()) return {};
+    std::vector<std::string> fits;
+    for (Method m : compatibleMethods(preset))
+        fits.emplace_back(methodName(m));
+    return Error{"preset '" + preset.name + "' cannot store method " + std::string(methodName(method)) +
+                 ": " + why +
+                 " (methods that fit: " + (fits.empty() ? std::string("none") : joinNames(fits)) + ")"};
 }
 
 std::vector<Method> compatibleMethods(const Preset& preset) {
     std::vector<Method> out;
-    for (Method m : allMethods()) {
-        const auto roles = methodRoles(m);
-        bool ok = true;
-        std::set<std::string> stored;
-        for (const auto& file : preset.files)
-            for (const auto& ch : file.channels) {
-                if (ch.kind != PresetChannel::Kind::Baked) continue;
-                const auto role = std::find_if(roles.begin(), roles.end(),
-                                               [&](const auto& r) { return roleName(r.role) == ch.role; });
-                ok = ok && role != roles.end() &&
-                     std::find(role->channels.begin(), role->channels.end(), ch.channel) !=
-                         role->channels.end();
-                stored.insert(ch.role);
-            }
-        for (const auto& r : roles)
-            ok = ok && (r.role == TextureRole::Normal || stored.count(std::string(roleName(r.role))));
-        if (ok) out.push_back(m);
-    }
+    for (Method m : allMethods())
+        if (presetMismatch(preset, m).empty()) out.push_back(m);
     return out;
 }
 

@@ -73,6 +73,7 @@ const MethodSpec kMethodTable[] = {
      false,
      false,
      "Blinn-Phong D_s about the renormalized mean normal",
+     "METHOD_NAIVE",
      {2, 1.5, "normal BC5 + gloss BC4"}},
     {Method::Toksvig,
      "toksvig",
@@ -83,6 +84,7 @@ const MethodSpec kMethodTable[] = {
      true,
      false,
      "p = f_t s with f_t = |Na|/(|Na| + s(1-|Na|)) from the filtered, unnormalized normal",
+     "METHOD_TOKSVIG",
      // Hill 2011: the length of Na must survive, so no two-channel or block-compressed normals.
      {2, 4.5, "normal RGBA8 uncompressed (its length is the variance) + gloss BC4"}},
     {Method::ToksvigMap,
@@ -96,6 +98,7 @@ const MethodSpec kMethodTable[] = {
      false,
      false,
      "ft /= lerp(s/fixed_s, 1, ft); p = ft s",
+     "METHOD_TOKSVIG_MAP",
      {2, 2.0, "normal BC5 + Toksvig factor and gloss in one BC5"}},
     {Method::VarianceToGloss,
      "variance-to-gloss",
@@ -105,6 +108,7 @@ const MethodSpec kMethodTable[] = {
      false,
      true,
      "plain Blinn-Phong with the stored (adjusted) gloss",
+     "METHOD_VARIANCE_TO_GLOSS",
      {2, 1.5, "normal BC5 + adjusted gloss BC4"}},
     {Method::Lean,
      "lean",
@@ -118,6 +122,7 @@ const MethodSpec kMethodTable[] = {
      false,
      false,
      "slope-space Gaussian with Sigma = M - BB^T from filtered B and M, and the 1/h_z^4 Jacobian",
+     "METHOD_LEAN",
      // Baker & Hill 2012: "X, Y offset can be 8 bit; X², Y², XY need to be 16 bit".
      {2, 8.0, "B in RG8 + M in RGB16 (padded to RGBA16: 10 B as stored by most APIs, 8 B packed)"}},
     {Method::Clean,
@@ -129,6 +134,7 @@ const MethodSpec kMethodTable[] = {
      false,
      false,
      "isotropic slope-space Gaussian with variance (M.avg - |B|^2/2) from filtered B and M.avg",
+     "METHOD_CLEAN",
      // Baker & Hill 2012: "Store 3 values, X, Y, (X²+Y²)/2; only (X²+Y²)/2 needs high precision".
      {2, 4.0, "B in RG8 + (M.xx+M.yy)/2 in R16"}},
     {Method::Vmf,
@@ -139,6 +145,7 @@ const MethodSpec kMethodTable[] = {
      false,
      true,
      "plain Blinn-Phong (or GGX with alpha^2 = 2/(p+2)) with the stored (adjusted) gloss",
+     "METHOD_VMF",
      {2, 1.5, "normal BC5 + adjusted gloss (or GGX roughness) BC4"}},
 };
 
@@ -192,6 +199,12 @@ bool storesSlopes(Method method) {
             if (c.range == ChannelRange::Slope || c.range == ChannelRange::Moment ||
                 c.range == ChannelRange::SignedMoment)
                 return true;
+    return false;
+}
+
+bool hasTexture(Method method, TextureRole role) {
+    for (const MethodTexture& t : methodSpec(method).textures)
+        if (t.role == role) return true;
     return false;
 }
 

@@ -140,11 +140,15 @@ struct MethodSpec {
     bool adjustsGloss = false;
     /// What its shader (methods.glsl) does with the fetched values.
     std::string_view shader;
+    /// Its switch value in the shaders: methods.glsl #defines it as int(method).
+    std::string_view glslMacro;
     MethodStorage storage;
 };
 const MethodSpec& methodSpec(Method method);
 /// True when the method stores slope-space values (B, M): the bake then scans the slope scales.
 bool storesSlopes(Method method);
+/// True when the method's row names a texture of `role` (LEAN and CLEAN have no gloss texture).
+bool hasTexture(Method method, TextureRole role);
 
 /// All methods, in report order.
 const std::vector<Method>& allMethods();

@@ -104,6 +104,31 @@ TEST_F(PlotTest, WritesAReadablePngWithContentAndText) {
     EXPECT_TRUE(sawOrange);
 }
 
+TEST_F(PlotTest, ALegendTallerThanThePlotWrapsIntoColumns) {
+    // 40 named series (evaluate's error-against-cost plot with several powers and kernels): one
+    // column of entries would run past the bottom (OpenImageIO aborted on the text below it).
+    PlotSpec spec = sampleSpec();
+    spec.series.clear();
+    for (int i = 0; i < 40; ++i) {
+        PlotSeries s;
+        s.name = "method " + std::to_string(i) + " (gaussian), s = 1024";
+        s.x = {double(i + 1), double(i + 2)};
+        s.y = {1e-3 * (i + 1), 2e-3 * (i + 1)};
+        s.color = plotPalette(i);
+        s.marker = MarkerShape::Square;
+        spec.series.push_back(s);
+    }
+    auto plot = renderPlot(spec);
+    ASSERT_TRUE(plot.ok()) << plot.error();
+    // The image widens for the second column instead of squeezing the plot area.
+    const int w = plot->spec().width, h = plot->spec().height;
+    EXPECT_GT(w, spec.width);
+    EXPECT_EQ(h, spec.height);
+    // The second column holds text; no entry runs into the bottom rows.
+    EXPECT_GT(darkPixels(*plot, w - 200, w, 0, h / 2), 0);
+    EXPECT_EQ(darkPixels(*plot, w - 200, w, h - 8, h), 0);
+}
+
 TEST_F(PlotTest, UnknownFontIsAnErrorNotAnUnlabeledPlot) {
     PlotSpec spec = sampleSpec();
     spec.fontName = "NoSuchFontBurnishTest";

@@ -201,19 +201,34 @@ Result<ImageBuf> renderPlot(const PlotSpec& spec) {
     int yTickWidth = 0;
     for (const auto& t : ay.ticks)
         yTickWidth = std::max(yTickWidth, textWidth(t.label, fs - 2, font));
-    int legendWidth = 0;
+    // The legend: one entry a row down the right side, in as many columns as the height needs (an
+    // entry below the image would be lost, and OpenImageIO aborts on text drawn wholly outside it).
+    const int top = spec.title.empty() ? 20 : 2 * fs + 14;
+    const int legendStep = fs + 10;
+    const int legendRows = std::max(1, (spec.height - (top + 8) - 10) / legendStep);
+    int legendWidth = 0, named = 0;
     for (const auto& s : spec.series)
-        if (!s.name.empty()) legendWidth = std::max(legendWidth, textWidth(s.name, fs - 1, font) + 48);
+        if (!s.name.empty()) {
+            legendWidth = std::max(legendWidth, textWidth(s.name, fs - 1, font) + 48);
+            ++named;
+        }
+    const int legendColumns = (named + legendRows - 1) / legendRows;
 
     const int left = 16 + fs + 12 + yTickWidth + 10;
-    const int right = spec.width - (legendWidth > 0 ? legendWidth + 24 : 30);
-    const int top = spec.title.empty() ? 20 : 2 * fs + 14;
+    // A legend of several columns widens the image rather than squeezing the plot area below
+    // kMinPlotWidth (or the title past the left edge).
+    constexpr int kMinPlotWidth = 600;
+    const int legendSpace = legendWidth > 0 ? legendColumns * legendWidth + 24 : 30;
+    const int width = legendColumns > 1
+                          ? std::max(spec.width, std::min(left + kMinPlotWidth + legendSpace, 4 * spec.width))
+                          : spec.width;
+    const int right = width - legendSpace;
     const int bottom = spec.height - (fs + 12 + fs + 20);
     if (right - left < 50 || bottom - top < 50) return Error{"plot: labels leave no room for the plot area"};
     ax.p0 = left, ax.p1 = right;
     ay.p0 = bottom, ay.p1 = top; // y grows upwards
 
-    ImageBuf img(OIIO::ImageSpec(spec.width, spec.height, 3, OIIO::TypeDesc::FLOAT));
+    ImageBuf img(OIIO::ImageSpec(width, spec.height, 3, OIIO::TypeDesc::FLOAT));
     IBA::fill(img, kWhite);
     const ROI plotRoi(left, right + 1, top, bottom + 1, 0, 1, 0, 3);
 
@@ -273,8 +288,10 @@ Result<ImageBuf> renderPlot(const PlotSpec& spec) {
         }
 
     // Title, axis labels (the y label rotated to read bottom to top), legend.
-    if (auto st = drawText(img, (left + right) / 2, 10, spec.title, fs + 2, font, kBlack,
-                           IBA::TextAlignX::Center, IBA::TextAlignY::Top);
+    // Centred over the plot area, moved right where it would start left of the image.
+    const int titleX = std::max((left + right) / 2, textWidth(spec.title, fs + 2, font) / 2 + 8);
+    if (auto st = drawText(img, titleX, 10, spec.title, fs + 2, font, kBlack, IBA::TextAlignX::Center,
+                           IBA::TextAlignY::Top);
         !st)
         return Error{st.error()};
     if (auto st = drawText(img, (left + right) / 2, spec.height - 10, spec.x.label, fs, font, kBlack,
@@ -295,11 +312,12 @@ Result<ImageBuf> renderPlot(const PlotSpec& spec) {
         const int ly = std::max(0, (top + bottom) / 2 - rotated.spec().height / 2);
         if (!IBA::paste(img, lx, ly, 0, 0, rotated)) return Error{"plot: " + img.geterror()};
     }
-    int legendY = top + 8;
-    const int legendX = right + 18;
+    int entry = 0;
     for (const auto& s : spec.series) {
         if (s.name.empty()) continue;
-        const int cy = legendY + fs / 2;
+        const int legendX = right + 18 + (entry / legendRows) * legendWidth;
+        const int cy = top + 8 + (entry % legendRows) * legendStep + fs / 2;
+        ++entry;
         if (s.line)
             drawThickLine(img, legendX, cy, legendX + 26, cy, std::max(1, s.lineWidth), s.color, ROI());
         drawMarker(img, legendX + 13, cy, s.marker, s.markerSize, s.color, ROI());
@@ -307,7 +325,6 @@ Result<ImageBuf> renderPlot(const PlotSpec& spec) {
                                IBA::TextAlignY::Center);
             !st)
             return Error{st.error()};
-        legendY += fs + 10;
     }
     return img;
 }

@@ -49,6 +49,7 @@ struct PlotSpec {
     PlotAxis x;
     PlotAxis y;
     std::vector<PlotSeries> series;
+    /// The image width; a legend of several columns (many series) widens it to keep the plot area.
     int width = 1100;
     int height = 720;
     int fontSize = 16;

@@ -1,0 +1,115 @@
+// Mixtures of slope-space Gaussian lobes per footprint: the fit behind the multi-lobe prefiltering
+// method. LEAN puts one Gaussian in slope space on a footprint; a mip texel over grooves, bevels or
+// a pitted plate covers two or three clusters of normals, which one lobe blurs together. Here each
+// footprint keeps up to kMaxMixtureLobes lobes, each a weight w, a slope mean b and a slope
+// covariance Σ with the base lobe's 1/s on the diagonal (as LEAN).
+//
+// Lobes are held as premultiplied raw moments (w, w·b, w·(Σ + bbᵀ)), so adding the lobes of the
+// same index of several texels (a mip reduction, or hardware bilinear/trilinear filtering of the
+// stored textures) merges them with exact moments and keeps their energy.
+//
+// The fit is hierarchical and deterministic: level 0 has one lobe per finest normal; each texel
+// above reduces the lobes of its children (up to 4K of them) to K by merging, again and again, the
+// pair whose merge loses the least information (Runnalls' bound on the KL divergence of the
+// merge). Lobes whose share of the footprint falls below kMinLobeShare are absorbed first (their
+// weight goes to the cheapest partner, whose shape stays): no lobe is left with a junk mean, and a
+// few steep outlier normals keep their energy without dragging a lobe's moments as they drag LEAN's. Lobes are then put in a canonical order (by mean slope, x then y), so
+// neighbouring texels and levels give the same index to the same cluster.
+#pragma once
+
+#include <burnish/core/prefilter/normal_pyramid.h>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <array>
+#include <vector>
+
+namespace burnish {
+
+inline constexpr int kMaxMixtureLobes = 4;
+/// Lobes holding less than this share of their footprint are merged before any other pair.
+inline constexpr double kMinLobeShare = 1.0 / 64.0;
+
+/// One lobe as premultiplied raw moments: w (a weight, here finest texels), w·b and w·M with
+/// M = Σ + bbᵀ (xx, yy, xy). Adding two is merging them with exact moments.
+struct LobeMoments {
+    double w = 0.0;
+    double bx = 0.0, by = 0.0;
+    double mxx = 0.0, myy = 0.0, mxy = 0.0;
+
+    LobeMoments& operator+=(const LobeMoments& o) {
+        w += o.w;
+        bx += o.bx;
+        by += o.by;
+        mxx += o.mxx;
+        myy += o.myy;
+        mxy += o.mxy;
+        return *this;
+    }
+    /// The slope mean b = (w·b)/w ((0, 0) for an empty lobe).
+    glm::dvec2 mean() const;
+    /// The slope covariance Σ = (w·M)/w − bbᵀ (xx, yy, xy), its variances at least `minVariance`
+    /// and its correlation inside (−1, 1), so it stays positive definite against rounding.
+    std::array<double, 3> covariance(double minVariance) const;
+
+    /// One finest normal n with base power s: b = n.xy / max(n.z, kMinSlopeZ) (NormalMoments'
+    /// slope), Σ = I/s, weight `weight`.
+    static LobeMoments ofNormal(const glm::vec3& n, double s, double weight = 1.0);
+};
+
+/// Up to kMaxMixtureLobes lobes of one footprint, in canonical order.
+struct LobeMixture {
+    std::array<LobeMoments, kMaxMixtureLobes> lobes{};
+    int count = 0;
+
+    double totalWeight() const;
+};
+
+/// Runnalls' cost of merging a and b: an upper bound on the KL divergence the merge adds,
+/// ½[(wa + wb) log det Σab − wa log det Σa − wb log det Σb] (≥ 0; 0 for equal lobes).
+// Runnalls 2007, "Kullback-Leibler Approach to Gaussian Mixture Reduction", eq. 21
+double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance);
+
+/// Reduces `lobes` (any number) to at most k (1..kMaxMixtureLobes): first every lobe whose share of
+/// the total is below kMinLobeShare gives its weight to its cheapest partner, then the cheapest pair
+/// is merged (exact moments) until k remain; ties go to the lower indices. The total weight is
+/// kept. Canonical order.
+LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance);
+
+/// The lobes of the levels above the finest of a normal map's box pyramid (the footprints of
+/// NormalPyramid). Level 0 is one lobe per finest normal and is not stored.
+class MixturePyramid {
+public:
+    /// Level 1 from the finest normals with base power s, each level above from its children's
+    /// lobes, up to level `lastLevel` (the pyramid's last when <= 0); in parallel over rows, the
+    /// same result on any thread count. k is clamped to [1, kMaxMixtureLobes].
+    static MixturePyramid build(const NormalPyramid& pyramid, double s, int k, int lastLevel = 0);
+
+    /// Levels 0..lastLevel (level 0 included in the count).
+    int levelCount() const { return int(m_levels.size()) + 1; }
+    int lobeCount() const { return m_k; }
+    double minVariance() const { return m_minVariance; }
+    /// Texel (x, y) of level `level` (1 <= level < levelCount()).
+    const LobeMixture& at(int level, int x, int y) const;
+
+private:
+    struct Level {
+        int width = 0;
+        int height = 0;
+        std::vector<LobeMixture> texels;
+    };
+    int m_k = 1;
+    double m_minVariance = 1.0;
+    std::vector<Level> m_levels; // levels 1, 2, ...
+};
+
+/// The mixture's NDF at tangent-space half vector h: Σ_i (w_i/Σw) D_i(h), each D_i the
+/// slope-space Gaussian of lobe i (slopeGaussianNdf, methods.h). 0 for h_z <= 0 or no weight.
+double mixtureNdf(const LobeMixture& mixture, const glm::dvec3& h, double minVariance);
+
+/// The mixture's reflected value for light l and half vector h, as evaluate measures every method:
+/// Σ_i (w_i/Σw) D_i(h) max(0, n_i·l) with n_i the normal of lobe i's mean slope.
+double mixtureValue(const LobeMixture& mixture, const glm::dvec3& l, const glm::dvec3& h, double minVariance);
+
+} // namespace burnish

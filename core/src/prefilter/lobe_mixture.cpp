@@ -1,0 +1,223 @@
+#include <burnish/core/prefilter/lobe_mixture.h>
+
+#include <burnish/core/prefilter/methods.h>
+
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace burnish {
+
+namespace {
+
+// Correlations are kept inside (−kMaxCorrelation, kMaxCorrelation): det Σ stays positive.
+constexpr double kMaxCorrelation = 1.0 - 1e-9;
+
+double logDet(const std::array<double, 3>& c) {
+    return std::log(c[0] * c[1] - c[2] * c[2]);
+}
+
+// Canonical order: by mean slope x, then y, then weight (a total order on distinct lobes).
+bool canonicalLess(const LobeMoments& a, const LobeMoments& b) {
+    const glm::dvec2 ma = a.mean(), mb = b.mean();
+    if (ma.x != mb.x) return ma.x < mb.x;
+    if (ma.y != mb.y) return ma.y < mb.y;
+    return a.w > b.w;
+}
+
+glm::dvec3 normalOfSlope(const glm::dvec2& b) {
+    return glm::normalize(glm::dvec3(b.x, b.y, 1.0));
+}
+
+} // namespace
+
+glm::dvec2 LobeMoments::mean() const {
+    return w > 0.0 ? glm::dvec2(bx / w, by / w) : glm::dvec2(0.0);
+}
+
+std::array<double, 3> LobeMoments::covariance(double minVariance) const {
+    if (!(w > 0.0)) return {minVariance, minVariance, 0.0};
+    const glm::dvec2 b = mean();
+    double xx = mxx / w - b.x * b.x, yy = myy / w - b.y * b.y, xy = mxy / w - b.x * b.y;
+    xx = xx > minVariance ? xx : minVariance; // also NaN → minVariance
+    yy = yy > minVariance ? yy : minVariance;
+    const double limit = kMaxCorrelation * std::sqrt(xx * yy);
+    xy = std::isfinite(xy) ? std::clamp(xy, -limit, limit) : 0.0;
+    return {xx, yy, xy};
+}
+
+LobeMoments LobeMoments::ofNormal(const glm::vec3& n, double s, double weight) {
+    const NormalMoments m = NormalMoments::ofNormal(n); // the pyramid's slope of a finest normal
+    // A non-finite normal (decoders replace them; guarded anyway) counts as the flat one.
+    const bool finite = std::isfinite(m.slope.x) && std::isfinite(m.slope.y);
+    const double bx = finite ? m.slope.x : 0.0, by = finite ? m.slope.y : 0.0, invS = slopeInverseBasePower(s);
+    LobeMoments l;
+    l.w = weight;
+    l.bx = weight * bx;
+    l.by = weight * by;
+    l.mxx = weight * (bx * bx + invS);
+    l.myy = weight * (by * by + invS);
+    l.mxy = weight * (bx * by);
+    return l;
+}
+
+double LobeMixture::totalWeight() const {
+    double w = 0.0;
+    for (int i = 0; i < count; ++i)
+        w += lobes[size_t(i)].w;
+    return w;
+}
+
+double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance) {
+    LobeMoments ab = a;
+    ab += b;
+    const double cost =
+        0.5 * (ab.w * logDet(ab.covariance(minVariance)) - a.w * logDet(a.covariance(minVariance)) -
+               b.w * logDet(b.covariance(minVariance)));
+    return cost > 0.0 ? cost : 0.0; // rounding below the bound's 0
+}
+
+LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance) {
+    k = std::clamp(k, 1, kMaxMixtureLobes);
+    std::erase_if(lobes, [](const LobeMoments& l) { return !(l.w > 0.0); });
+    double total = 0.0;
+    for (const auto& l : lobes)
+        total += l.w;
+    auto cheapestPartner = [&](size_t i) {
+        size_t best = i == 0 ? 1 : 0;
+        double bestCost = std::numeric_limits<double>::infinity();
+        for (size_t j = 0; j < lobes.size(); ++j) {
+            if (j == i) continue;
+            const double c = mergeCost(lobes[i], lobes[j], minVariance);
+            if (c < bestCost) bestCost = c, best = j;
+        }
+        return best;
+    };
+    // Lobes too light to carry a cluster of their own go first, the lightest first: their weight is
+    // absorbed by the cheapest partner, whose mean and covariance stay as they are. A few steep
+    // outlier normals then keep their energy without dragging a lobe's moments (a slope of 100 at
+    // 1/256 of a footprint would add 39 to a merged variance).
+    while (lobes.size() > 1) {
+        size_t light = lobes.size();
+        for (size_t i = 0; i < lobes.size(); ++i)
+            if (lobes[i].w < kMinLobeShare * total && (light == lobes.size() || lobes[i].w < lobes[light].w))
+                light = i;
+        if (light == lobes.size()) break;
+        LobeMoments& partner = lobes[cheapestPartner(light)];
+        const double scale = (partner.w + lobes[light].w) / partner.w;
+        partner.w += lobes[light].w;
+        partner.bx *= scale;
+        partner.by *= scale;
+        partner.mxx *= scale;
+        partner.myy *= scale;
+        partner.mxy *= scale;
+        lobes.erase(lobes.begin() + std::ptrdiff_t(light));
+    }
+    // The cheapest pair until k remain, with the pair costs kept in a matrix: a merge recomputes only
+    // the merged lobe's row.
+    const size_t n = lobes.size();
+    if (n > size_t(k)) {
+        std::vector<double> cost(n * n, 0.0);
+        std::vector<char> alive(n, 1);
+        for (size_t i = 0; i < n; ++i)
+            for (size_t j = i + 1; j < n; ++j)
+                cost[i * n + j] = mergeCost(lobes[i], lobes[j], minVariance);
+        for (size_t remaining = n; remaining > size_t(k); --remaining) {
+            size_t bi = 0, bj = 0;
+            double best = std::numeric_limits<double>::infinity();
+            for (size_t i = 0; i < n; ++i) {
+                if (!alive[i]) continue;
+                for (size_t j = i + 1; j < n; ++j)
+                    if (alive[j] && cost[i * n + j] < best) best = cost[i * n + j], bi = i, bj = j;
+            }
+            lobes[bi] += lobes[bj];
+            alive[bj] = 0;
+            for (size_t o = 0; o < n; ++o) {
+                if (!alive[o] || o == bi) continue;
+                const double c = mergeCost(lobes[std::min(o, bi)], lobes[std::max(o, bi)], minVariance);
+                cost[std::min(o, bi) * n + std::max(o, bi)] = c;
+            }
+        }
+        size_t out = 0;
+        for (size_t i = 0; i < n; ++i)
+            if (alive[i]) lobes[out++] = lobes[i];
+        lobes.resize(out);
+    }
+    std::sort(lobes.begin(), lobes.end(), canonicalLess);
+    LobeMixture out;
+    out.count = int(lobes.size());
+    for (size_t i = 0; i < lobes.size(); ++i)
+        out.lobes[i] = lobes[i];
+    return out;
+}
+
+MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int k, int lastLevel) {
+    MixturePyramid out;
+    out.m_k = std::clamp(k, 1, kMaxMixtureLobes);
+    out.m_minVariance = slopeInverseBasePower(s);
+    const int last = lastLevel > 0 ? std::min(lastLevel, pyramid.levelCount() - 1) : pyramid.levelCount() - 1;
+    const NormalMap& finest = pyramid.finest();
+    for (int level = 1; level <= last; ++level) {
+        const PyramidLevel& l = pyramid.level(level);
+        Level built;
+        built.width = l.width;
+        built.height = l.height;
+        built.texels.resize(size_t(l.width) * size_t(l.height));
+        const Level* child = level > 1 ? &out.m_levels.back() : nullptr;
+        tbb::parallel_for(0, l.height, [&](int y) {
+            std::vector<LobeMoments> lobes;
+            for (int x = 0; x < l.width; ++x) {
+                lobes.clear();
+                for (int j = l.yChild[size_t(y)]; j < l.yChild[size_t(y) + 1]; ++j)
+                    for (int i = l.xChild[size_t(x)]; i < l.xChild[size_t(x) + 1]; ++i) {
+                        if (!child) {
+                            lobes.push_back(LobeMoments::ofNormal(finest.at(i, j), s));
+                            continue;
+                        }
+                        const LobeMixture& m = child->texels[size_t(j) * size_t(child->width) + size_t(i)];
+                        for (int c = 0; c < m.count; ++c)
+                            lobes.push_back(m.lobes[size_t(c)]);
+                    }
+                built.texels[size_t(y) * size_t(l.width) + size_t(x)] =
+                    reduceLobes(lobes, out.m_k, out.m_minVariance);
+            }
+        });
+        out.m_levels.push_back(std::move(built));
+    }
+    return out;
+}
+
+const LobeMixture& MixturePyramid::at(int level, int x, int y) const {
+    const Level& l = m_levels[size_t(level - 1)];
+    return l.texels[size_t(y) * size_t(l.width) + size_t(x)];
+}
+
+double mixtureNdf(const LobeMixture& mixture, const glm::dvec3& h, double minVariance) {
+    const double total = mixture.totalWeight();
+    if (!(total > 0.0)) return 0.0;
+    double sum = 0.0;
+    for (int i = 0; i < mixture.count; ++i) {
+        const LobeMoments& l = mixture.lobes[size_t(i)];
+        sum += l.w / total * slopeGaussianNdf(h, l.mean(), l.covariance(minVariance));
+    }
+    return sum;
+}
+
+double mixtureValue(const LobeMixture& mixture, const glm::dvec3& lightDir, const glm::dvec3& h,
+                    double minVariance) {
+    const double total = mixture.totalWeight();
+    if (!(total > 0.0)) return 0.0;
+    double sum = 0.0;
+    for (int i = 0; i < mixture.count; ++i) {
+        const LobeMoments& l = mixture.lobes[size_t(i)];
+        const glm::dvec2 b = l.mean();
+        const double nl = std::max(0.0, glm::dot(normalOfSlope(b), lightDir));
+        sum += l.w / total * slopeGaussianNdf(h, b, l.covariance(minVariance)) * nl;
+    }
+    return sum;
+}
+
+} // namespace burnish

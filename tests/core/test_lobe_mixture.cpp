@@ -1,0 +1,278 @@
+// The lobe-mixture fit (prefilter/lobe_mixture.h): it recovers the clusters of normals a footprint
+// holds, keeps their energy, stays finite at the extremes, is deterministic, agrees with LEAN for
+// one lobe, and on a real map errs less than LEAN against the ground truth.
+#include <burnish/core/eval/evaluate.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
+#include <burnish/core/prefilter/methods.h>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <random>
+
+using namespace burnish;
+
+namespace {
+
+NormalMap mapOf(int w, int h, const std::function<glm::vec3(int, int)>& normal) {
+    std::vector<glm::vec3> n;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            n.push_back(glm::normalize(normal(x, y)));
+    return makeNormalMap(w, h, std::move(n));
+}
+
+struct Built {
+    std::shared_ptr<NormalMap> map;
+    NormalPyramid pyramid;
+};
+
+Built build(NormalMap map) {
+    auto shared = std::make_shared<NormalMap>(std::move(map));
+    NormalPyramid p = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
+    return {shared, std::move(p)};
+}
+
+bool allFinite(const LobeMixture& m, double minVariance) {
+    for (int i = 0; i < m.count; ++i) {
+        const auto& l = m.lobes[size_t(i)];
+        const auto c = l.covariance(minVariance);
+        const glm::dvec2 b = l.mean();
+        if (!(std::isfinite(l.w) && std::isfinite(b.x) && std::isfinite(b.y) && std::isfinite(c[0]) &&
+              std::isfinite(c[1]) && std::isfinite(c[2]) && c[0] * c[1] - c[2] * c[2] > 0.0))
+            return false;
+    }
+    return true;
+}
+
+} // namespace
+
+TEST(LobeMixture, TwoTiltCheckerGivesTwoLobesWithBothTiltsAndWeights) {
+    const double t = std::tan(0.3);
+    // A checker of two tilts about y, 3 of 4 texels one way: weights 3/4 and 1/4.
+    auto b = build(mapOf(8, 8, [&](int x, int y) {
+        return ((x + y) % 4 == 0) ? glm::vec3(float(-t), 0.0f, 1.0f) : glm::vec3(float(t), 0.0f, 1.0f);
+    }));
+    const double s = 1024.0;
+    const MixturePyramid two = MixturePyramid::build(b.pyramid, s, 2);
+    const LobeMixture& m = two.at(3, 0, 0); // the whole 8×8 map
+    ASSERT_EQ(m.count, 2);
+    // Canonical order: the −x tilt first.
+    EXPECT_NEAR(m.lobes[0].mean().x, -t, 1e-6);
+    EXPECT_NEAR(m.lobes[1].mean().x, t, 1e-6);
+    EXPECT_NEAR(m.lobes[0].w / m.totalWeight(), 0.25, 1e-12);
+    EXPECT_NEAR(m.lobes[1].w / m.totalWeight(), 0.75, 1e-12);
+    // Each lobe is as narrow as the base lobe: no spread between the two tilts leaks in.
+    for (int i = 0; i < 2; ++i) {
+        const auto c = m.lobes[size_t(i)].covariance(two.minVariance());
+        EXPECT_NEAR(c[0], 1.0 / s, 1e-9);
+        EXPECT_NEAR(c[1], 1.0 / s, 1e-9);
+    }
+    // One lobe holds both: its x variance carries the spread of the tilts (as LEAN's).
+    const MixturePyramid one = MixturePyramid::build(b.pyramid, s, 1);
+    const auto c1 = one.at(3, 0, 0).lobes[0].covariance(one.minVariance());
+    const double mean = 0.75 * t - 0.25 * t;
+    EXPECT_NEAR(c1[0], t * t - mean * mean + 1.0 / s, 1e-7); // slopes are the pyramid's floats
+}
+
+TEST(LobeMixture, GroovesGiveAnAnisotropicLobeAlongTheGrooveNormal) {
+    std::mt19937 rng(7);
+    std::normal_distribution<double> g(0.0, 0.2);
+    auto b = build(mapOf(16, 16, [&](int, int) { return glm::vec3(float(g(rng)), 0.0f, 1.0f); }));
+    const MixturePyramid one = MixturePyramid::build(b.pyramid, 512.0, 1);
+    const auto c = one.at(4, 0, 0).lobes[0].covariance(one.minVariance());
+    EXPECT_GT(c[0], 20.0 * c[1]); // slopes vary in x only
+    EXPECT_NEAR(c[1], 1.0 / 512.0, 1e-12);
+}
+
+TEST(LobeMixture, FlatMapGivesTheBasePowerForEveryK) {
+    for (const double s : {1.0, 256.0, 1e6}) {
+        auto b = build(mapOf(16, 16, [](int, int) { return glm::vec3(0.0f, 0.0f, 1.0f); }));
+        for (int k = 1; k <= kMaxMixtureLobes; ++k) {
+            const MixturePyramid mp = MixturePyramid::build(b.pyramid, s, k);
+            for (int level = 1; level < mp.levelCount(); ++level) {
+                const LobeMixture& m = mp.at(level, 0, 0);
+                for (int i = 0; i < m.count; ++i) {
+                    const auto c = m.lobes[size_t(i)].covariance(mp.minVariance());
+                    EXPECT_NEAR(c[0] * s, 1.0, 1e-12) << "s " << s << " k " << k << " level " << level;
+                    EXPECT_NEAR(c[1] * s, 1.0, 1e-12);
+                    EXPECT_EQ(c[2], 0.0);
+                    EXPECT_EQ(m.lobes[size_t(i)].mean().x, 0.0);
+                }
+                // Equal lobes cost nothing to merge, and every K holds the same NDF.
+                const glm::dvec3 h = glm::normalize(glm::dvec3(0.01, 0.02, 1.0));
+                EXPECT_NEAR(mixtureNdf(m, h, mp.minVariance()),
+                            slopeGaussianNdf(h, {0.0, 0.0}, {1.0 / s, 1.0 / s, 0.0}),
+                            1e-9 * slopeGaussianNdf(h, {0.0, 0.0}, {1.0 / s, 1.0 / s, 0.0}) + 1e-300);
+            }
+        }
+    }
+}
+
+TEST(LobeMixture, OneLobeAgreesWithLean) {
+    auto map = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png");
+    ASSERT_TRUE(map) << map.error();
+    auto b = build(std::move(map).value());
+    const double s = 256.0;
+    const MixturePyramid one = MixturePyramid::build(b.pyramid, s, 1, 4);
+    double worst = 0.0;
+    for (int level = 1; level <= 4; ++level) {
+        const PyramidLevel& l = b.pyramid.level(level);
+        for (int y = 0; y < l.height; y += 7)
+            for (int x = 0; x < l.width; x += 5) {
+                const TexelLobe lean = methodLobe(Method::Lean, b.pyramid.boxMoments(level, x, y), s);
+                const LobeMoments& m = one.at(level, x, y).lobes[0];
+                const auto c = m.covariance(one.minVariance());
+                worst = std::max({worst, std::abs(m.mean().x - lean.slopeMean.x),
+                                  std::abs(m.mean().y - lean.slopeMean.y),
+                                  std::abs(c[0] - lean.slopeCov[0]) / lean.slopeCov[0],
+                                  std::abs(c[1] - lean.slopeCov[1]) / lean.slopeCov[1]});
+            }
+    }
+    // The pyramid sums in float, the mixture in double.
+    EXPECT_LT(worst, 1e-4);
+}
+
+TEST(LobeMixture, SteepOutliersKeepTheirEnergyWithoutDraggingTheLobe) {
+    // 255 flat normals and one within a degree of the horizon in one 16×16 footprint.
+    auto b = build(mapOf(16, 16, [](int x, int y) {
+        return x == 3 && y == 5 ? glm::vec3(1.0f, 0.0f, 0.005f) : glm::vec3(0.0f, 0.0f, 1.0f);
+    }));
+    const double s = 1024.0;
+    const TexelLobe lean = methodLobe(Method::Lean, b.pyramid.boxMoments(4, 0, 0), s);
+    EXPECT_GT(lean.slopeCov[0], 10.0); // LEAN's variance takes 200²/256 from the outlier
+    for (int k = 1; k <= kMaxMixtureLobes; ++k) {
+        const MixturePyramid mp = MixturePyramid::build(b.pyramid, s, k);
+        const LobeMixture& m = mp.at(4, 0, 0);
+        EXPECT_DOUBLE_EQ(m.totalWeight(), 256.0);
+        ASSERT_TRUE(allFinite(m, mp.minVariance()));
+        const auto c = m.lobes[0].covariance(mp.minVariance());
+        if (k == 1) {
+            // One lobe is LEAN's, dragged alike.
+            EXPECT_NEAR(c[0], lean.slopeCov[0], 1e-4 * lean.slopeCov[0]);
+            continue;
+        }
+        // With a second lobe the outlier stays apart at the finest merge, then gives its weight to
+        // the flat lobe, whose variance stays the base lobe's.
+        for (int i = 0; i < m.count; ++i) {
+            EXPECT_LT(m.lobes[size_t(i)].covariance(mp.minVariance())[0], 1.001 / s) << "k " << k;
+            EXPECT_LT(std::abs(m.lobes[size_t(i)].mean().x), 1e-6) << "k " << k;
+        }
+    }
+}
+
+TEST(LobeMixture, ExtremesStayFinite) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (const auto& [w, h] : {std::pair{1, 1}, {3, 5}, {17, 9}}) {
+        auto b = build(mapOf(w, h, [&](int x, int y) {
+            if ((x + y) % 3 == 0) return glm::vec3(float(u(rng)), float(u(rng)), 0.0f); // on the horizon
+            return glm::vec3(float(u(rng)), float(u(rng)), 0.3f);
+        }));
+        for (const double s : {1.0, 1e6}) {
+            const MixturePyramid mp = MixturePyramid::build(b.pyramid, s, 3);
+            EXPECT_EQ(mp.levelCount(), b.pyramid.levelCount());
+            for (int level = 1; level < mp.levelCount(); ++level) {
+                const PyramidLevel& l = b.pyramid.level(level);
+                for (int y = 0; y < l.height; ++y)
+                    for (int x = 0; x < l.width; ++x) {
+                        const LobeMixture& m = mp.at(level, x, y);
+                        ASSERT_TRUE(allFinite(m, mp.minVariance()));
+                        EXPECT_EQ(m.totalWeight(), double(b.pyramid.footprintCount(level, x, y)));
+                        for (const glm::dvec3 hv :
+                             {glm::dvec3(0, 0, 1), glm::normalize(glm::dvec3(1, 0, 1e-3))})
+                            EXPECT_TRUE(
+                                std::isfinite(mixtureValue(m, glm::dvec3(0, 0, 1), hv, mp.minVariance())));
+                    }
+            }
+        }
+    }
+    // A NaN normal counts as a flat one.
+    const LobeMoments nan = LobeMoments::ofNormal(glm::vec3(std::nanf(""), 0.0f, 1.0f), 64.0);
+    EXPECT_EQ(nan.bx, 0.0);
+    EXPECT_EQ(nan.mxx, 1.0 / 64.0);
+}
+
+TEST(LobeMixture, SameBitsOnOneThreadAndOnAll) {
+    auto map = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png");
+    ASSERT_TRUE(map) << map.error();
+    auto b = build(std::move(map).value());
+    const MixturePyramid all = MixturePyramid::build(b.pyramid, 256.0, 3, 3);
+    MixturePyramid one;
+    {
+        tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+        one = MixturePyramid::build(b.pyramid, 256.0, 3, 3);
+    }
+    for (int level = 1; level <= 3; ++level) {
+        const PyramidLevel& l = b.pyramid.level(level);
+        for (int y = 0; y < l.height; ++y)
+            for (int x = 0; x < l.width; ++x) {
+                const LobeMixture &a = all.at(level, x, y), &o = one.at(level, x, y);
+                ASSERT_EQ(a.count, o.count);
+                ASSERT_EQ(std::memcmp(a.lobes.data(), o.lobes.data(), sizeof(a.lobes)), 0);
+            }
+    }
+}
+
+TEST(LobeMixture, NdfKeepsItsEnergy) {
+    // ∫ D(h) h_z dω_h = 1 for each lobe (the slope Gaussian's normalization), so for the mixture.
+    const double t = std::tan(0.25);
+    auto b = build(mapOf(4, 4, [&](int x, int) {
+        return x % 2 ? glm::vec3(float(t), 0.0f, 1.0f) : glm::vec3(0.0f, float(-t), 1.0f);
+    }));
+    const MixturePyramid mp = MixturePyramid::build(b.pyramid, 64.0, 2);
+    const LobeMixture& m = mp.at(2, 0, 0);
+    ASSERT_EQ(m.count, 2);
+    double sum = 0.0;
+    const int n = 800;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < 2 * n; ++j) {
+            const double theta = (i + 0.5) / n * (kPi<double> / 2),
+                         phi = (j + 0.5) / (2 * n) * 2 * kPi<double>;
+            const glm::dvec3 h(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                               std::cos(theta));
+            sum += mixtureNdf(m, h, mp.minVariance()) * h.z * std::sin(theta) * (kPi<double> / 2 / n) *
+                   (2 * kPi<double> / (2 * n));
+        }
+    EXPECT_NEAR(sum, 1.0, 2e-3);
+}
+
+TEST(LobeMixture, ErrsLessThanLeanOnARealMap) {
+    // The evaluate metric (texture space, box footprints, the default 49 directions) at s = 256.
+    auto map = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png");
+    ASSERT_TRUE(map) << map.error();
+    auto b = build(std::move(map).value());
+    const double s = 256.0;
+    const auto dirs = evaluationDirections(EvaluateOptions{});
+    const MixturePyramid k3 = MixturePyramid::build(b.pyramid, s, 3, 3);
+    for (int level : {2, 3}) {
+        const PyramidLevel& l = b.pyramid.level(level);
+        double truth = 0.0, leanAbs = 0.0, leanSum = 0.0, mixAbs = 0.0, mixSum = 0.0;
+        for (int y = 0; y < l.height; y += 2)
+            for (int x = 0; x < l.width; x += 2) {
+                const TexelLobe lean = methodLobe(Method::Lean, b.pyramid.boxMoments(level, x, y), s);
+                for (const DirectionPair& d : dirs) {
+                    const double t = groundTruthTexel(b.pyramid, level, x, y, s, d);
+                    const double vl = methodValue(lean, d);
+                    const double vm = mixtureValue(k3.at(level, x, y), d.l, d.h, k3.minVariance());
+                    truth += t;
+                    leanAbs += std::abs(vl - t);
+                    leanSum += vl;
+                    mixAbs += std::abs(vm - t);
+                    mixSum += vm;
+                }
+            }
+        std::printf("[measured] trak-rust1 s = 256 mip %d: relative L1 LEAN %.4f, mixture K=3 %.4f; energy "
+                    "LEAN %.4f, mixture %.4f\n",
+                    level, leanAbs / truth, mixAbs / truth, leanSum / truth, mixSum / truth);
+        EXPECT_LT(mixAbs, leanAbs) << "mip " << level;
+        EXPECT_LT(std::abs(mixSum / truth - 1.0), std::abs(leanSum / truth - 1.0) + 0.01) << "mip " << level;
+    }
+}

@@ -53,7 +53,8 @@ LobeMoments LobeMoments::ofNormal(const glm::vec3& n, double s, double weight) {
     const NormalMoments m = NormalMoments::ofNormal(n); // the pyramid's slope of a finest normal
     // A non-finite normal (decoders replace them; guarded anyway) counts as the flat one.
     const bool finite = std::isfinite(m.slope.x) && std::isfinite(m.slope.y);
-    const double bx = finite ? m.slope.x : 0.0, by = finite ? m.slope.y : 0.0, invS = slopeInverseBasePower(s);
+    const double bx = finite ? m.slope.x : 0.0, by = finite ? m.slope.y : 0.0,
+                 invS = slopeInverseBasePower(s);
     LobeMoments l;
     l.w = weight;
     l.bx = weight * bx;

@@ -13,8 +13,9 @@
 // pair whose merge loses the least information (Runnalls' bound on the KL divergence of the
 // merge). Lobes whose share of the footprint falls below kMinLobeShare are absorbed first (their
 // weight goes to the cheapest partner, whose shape stays): no lobe is left with a junk mean, and a
-// few steep outlier normals keep their energy without dragging a lobe's moments as they drag LEAN's. Lobes are then put in a canonical order (by mean slope, x then y), so
-// neighbouring texels and levels give the same index to the same cluster.
+// few steep outlier normals keep their energy without dragging a lobe's moments as they drag LEAN's. Lobes
+// are then put in a canonical order (by mean slope, x then y), so neighbouring texels and levels give the
+// same index to the same cluster.
 #pragma once
 
 #include <burnish/core/prefilter/normal_pyramid.h>

@@ -72,13 +72,24 @@ double LobeMixture::totalWeight() const {
     return w;
 }
 
-double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance) {
+namespace {
+
+// w · log det Σ of a lobe: the part of the merge cost each lobe brings, computed once per lobe.
+double weightedLogDet(const LobeMoments& a, double minVariance) {
+    return a.w * logDet(a.covariance(minVariance));
+}
+
+double mergeCostOf(const LobeMoments& a, double wlA, const LobeMoments& b, double wlB, double minVariance) {
     LobeMoments ab = a;
     ab += b;
-    const double cost =
-        0.5 * (ab.w * logDet(ab.covariance(minVariance)) - a.w * logDet(a.covariance(minVariance)) -
-               b.w * logDet(b.covariance(minVariance)));
+    const double cost = 0.5 * (ab.w * logDet(ab.covariance(minVariance)) - wlA - wlB);
     return cost > 0.0 ? cost : 0.0; // rounding below the bound's 0
+}
+
+} // namespace
+
+double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance) {
+    return mergeCostOf(a, weightedLogDet(a, minVariance), b, weightedLogDet(b, minVariance), minVariance);
 }
 
 LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance) {
@@ -121,11 +132,13 @@ LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVarianc
     // the merged lobe's row.
     const size_t n = lobes.size();
     if (n > size_t(k)) {
-        std::vector<double> cost(n * n, 0.0);
+        std::vector<double> cost(n * n, 0.0), wl(n);
         std::vector<char> alive(n, 1);
         for (size_t i = 0; i < n; ++i)
+            wl[i] = weightedLogDet(lobes[i], minVariance);
+        for (size_t i = 0; i < n; ++i)
             for (size_t j = i + 1; j < n; ++j)
-                cost[i * n + j] = mergeCost(lobes[i], lobes[j], minVariance);
+                cost[i * n + j] = mergeCostOf(lobes[i], wl[i], lobes[j], wl[j], minVariance);
         for (size_t remaining = n; remaining > size_t(k); --remaining) {
             size_t bi = 0, bj = 0;
             double best = std::numeric_limits<double>::infinity();
@@ -135,11 +148,12 @@ LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVarianc
                     if (alive[j] && cost[i * n + j] < best) best = cost[i * n + j], bi = i, bj = j;
             }
             lobes[bi] += lobes[bj];
+            wl[bi] = weightedLogDet(lobes[bi], minVariance);
             alive[bj] = 0;
             for (size_t o = 0; o < n; ++o) {
                 if (!alive[o] || o == bi) continue;
-                const double c = mergeCost(lobes[std::min(o, bi)], lobes[std::max(o, bi)], minVariance);
-                cost[std::min(o, bi) * n + std::max(o, bi)] = c;
+                const size_t lo = std::min(o, bi), hi = std::max(o, bi);
+                cost[lo * n + hi] = mergeCostOf(lobes[lo], wl[lo], lobes[hi], wl[hi], minVariance);
             }
         }
         size_t out = 0;

@@ -40,8 +40,6 @@ TEST(MethodTable, EveryMethodHasOneRowWithAUniqueNameThatRoundTrips) {
         EXPECT_FALSE(spec.shader.empty());
         EXPECT_GT(spec.storage.textureFetches, 0);
         EXPECT_GT(spec.storage.bytesPerTexel, 0.0);
-        EXPECT_EQ(momentsNeeded(m), spec.moments);
-        EXPECT_EQ(methodStorage(m).layout, spec.storage.layout);
         ASSERT_FALSE(spec.textures.empty());
         EXPECT_EQ(spec.textures.front().role, TextureRole::Normal) << spec.name;
     }
@@ -116,11 +114,6 @@ TEST(MethodTable, TheBakeProducesExactlyTheRowsTextures) {
                 EXPECT_EQ(t.decode[c].name, row.channels[c].name);
             EXPECT_EQ(t.description.find('{'), std::string::npos) << "placeholder left: " << t.description;
         }
-        // Presets see the same rows.
-        const auto roles = methodRoles(m);
-        ASSERT_EQ(roles.size(), spec.textures.size());
-        for (size_t i = 0; i < roles.size(); ++i)
-            EXPECT_EQ(roles[i].role, spec.textures[i].role);
     }
 }
 

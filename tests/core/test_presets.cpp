@@ -189,17 +189,30 @@ TEST(Presets, MethodCompatibilityFollowsTheBakedRoles) {
     EXPECT_FALSE(checkPresetMethod(gltf, Method::Lean));
 }
 
-TEST(Presets, MethodRolesComeFromTheBake) {
-    const auto roles = methodRoles(Method::Lean);
-    std::set<std::string> names;
-    for (const auto& r : roles)
-        names.insert(std::string(roleName(r.role)));
-    EXPECT_TRUE(names.count("lean-b") && names.count("lean-m") && names.count("lean-gloss"));
-    for (const auto& r : roles)
-        if (r.role == TextureRole::LeanM) {
-            EXPECT_TRUE(r.needsHighPrecision);
-            EXPECT_EQ(r.channels, (std::vector<std::string>{"M.xx", "M.yy", "M.xy"}));
-        }
+TEST(Presets, MethodChannelsComeFromTheMethodTable) {
+    // A channel the method's row does not list is refused, naming the ones it has; a role the row
+    // lists but the preset drops is refused too.
+    Preset lean = findPreset("lean").value();
+    ASSERT_TRUE(checkPresetMethod(lean, Method::Lean));
+    Preset renamed = lean;
+    bool changed = false;
+    for (auto& file : renamed.files)
+        for (auto& ch : file.channels)
+            if (ch.role == "lean-m" && ch.channel == "M.yy") ch.channel = "M.zz", changed = true;
+    ASSERT_TRUE(changed);
+    const Status bad = checkPresetMethod(renamed, Method::Lean);
+    ASSERT_FALSE(bad);
+    EXPECT_NE(bad.error().find("has no channel 'M.zz' (it has M.xx, M.yy, M.xy)"), std::string::npos)
+        << bad.error();
+    Preset dropped = lean;
+    std::erase_if(dropped.files, [](const PresetFile& f) {
+        return std::any_of(f.channels.begin(), f.channels.end(),
+                           [](const auto& c) { return c.role == "lean-m"; });
+    });
+    const Status missing = checkPresetMethod(dropped, Method::Lean);
+    ASSERT_FALSE(missing);
+    EXPECT_NE(missing.error().find("stores none of its 'lean-m' texture"), std::string::npos)
+        << missing.error();
 }
 
 TEST(Presets, FormatAndCompressionNames) {

@@ -472,42 +472,29 @@ const PresetParameter* Preset::findParameter(std::string_view parameterName) con
     return nullptr;
 }
 
-std::vector<MethodRole> methodRoles(Method method) {
-    std::vector<MethodRole> roles;
-    for (const MethodTexture& t : methodSpec(method).textures) {
-        const TextureSpec& spec = textureSpec(t.role);
-        MethodRole r;
-        r.role = t.role;
-        r.needsHighPrecision = spec.needsHighPrecision;
-        for (const ChannelSpec& c : spec.channels)
-            r.channels.emplace_back(c.name);
-        roles.push_back(std::move(r));
-    }
-    return roles;
-}
-
 namespace {
 
 // Why the method's textures (its method-table row) do not fit the preset's files, or empty when they
 // do: every baked channel the preset stores must be one the method bakes, and every texture the
 // method bakes (except the normal, which slope methods carry in B) must be stored.
 std::string presetMismatch(const Preset& preset, Method method) {
-    const auto roles = methodRoles(method);
     std::set<std::string> stored;
     for (const auto& file : preset.files)
         for (const auto& ch : file.channels) {
             if (ch.kind != PresetChannel::Kind::Baked) continue;
-            const auto role = std::find_if(roles.begin(), roles.end(),
-                                           [&](const auto& r) { return roleName(r.role) == ch.role; });
-            if (role == roles.end()) return "it bakes no '" + ch.role + "' texture";
-            if (std::find(role->channels.begin(), role->channels.end(), ch.channel) == role->channels.end())
+            const std::optional<TextureRole> role = roleFromName(ch.role);
+            if (!role || !hasTexture(method, *role)) return "it bakes no '" + ch.role + "' texture";
+            std::vector<std::string> channels;
+            for (const ChannelSpec& c : textureSpec(*role).channels)
+                channels.emplace_back(c.name);
+            if (std::find(channels.begin(), channels.end(), ch.channel) == channels.end())
                 return "its '" + ch.role + "' texture has no channel '" + ch.channel + "' (it has " +
-                       joinNames(role->channels) + ")";
+                       joinNames(channels) + ")";
             stored.insert(ch.role);
         }
-    for (const auto& r : roles)
-        if (r.role != TextureRole::Normal && !stored.count(std::string(roleName(r.role))))
-            return "the preset stores none of its '" + std::string(roleName(r.role)) + "' texture";
+    for (const MethodTexture& t : methodSpec(method).textures)
+        if (t.role != TextureRole::Normal && !stored.count(std::string(roleName(t.role))))
+            return "the preset stores none of its '" + std::string(roleName(t.role)) + "' texture";
     return {};
 }
 

@@ -71,10 +71,6 @@ std::string powerLabel(double s) {
 
 } // namespace
 
-MethodStorage methodStorage(Method method) {
-    return methodSpec(method).storage;
-}
-
 Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const EvaluationReportOptions& options,
                                                const std::function<void(double)>& progress,
                                                const std::atomic<bool>* cancel) {
@@ -117,7 +113,7 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
         const Method method = options.evaluate.methods[i];
         MethodCost cost;
         cost.method = method;
-        cost.storage = methodStorage(method);
+        cost.storage = methodSpec(method).storage;
         BakeOptions bakeOptions;
         bakeOptions.method = method;
         bakeOptions.basePower = s;

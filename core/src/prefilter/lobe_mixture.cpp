@@ -28,10 +28,6 @@ bool canonicalLess(const LobeMoments& a, const LobeMoments& b) {
     return a.w > b.w;
 }
 
-glm::dvec3 normalOfSlope(const glm::dvec2& b) {
-    return glm::normalize(glm::dvec3(b.x, b.y, 1.0));
-}
-
 } // namespace
 
 glm::dvec2 LobeMoments::mean() const {
@@ -49,19 +45,19 @@ std::array<double, 3> LobeMoments::covariance(double minVariance) const {
     return {xx, yy, xy};
 }
 
-LobeMoments LobeMoments::ofNormal(const glm::vec3& n, double s, double weight) {
+LobeMoments LobeMoments::ofNormal(const glm::vec3& n, double s) {
     const NormalMoments m = NormalMoments::ofNormal(n); // the pyramid's slope of a finest normal
     // A non-finite normal (decoders replace them; guarded anyway) counts as the flat one.
     const bool finite = std::isfinite(m.slope.x) && std::isfinite(m.slope.y);
     const double bx = finite ? m.slope.x : 0.0, by = finite ? m.slope.y : 0.0,
                  invS = slopeInverseBasePower(s);
     LobeMoments l;
-    l.w = weight;
-    l.bx = weight * bx;
-    l.by = weight * by;
-    l.mxx = weight * (bx * bx + invS);
-    l.myy = weight * (by * by + invS);
-    l.mxy = weight * (bx * by);
+    l.w = 1.0;
+    l.bx = bx;
+    l.by = by;
+    l.mxx = bx * bx + invS;
+    l.myy = by * by + invS;
+    l.mxy = bx * by;
     return l;
 }
 

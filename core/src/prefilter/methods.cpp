@@ -149,10 +149,6 @@ const MethodSpec kMethodTable[] = {
      {2, 1.5, "normal BC5 + adjusted gloss (or GGX roughness) BC4"}},
 };
 
-glm::vec3 normalOfSlope(const glm::dvec2& b) {
-    return glm::vec3(glm::normalize(glm::dvec3(b.x, b.y, 1.0)));
-}
-
 } // namespace
 
 const MethodSpec& methodSpec(Method method) {
@@ -285,7 +281,7 @@ TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, cons
     case Method::Clean: {
         lobe.slopeGaussian = true;
         lobe.slopeMean = glm::dvec2(moments.slope);
-        lobe.normal = normalOfSlope(lobe.slopeMean);
+        lobe.normal = glm::vec3(normalOfSlope(lobe.slopeMean));
         const double invS = slopeInverseBasePower(s);
         if (method == Method::Lean) {
             lobe.slopeCov = leanSlopeCovariance(moments, s);

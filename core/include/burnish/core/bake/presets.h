@@ -127,18 +127,9 @@ Result<Preset> findPreset(std::string_view nameOrPath);
 /// (names that are no texture role are left out; checkPresetMethod refuses them).
 std::vector<TextureRole> presetRoles(const Preset& preset);
 
-/// The roles a method bakes, each with its channels' decode names, in bake order: its row in the
-/// method table (methods.h).
-struct MethodRole {
-    TextureRole role = TextureRole::Normal;
-    std::vector<std::string> channels;
-    bool needsHighPrecision = false;
-};
-std::vector<MethodRole> methodRoles(Method method);
-
-/// Checks that `method` produces every role and channel the preset stores, and that every role
-/// the method produces (except "normal", which slope methods carry in B) is stored. The error
-/// lists the methods that fit the preset.
+/// Checks, against the method's row in the method table (methods.h), that `method` produces every
+/// role and channel the preset stores, and that every role the method produces (except "normal",
+/// which slope methods carry in B) is stored. The error lists the methods that fit the preset.
 Status checkPresetMethod(const Preset& preset, Method method);
 /// The methods checkPresetMethod accepts for the preset, in report order.
 std::vector<Method> compatibleMethods(const Preset& preset);

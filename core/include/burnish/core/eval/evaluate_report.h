@@ -15,9 +15,6 @@
 
 namespace burnish {
 
-/// What a method stores and fetches per shaded pixel: its method-table row's storage (methods.h).
-MethodStorage methodStorage(Method method);
-
 struct MethodCost {
     Method method;
     double bakeSeconds = 0.0; // median over the runs of an in-memory bake (pyramid included)

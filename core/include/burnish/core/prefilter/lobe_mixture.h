@@ -55,8 +55,8 @@ struct LobeMoments {
     std::array<double, 3> covariance(double minVariance) const;
 
     /// One finest normal n with base power s: b = n.xy / max(n.z, kMinSlopeZ) (NormalMoments'
-    /// slope), Σ = I/s, weight `weight`.
-    static LobeMoments ofNormal(const glm::vec3& n, double s, double weight = 1.0);
+    /// slope), Σ = I/s, weight 1 (one finest texel).
+    static LobeMoments ofNormal(const glm::vec3& n, double s);
 };
 
 /// Up to kMaxMixtureLobes lobes of one footprint, in canonical order.

@@ -7,6 +7,7 @@
 #include <burnish/core/util/numeric.h>
 #include <burnish/core/util/result.h>
 
+#include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -219,6 +220,11 @@ unsigned momentsNeeded(Method method);
 /// normalized Blinn-Phong (p+2)/(2π)(n̄·h)^p for the isotropic methods; for LEAN/CLEAN the
 /// slope-space Gaussian exp(−½ dᵀΣ⁻¹d)/(2π√detΣ) / h_z⁴ with d = h.xy/h.z − B. 0 for h_z <= 0.
 double methodNdf(const TexelLobe& lobe, const glm::dvec3& h);
+
+/// The unit normal whose slope (n.x/n.z, n.y/n.z) is b: the axis of a slope-space lobe.
+inline glm::dvec3 normalOfSlope(const glm::dvec2& b) {
+    return glm::normalize(glm::dvec3(b.x, b.y, 1.0));
+}
 
 /// The slope-space Gaussian NDF on its own (used by methodNdf and the GLSL twin's test).
 // Olano & Baker 2010, "LEAN Mapping"

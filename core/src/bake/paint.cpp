@@ -346,7 +346,6 @@ Result<LiveGlossBake> LiveGlossBake::create(std::shared_ptr<const NormalMap> map
     out.m_authored = *options.authoredGloss;
     out.m_options = options;
     out.m_options.authoredGloss.reset(); // kept once, in m_authored
-    out.m_taps = kernelTaps(options.pyramid.kernel);
     const NormalPyramid pyramid = NormalPyramid::build(map, options.pyramid);
     const int levels =
         options.mipCount > 0 ? std::min(options.mipCount, pyramid.levelCount()) : pyramid.levelCount();
@@ -414,7 +413,7 @@ Status LiveGlossBake::rebakeRegion(const std::vector<float>& authoredGloss, cons
 
     // The gloss texels whose kernel reads a changed box texel: the box rectangle grown by the
     // kernel radius, mapped through the border mode (exact for both: see borderIndex).
-    const int r = m_taps.radius;
+    const int r = m_base.kernelRadius();
     for (size_t k = 0; k < m_levels.size(); ++k) {
         const Level& l = m_levels[k];
         const std::vector<int> xs = borderRange(box[k].x0 - r, box[k].x1 + r, l.width);

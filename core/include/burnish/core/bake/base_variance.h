@@ -49,6 +49,8 @@ public:
     double power(int k, int x, int y) const;
 
     int levelCount() const { return int(m_levels.size()); }
+    /// The radius of the kernel power() filters with: a changed texel reaches this far.
+    int kernelRadius() const { return m_taps.radius; }
     /// Finest texels under texel (x, y) of level k.
     int footprintCount(int k, int x, int y) const;
     /// The level-k column / row whose footprint holds finest column x / row y.

@@ -207,7 +207,6 @@ private:
     std::vector<int> borderRange(int lo, int hi, int size) const;
 
     BakeOptions m_options; // authoredGloss moved out into m_authored
-    KernelTaps m_taps;
     std::vector<float> m_authored;
     std::vector<Level> m_levels;
     BaseVariancePyramid m_base; // the authored 1/s, as bake() builds it

@@ -129,6 +129,9 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                     "Input channels holding the normal: auto (default), rgb, rg (z rebuilt)");
     cmd->add_option("--metallic", spec->metallic,
                     "Metalness in [0, 1] for presets with a metallic channel (gltf, unity)");
+    cmd->add_option("--lobes", spec->lobes,
+                    "Mixture lobes per texel, 1..4 (--method mixture; default: as many as the preset stores, "
+                    "3 in the mixture preset; 1 is LEAN)");
     cmd->add_option("--mips", spec->mips,
                     "Mip levels written, N >= 1 (default all, down to 1x1; more than the chain holds is "
                     "clamped, with a note in the --json summary)");

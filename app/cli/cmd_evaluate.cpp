@@ -34,6 +34,7 @@ struct EvaluateCliOptions {
     int bakeRuns = 3;
     std::string border = "wrap";
     double toksvigMapPower = 100.0;
+    std::vector<int> lobes{kDefaultMixtureLobes};
     bool json = false;
     NormalMapCliOptions normalMap;
 };
@@ -68,6 +69,7 @@ int runEvaluate(const EvaluateCliOptions& o) {
     options.evaluate.border = o.border == "clamp" ? BorderMode::Clamp : BorderMode::Wrap;
     options.evaluate.errorMaps = o.errorMaps;
     options.evaluate.params.toksvigMapPower = o.toksvigMapPower;
+    options.evaluate.mixtureLobes = o.lobes;
     if (!o.methods.empty()) {
         options.evaluate.methods.clear();
         for (const auto& name : o.methods) {
@@ -130,7 +132,7 @@ const CommandRegistration registration{
             ->check(CLI::Range(0.0, 89.0));
         sub->add_option("--methods", o->methods,
                         "Methods to evaluate, comma separated (default all: naive, toksvig, toksvig-map, "
-                        "variance-to-gloss, lean, clean, vmf).")
+                        "variance-to-gloss, lean, clean, vmf, mixture).")
             ->delimiter(',')
             ->type_name("LIST");
         sub->add_option("--kernels", o->kernels,
@@ -152,6 +154,13 @@ const CommandRegistration registration{
         sub->add_option("--toksvig-map-power", o->toksvigMapPower,
                         "Fixed power the Toksvig map is baked for (default 100).")
             ->check(CLI::Range(1.0, 1e6));
+        sub->add_option(
+               "--lobes", o->lobes,
+               "Lobe counts K of the mixture, comma separated, each its own row mixture-kK (default 3; "
+               "1,2,3,4 draws the error-against-cost curve; K = 1 is LEAN).")
+            ->delimiter(',')
+            ->check(CLI::Range(1, 4))
+            ->type_name("LIST");
         sub->add_flag("--json", o->json, "Print the report as JSON on stdout instead of Markdown.");
         addNormalMapOptions(sub, o->normalMap);
         return [o] { return runEvaluate(*o); };

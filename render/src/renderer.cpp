@@ -27,7 +27,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 // Texture units of material.frag's samplers: a baked texture's unit is its role's index in the method
-// table (methods.h), the detail map's and the others' follow.
+// table (methods.h) up to the detail map's, then the detail map's and the others'; the mixture's
+// roles (after Detail) follow the environment's unit (textureUnit).
 enum TextureUnit : int {
     kUnitNormal = int(TextureRole::Normal),
     kUnitGloss = int(TextureRole::Gloss),
@@ -35,6 +36,12 @@ enum TextureUnit : int {
     kUnitSpecular = 7,
     kUnitEnvironment = 8,
 };
+
+int textureUnit(TextureRole role) {
+    return role < TextureRole::MixtureWeights
+               ? int(role)
+               : kUnitEnvironment + 1 + int(role) - int(TextureRole::MixtureWeights);
+}
 
 // Largest reference sample count: 4096 passes already take minutes on a software rasterizer.
 constexpr int kMaxReferenceSamples = 4096;
@@ -83,10 +90,12 @@ struct BakeKey {
     double toksvigMapPower = 0.0;
     double basePower = 0.0;
     std::string encoding;
+    int mixtureLobes = 0;
 
     bool operator==(const BakeKey& o) const {
         return normalMap == o.normalMap && glossMap == o.glossMap && method == o.method &&
-               toksvigMapPower == o.toksvigMapPower && basePower == o.basePower && encoding == o.encoding;
+               toksvigMapPower == o.toksvigMapPower && basePower == o.basePower && encoding == o.encoding &&
+               mixtureLobes == o.mixtureLobes;
     }
 };
 
@@ -171,6 +180,8 @@ struct Renderer::Impl {
     std::optional<BakeKey> bakeKey;
     std::map<TextureRole, GpuBaked> baked;
     int bakes = 0;
+    // The mixture's covariance floor: 1/s of the narrowest authored lobe (MixturePyramid's).
+    double mixtureMinVariance = 1.0 / 1024.0;
     // The reference's finest normals and authored gloss, level 0 only.
     std::shared_ptr<const NormalMap> finestFor;
     std::shared_ptr<const std::vector<float>> finestGlossFor;
@@ -251,8 +262,13 @@ Status Renderer::Impl::prepareBake() {
         bakeKey.reset();
         return {};
     }
-    BakeKey key{m.normalMap,           m.glossMap, m.method, m.methodParams.toksvigMapPower, m.basePower,
-                m.glossEncoding.name()};
+    BakeKey key{m.normalMap,
+                m.glossMap,
+                m.method,
+                m.methodParams.toksvigMapPower,
+                m.basePower,
+                m.glossEncoding.name(),
+                m.method == Method::Mixture ? m.methodParams.mixtureLobes : 0};
     if (!(bakeKey && *bakeKey == key)) {
         BakeOptions options;
         options.method = m.method;
@@ -262,6 +278,13 @@ Status Renderer::Impl::prepareBake() {
         if (m.glossMap) options.authoredGloss = *m.glossMap;
         auto out = bake(*m.normalMap, options);
         if (!out) return Error{"bake: " + out.error()};
+        double maxPower = m.basePower;
+        if (m.glossMap) {
+            maxPower = 0.0;
+            for (float g : *m.glossMap)
+                maxPower = std::max(maxPower, m.glossEncoding.power(g));
+        }
+        mixtureMinVariance = slopeInverseBasePower(maxPower);
         ++bakes;
         baked.clear();
         bakeKey.reset();
@@ -457,6 +480,8 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
     p.set("uGlossMinPower", float(m.glossEncoding.minPower()));
     p.set("uGlossMaxPower", float(m.glossEncoding.maxPower()));
     p.set("uToksvigFixedPower", float(m.methodParams.toksvigMapPower));
+    p.set("uMixtureLobes", std::clamp(m.methodParams.mixtureLobes, 1, kMaxMixtureLobes));
+    p.set("uMixtureMinVariance", float(mixtureMinVariance));
     p.set("uDetailUvScale", m.detailUvScale);
     if (m.normalMap)
         p.set("uNormalMapSize", glm::vec2(float(m.normalMap->width), float(m.normalMap->height)));
@@ -464,7 +489,7 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
     // A baked texture at its role's unit, with its decode uniforms as its table row names them.
     auto bindBaked = [&](TextureRole role, const GpuBaked& gpu) {
         const TextureSpec& spec = textureSpec(role);
-        const int unit = int(role);
+        const int unit = textureUnit(role);
         const std::string sampler(spec.sampler), scale(spec.scaleUniform), bias(spec.biasUniform);
         gpu.texture.bind(unit);
         p.set(sampler.c_str(), unit);
@@ -475,6 +500,9 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
         } else if (spec.channels.size() == 3) {
             p.set(scale.c_str(), glm::vec3(gpu.scale));
             p.set(bias.c_str(), glm::vec3(gpu.bias));
+        } else if (spec.channels.size() == 4) {
+            p.set(scale.c_str(), gpu.scale);
+            p.set(bias.c_str(), gpu.bias);
         }
     };
     if (reference) {

@@ -96,10 +96,14 @@ uniform vec3 uAlbedo; // linear diffuse albedo
 // The authored (base) power where no gloss texture carries it.
 uniform float uBasePower;
 
+// The methods whose lobes live in slope space and carry the authored power in their moments.
+#define STATIC_SLOPE_METHOD (METHOD == METHOD_LEAN || METHOD == METHOD_CLEAN || METHOD == METHOD_MIXTURE)
+#define IS_SLOPE_METHOD (IS_METHOD(METHOD_LEAN) || IS_METHOD(METHOD_CLEAN) || IS_METHOD(METHOD_MIXTURE))
+
 #if defined(HAS_NORMAL_MAP)
-// The baked "normal" texture (every method but LEAN/CLEAN reads it); in the reference, the finest
-// normals themselves. Decoded as stored·scale + bias (core's ChannelDecode).
-#if UBERSHADER || METHOD != METHOD_LEAN && METHOD != METHOD_CLEAN
+// The baked "normal" texture (every method but LEAN/CLEAN/mixture reads it); in the reference, the
+// finest normals themselves. Decoded as stored·scale + bias (core's ChannelDecode).
+#if UBERSHADER || !STATIC_SLOPE_METHOD
 uniform sampler2D uNormalMap;
 uniform vec3 uNormalScale;
 uniform vec3 uNormalBias;
@@ -110,7 +114,7 @@ uniform vec2 uNormalMapSize;
 // LEAN and CLEAN carry the authored gloss as 1/s inside their moments: they never read it.
 #if UBERSHADER || METHOD == METHOD_VARIANCE_TO_GLOSS || METHOD == METHOD_VMF
 #define READS_GLOSS_TEXTURE 1
-#elif defined(HAS_GLOSS_MAP) && METHOD != METHOD_LEAN && METHOD != METHOD_CLEAN
+#elif defined(HAS_GLOSS_MAP) && !STATIC_SLOPE_METHOD
 #define READS_GLOSS_TEXTURE 1
 #endif
 #if defined(READS_GLOSS_TEXTURE)
@@ -136,6 +140,24 @@ uniform vec3 uLeanMBias;
 uniform sampler2D uClean;
 uniform vec3 uCleanScale;
 uniform vec3 uCleanBias;
+#endif
+#if UBERSHADER || METHOD == METHOD_MIXTURE
+// The mixture's textures (method table rows mixture-weights, mixture-lobe0..3, mixture-cross):
+// uMixtureLobes of the lobe samplers are bound.
+uniform int uMixtureLobes;
+uniform float uMixtureMinVariance; // 1/s of the narrowest authored lobe
+uniform sampler2D uMixtureWeights;
+uniform vec4 uMixtureWeightsScale;
+uniform vec4 uMixtureWeightsBias;
+uniform sampler2D uMixtureLobe0;
+uniform sampler2D uMixtureLobe1;
+uniform sampler2D uMixtureLobe2;
+uniform sampler2D uMixtureLobe3;
+uniform vec4 uMixtureLobe0Scale, uMixtureLobe1Scale, uMixtureLobe2Scale, uMixtureLobe3Scale;
+uniform vec4 uMixtureLobe0Bias, uMixtureLobe1Bias, uMixtureLobe2Bias, uMixtureLobe3Bias;
+uniform sampler2D uMixtureCross;
+uniform vec4 uMixtureCrossScale;
+uniform vec4 uMixtureCrossBias;
 #endif
 #if defined(HAS_DETAIL_MAP)
 uniform sampler2D uDetailMap; // core's bakeDetail: [x, y, 0, variance]
@@ -195,7 +217,22 @@ struct Lobe {
     vec2 B;
     vec3 cov;
     float lenNa; // |Na| for diffuse AA (1 = a flat footprint)
+    // The mixture's lobes as filtered premultiplied moments (its B and cov above are the moment-
+    // matched single lobe, LEAN's, for the terms that need one lobe: visibility, environment).
+    int mixtureLobes; // 0: not a mixture
+    vec4 mixtureWeights;
+    vec4 mixtureLobe[kMaxMixtureLobes];
+    vec4 mixtureCross;
+    float mixtureMinVariance;
 };
+
+// Variance added to a slope lobe on both axes (specular AA, detail maps): a mixture adds it to every
+// lobe, w·v on its premultiplied w·M diagonal.
+void addSlopeVariance(inout Lobe lobe, float v) {
+    lobe.cov.xy += vec2(v);
+    for (int i = 0; i < kMaxMixtureLobes; ++i)
+        lobe.mixtureLobe[i].zw += vec2(lobe.mixtureWeights[i] * v);
+}
 
 // Variance below which a slope covariance is treated as this: kMinVariance, the variance of
 // kMaxPower, keeps det Σ > 0 and 1/det finite.
@@ -215,17 +252,23 @@ Lobe materialLobe(vec2 uv) {
     lobe.B = vec2(0.0);
     lobe.cov = vec3(0.0);
     lobe.lenNa = 1.0;
+    lobe.mixtureLobes = 0;
+    lobe.mixtureWeights = vec4(0.0);
+    for (int i = 0; i < kMaxMixtureLobes; ++i)
+        lobe.mixtureLobe[i] = vec4(0.0);
+    lobe.mixtureCross = vec4(0.0);
+    lobe.mixtureMinVariance = kMinVariance;
 #if defined(HAS_NORMAL_MAP)
     if (UBER_ON(uHasNormalMap)) {
         float s = clampPower(uBasePower);
 #if defined(HAS_GLOSS_MAP) && defined(READS_GLOSS_TEXTURE)
         // The authored power per texel (the slope methods' lenNa below then uses the base power).
         if (UBER_ON(uHasGlossMap) && !(IS_METHOD(METHOD_VARIANCE_TO_GLOSS) || IS_METHOD(METHOD_VMF) ||
-                                       IS_METHOD(METHOD_LEAN) || IS_METHOD(METHOD_CLEAN)))
+                                       IS_SLOPE_METHOD))
             s = glossEncodingPower(sampleMap(uGlossMap, uv).r);
 #endif
-#if UBERSHADER || METHOD != METHOD_LEAN && METHOD != METHOD_CLEAN
-        if (!(IS_METHOD(METHOD_LEAN) || IS_METHOD(METHOD_CLEAN))) {
+#if UBERSHADER || !STATIC_SLOPE_METHOD
+        if (!IS_SLOPE_METHOD) {
             vec3 Na = sampleMap(uNormalMap, uv).xyz * uNormalScale + uNormalBias;
             lobe.n = safeNormalize(Na, vec3(0.0, 0.0, 1.0));
             lobe.power = s;
@@ -273,6 +316,38 @@ Lobe materialLobe(vec2 uv) {
             lobe.cov = guardCovariance(vec3(sigma2, sigma2, 0.0));
         }
 #endif
+#if UBERSHADER || METHOD == METHOD_MIXTURE
+        if (IS_METHOD(METHOD_MIXTURE)) {
+            // Premultiplied moments, filtered by the hardware: same-index lobes merge exactly.
+            lobe.mixtureLobes = clamp(uMixtureLobes, 1, kMaxMixtureLobes);
+            lobe.mixtureMinVariance = max(uMixtureMinVariance, kMinVariance);
+            lobe.mixtureWeights = sampleMap(uMixtureWeights, uv) * uMixtureWeightsScale + uMixtureWeightsBias;
+            lobe.mixtureCross = sampleMap(uMixtureCross, uv) * uMixtureCrossScale + uMixtureCrossBias;
+            lobe.mixtureLobe[0] = sampleMap(uMixtureLobe0, uv) * uMixtureLobe0Scale + uMixtureLobe0Bias;
+            if (lobe.mixtureLobes > 1)
+                lobe.mixtureLobe[1] = sampleMap(uMixtureLobe1, uv) * uMixtureLobe1Scale + uMixtureLobe1Bias;
+            if (lobe.mixtureLobes > 2)
+                lobe.mixtureLobe[2] = sampleMap(uMixtureLobe2, uv) * uMixtureLobe2Scale + uMixtureLobe2Bias;
+            if (lobe.mixtureLobes > 3)
+                lobe.mixtureLobe[3] = sampleMap(uMixtureLobe3, uv) * uMixtureLobe3Scale + uMixtureLobe3Bias;
+            // Lobes above the count and lost weights carry nothing.
+            for (int i = 0; i < kMaxMixtureLobes; ++i)
+                if (i >= lobe.mixtureLobes) lobe.mixtureWeights[i] = 0.0;
+            lobe.mixtureWeights = max(lobe.mixtureWeights, vec4(0.0));
+            // The moment-matched single lobe (LEAN's): Σ of the sums.
+            float total = dot(lobe.mixtureWeights, vec4(1.0));
+            vec2 wb = vec2(0.0);
+            vec3 wM = vec3(0.0);
+            for (int i = 0; i < kMaxMixtureLobes; ++i) {
+                if (i >= lobe.mixtureLobes) continue;
+                wb += lobe.mixtureLobe[i].xy;
+                wM += vec3(lobe.mixtureLobe[i].zw, lobe.mixtureCross[i]);
+            }
+            lobe.slope = true;
+            lobe.B = mixtureLobeMean(total, wb);
+            lobe.cov = guardCovariance(mixtureLobeCovariance(total, wb, wM, lobe.mixtureMinVariance));
+        }
+#endif
         if (lobe.slope) {
             // The slope methods' normal is the one whose slope is B (core's normalOfSlope).
             lobe.n = normalOfSlope(lobe.B);
@@ -292,8 +367,18 @@ Lobe materialLobe(vec2 uv) {
             float sigma2 = max(d.w, 0.0);
             if (lobe.slope) {
                 // Olano & Baker 2010: layered LEAN maps add their slopes and their variances.
-                lobe.B += detailN.xy / max(detailN.z, 0.01); // kMinSlopeZ of normal_pyramid.h
-                lobe.cov.xy += vec2(sigma2);
+                vec2 detailSlope = detailN.xy / max(detailN.z, 0.01); // kMinSlopeZ of normal_pyramid.h
+                lobe.B += detailSlope;
+                // A mixture's lobes each move by the detail slope: w·b += w·d, w·M += w(b d + d b + d d).
+                for (int i = 0; i < kMaxMixtureLobes; ++i) {
+                    float w = lobe.mixtureWeights[i];
+                    vec2 b = mixtureLobeMean(w, lobe.mixtureLobe[i].xy);
+                    vec2 nb = b + detailSlope;
+                    lobe.mixtureLobe[i].zw += w * (nb * nb - b * b);
+                    lobe.mixtureCross[i] += w * (nb.x * nb.y - b.x * b.y);
+                    lobe.mixtureLobe[i].xy += w * detailSlope;
+                }
+                addSlopeVariance(lobe, sigma2);
                 lobe.n = normalOfSlope(lobe.B);
                 lobe.power = clampPower(2.0 / (lobe.cov.x + lobe.cov.y));
             } else {
@@ -351,8 +436,18 @@ void shadeLight(inout Shading sh, Lobe lobe, mat3 TBN, vec3 N, vec3 V, vec3 L, v
     else if (IS_VISIBILITY(VISIBILITY_SMITH_GGX_CORRELATED))
         Vis = visibilitySmithGgxCorrelated(NoL, NoV, ggxAlphaFromPower(lobe.power));
     vec3 F = fresnelTerm(F0, VoH);
+    // D·(n·l): the mixture's lobes each with their own normal (core's mixtureValue), in tangent space.
+    float DNoL = 0.0;
+    if (lobe.mixtureLobes > 0) {
+        mat3 toTangent = transpose(TBN);
+        DNoL = mixtureValue(lobe.mixtureWeights, lobe.mixtureLobe, lobe.mixtureCross, lobe.mixtureLobes,
+                            toTangent * L, toTangent * H, lobe.mixtureMinVariance);
+    }
     // Lazarov 2011: f = D·F·V/4; Lagarde 2012: L_o = π f c_light (n·l)
-    sh.specular += kPi * (D * Vis * 0.25) * F * radiance * saturate(NoL);
+    if (lobe.mixtureLobes > 0)
+        sh.specular += kPi * (DNoL * Vis * 0.25) * F * radiance;
+    else
+        sh.specular += kPi * (D * Vis * 0.25) * F * radiance * saturate(NoL);
 #if defined(HAS_DIFFUSE)
     if (UBER_ON(uHasDiffuse)) {
         float diffuseNoL = saturate(NoL);
@@ -400,7 +495,7 @@ void main() {
         float curvature = sqrt(saturate(1.0 - dot(bentN, N)));
         float p = kvCurvatureAdjustedPower(lobe.power, curvature);
         // The slope methods take the widening as added per-axis variance 1/p' − 1/p.
-        if (lobe.slope) lobe.cov.xy += vec2(max(1.0 / max(p, 1e-6) - 1.0 / max(lobe.power, 1e-6), 0.0));
+        if (lobe.slope) addSlopeVariance(lobe, max(1.0 / max(p, 1e-6) - 1.0 / max(lobe.power, 1e-6), 0.0));
         lobe.power = p;
     }
 #endif
@@ -412,7 +507,7 @@ void main() {
         vec3 dv = dFdy(N);
         float p = specularAaPower(lobe.power, du, dv);
         // The slope Gaussian's per-axis variance is α²/2, so it takes half the kernel roughness.
-        if (lobe.slope) lobe.cov.xy += vec2(0.5 * specularAaKernelRoughness2(normalDerivative2(du, dv)));
+        if (lobe.slope) addSlopeVariance(lobe, 0.5 * specularAaKernelRoughness2(normalDerivative2(du, dv)));
         lobe.power = p;
     }
 #endif

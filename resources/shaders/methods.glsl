@@ -12,6 +12,7 @@
 #define METHOD_LEAN 4
 #define METHOD_CLEAN 5
 #define METHOD_VMF 6
+#define METHOD_MIXTURE 7
 
 // Base powers below this are treated as this, so 1/s stays finite (methods.cpp).
 const float kMinBasePower = 1e-6;
@@ -120,4 +121,50 @@ float slopeGaussianNdf(vec3 h, vec2 mean, vec3 cov) {
 // The isotropic methods' NDF (methodNdf for a lobe with power p about normal): (p+2)/(2π)(n̄·h)^p
 float isotropicLobeNdf(vec3 normal, float power, vec3 h) {
     return blinnPhongNdf(dot(normal, h), power);
+}
+
+// The lobe mixture (core/include/burnish/core/prefilter/lobe_mixture.h): up to 4 slope-space
+// Gaussians per texel, stored as premultiplied raw moments (w, w·b, w·M) that filtering merges.
+const int kMaxMixtureLobes = 4;
+// Correlations stay inside (−kMaxCorrelation, kMaxCorrelation): det Σ stays positive in float.
+const float kMaxCorrelation = 0.999;
+
+// LobeMoments::mean: b = (w·b)/w, (0, 0) for an empty lobe
+vec2 mixtureLobeMean(float w, vec2 wb) {
+    return w > 0.0 ? wb / w : vec2(0.0);
+}
+
+// LobeMoments::covariance: Σ = (w·M)/w − bbᵀ (wM = xx, yy, xy), each variance at least minVariance
+// (NaN too) and the correlation inside ±kMaxCorrelation; an empty lobe gets (min, min, 0).
+vec3 mixtureLobeCovariance(float w, vec2 wb, vec3 wM, float minVariance) {
+    if (!(w > 0.0)) return vec3(minVariance, minVariance, 0.0);
+    vec2 b = wb / w;
+    float xx = wM.x / w - b.x * b.x;
+    float yy = wM.y / w - b.y * b.y;
+    float xy = wM.z / w - b.x * b.y;
+    xx = xx > minVariance ? xx : minVariance;
+    yy = yy > minVariance ? yy : minVariance;
+    float limit = kMaxCorrelation * sqrt(xx * yy);
+    xy = isnan(xy) || isinf(xy) ? 0.0 : clamp(xy, -limit, limit);
+    return vec3(xx, yy, xy);
+}
+
+// Runnalls 2007 (merge cost) on Olano & Baker 2010's lobes: the mixture's reflected value
+// Σ_i (w_i/Σw) D_i(h) max(0, n_i·l), D_i the slope-space Gaussian of lobe i and n_i the normal of
+// its mean slope (core's mixtureValue). lobe[i] = (w·b.x, w·b.y, w·M.xx, w·M.yy); cross[i] = w·M.xy.
+float mixtureValue(vec4 weights, vec4 lobe[kMaxMixtureLobes], vec4 cross, int count, vec3 l, vec3 h,
+                   float minVariance) {
+    float total = 0.0;
+    for (int i = 0; i < kMaxMixtureLobes; ++i)
+        if (i < count) total += max(weights[i], 0.0);
+    if (!(total > 0.0)) return 0.0;
+    float sum = 0.0;
+    for (int i = 0; i < kMaxMixtureLobes; ++i) {
+        float w = max(weights[i], 0.0);
+        if (i >= count || !(w > 0.0)) continue;
+        vec2 b = mixtureLobeMean(w, lobe[i].xy);
+        vec3 cov = mixtureLobeCovariance(w, lobe[i].xy, vec3(lobe[i].zw, cross[i]), minVariance);
+        sum += w / total * slopeGaussianNdf(h, b, cov) * max(0.0, dot(normalOfSlope(b), l));
+    }
+    return sum;
 }

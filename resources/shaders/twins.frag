@@ -32,6 +32,8 @@
 #define TWIN_LEAN_CLEAN 19
 #define TWIN_SLOPE_NDF 20
 #define TWIN_ISOTROPIC_NDF 21
+#define TWIN_MIXTURE_LOBE 22
+#define TWIN_MIXTURE_VALUE 23
 // 30..38: the vec3 (RGB specular colour) overloads of brdf_fresnel.glsl, one per twin.
 #define TWIN_FRESNEL_RGB_FIRST 30
 #define TWIN_FRESNEL_RGB_LAST 38
@@ -139,6 +141,25 @@ vec4 twin(vec4 a, vec4 b) {
 #elif TWIN == TWIN_ISOTROPIC_NDF
     // a = (normal, power), b = (h, _); also the LEAN lobe normal of slope a.xy
     return vec4(isotropicLobeNdf(a.xyz, a.w, b.xyz), normalOfSlope(a.xy));
+#elif TWIN == TWIN_MIXTURE_LOBE
+    // a = (w, wb.x, wb.y, wM.xx), b = (wM.yy, wM.xy, minVariance, _): the lobe's covariance and mean.x
+    // (mean.y is the channel-swapped case, a.yz = (wb.y, wb.x), in the test)
+    return vec4(mixtureLobeCovariance(a.x, a.yz, vec3(a.w, b.x, b.y), b.z), mixtureLobeMean(a.x, a.yz).x);
+#elif TWIN == TWIN_MIXTURE_VALUE
+    // a = (l, t), b = (h, minVariance): a four-lobe mixture spread by t, built as the test builds it;
+    // its value with all four lobes and with the first two.
+    vec4 weights = vec4(0.1, 0.2, 0.3, 0.4);
+    vec4 lobe[kMaxMixtureLobes];
+    vec4 crossM;
+    for (int i = 0; i < kMaxMixtureLobes; ++i) {
+        float w = weights[i];
+        vec2 m = a.w * vec2(float(i) - 1.5, 0.5 * float(i) - 0.7);
+        float v = 0.01 * float(i + 1);
+        lobe[i] = vec4(w * m, w * (v + m.x * m.x), w * (2.0 * v + m.y * m.y));
+        crossM[i] = w * (0.3 * v + m.x * m.y);
+    }
+    return vec4(mixtureValue(weights, lobe, crossM, 4, a.xyz, b.xyz, b.w),
+                mixtureValue(weights, lobe, crossM, 2, a.xyz, b.xyz, b.w), 0.0, 0.0);
 #else
 #error "unknown TWIN"
 #endif

@@ -84,6 +84,34 @@ TEST_F(RendererTest, EveryMethodRendersTheSampleMaterial) {
     }
 }
 
+TEST_F(RendererTest, OneLobeMixtureDrawsLeanAndMoreLobesComeCloserToTheReference) {
+    // K = 1 stores LEAN's moments: its shader path (premultiplied moments, per-lobe normal) must draw
+    // what LEAN's does. More lobes keep more of the highlight: closer to the supersampled truth.
+    Scene scene = sampleScene(SampleMapKind::Brushed, 256);
+    scene.mesh = MeshKind::Plane;
+    scene.camera.pitchDegrees = 8.0f;
+    scene.camera.distance = 2.2f;
+    scene.light.direction = {-0.5f, 0.15f, -0.85f};
+    scene.material.method = Method::Lean;
+    const auto lean = hdr(scene);
+    scene.material.method = Method::Mixture;
+    scene.material.methodParams.mixtureLobes = 1;
+    const auto one = hdr(scene);
+    double leanMean = 0.0;
+    for (size_t p = 0; p < lean.size() / 4; ++p)
+        leanMean += luminance(lean, p) / double(lean.size() / 4);
+    ASSERT_GT(leanMean, 0.0);
+    // The same lobe through float arithmetic in another order: a few float ULPs of the image.
+    EXPECT_LT(meanAbsLuminanceError(one, lean), 1e-4 * leanMean);
+    scene.material.methodParams.mixtureLobes = 3;
+    const auto three = hdr(scene);
+    EXPECT_EQ(nonFiniteCount(three), 0u);
+    ASSERT_TRUE(renderer().setScene(scene).ok());
+    auto reference = renderer().renderReference(kSize, kSize, 16, ImageKind::Hdr);
+    ASSERT_TRUE(reference.ok()) << reference.error();
+    EXPECT_LT(meanAbsLuminanceError(three, *reference), meanAbsLuminanceError(lean, *reference));
+}
+
 TEST_F(RendererTest, DisplayImageIsInUnitRange) {
     Scene scene = sampleScene();
     ASSERT_TRUE(renderer().setScene(scene).ok());

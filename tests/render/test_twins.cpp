@@ -9,6 +9,7 @@
 // llvmpipe's exp/log polynomials add a few ULPs. Values spanning decades are compared relative to
 // |core| above a named floor and absolutely below it.
 #include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/shading/fresnel.h>
 #include <burnish/core/shading/geometric_aa.h>
@@ -62,6 +63,8 @@ enum Twin {
     kTwinLeanClean = 19,
     kTwinSlopeNdf = 20,
     kTwinIsotropicNdf = 21,
+    kTwinMixtureLobe = 22,
+    kTwinMixtureValue = 23,
     kTwinFresnelRgbFirst = 30,
 };
 
@@ -665,6 +668,85 @@ TEST_F(Twins, SlopeGaussianAndIsotropicNdf) {
         // n·h is a float dot product in the shader (3 roundings) against core's double one:
         // at power 1e6 near the peak that is 1e6·(3ε) relative in the lobe.
         {Tolerance{1e-3, kTinyFloor}, kUnitRational, kUnitRational, kUnitRational}, 4);
+}
+
+} // namespace
+} // namespace burnish::render
+
+namespace burnish::render {
+namespace {
+
+TEST_F(Twins, MixtureLobeDecodeAndValue) {
+    // a = (w, wb.x, wb.y, wM.xx), b = (wM.yy, wM.xy, minVariance, _): LobeMoments::covariance and
+    // mean; weights from empty to whole, means to slope 3, moments below the floor (clamped), a
+    // correlation beyond ±1 (clamped) and a covariance that cancels to 0.
+    std::vector<Args> args;
+    for (const float w : {0.0f, 1e-3f, 0.25f, 1.0f})
+        for (const glm::vec2 b : {glm::vec2(0.0f), glm::vec2(0.3f, -0.1f), glm::vec2(3.0f, 1.0f)})
+            for (const std::array<float, 3> sigma :
+                 {std::array<float, 3>{1e-3f, 2e-3f, 5e-4f}, std::array<float, 3>{0.1f, 0.05f, 0.2f},
+                  std::array<float, 3>{0.0f, 0.0f, 0.0f}})
+                for (const float minVariance : {1e-6f, 1e-3f}) {
+                    const float mxx = w * (sigma[0] + b.x * b.x), myy = w * (sigma[1] + b.y * b.y),
+                                mxy = w * (sigma[2] + b.x * b.y);
+                    args.push_back(Args{w, w * b.x, w * b.y, mxx, myy, mxy, minVariance, 0.0f});
+                    // The swapped case: channel 3 then gives mean.y.
+                    args.push_back(Args{w, w * b.y, w * b.x, myy, mxx, mxy, minVariance, 0.0f});
+                }
+    auto lobeOf = [](const Args& a) {
+        LobeMoments l;
+        l.w = a[0], l.bx = a[1], l.by = a[2], l.mxx = a[3], l.myy = a[4], l.mxy = a[5];
+        return l;
+    };
+    // (w·M)/w − b² cancels in float as LEAN's M − BBᵀ does (kCancel there): ~1e-6 of |M|/w + b².
+    constexpr Tolerance kCancel{1e-5, 0.1};
+    expectTwin(
+        "mixtureLobeCovariance, mixtureLobeMean", kTwinMixtureLobe, args,
+        [&](const Args& a) {
+            const LobeMoments l = lobeOf(a);
+            const auto c = l.covariance(d(a[6]));
+            return std::array<double, 4>{c[0], c[1], c[2], l.mean().x};
+        },
+        {kCancel, kCancel, kCancel, kRational}, 4);
+
+    // a = (l, t), b = (h, minVariance): mixtureValue of the four-lobe mixture twins.frag builds.
+    std::vector<Args> values;
+    const std::vector<glm::vec3> dirs{{0.0f, 0.0f, 1.0f},
+                                      {0.3f, -0.2f, 0.93f},
+                                      {-0.6f, 0.5f, 0.62f},
+                                      {0.99f, 0.0f, 0.1f},
+                                      {0.0f, 0.0f, -1.0f}};
+    for (const glm::vec3& l : dirs)
+        for (const glm::vec3& h : dirs)
+            for (const float t : {0.0f, 0.05f, 0.3f})
+                for (const float minVariance : {1e-4f, 1e-2f}) {
+                    const glm::vec3 ln = glm::normalize(l), hn = glm::normalize(h);
+                    values.push_back(Args{ln.x, ln.y, ln.z, t, hn.x, hn.y, hn.z, minVariance});
+                }
+    expectTwin(
+        "mixtureValue", kTwinMixtureValue, values,
+        [](const Args& a) {
+            LobeMixture all;
+            const float weights[4] = {0.1f, 0.2f, 0.3f, 0.4f};
+            for (int i = 0; i < 4; ++i) {
+                // The shader's float arithmetic, then core in double on those values.
+                const float w = weights[i];
+                const glm::vec2 m = a[3] * glm::vec2(float(i) - 1.5f, 0.5f * float(i) - 0.7f);
+                const float v = 0.01f * float(i + 1);
+                LobeMoments l;
+                l.w = w, l.bx = w * m.x, l.by = w * m.y;
+                l.mxx = w * (v + m.x * m.x), l.myy = w * (2.0f * v + m.y * m.y),
+                l.mxy = w * (0.3f * v + m.x * m.y);
+                all.lobes[size_t(i)] = l;
+            }
+            all.count = 4;
+            LobeMixture two = all;
+            two.count = 2;
+            const glm::dvec3 l(a[0], a[1], a[2]), h(a[4], a[5], a[6]);
+            return std::array<double, 4>{mixtureValue(all, l, h, d(a[7])), mixtureValue(two, l, h, d(a[7])),
+                                         0.0, 0.0};
+        },
+        {kExp, kExp, kExp, kExp}, 2);
 }
 
 } // namespace

@@ -1,6 +1,7 @@
 #include <burnish/core/bake/bake.h>
 
 #include <burnish/core/bake/base_variance.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -94,6 +95,7 @@ std::string describe(std::string_view text, const BakeOptions& options) {
 std::vector<BakedTexture> planTextures(const BakeOptions& options, const ChannelScales& scales) {
     std::vector<BakedTexture> textures;
     for (const MethodTexture& m : methodSpec(options.method).textures) {
+        if (!bakesTexture(options.method, m.role, options.params)) continue; // a mixture's unused lobes
         if (options.roles &&
             std::find(options.roles->begin(), options.roles->end(), m.role) == options.roles->end())
             continue;
@@ -191,7 +193,10 @@ ChannelScales slopeScales(const NormalMap& map, const BakeOptions& options) {
 struct RowPlan {
     const BakeOptions& options;
     const BaseVariancePyramid* base; // the authored gloss as variances, or none (options.basePower)
-    std::vector<TextureRole> roles;  // of the textures produced, in order
+    // The mixture's lobes for K >= 2 (K = 1 stores LEAN's moments from the rows).
+    const MixturePyramid* mixture = nullptr;
+    const NormalMap* finestMap = nullptr;
+    std::vector<TextureRole> roles; // of the textures produced, in order
     ChannelScales scales;
     bool slopeMethod = false;
     bool unnormalized = false;
@@ -204,10 +209,11 @@ struct RowPlan {
     double glossMinPower = 0.0, glossMaxPower = 0.0;
     float baseGloss = 0.0f;
 
-    RowPlan(const BakeOptions& o, const BaseVariancePyramid* b, const std::vector<BakedTexture>& textures,
-            const ChannelScales& s)
+    RowPlan(const BakeOptions& o, const BaseVariancePyramid* b, const MixturePyramid* mix,
+            const std::vector<BakedTexture>& textures, const ChannelScales& s)
         : options(o)
         , base(b)
+        , mixture(mix)
         , scales(s) {
         const MethodSpec& spec = methodSpec(o.method);
         for (const auto& tex : textures)
@@ -294,8 +300,55 @@ struct ClampCounts {
 // One role's texels of a row into `px` (`channels` floats a texel); the gloss role counts the powers
 // it clamps to the encoding's range. sB and sM are powers of two, so multiplying by their
 // reciprocals is exact.
-ClampCounts writeRoleRow(const RowPlan& plan, TextureRole role, const NormalMoments* row, const RowValues& v,
-                         int width, float* px) {
+// One mixture role's texels of row y of level k: each texel's lobes as premultiplied moments over
+// its total weight (weights summing to 1), scaled into [0, 1]. Level 0 is one lobe per finest
+// normal, at the index of the parent's lobe it belongs to (MixturePyramid::finestLobe).
+void mixtureRow(const RowPlan& plan, TextureRole role, int k, int y, int width, float* px) {
+    const MixturePyramid& mix = *plan.mixture;
+    const BakeOptions& o = plan.options;
+    const double sB = plan.scales.slope, sM = plan.scales.moment;
+    const double invB2 = 1.0 / (2 * sB), invM = 1.0 / sM, invM2 = 1.0 / (2 * sM);
+    LobeMixture single;
+    single.count = 1;
+    for (int x = 0; x < width; ++x) {
+        const LobeMixture* m = nullptr;
+        int slot0 = 0; // level 0: the finest lobe's slot
+        if (k == 0) {
+            const double s = o.authoredGloss
+                                 ? o.encoding.power((*o.authoredGloss)[size_t(y) * size_t(width) + size_t(x)])
+                                 : o.basePower;
+            single.lobes[0] = LobeMoments::ofNormal(plan.finestMap->at(x, y), s);
+            slot0 = mix.finestLobe(x, y);
+            m = &single;
+        } else {
+            m = &mix.at(k, x, y);
+        }
+        const double total = m->totalWeight();
+        const double inv = total > 0.0 ? 1.0 / total : 0.0;
+        // Lobe i of the texel, or an empty one.
+        auto lobeAt = [&](int i) {
+            if (k == 0) return i == slot0 ? m->lobes[0] : LobeMoments{};
+            return i < m->count ? m->lobes[size_t(i)] : LobeMoments{};
+        };
+        if (role == TextureRole::MixtureWeights) {
+            for (int i = 0; i < kMaxMixtureLobes; ++i)
+                px[4 * x + i] = unit(lobeAt(i).w * inv);
+        } else if (role == TextureRole::MixtureCross) {
+            for (int i = 0; i < kMaxMixtureLobes; ++i)
+                px[4 * x + i] = unit(lobeAt(i).mxy * inv * invM2 + 0.5);
+        } else {
+            const LobeMoments l = lobeAt(mixtureLobeIndex(role));
+            // An empty lobe stores zeros as its moments: 0 decodes to w·b = 0 only at 0.5.
+            px[4 * x] = unit(l.bx * inv * invB2 + 0.5);
+            px[4 * x + 1] = unit(l.by * inv * invB2 + 0.5);
+            px[4 * x + 2] = unit(l.mxx * inv * invM);
+            px[4 * x + 3] = unit(l.myy * inv * invM);
+        }
+    }
+}
+
+ClampCounts writeRoleRow(const RowPlan& plan, TextureRole role, int k, int y, const NormalMoments* row,
+                         const RowValues& v, int width, float* px) {
     const BakeOptions& o = plan.options;
     const double sB = plan.scales.slope, sM = plan.scales.moment;
     const double invB2 = 1.0 / (2 * sB), invM = 1.0 / sM, invM2 = 1.0 / (2 * sM);
@@ -341,6 +394,31 @@ ClampCounts writeRoleRow(const RowPlan& plan, TextureRole role, const NormalMome
         break;
     case TextureRole::Detail: // no method's row names it: detail.cpp bakes it
         break;
+    case TextureRole::MixtureWeights:
+    case TextureRole::MixtureLobe0:
+    case TextureRole::MixtureLobe1:
+    case TextureRole::MixtureLobe2:
+    case TextureRole::MixtureLobe3:
+    case TextureRole::MixtureCross:
+        if (plan.mixture) {
+            mixtureRow(plan, role, k, y, width, px);
+            break;
+        }
+        // K = 1: one lobe of weight 1 with LEAN's moments B and M + I/s (leanMRow's values).
+        for (int x = 0; x < width; ++x, px += 4) {
+            const double invS = v.invBase[size_t(x)];
+            if (role == TextureRole::MixtureWeights) {
+                px[0] = 1.0f, px[1] = px[2] = px[3] = 0.0f;
+            } else if (role == TextureRole::MixtureCross) {
+                px[0] = unit(v.mxy[size_t(x)] * invM2 + 0.5), px[1] = px[2] = px[3] = 0.5f;
+            } else {
+                px[0] = unit(v.bx[size_t(x)] * invB2 + 0.5);
+                px[1] = unit(v.by[size_t(x)] * invB2 + 0.5);
+                px[2] = unit((v.mxx[size_t(x)] + invS) * invM);
+                px[3] = unit((v.myy[size_t(x)] + invS) * invM);
+            }
+        }
+        break;
     }
     return counts;
 }
@@ -370,7 +448,7 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
         for (size_t r = 0; r < plan.roles.size(); ++r) {
             BakedTexture& tex = out.textures[r];
             float* px = &tex.mips[size_t(k)].texels[first * size_t(tex.channels)];
-            const ClampCounts c = writeRoleRow(plan, plan.roles[r], row, values, width, px);
+            const ClampCounts c = writeRoleRow(plan, plan.roles[r], k, y, row, values, width, px);
             rowCounts[size_t(y)].low += c.low;
             rowCounts[size_t(y)].high += c.high;
         }
@@ -409,7 +487,21 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     out.textures = planTextures(options, scales);
     for (auto& tex : out.textures)
         tex.mips.resize(size_t(levels));
-    const RowPlan plan(options, base ? &*base : nullptr, out.textures, scales);
+    // The mixture's lobes (K >= 2) from the finest normals, each with its authored power.
+    std::optional<MixturePyramid> mixture;
+    const int lobes = std::clamp(options.params.mixtureLobes, 1, kMaxMixtureLobes);
+    if (options.method == Method::Mixture && lobes > 1) {
+        std::optional<std::vector<double>> powers;
+        if (options.authoredGloss) {
+            powers.emplace(options.authoredGloss->size());
+            for (size_t i = 0; i < powers->size(); ++i)
+                (*powers)[i] = options.encoding.power((*options.authoredGloss)[i]);
+        }
+        mixture.emplace(MixturePyramid::build(pyramid, options.basePower, lobes, levels - 1,
+                                              powers ? &*powers : nullptr));
+    }
+    RowPlan plan(options, base ? &*base : nullptr, mixture ? &*mixture : nullptr, out.textures, scales);
+    plan.finestMap = &map;
     for (int k = 0; k < levels; ++k)
         bakeLevel(plan, pyramid, k, out);
     out.stats.methodSeconds = seconds(start);

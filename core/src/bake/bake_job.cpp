@@ -83,6 +83,31 @@ std::string inputStem(const std::string& input) {
     return fs::path(input).stem().string();
 }
 
+// The mixture's lobe count: --lobes, or as many lobe textures as the preset's files store. A preset
+// that stores another count is refused (its files would drop or miss a lobe).
+Status resolveLobes(const BakeJobSpec& spec, BakeJob& job) {
+    int stored = 0;
+    if (job.bake.roles)
+        for (TextureRole r : *job.bake.roles)
+            if (isMixtureLobeRole(r)) stored = std::max(stored, mixtureLobeIndex(r) + 1);
+    if (!spec.lobes) {
+        if (job.method == Method::Mixture && stored > 0) job.bake.params.mixtureLobes = stored;
+        return {};
+    }
+    if (job.method != Method::Mixture)
+        return Error{fmt::format("--lobes applies to --method mixture only (the method is {})",
+                                 methodName(job.method))};
+    if (*spec.lobes < 1 || *spec.lobes > kMaxMixtureLobes)
+        return Error{fmt::format("--lobes {} must lie in 1..{}", *spec.lobes, kMaxMixtureLobes)};
+    if (stored > 0 && stored != *spec.lobes)
+        return Error{fmt::format(
+            "--lobes {}: preset '{}' stores {} mixture lobe{} (files mixture-lobe0..{}); "
+            "write a preset with {} lobe files for this count",
+            *spec.lobes, job.preset.name, stored, stored == 1 ? "" : "s", stored - 1, *spec.lobes)};
+    job.bake.params.mixtureLobes = *spec.lobes;
+    return {};
+}
+
 } // namespace
 
 Result<NormalMap> loadBakeInput(const std::string& input, const NormalMapOptions& options) {
@@ -182,6 +207,7 @@ Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
         if (*spec.mips < 1) return Error{fmt::format("--mips {} must be at least 1", *spec.mips)};
         job.bake.mipCount = *spec.mips;
     }
+    if (const Status s = resolveLobes(spec, job); !s) return Error{s.error()};
     if (spec.detailFade && !spec.detail) return Error{"--detail-fade needs a detail map (--detail FILE)"};
     if (spec.detail) {
         if (spec.detail->empty()) return Error{"--detail: no file given"};
@@ -222,6 +248,7 @@ Result<std::string> writeBakeReport(const BakeJob& job, const NormalMap& map, co
     evaluation.evaluate.basePowers = {options.basePower};
     evaluation.evaluate.border = options.pyramid.border;
     evaluation.evaluate.params = options.params;
+    evaluation.evaluate.mixtureLobes = {options.params.mixtureLobes};
     if (options.authoredGloss) {
         // The ground truth with each texel's authored power, decoded as the bake decodes it.
         std::vector<double> powers(options.authoredGloss->size());
@@ -336,6 +363,7 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
         {"allow8bit", job.spec.allowEightBit},
         {"allowImplausible", job.spec.allowImplausible}};
     if (detailRecord) record.options["detailFade"] = {detailRecord->fadeStartMip, detailRecord->fadeEndMip};
+    if (job.method == Method::Mixture) record.options["lobes"] = job.bake.params.mixtureLobes;
     record.diagnostics = map->diagnostics;
     record.detail = detailRecord;
 
@@ -480,6 +508,11 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
                     s = Error{at + ": 'mips' must be an integer"};
                 else
                     spec.mips = value.get<int>();
+            } else if (key == "lobes") {
+                if (!value.is_number_integer())
+                    s = Error{at + ": 'lobes' must be an integer"};
+                else
+                    spec.lobes = value.get<int>();
             } else if (key == "detail")
                 s = optStr(spec.detail);
             else if (key == "detail-fade")
@@ -491,11 +524,12 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
             else if (key == "allow-8bit")
                 s = flag(spec.allowEightBit);
             else
-                s = Error{at + ": unknown field '" + key +
-                          "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
-                          "border, "
-                          "green, layout, metallic, mips, detail, detail-fade, force, allow-implausible, "
-                          "allow-8bit)"};
+                s = Error{
+                    at + ": unknown field '" + key +
+                    "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
+                    "border, "
+                    "green, layout, metallic, mips, lobes, detail, detail-fade, force, allow-implausible, "
+                    "allow-8bit)"};
             if (!s) return Error{s.error()};
         }
         if (j.contains("input") && !isSampleBakeInput(spec.input)) spec.input = rebase(spec.input);

@@ -143,6 +143,7 @@ std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& j
                     {"--compression", std::string(ddsCompressionName(*job.exportOptions.compression))});
     if (s.metallic) args.insert(args.end(), {"--metallic", fmt::format("{}", *s.metallic)});
     if (s.mips) args.insert(args.end(), {"--mips", std::to_string(*s.mips)});
+    if (s.lobes) args.insert(args.end(), {"--lobes", std::to_string(*s.lobes)});
     if (s.detail)
         args.insert(args.end(), {"--detail", absolutePath(*s.detail), "--detail-fade",
                                  fmt::format("{}:{}", job.detail.fadeStartMip, job.detail.fadeEndMip)});

@@ -24,6 +24,7 @@ extern const std::string_view kPreset_filament;
 extern const std::string_view kPreset_toksvig_map;
 extern const std::string_view kPreset_lean;
 extern const std::string_view kPreset_clean;
+extern const std::string_view kPreset_mixture;
 } // namespace resources
 
 namespace {
@@ -371,7 +372,7 @@ struct BuiltinSet {
 const BuiltinSet& builtins() {
     static const BuiltinSet set = [] {
         BuiltinSet s;
-        const std::array<std::pair<const char*, std::string_view>, 10> sources{{
+        const std::array<std::pair<const char*, std::string_view>, 11> sources{{
             {"blackops", resources::kPreset_blackops},
             {"exp2", resources::kPreset_exp2},
             {"gltf", resources::kPreset_gltf},
@@ -382,6 +383,7 @@ const BuiltinSet& builtins() {
             {"toksvig-map", resources::kPreset_toksvig_map},
             {"lean", resources::kPreset_lean},
             {"clean", resources::kPreset_clean},
+            {"mixture", resources::kPreset_mixture},
         }};
         for (const auto& [file, text] : sources) {
             auto p = parsePreset(text, "built-in '" + std::string(file) + ".json'");
@@ -492,9 +494,19 @@ std::string presetMismatch(const Preset& preset, Method method) {
                        joinNames(channels) + ")";
             stored.insert(ch.role);
         }
-    for (const MethodTexture& t : methodSpec(method).textures)
-        if (t.role != TextureRole::Normal && !stored.count(std::string(roleName(t.role))))
-            return "the preset stores none of its '" + std::string(roleName(t.role)) + "' texture";
+    // A mixture preset stores lobes 0..K−1 for its K (1..4): the lobes above K are not baked.
+    int lobes = 0;
+    while (lobes < kMaxMixtureLobes &&
+           stored.count(std::string(roleName(TextureRole(int(TextureRole::MixtureLobe0) + lobes)))))
+        ++lobes;
+    for (const MethodTexture& t : methodSpec(method).textures) {
+        if (t.role == TextureRole::Normal || stored.count(std::string(roleName(t.role)))) continue;
+        if (isMixtureLobeRole(t.role) && lobes > 0 && mixtureLobeIndex(t.role) >= lobes) continue;
+        return "the preset stores none of its '" + std::string(roleName(t.role)) + "' texture";
+    }
+    for (int i = lobes; i < kMaxMixtureLobes; ++i)
+        if (stored.count(std::string(roleName(TextureRole(int(TextureRole::MixtureLobe0) + i)))))
+            return "it stores mixture lobe " + std::to_string(i) + " without lobe " + std::to_string(lobes);
     return {};
 }
 

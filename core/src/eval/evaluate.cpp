@@ -1,11 +1,13 @@
 #include <burnish/core/eval/evaluate.h>
 
 #include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/shading/ndf.h>
 
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -78,6 +80,28 @@ private:
 };
 
 } // namespace
+
+std::vector<EvaluatedVariant> evaluatedVariants(const EvaluateOptions& options) {
+    std::vector<EvaluatedVariant> out;
+    for (FilterKernel kernel : options.kernels)
+        for (Method m : options.methods) {
+            if (m != Method::Mixture) {
+                out.push_back({m, kernel, 0});
+                continue;
+            }
+            if (kernel != FilterKernel::Box) continue;
+            for (int k : options.mixtureLobes)
+                out.push_back({m, kernel, std::clamp(k, 1, kMaxMixtureLobes)});
+        }
+    return out;
+}
+
+std::string variantLabel(const EvaluatedVariant& v) {
+    std::string label(methodName(v.method));
+    if (v.method == Method::Mixture) label += "-k" + std::to_string(v.lobes);
+    if (v.kernel != FilterKernel::Box) label += " (" + std::string(kernelName(v.kernel)) + ")";
+    return label;
+}
 
 std::vector<DirectionPair> evaluationDirections(const EvaluateOptions& options) {
     std::vector<DirectionPair> pairs;
@@ -202,15 +226,16 @@ void truthSums(const NormalMap& map, const NormalPyramid& pyramid, const std::ve
 // One method's figures at one mip from its accumulated sums. Σ GT > 0 whenever a direction has its
 // light above the horizon and a normal faces it; a truth of exactly 0 (all normals facing away)
 // reports zero error and energy 1.
-MipError errorOf(const Accumulator& a, Method method, double s, int k, FilterKernel kernel) {
+MipError errorOf(const Accumulator& a, const EvaluatedVariant& v, double s, int k) {
     const bool lit = a.truth > 0.0;
-    return {method, s, k, lit ? a.absError / a.truth : 0.0, lit ? a.method / a.truth : 1.0, kernel};
+    return {v.method, s,      k, lit ? a.absError / a.truth : 0.0, lit ? a.method / a.truth : 1.0,
+            v.kernel, v.lobes};
 }
 
 // The per-texel relative error map of one method at one mip.
-ErrorMap errorMapOf(const std::vector<double>& absSum, const std::vector<double>& truthSum, Method method,
-                    double s, int k, const PyramidLevel& level, FilterKernel kernel) {
-    ErrorMap em{method, s, k, level.width, level.height, {}, kernel};
+ErrorMap errorMapOf(const std::vector<double>& absSum, const std::vector<double>& truthSum,
+                    const EvaluatedVariant& v, double s, int k, const PyramidLevel& level) {
+    ErrorMap em{v.method, s, k, level.width, level.height, {}, v.kernel, v.lobes};
     em.relativeError.resize(absSum.size());
     for (size_t t = 0; t < absSum.size(); ++t)
         em.relativeError[t] = truthSum[t] > 0.0 ? float(absSum[t] / truthSum[t]) : 0.0f;
@@ -221,6 +246,8 @@ ErrorMap errorMapOf(const std::vector<double>& absSum, const std::vector<double>
 // per-texel sums of the error maps ([method][mip] |M − GT|, [mip] GT) when they are asked for.
 struct Pass {
     std::vector<std::vector<std::vector<TexelLobe>>> lobes;
+    // Per variant: the mixture's lobes (K >= 2), or none (its TexelLobes above).
+    std::vector<const MixturePyramid*> mixtures;
     std::vector<std::vector<Accumulator>> acc;
     std::vector<std::vector<std::vector<double>>> texelAbs;
     std::vector<std::vector<double>> texelTruth;
@@ -241,7 +268,10 @@ void accumulateLevel(const NormalPyramid& pyramid, int k, size_t mi, const std::
             const double truth = levelSums[t] / pyramid.footprintCount(k, x, y);
             if (pass.errorMaps) pass.texelTruth[mi][t] += truth;
             for (size_t m = 0; m < methodCount; ++m) {
-                const double value = methodValue(pass.lobes[m][mi][t], d);
+                const MixturePyramid* mix = pass.mixtures[m];
+                const double value = mix && k > 0
+                                         ? mixtureValue(mix->at(k, x, y), d.l, d.h, mix->minVariance())
+                                         : methodValue(pass.lobes[m][mi][t], d);
                 Accumulator& a = rows[size_t(y) * methodCount + m];
                 a.absError += std::abs(value - truth);
                 a.method += value;
@@ -291,12 +321,16 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
     const int lastMip = std::min(options.lastMip, lastLevel);
     const int mipCount = lastMip - firstMip + 1;
     if (options.kernels.empty()) return Error{"no footprint kernel given"};
-    // Variants: every method with every kernel, kernel-major; variant v is methods[v % M] with
-    // kernels[v / M]. Box variants read the footprint's own moments (the definition); others read
-    // the kernel-filtered moments a bake would store, reported beside them.
-    const size_t methodCount = options.methods.size() * options.kernels.size();
-    auto variantMethod = [&](size_t v) { return options.methods[v % options.methods.size()]; };
-    auto variantKernel = [&](size_t v) { return options.kernels[v / options.methods.size()]; };
+    // Variants: every method with every kernel, kernel-major, the mixture once per K (box only).
+    // Box variants read the footprint's own moments (the definition); others read the
+    // kernel-filtered moments a bake would store, reported beside them.
+    const std::vector<EvaluatedVariant> variants = evaluatedVariants(options);
+    if (variants.empty()) return Error{"no method to evaluate (the mixture has box footprints only)"};
+    const size_t methodCount = variants.size();
+    auto kernelIndex = [&](FilterKernel kernel) {
+        return size_t(std::find(options.kernels.begin(), options.kernels.end(), kernel) -
+                      options.kernels.begin());
+    };
     std::vector<std::optional<NormalPyramid>> filtered(options.kernels.size());
     for (size_t i = 0; i < options.kernels.size(); ++i)
         if (options.kernels[i] != FilterKernel::Box)
@@ -323,13 +357,27 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
         // Lobes of every method at every evaluated mip.
         auto& lobes = pass.lobes;
         lobes.assign(methodCount, std::vector<std::vector<TexelLobe>>(size_t(mipCount)));
+        // The mixtures, one per K >= 2 (K = 1 is LEAN's lobe, from the moments).
+        std::vector<std::optional<MixturePyramid>> mixtures(kMaxMixtureLobes + 1);
+        pass.mixtures.assign(methodCount, nullptr);
+        for (size_t m = 0; m < methodCount; ++m) {
+            const EvaluatedVariant& v = variants[m];
+            if (v.method != Method::Mixture || v.lobes < 2) continue;
+            if (cancelled()) return Error{std::string(kCancelledMessage)};
+            auto& mix = mixtures[size_t(v.lobes)];
+            if (!mix) mix.emplace(MixturePyramid::build(pyramid, s, v.lobes, lastMip, texelPowers));
+            pass.mixtures[m] = &*mix;
+        }
         for (size_t m = 0; m < methodCount; ++m)
             for (int k = firstMip; k <= lastMip; ++k) {
                 if (cancelled()) return Error{std::string(kCancelledMessage)};
-                const auto& kernelPyramid = filtered[m / options.methods.size()];
+                const EvaluatedVariant& v = variants[m];
+                // A mixture's level 0 is each normal's own lobe: LEAN's of the one-texel footprint.
+                if (pass.mixtures[m] && k > 0) continue;
+                const auto& kernelPyramid = filtered[kernelIndex(v.kernel)];
                 lobes[m][size_t(k - firstMip)] =
-                    levelLobes(pyramid, kernelPyramid ? &*kernelPyramid : nullptr, k, variantMethod(m),
-                               variantKernel(m), authored ? &*authored : nullptr, s, options.params);
+                    levelLobes(pyramid, kernelPyramid ? &*kernelPyramid : nullptr, k, v.method, v.kernel,
+                               authored ? &*authored : nullptr, s, options.params);
             }
 
         pass.acc.assign(methodCount, std::vector<Accumulator>(size_t(mipCount)));
@@ -360,10 +408,10 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
         for (size_t m = 0; m < methodCount; ++m)
             for (int k = firstMip; k <= lastMip; ++k) {
                 const size_t mi = size_t(k - firstMip);
-                result.errors.push_back(errorOf(pass.acc[m][mi], variantMethod(m), s, k, variantKernel(m)));
+                result.errors.push_back(errorOf(pass.acc[m][mi], variants[m], s, k));
                 if (options.errorMaps)
-                    result.maps.push_back(errorMapOf(texelAbs[m][mi], texelTruth[mi], variantMethod(m), s, k,
-                                                     pyramid.level(k), variantKernel(m)));
+                    result.maps.push_back(
+                        errorMapOf(texelAbs[m][mi], texelTruth[mi], variants[m], s, k, pyramid.level(k)));
             }
     }
     // A flag raised during the last pass still wins: the caller asked for no result.

@@ -3,6 +3,7 @@
 #include <burnish/core/io/image.h>
 
 #include <burnish/core/bake/bake.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/util/files.h>
 #include <burnish/core/util/plot.h>
 
@@ -34,33 +35,44 @@ double median(std::vector<double> v) {
 constexpr size_t kCostTexels = 1 << 16;
 constexpr int kCostRepetitions = 5;
 
-double measureShadingNs(const NormalPyramid& pyramid, int mip, Method method, double s,
-                        const EvaluateOptions& options, const std::vector<DirectionPair>& directions) {
-    const PyramidLevel& level = pyramid.level(mip);
-    std::vector<TexelLobe> lobes;
-    for (int y = 0; y < level.height && lobes.size() < kCostTexels; ++y)
-        for (int x = 0; x < level.width && lobes.size() < kCostTexels; ++x)
-            lobes.push_back(methodLobe(method, pyramid.boxMoments(mip, x, y), s, options.params));
+// The median over kCostRepetitions of `evaluate(d, i)` over every direction and item, in ns each.
+template <typename F>
+double medianNs(size_t items, const std::vector<DirectionPair>& directions, F evaluate) {
     std::vector<double> times;
     volatile double sink = 0.0;
     for (int r = 0; r < kCostRepetitions; ++r) {
         const auto start = Clock::now();
         double sum = 0.0;
         for (const auto& d : directions)
-            for (const auto& lobe : lobes)
-                sum += methodValue(lobe, d);
+            for (size_t i = 0; i < items; ++i)
+                sum += evaluate(d, i);
         const double ns = std::chrono::duration<double, std::nano>(Clock::now() - start).count();
         sink = sink + sum;
-        times.push_back(ns / double(lobes.size() * directions.size()));
+        times.push_back(ns / double(items * directions.size()));
     }
     return median(times);
 }
 
-// "lean", or "lean (tent)" for a variant evaluated with kernel-filtered moments.
-std::string variantLabel(Method method, FilterKernel kernel) {
-    std::string label(methodName(method));
-    if (kernel != FilterKernel::Box) label += " (" + std::string(kernelName(kernel)) + ")";
-    return label;
+double measureShadingNs(const NormalPyramid& pyramid, int mip, const EvaluatedVariant& v, double s,
+                        const EvaluateOptions& options, const std::vector<DirectionPair>& directions) {
+    const PyramidLevel& level = pyramid.level(mip);
+    if (v.method == Method::Mixture && v.lobes > 1 && mip > 0) {
+        // The mixture's own lobes at that mip, evaluated as evaluate does.
+        const MixturePyramid mix = MixturePyramid::build(pyramid, s, v.lobes, mip);
+        // Decoded first, as methodLobe decodes the other methods' lobes outside the timing.
+        std::vector<DecodedMixture> texels;
+        for (int y = 0; y < level.height && texels.size() < kCostTexels; ++y)
+            for (int x = 0; x < level.width && texels.size() < kCostTexels; ++x)
+                texels.push_back(decodeMixture(mix.at(mip, x, y), mix.minVariance()));
+        return medianNs(texels.size(), directions,
+                        [&](const DirectionPair& d, size_t i) { return mixtureValue(texels[i], d.l, d.h); });
+    }
+    std::vector<TexelLobe> lobes;
+    for (int y = 0; y < level.height && lobes.size() < kCostTexels; ++y)
+        for (int x = 0; x < level.width && lobes.size() < kCostTexels; ++x)
+            lobes.push_back(methodLobe(v.method, pyramid.boxMoments(mip, x, y), s, options.params));
+    return medianNs(lobes.size(), directions,
+                    [&](const DirectionPair& d, size_t i) { return methodValue(lobes[i], d); });
 }
 
 std::string powerLabel(double s) {
@@ -108,16 +120,23 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
         for (double p : *options.evaluate.texelPowers)
             authoredGloss->push_back(float(encoding.value(p)));
     }
-    const size_t methodCount = options.evaluate.methods.size();
+    std::vector<EvaluatedVariant> costed;
+    for (const EvaluatedVariant& v : evaluatedVariants(options.evaluate))
+        if (v.kernel == FilterKernel::Box) costed.push_back(v);
+    const size_t methodCount = costed.size();
     for (size_t i = 0; i < methodCount; ++i) {
-        const Method method = options.evaluate.methods[i];
+        const EvaluatedVariant& v = costed[i];
+        const Method method = v.method;
         MethodCost cost;
         cost.method = method;
-        cost.storage = methodSpec(method).storage;
+        cost.lobes = v.lobes;
+        MethodParams params = options.evaluate.params;
+        if (v.lobes > 0) params.mixtureLobes = v.lobes;
+        cost.storage = methodStorage(method, params);
         BakeOptions bakeOptions;
         bakeOptions.method = method;
         bakeOptions.basePower = s;
-        bakeOptions.params = options.evaluate.params;
+        bakeOptions.params = params;
         bakeOptions.pyramid = {options.evaluate.border, FilterKernel::Box};
         bakeOptions.mipCount = report.result.lastMip + 1;
         bakeOptions.authoredGloss = authoredGloss;
@@ -131,7 +150,7 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
         }
         cost.bakeSeconds = median(runs);
         if (cancelled()) return Error{std::string(kCancelledMessage)};
-        cost.nsPerLobe = measureShadingNs(pyramid, report.result.firstMip, method, s, options.evaluate,
+        cost.nsPerLobe = measureShadingNs(pyramid, report.result.firstMip, v, s, options.evaluate,
                                           report.result.directions);
         report.costs.push_back(cost);
         if (progress) progress(0.8 + 0.2 * double(i + 1) / double(methodCount));
@@ -174,18 +193,17 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
         align[0] = Align::Left;
         MarkdownTable errors(header, align);
         MarkdownTable energy(header, align);
-        for (FilterKernel kernel : r.options.kernels)
-            for (Method m : r.options.methods) {
-                std::vector<std::string> e{variantLabel(m, kernel)}, en{variantLabel(m, kernel)};
-                for (int k = r.result.firstMip; k <= r.result.lastMip; ++k)
-                    for (const auto& x : r.result.errors)
-                        if (x.method == m && x.kernel == kernel && x.basePower == s && x.mip == k) {
-                            e.push_back(formatNumber(x.relativeL1));
-                            en.push_back(formatNumber(x.energyRatio));
-                        }
-                errors.addRow(e);
-                energy.addRow(en);
-            }
+        for (const EvaluatedVariant& v : evaluatedVariants(r.options)) {
+            std::vector<std::string> e{variantLabel(v)}, en{variantLabel(v)};
+            for (int k = r.result.firstMip; k <= r.result.lastMip; ++k)
+                for (const auto& x : r.result.errors)
+                    if (variantOf(x) == v && x.basePower == s && x.mip == k) {
+                        e.push_back(formatNumber(x.relativeL1));
+                        en.push_back(formatNumber(x.energyRatio));
+                    }
+            errors.addRow(e);
+            energy.addRow(en);
+        }
         md << "Relative L1 error against the ground truth:\n\n"
            << errors.render() << "\nEnergy ratio:\n\n"
            << energy.render() << "\n";
@@ -196,7 +214,7 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
                         "shading (ns/lobe)", "fetches", "bytes/texel", "storage"},
                        {Align::Left, Align::Right, Align::Right, Align::Right, Align::Right, Align::Left});
     for (const auto& c : r.costs)
-        cost.addRow({std::string(methodName(c.method)), formatNumber(c.bakeSeconds),
+        cost.addRow({variantLabel({c.method, FilterKernel::Box, c.lobes}), formatNumber(c.bakeSeconds),
                      formatNumber(c.nsPerLobe), std::to_string(c.storage.textureFetches),
                      formatNumber(c.storage.bytesPerTexel), std::string(c.storage.layout)});
     md << cost.render() << "\n";
@@ -235,6 +253,8 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
     j["errors"] = nlohmann::json::array();
     for (const auto& e : r.result.errors)
         j["errors"].push_back({{"method", methodName(e.method)},
+                               {"variant", variantLabel(variantOf(e))},
+                               {"lobes", e.lobes},
                                {"kernel", kernelName(e.kernel)},
                                {"base_power", e.basePower},
                                {"mip", e.mip},
@@ -243,6 +263,8 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
     j["costs"] = nlohmann::json::array();
     for (const auto& c : r.costs)
         j["costs"].push_back({{"method", methodName(c.method)},
+                              {"variant", variantLabel({c.method, FilterKernel::Box, c.lobes})},
+                              {"lobes", c.lobes},
                               {"bake_seconds_median", jsonNumber(c.bakeSeconds)},
                               {"bake_runs", r.bakeRuns},
                               {"shading_ns_per_lobe", jsonNumber(c.nsPerLobe)},
@@ -263,20 +285,18 @@ PlotSpec evaluationErrorPerMipPlot(const EvaluationReport& r) {
     spec.y = {"relative L1 error", AxisScale::Log, std::nullopt, std::nullopt};
     size_t colour = 0;
     for (double s : r.options.basePowers)
-        for (FilterKernel kernel : r.options.kernels)
-            for (Method m : r.options.methods) {
-                PlotSeries series;
-                series.name =
-                    variantLabel(m, kernel) + (r.options.basePowers.size() > 1 ? " s=" + powerLabel(s) : "");
-                series.color = plotPalette(colour++);
-                series.line = true;
-                for (const auto& e : r.result.errors)
-                    if (e.method == m && e.kernel == kernel && e.basePower == s) {
-                        series.x.push_back(e.mip);
-                        series.y.push_back(e.relativeL1);
-                    }
-                spec.series.push_back(std::move(series));
-            }
+        for (const EvaluatedVariant& v : evaluatedVariants(r.options)) {
+            PlotSeries series;
+            series.name = variantLabel(v) + (r.options.basePowers.size() > 1 ? " s=" + powerLabel(s) : "");
+            series.color = plotPalette(colour++);
+            series.line = true;
+            for (const auto& e : r.result.errors)
+                if (variantOf(e) == v && e.basePower == s) {
+                    series.x.push_back(e.mip);
+                    series.y.push_back(e.relativeL1);
+                }
+            spec.series.push_back(std::move(series));
+        }
     return spec;
 }
 
@@ -291,10 +311,10 @@ PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& r) {
     std::vector<std::string> names;
     for (const auto& c : r.costs)
         for (const auto& e : r.result.errors)
-            if (e.method == c.method && e.kernel == FilterKernel::Box && e.basePower == s &&
-                e.mip == r.result.lastMip) {
+            if (e.method == c.method && e.lobes == c.lobes && e.kernel == FilterKernel::Box &&
+                e.basePower == s && e.mip == r.result.lastMip) {
                 points.push_back({"methods", c.nsPerLobe, e.relativeL1});
-                names.emplace_back(methodName(c.method));
+                names.emplace_back(variantLabel({c.method, FilterKernel::Box, c.lobes}));
             }
     const auto front = paretoFront(points);
     PlotSeries all{"methods", {}, {}, {0.2f, 0.3f, 0.7f}, false, 2, MarkerShape::Square, 9, {}};
@@ -336,7 +356,7 @@ Status writeEvaluationReport(const EvaluationReport& r, const fs::path& dir) {
         for (const auto& m : r.result.maps) {
             const std::string kernel =
                 m.kernel == FilterKernel::Box ? "" : "-" + std::string(kernelName(m.kernel));
-            const std::string name = std::string(methodName(m.method)) + kernel + "-s" +
+            const std::string name = variantLabel({m.method, FilterKernel::Box, m.lobes}) + kernel + "-s" +
                                      powerLabel(m.basePower) + "-mip" + std::to_string(m.mip) + ".exr";
             if (auto st = writeFloatExr(dir / "errors" / name, m.width, m.height, m.relativeError); !st)
                 return st;

@@ -14,7 +14,9 @@ namespace burnish {
 namespace {
 
 // Correlations are kept inside (−kMaxCorrelation, kMaxCorrelation): det Σ stays positive.
-constexpr double kMaxCorrelation = 1.0 - 1e-9;
+constexpr double kMaxCorrelation = 0.999;
+// A merge costing less than this per unit of weight loses nothing a float texture could store.
+constexpr double kNegligibleMergeCost = 1e-9; // as methods.glsl: det Σ stays positive in float too
 
 double logDet(const std::array<double, 3>& c) {
     return std::log(c[0] * c[1] - c[2] * c[2]);
@@ -104,11 +106,11 @@ LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVarianc
         }
         return best;
     };
-    // Lobes too light to carry a cluster of their own go first, the lightest first: their weight is
-    // absorbed by the cheapest partner, whose mean and covariance stay as they are. A few steep
-    // outlier normals then keep their energy without dragging a lobe's moments (a slope of 100 at
-    // 1/256 of a footprint would add 39 to a merged variance).
-    while (lobes.size() > 1) {
+    // Lobes too light to carry a cluster of their own go first (k >= 2: one lobe is the exact sum), the
+    // lightest first: their weight is absorbed by the cheapest partner, whose mean and covariance stay as
+    // they are. A few steep outlier normals then keep their energy without dragging a lobe's moments (a slope
+    // of 100 at 1/256 of a footprint would add 39 to a merged variance).
+    while (k > 1 && lobes.size() > 1) {
         size_t light = lobes.size();
         for (size_t i = 0; i < lobes.size(); ++i)
             if (lobes[i].w < kMinLobeShare * total && (light == lobes.size() || lobes[i].w < lobes[light].w))
@@ -124,10 +126,11 @@ LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVarianc
         partner.mxy *= scale;
         lobes.erase(lobes.begin() + std::ptrdiff_t(light));
     }
-    // The cheapest pair until k remain, with the pair costs kept in a matrix: a merge recomputes only
-    // the merged lobe's row.
+    // The cheapest pair until k remain, and then while a pair costs nothing (equal lobes: a flat
+    // footprint keeps one lobe, not k copies), with the pair costs kept in a matrix: a merge
+    // recomputes only the merged lobe's row.
     const size_t n = lobes.size();
-    if (n > size_t(k)) {
+    if (n > 1) {
         std::vector<double> cost(n * n, 0.0), wl(n);
         std::vector<char> alive(n, 1);
         for (size_t i = 0; i < n; ++i)
@@ -135,7 +138,7 @@ LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVarianc
         for (size_t i = 0; i < n; ++i)
             for (size_t j = i + 1; j < n; ++j)
                 cost[i * n + j] = mergeCostOf(lobes[i], wl[i], lobes[j], wl[j], minVariance);
-        for (size_t remaining = n; remaining > size_t(k); --remaining) {
+        for (size_t remaining = n; remaining > 1; --remaining) {
             size_t bi = 0, bj = 0;
             double best = std::numeric_limits<double>::infinity();
             for (size_t i = 0; i < n; ++i) {
@@ -143,6 +146,7 @@ LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVarianc
                 for (size_t j = i + 1; j < n; ++j)
                     if (alive[j] && cost[i * n + j] < best) best = cost[i * n + j], bi = i, bj = j;
             }
+            if (remaining <= size_t(k) && !(best <= kNegligibleMergeCost * total)) break;
             lobes[bi] += lobes[bj];
             wl[bi] = weightedLogDet(lobes[bi], minVariance);
             alive[bj] = 0;
@@ -165,11 +169,20 @@ LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVarianc
     return out;
 }
 
-MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int k, int lastLevel) {
+MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int k, int lastLevel,
+                                     const std::vector<double>* texelPowers) {
     MixturePyramid out;
     out.m_k = std::clamp(k, 1, kMaxMixtureLobes);
-    out.m_minVariance = slopeInverseBasePower(s);
-    const int last = lastLevel > 0 ? std::min(lastLevel, pyramid.levelCount() - 1) : pyramid.levelCount() - 1;
+    // The narrowest lobe any finest texel brings: its covariance floor.
+    double maxPower = s;
+    if (texelPowers) {
+        maxPower = 0.0;
+        for (double p : *texelPowers)
+            maxPower = std::max(maxPower, p);
+    }
+    out.m_minVariance = slopeInverseBasePower(maxPower);
+    const int last =
+        lastLevel >= 0 ? std::min(lastLevel, pyramid.levelCount() - 1) : pyramid.levelCount() - 1;
     const NormalMap& finest = pyramid.finest();
     for (int level = 1; level <= last; ++level) {
         const PyramidLevel& l = pyramid.level(level);
@@ -185,7 +198,10 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
                 for (int j = l.yChild[size_t(y)]; j < l.yChild[size_t(y) + 1]; ++j)
                     for (int i = l.xChild[size_t(x)]; i < l.xChild[size_t(x) + 1]; ++i) {
                         if (!child) {
-                            lobes.push_back(LobeMoments::ofNormal(finest.at(i, j), s));
+                            const double p =
+                                texelPowers ? (*texelPowers)[size_t(j) * size_t(finest.width) + size_t(i)]
+                                            : s;
+                            lobes.push_back(LobeMoments::ofNormal(finest.at(i, j), p));
                             continue;
                         }
                         const LobeMixture& m = child->texels[size_t(j) * size_t(child->width) + size_t(i)];
@@ -198,7 +214,48 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         });
         out.m_levels.push_back(std::move(built));
     }
+    // Level 0's lobe indices, from the level-1 parents.
+    out.m_finestWidth = finest.width;
+    if (last >= 1 && out.m_k > 1) {
+        const PyramidLevel& l1 = pyramid.level(1);
+        out.m_finestLobe.assign(finest.texelCount(), 0);
+        tbb::parallel_for(0, l1.height, [&](int y) {
+            for (int x = 0; x < l1.width; ++x) {
+                const LobeMixture& parent = out.at(1, x, y);
+                for (int j = l1.yChild[size_t(y)]; j < l1.yChild[size_t(y) + 1]; ++j)
+                    for (int i = l1.xChild[size_t(x)]; i < l1.xChild[size_t(x) + 1]; ++i) {
+                        const double p =
+                            texelPowers ? (*texelPowers)[size_t(j) * size_t(finest.width) + size_t(i)] : s;
+                        out.m_finestLobe[size_t(j) * size_t(finest.width) + size_t(i)] =
+                            (unsigned char)assignLobe(parent, LobeMoments::ofNormal(finest.at(i, j), p),
+                                                      out.m_minVariance);
+                    }
+            }
+        });
+    }
     return out;
+}
+
+int MixturePyramid::finestLobe(int x, int y) const {
+    if (m_finestLobe.empty()) return 0;
+    return m_finestLobe[size_t(y) * size_t(m_finestWidth) + size_t(x)];
+}
+
+int assignLobe(const LobeMixture& mixture, const LobeMoments& lobe, double minVariance) {
+    const glm::dvec2 b = lobe.mean();
+    int best = 0;
+    double bestScore = -std::numeric_limits<double>::infinity();
+    for (int i = 0; i < mixture.count; ++i) {
+        const LobeMoments& l = mixture.lobes[size_t(i)];
+        const auto c = l.covariance(minVariance);
+        const double det = c[0] * c[1] - c[2] * c[2];
+        const glm::dvec2 d = b - l.mean();
+        const double e = (d.x * d.x * c[1] + d.y * d.y * c[0] - 2.0 * d.x * d.y * c[2]) / det;
+        // log(w N(b; μ, Σ)) up to a constant.
+        const double score = std::log(l.w) - 0.5 * std::log(det) - 0.5 * e;
+        if (score > bestScore) bestScore = score, best = i;
+    }
+    return best;
 }
 
 const LobeMixture& MixturePyramid::at(int level, int x, int y) const {
@@ -217,18 +274,33 @@ double mixtureNdf(const LobeMixture& mixture, const glm::dvec3& h, double minVar
     return sum;
 }
 
-double mixtureValue(const LobeMixture& mixture, const glm::dvec3& lightDir, const glm::dvec3& h,
-                    double minVariance) {
+DecodedMixture decodeMixture(const LobeMixture& mixture, double minVariance) {
+    DecodedMixture out;
     const double total = mixture.totalWeight();
-    if (!(total > 0.0)) return 0.0;
-    double sum = 0.0;
+    if (!(total > 0.0)) return out;
     for (int i = 0; i < mixture.count; ++i) {
         const LobeMoments& l = mixture.lobes[size_t(i)];
-        const glm::dvec2 b = l.mean();
-        const double nl = std::max(0.0, glm::dot(normalOfSlope(b), lightDir));
-        sum += l.w / total * slopeGaussianNdf(h, b, l.covariance(minVariance)) * nl;
+        DecodedMixture::Lobe& d = out.lobes[size_t(out.count++)];
+        d.share = l.w / total;
+        d.mean = l.mean();
+        d.cov = l.covariance(minVariance);
+        d.normal = normalOfSlope(d.mean);
+    }
+    return out;
+}
+
+double mixtureValue(const DecodedMixture& mixture, const glm::dvec3& lightDir, const glm::dvec3& h) {
+    double sum = 0.0;
+    for (int i = 0; i < mixture.count; ++i) {
+        const DecodedMixture::Lobe& l = mixture.lobes[size_t(i)];
+        sum += l.share * slopeGaussianNdf(h, l.mean, l.cov) * std::max(0.0, glm::dot(l.normal, lightDir));
     }
     return sum;
+}
+
+double mixtureValue(const LobeMixture& mixture, const glm::dvec3& lightDir, const glm::dvec3& h,
+                    double minVariance) {
+    return mixtureValue(decodeMixture(mixture, minVariance), lightDir, h);
 }
 
 } // namespace burnish

@@ -5,6 +5,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace burnish {
@@ -54,11 +55,54 @@ const TextureSpec kTextureTable[kTextureRoleCount] = {
      "",
      "",
      ""},
+    // The mixture's premultiplied raw moments (lobe_mixture.h): linear in the moments, so bilinear and
+    // trilinear filtering merge lobes of the same index exactly.
+    {TextureRole::MixtureWeights,
+     {{"w0", R::Unit}, {"w1", R::Unit}, {"w2", R::Unit}, {"w3", R::Unit}},
+     true,
+     "uMixtureWeights",
+     "uMixtureWeightsScale",
+     "uMixtureWeightsBias"},
+    {TextureRole::MixtureLobe0,
+     {{"wb.x", R::Slope}, {"wb.y", R::Slope, true}, {"wM.xx", R::Moment}, {"wM.yy", R::Moment}},
+     true,
+     "uMixtureLobe0",
+     "uMixtureLobe0Scale",
+     "uMixtureLobe0Bias"},
+    {TextureRole::MixtureLobe1,
+     {{"wb.x", R::Slope}, {"wb.y", R::Slope, true}, {"wM.xx", R::Moment}, {"wM.yy", R::Moment}},
+     true,
+     "uMixtureLobe1",
+     "uMixtureLobe1Scale",
+     "uMixtureLobe1Bias"},
+    {TextureRole::MixtureLobe2,
+     {{"wb.x", R::Slope}, {"wb.y", R::Slope, true}, {"wM.xx", R::Moment}, {"wM.yy", R::Moment}},
+     true,
+     "uMixtureLobe2",
+     "uMixtureLobe2Scale",
+     "uMixtureLobe2Bias"},
+    {TextureRole::MixtureLobe3,
+     {{"wb.x", R::Slope}, {"wb.y", R::Slope, true}, {"wM.xx", R::Moment}, {"wM.yy", R::Moment}},
+     true,
+     "uMixtureLobe3",
+     "uMixtureLobe3Scale",
+     "uMixtureLobe3Bias"},
+    {TextureRole::MixtureCross,
+     {{"wM.xy0", R::SignedMoment, true},
+      {"wM.xy1", R::SignedMoment, true},
+      {"wM.xy2", R::SignedMoment, true},
+      {"wM.xy3", R::SignedMoment, true}},
+     true,
+     "uMixtureCross",
+     "uMixtureCrossScale",
+     "uMixtureCrossBias"},
 };
 
 // In TextureRole order, as kTextureTable's rows.
-constexpr std::string_view kRoleNames[kTextureRoleCount] = {"normal", "gloss", "toksvig",    "lean-b",
-                                                            "lean-m", "clean", "lean-gloss", "detail"};
+constexpr std::string_view kRoleNames[kTextureRoleCount] = {
+    "normal",        "gloss",         "toksvig",       "lean-b",          "lean-m",
+    "clean",         "lean-gloss",    "detail",        "mixture-weights", "mixture-lobe0",
+    "mixture-lobe1", "mixture-lobe2", "mixture-lobe3", "mixture-cross"};
 
 constexpr std::string_view kRenormalized = "renormalized mean normal";
 constexpr std::string_view kAuthoredGloss = "authored gloss, {encoding}";
@@ -147,6 +191,26 @@ const MethodSpec kMethodTable[] = {
      "plain Blinn-Phong (or GGX with alpha^2 = 2/(p+2)) with the stored (adjusted) gloss",
      "METHOD_VMF",
      {2, 1.5, "normal BC5 + adjusted gloss (or GGX roughness) BC4"}},
+    {Method::Mixture,
+     "mixture",
+     "K slope-space Gaussians per texel (K = 1..4, --lobes), fitted by merging, stored as premultiplied "
+     "moments (w, w.b, w.M)",
+     kMomentsSlope,
+     {{TextureRole::Normal, kRenormalized},
+      {TextureRole::MixtureWeights, "mixture lobe weights w_0..w_3 (shares of the footprint, sum 1)"},
+      {TextureRole::MixtureLobe0, "mixture lobe 0: w.b.x, w.b.y, w.M.xx, w.M.yy (1/s on M's diagonal)"},
+      {TextureRole::MixtureLobe1, "mixture lobe 1: w.b.x, w.b.y, w.M.xx, w.M.yy (1/s on M's diagonal)"},
+      {TextureRole::MixtureLobe2, "mixture lobe 2: w.b.x, w.b.y, w.M.xx, w.M.yy (1/s on M's diagonal)"},
+      {TextureRole::MixtureLobe3, "mixture lobe 3: w.b.x, w.b.y, w.M.xx, w.M.yy (1/s on M's diagonal)"},
+      {TextureRole::MixtureCross, "mixture cross moments w_i.M.xy of lobes 0..3"}},
+     false,
+     false,
+     "sum over lobes of w_i D_i(h) max(0, n_i.l), each D_i LEAN's Gaussian with Sigma_i = M_i - b_i b_i^T "
+     "from "
+     "filtered (w, w.b, w.M)",
+     "METHOD_MIXTURE",
+     // Filled per lobe count by methodStorage.
+     {0, 0.0, ""}},
 };
 
 } // namespace
@@ -204,6 +268,22 @@ bool hasTexture(Method method, TextureRole role) {
     return false;
 }
 
+bool bakesTexture(Method method, TextureRole role, const MethodParams& params) {
+    if (!hasTexture(method, role)) return false;
+    return !isMixtureLobeRole(role) ||
+           mixtureLobeIndex(role) < std::clamp(params.mixtureLobes, 1, kMaxMixtureLobes);
+}
+
+MethodStorage methodStorage(Method method, const MethodParams& params) {
+    if (method != Method::Mixture) return methodSpec(method).storage;
+    // K lobe textures, the weights and the cross moments, each RGBA16 (half float or unorm).
+    static const std::string_view layouts[kMaxMixtureLobes] = {
+        "weights + 1 lobe + cross moments, 3 RGBA16", "weights + 2 lobes + cross moments, 4 RGBA16",
+        "weights + 3 lobes + cross moments, 5 RGBA16", "weights + 4 lobes + cross moments, 6 RGBA16"};
+    const int k = std::clamp(params.mixtureLobes, 1, kMaxMixtureLobes);
+    return {k + 2, 8.0 * (k + 2), layouts[k - 1]};
+}
+
 const std::vector<Method>& allMethods() {
     static const std::vector<Method> methods = [] {
         std::vector<Method> v;
@@ -240,7 +320,7 @@ double vmfKappa(double r) {
 }
 
 double methodPower(Method method, const NormalMoments& moments, double s, const MethodParams& params) {
-    if (method == Method::Lean || method == Method::Clean)
+    if (method == Method::Lean || method == Method::Clean || method == Method::Mixture)
         return methodLobe(method, moments, s, params).power;
     // Variance-to-gloss clamps s itself (to [0, kMaxPower]), as the bake's rows call it.
     if (method == Method::VarianceToGloss) return varianceToGlossPower(moments.projectedVariance(), s);
@@ -264,6 +344,7 @@ double methodPower(Method method, const NormalMoments& moments, double s, const 
     }
     case Method::Lean:
     case Method::Clean:
+    case Method::Mixture:
         break;
     }
     return s;
@@ -271,6 +352,9 @@ double methodPower(Method method, const NormalMoments& moments, double s, const 
 
 TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, const MethodParams& params) {
     TexelLobe lobe;
+    // A mixture's lobes need the footprint's normals (lobe_mixture.h); from moments alone its one
+    // moment-matched lobe is LEAN's, which is also what its K = 1 stores.
+    if (method == Method::Mixture) method = Method::Lean;
     if (method != Method::Lean && method != Method::Clean) {
         lobe.normal = moments.meanDirection();
         lobe.power = methodPower(method, moments, s, params);

@@ -57,6 +57,8 @@ struct BakeJobSpec {
     std::optional<double> metallic;
     /// Mip levels to write (absent = the whole chain down to 1×1); must be >= 1.
     std::optional<int> mips;
+    /// The mixture's lobes per texel (1..4; absent = as many as the preset's files store).
+    std::optional<int> lobes;
     /// Detail normal map baked beside the method's textures (detail.h), and its fade "START:END".
     std::optional<std::string> detail;
     std::optional<std::string> detailFade;

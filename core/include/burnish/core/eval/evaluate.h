@@ -30,6 +30,7 @@
 #include <atomic>
 #include <functional>
 #include <optional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -54,6 +55,9 @@ struct EvaluateOptions {
     /// Footprint moments each method is evaluated with: Box is the definition above; Tent and
     /// Gaussian use the kernel-filtered moments a bake stores, and are reported beside it.
     std::vector<FilterKernel> kernels{FilterKernel::Box};
+    /// The mixture's lobe counts, each evaluated as its own row ("mixture-k3"); K = 1 is LEAN's
+    /// lobe exactly. The mixture fits box footprints, so it has no tent or Gaussian rows.
+    std::vector<int> mixtureLobes{kDefaultMixtureLobes};
     MethodParams params;
     BorderMode border = BorderMode::Wrap;
     /// Keep per-texel error maps (relative L1 per texel: Σ_dir|M − GT| / Σ_dir GT).
@@ -81,6 +85,7 @@ struct MipError {
     double relativeL1;  // Σ|M − GT| / Σ GT over texels and directions
     double energyRatio; // Σ M / Σ GT
     FilterKernel kernel = FilterKernel::Box;
+    int lobes = 0; // the mixture's K (0 for the other methods)
 };
 
 struct ErrorMap {
@@ -91,7 +96,24 @@ struct ErrorMap {
     int height;
     std::vector<float> relativeError; // per texel, row-major
     FilterKernel kernel = FilterKernel::Box;
+    int lobes = 0;
 };
+
+/// What one row of an evaluation is: a method, its footprint kernel and, for the mixture, its K.
+struct EvaluatedVariant {
+    Method method;
+    FilterKernel kernel = FilterKernel::Box;
+    int lobes = 0;
+    bool operator==(const EvaluatedVariant&) const = default;
+};
+/// The rows the options ask for, kernel-major, methods in the options' order, the mixture once per
+/// lobe count (box kernel only).
+std::vector<EvaluatedVariant> evaluatedVariants(const EvaluateOptions& options);
+/// "lean", "lean (tent)", "mixture-k3".
+std::string variantLabel(const EvaluatedVariant& variant);
+inline EvaluatedVariant variantOf(const MipError& e) {
+    return {e.method, e.kernel, e.lobes};
+}
 
 struct EvaluationResult {
     std::vector<MipError> errors;

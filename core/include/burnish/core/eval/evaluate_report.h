@@ -17,6 +17,7 @@ namespace burnish {
 
 struct MethodCost {
     Method method;
+    int lobes = 0;            // the mixture's K (0 for the other methods)
     double bakeSeconds = 0.0; // median over the runs of an in-memory bake (pyramid included)
     double nsPerLobe = 0.0;   // median ns per lobe evaluation (NDF × n·l, double, one core)
     MethodStorage storage;

@@ -18,6 +18,7 @@
 // same index to the same cluster.
 #pragma once
 
+#include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_pyramid.h>
 
 #include <glm/vec2.hpp>
@@ -28,7 +29,6 @@
 
 namespace burnish {
 
-inline constexpr int kMaxMixtureLobes = 4;
 /// Lobes holding less than this share of their footprint are merged before any other pair.
 inline constexpr double kMinLobeShare = 1.0 / 64.0;
 
@@ -72,20 +72,22 @@ struct LobeMixture {
 // Runnalls 2007, "Kullback-Leibler Approach to Gaussian Mixture Reduction", eq. 21
 double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance);
 
-/// Reduces `lobes` (any number) to at most k (1..kMaxMixtureLobes): first every lobe whose share of
-/// the total is below kMinLobeShare gives its weight to its cheapest partner, then the cheapest pair
-/// is merged (exact moments) until k remain; ties go to the lower indices. The total weight is
-/// kept. Canonical order.
+/// Reduces `lobes` (any number) to at most k (1..kMaxMixtureLobes): first, for k >= 2, every lobe
+/// whose share of the total is below kMinLobeShare gives its weight to its cheapest partner, then the
+/// cheapest pair is merged (exact moments) until k remain; ties go to the lower indices. The total
+/// weight is kept; k = 1 is the exact sum, LEAN's moments. Canonical order.
 LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance);
 
 /// The lobes of the levels above the finest of a normal map's box pyramid (the footprints of
 /// NormalPyramid). Level 0 is one lobe per finest normal and is not stored.
 class MixturePyramid {
 public:
-    /// Level 1 from the finest normals with base power s, each level above from its children's
-    /// lobes, up to level `lastLevel` (the pyramid's last when <= 0); in parallel over rows, the
-    /// same result on any thread count. k is clamped to [1, kMaxMixtureLobes].
-    static MixturePyramid build(const NormalPyramid& pyramid, double s, int k, int lastLevel = 0);
+    /// Level 1 from the finest normals with base power s (or each finest texel's own power,
+    /// texelPowers, row-major), each level above from its children's lobes, up to level `lastLevel`
+    /// (the pyramid's last when < 0; 0 builds no level); in parallel over rows, the same result on any thread
+    /// count. k is clamped to [1, kMaxMixtureLobes].
+    static MixturePyramid build(const NormalPyramid& pyramid, double s, int k, int lastLevel = -1,
+                                const std::vector<double>* texelPowers = nullptr);
 
     /// Levels 0..lastLevel (level 0 included in the count).
     int levelCount() const { return int(m_levels.size()) + 1; }
@@ -93,6 +95,10 @@ public:
     double minVariance() const { return m_minVariance; }
     /// Texel (x, y) of level `level` (1 <= level < levelCount()).
     const LobeMixture& at(int level, int x, int y) const;
+    /// The lobe index a finest texel's own lobe takes at level 0: that of the lobe of its level-1
+    /// parent it belongs to most (assignLobe), so trilinear filtering between levels 0 and 1 merges
+    /// a normal into its own cluster. 0 without a level 1.
+    int finestLobe(int x, int y) const;
 
 private:
     struct Level {
@@ -103,14 +109,35 @@ private:
     int m_k = 1;
     double m_minVariance = 1.0;
     std::vector<Level> m_levels; // levels 1, 2, ...
+    int m_finestWidth = 0;
+    std::vector<unsigned char> m_finestLobe; // per finest texel, row-major (empty: all 0)
 };
+
+/// The index of the lobe of `mixture` that `lobe` belongs to most: the largest w_i N(b; b_i, Σ_i)
+/// (log form; ties to the lower index). 0 for an empty mixture.
+int assignLobe(const LobeMixture& mixture, const LobeMoments& lobe, double minVariance);
 
 /// The mixture's NDF at tangent-space half vector h: Σ_i (w_i/Σw) D_i(h), each D_i the
 /// slope-space Gaussian of lobe i (slopeGaussianNdf, methods.h). 0 for h_z <= 0 or no weight.
 double mixtureNdf(const LobeMixture& mixture, const glm::dvec3& h, double minVariance);
 
+/// A mixture decoded as its shader decodes it once per pixel: per lobe its share w_i/Σw, mean slope,
+/// covariance (LobeMoments::covariance) and the normal of its mean slope.
+struct DecodedMixture {
+    struct Lobe {
+        double share = 0.0;
+        glm::dvec2 mean{0.0};
+        std::array<double, 3> cov{0.0, 0.0, 0.0};
+        glm::dvec3 normal{0.0, 0.0, 1.0};
+    };
+    std::array<Lobe, kMaxMixtureLobes> lobes{};
+    int count = 0; // 0 for a mixture without weight
+};
+DecodedMixture decodeMixture(const LobeMixture& mixture, double minVariance);
+
 /// The mixture's reflected value for light l and half vector h, as evaluate measures every method:
 /// Σ_i (w_i/Σw) D_i(h) max(0, n_i·l) with n_i the normal of lobe i's mean slope.
+double mixtureValue(const DecodedMixture& mixture, const glm::dvec3& l, const glm::dvec3& h);
 double mixtureValue(const LobeMixture& mixture, const glm::dvec3& l, const glm::dvec3& h, double minVariance);
 
 } // namespace burnish

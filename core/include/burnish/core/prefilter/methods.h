@@ -49,6 +49,12 @@ enum class Method {
     /// Stores: the gloss map. Shader: plain Blinn-Phong (or GGX with α² = 2/(p+2)).
     // Banerjee et al. 2005 (κ estimate); Han et al. 2007, "Frequency Domain Normal Map Filtering"
     Vmf,
+    /// Lobe mixture: up to 4 slope-space Gaussians per texel (lobe_mixture.h), each stored as
+    /// premultiplied raw moments (w, w·b, w·M) so hardware filtering merges same-index lobes with
+    /// exact moments. K = 1 stores LEAN's B and M. Stores: K + 2 RGBA16 textures.
+    /// Shader: Σ_i w_i D_i(h) max(0, n_i·l), each D_i LEAN's slope-space Gaussian.
+    // Runnalls 2007 (merge cost) on Olano & Baker 2010's lobes
+    Mixture,
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -63,21 +69,39 @@ enum class Method {
 // its tests (test_methods' table checks, a twin in test_twins, bake and evaluate cases).
 
 /// A texture the bake produces. The order is the renderer's texture unit of each sampled role.
-enum class TextureRole { Normal, Gloss, Toksvig, LeanB, LeanM, Clean, LeanGloss, Detail };
-inline constexpr int kTextureRoleCount = 8;
+/// The mixture's roles: MixtureWeights holds w_0..w_3 (shares of the footprint, Σ = 1),
+/// MixtureLobe0..3 lobe i's (w·b.x, w·b.y, w·M.xx, w·M.yy), MixtureCross w_i·M.xy of lobes 0..3.
+enum class TextureRole {
+    Normal,
+    Gloss,
+    Toksvig,
+    LeanB,
+    LeanM,
+    Clean,
+    LeanGloss,
+    Detail,
+    MixtureWeights,
+    MixtureLobe0,
+    MixtureLobe1,
+    MixtureLobe2,
+    MixtureLobe3,
+    MixtureCross,
+};
+inline constexpr int kTextureRoleCount = 14;
 /// The role's name in presets, bake.json and the studio ("normal", "gloss", "toksvig", "lean-b",
-/// "lean-m", "clean", "lean-gloss", "detail").
+/// "lean-m", "clean", "lean-gloss", "detail", "mixture-weights", "mixture-lobe0".."mixture-lobe3",
+/// "mixture-cross").
 std::string_view roleName(TextureRole role);
 std::optional<TextureRole> roleFromName(std::string_view name);
 
 /// How a stored channel in [0, 1] decodes to its physical value (value = stored·scale + bias), with
 /// the bake's binary slope scales sB (slopes) and sM (second moments).
 enum class ChannelRange {
-    Unit,         // scale 1, bias 0: gloss, the Toksvig factor, log variances
+    Unit,         // scale 1, bias 0: gloss, the Toksvig factor, log variances, mixture weights
     Signed,       // scale 2, bias −1: normal components, the correlation ρ
-    Slope,        // scale 2·sB, bias −sB: B.x, B.y
-    Moment,       // scale sM, bias 0: M.xx, M.yy, M.avg
-    SignedMoment, // scale 2·sM, bias −sM: M.xy
+    Slope,        // scale 2·sB, bias −sB: B.x, B.y, w·b
+    Moment,       // scale sM, bias 0: M.xx, M.yy, M.avg, w·M.xx, w·M.yy
+    SignedMoment, // scale 2·sM, bias −sM: M.xy, w·M.xy
     Variance,     // scale sV, bias 0: the detail map's variance
 };
 /// The binary scales a bake chose so every mip's values fit [0, 1] (powers of two).
@@ -158,10 +182,31 @@ Result<Method> methodFromName(std::string_view name);
 /// A one-line description of what the method stores and what its shader does.
 std::string_view methodDescription(Method method);
 
+/// The mixture's default lobe count: the knee of its error-against-cost curve on the real maps
+/// (README, "Lobe mixtures").
+inline constexpr int kDefaultMixtureLobes = 3;
+/// The most lobes a mixture texel keeps (one RGBA texture each).
+inline constexpr int kMaxMixtureLobes = 4;
+
 struct MethodParams {
     /// Fixed power the Toksvig map is baked for (Hill 2011: "around 100 seems to work well").
     double toksvigMapPower = 100.0;
+    /// Lobes per texel of the mixture (1..kMaxMixtureLobes of lobe_mixture.h; 1 is LEAN).
+    int mixtureLobes = kDefaultMixtureLobes;
 };
+
+/// The mixture's lobe textures for K lobes: MixtureLobe0..MixtureLobe(K−1).
+inline bool isMixtureLobeRole(TextureRole role) {
+    return role >= TextureRole::MixtureLobe0 && role <= TextureRole::MixtureLobe3;
+}
+inline int mixtureLobeIndex(TextureRole role) {
+    return int(role) - int(TextureRole::MixtureLobe0);
+}
+/// Whether the method's bake with these parameters writes `role` (its row names it and, for a
+/// mixture lobe texture, the lobe index is below the lobe count).
+bool bakesTexture(Method method, TextureRole role, const MethodParams& params);
+/// The method's storage with these parameters (the mixture's depends on its lobe count).
+MethodStorage methodStorage(Method method, const MethodParams& params);
 
 /// A texel's lobe, as its shader would reconstruct it.
 struct TexelLobe {

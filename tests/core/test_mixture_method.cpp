@@ -1,0 +1,334 @@
+// The lobe mixture as a method: its bake (textures, K = 1 as LEAN, flat maps, extremes, odd sizes,
+// threads), the filtering its premultiplied moments are made for, evaluate's rows per K, and the
+// mixture preset with its --lobes rule.
+#include <burnish/core/bake/bake.h>
+#include <burnish/core/bake/bake_job.h>
+#include <burnish/core/bake/presets.h>
+#include <burnish/core/eval/evaluate.h>
+#include <burnish/core/io/image.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
+#include <burnish/core/prefilter/methods.h>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <random>
+
+using namespace burnish;
+namespace fs = std::filesystem;
+
+namespace {
+
+NormalMap mapOf(int w, int h, const std::function<glm::vec3(int, int)>& normal) {
+    std::vector<glm::vec3> n;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            n.push_back(glm::normalize(normal(x, y)));
+    return makeNormalMap(w, h, std::move(n));
+}
+
+// Normals tilted one way on black squares and the other on white (a two-cluster footprint).
+NormalMap checker(int size, float tilt) {
+    return mapOf(size, size, [tilt](int x, int y) {
+        return ((x + y) % 2) ? glm::vec3(tilt, 0.0f, 1.0f) : glm::vec3(-tilt, 0.3f * tilt, 1.0f);
+    });
+}
+
+BakeOutput bakeMixture(const NormalMap& map, int lobes, double s = 256.0) {
+    BakeOptions o;
+    o.method = Method::Mixture;
+    o.basePower = s;
+    o.params.mixtureLobes = lobes;
+    auto out = bake(map, o);
+    EXPECT_TRUE(out) << out.error();
+    return std::move(out).value();
+}
+
+// A stored texel's channels decoded (value = stored·scale + bias).
+std::vector<double> decoded(const BakedTexture& t, int mip, size_t texel) {
+    std::vector<double> v;
+    for (int c = 0; c < t.channels; ++c)
+        v.push_back(double(t.mips[size_t(mip)].texels[texel * size_t(t.channels) + size_t(c)]) *
+                        t.decode[size_t(c)].scale +
+                    t.decode[size_t(c)].bias);
+    return v;
+}
+
+// The mixture a shader reads from stored (filtered) values: per lobe (w, w·b, w·M) back as LobeMoments.
+LobeMixture storedMixture(const BakeOutput& out, int lobes, int mip, size_t texel) {
+    const auto w = decoded(*out.find(TextureRole::MixtureWeights), mip, texel);
+    const auto cross = decoded(*out.find(TextureRole::MixtureCross), mip, texel);
+    LobeMixture m;
+    for (int i = 0; i < lobes; ++i) {
+        const auto l = decoded(*out.find(TextureRole(int(TextureRole::MixtureLobe0) + i)), mip, texel);
+        LobeMoments lm;
+        lm.w = w[size_t(i)];
+        lm.bx = l[0], lm.by = l[1], lm.mxx = l[2], lm.myy = l[3], lm.mxy = cross[size_t(i)];
+        if (lm.w > 0.0) m.lobes[size_t(m.count++)] = lm;
+    }
+    return m;
+}
+
+bool finiteUnit(const BakeOutput& out) {
+    for (const auto& t : out.textures)
+        for (const auto& mip : t.mips)
+            for (float v : mip.texels)
+                if (!(v >= 0.0f && v <= 1.0f)) return false;
+    return true;
+}
+
+} // namespace
+
+TEST(MixtureMethod, BakesKLobeTexturesBesideTheWeightsAndCrossMoments) {
+    const NormalMap map = checker(32, 0.4f);
+    for (int k = 1; k <= kMaxMixtureLobes; ++k) {
+        const BakeOutput out = bakeMixture(map, k);
+        int lobeTextures = 0;
+        for (const auto& t : out.textures)
+            lobeTextures += isMixtureLobeRole(t.role) ? 1 : 0;
+        EXPECT_EQ(lobeTextures, k);
+        EXPECT_TRUE(out.find(TextureRole::MixtureWeights));
+        EXPECT_TRUE(out.find(TextureRole::MixtureCross));
+        EXPECT_EQ(out.find(TextureRole::MixtureWeights)->mips.size(), 6u);
+        EXPECT_TRUE(finiteUnit(out));
+        EXPECT_EQ(methodStorage(Method::Mixture, {100.0, k}).textureFetches, k + 2);
+        // The weights of every texel of every level sum to 1.
+        const auto& weights = *out.find(TextureRole::MixtureWeights);
+        for (size_t mip = 0; mip < weights.mips.size(); ++mip)
+            for (size_t t = 0; t < weights.mips[mip].texels.size() / 4; ++t) {
+                const auto w = decoded(weights, int(mip), t);
+                EXPECT_NEAR(w[0] + w[1] + w[2] + w[3], 1.0, 1e-6) << "k " << k << " mip " << mip;
+            }
+    }
+}
+
+TEST(MixtureMethod, OneLobeStoresLeansMoments) {
+    auto loaded = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png");
+    ASSERT_TRUE(loaded) << loaded.error();
+    BakeOptions lean;
+    lean.method = Method::Lean;
+    lean.basePower = 300.0;
+    auto leanOut = bake(*loaded, lean);
+    ASSERT_TRUE(leanOut);
+    const BakeOutput mix = bakeMixture(*loaded, 1, 300.0);
+    const auto& b = *leanOut->find(TextureRole::LeanB);
+    const auto& m = *leanOut->find(TextureRole::LeanM);
+    const auto& lobe = *mix.find(TextureRole::MixtureLobe0);
+    const auto& cross = *mix.find(TextureRole::MixtureCross);
+    const auto& weights = *mix.find(TextureRole::MixtureWeights);
+    ASSERT_EQ(lobe.mips.size(), b.mips.size());
+    for (size_t k = 0; k < b.mips.size(); ++k)
+        for (size_t t = 0; t < b.mips[k].texels.size() / 2; ++t) {
+            // The same stored bits: B, M.xx, M.yy and M.xy at the same scales, weight 1.
+            ASSERT_EQ(lobe.mips[k].texels[4 * t], b.mips[k].texels[2 * t]) << "mip " << k;
+            ASSERT_EQ(lobe.mips[k].texels[4 * t + 1], b.mips[k].texels[2 * t + 1]);
+            ASSERT_EQ(lobe.mips[k].texels[4 * t + 2], m.mips[k].texels[3 * t]);
+            ASSERT_EQ(lobe.mips[k].texels[4 * t + 3], m.mips[k].texels[3 * t + 1]);
+            ASSERT_EQ(cross.mips[k].texels[4 * t], m.mips[k].texels[3 * t + 2]);
+            ASSERT_EQ(weights.mips[k].texels[4 * t], 1.0f);
+        }
+    EXPECT_EQ(lobe.decode[0].scale, b.decode[0].scale);
+    EXPECT_EQ(lobe.decode[2].scale, m.decode[0].scale);
+}
+
+TEST(MixtureMethod, FlatMapStoresTheBasePowerForEveryK) {
+    const NormalMap flat = mapOf(16, 16, [](int, int) { return glm::vec3(0.0f, 0.0f, 1.0f); });
+    for (const double s : {1.0, 256.0, 1e6})
+        for (int k = 1; k <= kMaxMixtureLobes; ++k) {
+            const BakeOutput out = bakeMixture(flat, k, s);
+            for (int mip = 0; mip < 5; ++mip) {
+                const LobeMixture m = storedMixture(out, k, mip, 0);
+                ASSERT_GE(m.count, 1);
+                for (int i = 0; i < m.count; ++i) {
+                    const auto c = m.lobes[size_t(i)].covariance(1e-300);
+                    // Float storage of 1/s · 1/sM: a float's rounding of the power.
+                    EXPECT_NEAR(c[0] * s, 1.0, 1e-6) << "s " << s << " k " << k << " mip " << mip;
+                    EXPECT_NEAR(c[1] * s, 1.0, 1e-6);
+                    EXPECT_NEAR(c[2] * s, 0.0, 1e-6);
+                    EXPECT_NEAR(m.lobes[size_t(i)].mean().x, 0.0, 1e-6);
+                }
+            }
+        }
+}
+
+TEST(MixtureMethod, FlatMapStoresTheBasePowerIn8BitAndHalfFloat) {
+    // What an 8-bit or half-float file keeps of a flat map's stored values: the power comes back
+    // within the storage's step (1/255 of the moment scale for 8 bits, 2^-11 relative for half).
+    const NormalMap flat = mapOf(8, 8, [](int, int) { return glm::vec3(0.0f, 0.0f, 1.0f); });
+    const double s = 16.0;
+    const BakeOutput out = bakeMixture(flat, 3, s);
+    const auto& lobe = *out.find(TextureRole::MixtureLobe0);
+    const float stored = lobe.mips[0].texels[2];
+    const double scale = lobe.decode[2].scale;
+    const double eight = std::round(double(stored) * 255.0) / 255.0 * scale;
+    EXPECT_NEAR(eight * s, 1.0, scale * s / 255.0);
+    const double half = double(stored) * scale; // exact in half: a power of two over s = 16
+    EXPECT_NEAR(half * s, 1.0, 1.0 / 2048.0);
+}
+
+TEST(MixtureMethod, SteepOutliersNanTexelsAndOddSizesStayFinite) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {3, 5}, {17, 6}, {64, 64}}) {
+        NormalMap map = mapOf(w, h, [&](int x, int y) {
+            if ((x * 7 + y * 3) % 11 == 0) return glm::vec3(1.0f, 0.0f, 1e-7f); // near the horizon
+            return glm::vec3(u(rng), u(rng), 0.2f + std::abs(u(rng)));
+        });
+        map.normals[0] = glm::vec3(std::numeric_limits<float>::quiet_NaN(), 0.0f, 1.0f);
+        for (int k = 1; k <= kMaxMixtureLobes; ++k)
+            for (const double s : {1.0, 1e6}) {
+                const BakeOutput out = bakeMixture(map, k, s);
+                EXPECT_TRUE(finiteUnit(out)) << w << "x" << h << " k " << k << " s " << s;
+                const auto& weights = *out.find(TextureRole::MixtureWeights);
+                EXPECT_EQ(weights.mips.back().width, 1);
+                EXPECT_EQ(weights.mips.back().height, 1);
+            }
+    }
+}
+
+TEST(MixtureMethod, SameBitsOnOneThreadAndOnAll) {
+    auto loaded = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png");
+    ASSERT_TRUE(loaded);
+    const BakeOutput all = bakeMixture(*loaded, 3);
+    BakeOutput one;
+    {
+        tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+        one = bakeMixture(*loaded, 3);
+    }
+    ASSERT_EQ(all.textures.size(), one.textures.size());
+    for (size_t t = 0; t < all.textures.size(); ++t)
+        for (size_t k = 0; k < all.textures[t].mips.size(); ++k)
+            EXPECT_TRUE(all.textures[t].mips[k].texels == one.textures[t].mips[k].texels)
+                << roleName(all.textures[t].role) << " mip " << k;
+}
+
+TEST(MixtureMethod, FilteringBetweenTexelsOfDifferentLobesKeepsEnergyAndStaysFinite) {
+    // Bilinear filtering halfway between a two-lobe texel and a one-lobe texel (and every other
+    // pair of a level) averages their stored values: the result decodes to a valid mixture whose
+    // weights sum to 1 and whose NDF keeps its projected-area integral.
+    NormalMap map = mapOf(64, 64, [](int x, int y) {
+        if (x < 32) return ((x + y) % 2) ? glm::vec3(0.5f, 0.0f, 1.0f) : glm::vec3(-0.5f, 0.0f, 1.0f);
+        return glm::vec3(0.0f, 0.2f, 1.0f);
+    });
+    const BakeOutput out = bakeMixture(map, 3, 128.0);
+    const int mip = 2; // 16×16: the two halves meet between x = 7 and 8
+    const int width = 16;
+    auto lerp = [&](size_t a, size_t b) {
+        BakeOutput mixed = out;
+        for (auto& t : mixed.textures)
+            if (t.mips.size() > size_t(mip))
+                for (int c = 0; c < t.channels; ++c) {
+                    auto& v = t.mips[size_t(mip)].texels;
+                    v[a * size_t(t.channels) + size_t(c)] = 0.5f * (v[a * size_t(t.channels) + size_t(c)] +
+                                                                    v[b * size_t(t.channels) + size_t(c)]);
+                }
+        return storedMixture(mixed, 3, mip, a);
+    };
+    const LobeMixture left = storedMixture(out, 3, mip, 7), right = storedMixture(out, 3, mip, 8);
+    EXPECT_GE(left.count, 2);
+    EXPECT_EQ(right.count, 1);
+    const LobeMixture between = lerp(7, 8);
+    EXPECT_NEAR(between.totalWeight(), 1.0, 1e-6);
+    // ∫ D(h) (n·h) dω over the hemisphere, by a midpoint rule on (θ, φ).
+    auto integral = [](const LobeMixture& m) {
+        double sum = 0.0;
+        const int nt = 400, np = 200;
+        for (int i = 0; i < nt; ++i)
+            for (int j = 0; j < np; ++j) {
+                const double t = (i + 0.5) * (kPi<double> / 2) / nt, p = (j + 0.5) * 2 * kPi<double> / np;
+                const glm::dvec3 h(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+                sum += mixtureNdf(m, h, 1.0 / 128.0) * h.z * std::sin(t) * (kPi<double> / 2 / nt) *
+                       (2 * kPi<double> / np);
+            }
+        return sum;
+    };
+    EXPECT_NEAR(integral(between), 0.5 * (integral(left) + integral(right)), 1e-3);
+    EXPECT_GT(integral(between), 0.9);
+    for (int y = 0; y < width; ++y)
+        for (int x = 0; x + 1 < width; ++x) {
+            const LobeMixture m = lerp(size_t(y * width + x), size_t(y * width + x + 1));
+            const glm::dvec3 h = glm::normalize(glm::dvec3(0.1, -0.05, 1.0));
+            ASSERT_TRUE(std::isfinite(mixtureNdf(m, h, 1.0 / 128.0)));
+        }
+}
+
+TEST(MixtureMethod, EvaluateReportsEveryKAndOneLobeIsLean) {
+    auto loaded = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png");
+    ASSERT_TRUE(loaded);
+    EvaluateOptions o;
+    o.basePowers = {256.0};
+    o.methods = {Method::Lean, Method::Mixture};
+    o.mixtureLobes = {1, 2, 3, 4};
+    o.lastMip = 3;
+    auto r = evaluateMethods(*loaded, o);
+    ASSERT_TRUE(r) << r.error();
+    ASSERT_EQ(r->errors.size(), 5u * 3u);
+    auto find = [&](Method m, int lobes, int mip) {
+        for (const auto& e : r->errors)
+            if (e.method == m && e.lobes == lobes && e.mip == mip) return e;
+        ADD_FAILURE() << "no row";
+        return MipError{};
+    };
+    for (int mip = 1; mip <= 3; ++mip) {
+        const MipError lean = find(Method::Lean, 0, mip), one = find(Method::Mixture, 1, mip);
+        EXPECT_EQ(lean.relativeL1, one.relativeL1);
+        EXPECT_EQ(lean.energyRatio, one.energyRatio);
+        // More lobes, less error; from three lobes at most half of LEAN's where footprints hold
+        // several clusters (mips 2 and up on this map); energy within 3 %.
+        double previous = lean.relativeL1;
+        for (int k = 2; k <= 4; ++k) {
+            const MipError e = find(Method::Mixture, k, mip);
+            EXPECT_LT(e.relativeL1, previous) << "k " << k << " mip " << mip;
+            if (k >= 3 && mip >= 2)
+                EXPECT_LT(e.relativeL1, 0.5 * lean.relativeL1) << "k " << k << " mip " << mip;
+            EXPECT_NEAR(e.energyRatio, 1.0, 0.03);
+            previous = e.relativeL1;
+        }
+    }
+    EXPECT_EQ(variantLabel({Method::Mixture, FilterKernel::Box, 3}), "mixture-k3");
+    // The mixture fits box footprints: no tent rows.
+    o.kernels = {FilterKernel::Tent};
+    o.methods = {Method::Mixture};
+    EXPECT_FALSE(evaluateMethods(*loaded, o));
+}
+
+TEST(MixtureMethod, PresetStoresThreeLobesAndLobesMustMatchIt) {
+    const fs::path dir = fs::temp_directory_path() / ("burnish-mixture-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    BakeJobSpec spec;
+    spec.input = std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png";
+    spec.out = (dir / "set").string();
+    spec.preset = "mixture";
+    auto job = resolveBakeJob(spec);
+    ASSERT_TRUE(job) << job.error();
+    EXPECT_EQ(job->method, Method::Mixture);
+    EXPECT_EQ(job->bake.params.mixtureLobes, 3);
+    auto result = runBakeJob(*job);
+    ASSERT_TRUE(result) << result.error();
+    for (const char* name :
+         {"mixture-weights", "mixture-lobe0", "mixture-lobe1", "mixture-lobe2", "mixture-cross"}) {
+        const fs::path file = dir / "set" / (std::string("trak-rust1_nm_") + name + ".exr");
+        ASSERT_TRUE(fs::exists(file)) << file;
+        auto image = readImage(file);
+        ASSERT_TRUE(image) << image.error();
+        EXPECT_EQ(image->channels, 4);
+    }
+    spec.lobes = 4;
+    auto four = resolveBakeJob(spec);
+    ASSERT_FALSE(four);
+    EXPECT_NE(four.error().find("stores 3 mixture lobes"), std::string::npos) << four.error();
+    spec.preset = "lean";
+    spec.lobes = 2;
+    auto notMixture = resolveBakeJob(spec);
+    ASSERT_FALSE(notMixture);
+    EXPECT_NE(notMixture.error().find("--method mixture only"), std::string::npos) << notMixture.error();
+    // LEAN's preset fits neither the mixture nor the mixture's preset LEAN.
+    EXPECT_FALSE(checkPresetMethod(*findPreset("lean"), Method::Mixture));
+    EXPECT_FALSE(checkPresetMethod(*findPreset("mixture"), Method::Lean));
+    fs::remove_all(dir);
+}

@@ -27,6 +27,8 @@ struct EvaluateCliOptions {
     int firstMip = 1;
     int lastMip = 4;
     double viewAngle = 30.0;
+    std::vector<double> halfAngles;
+    int azimuths = 8;
     std::vector<std::string> methods;
     std::vector<std::string> kernels{"box"};
     std::string out = "burnish-evaluate";
@@ -66,6 +68,8 @@ int runEvaluate(const EvaluateCliOptions& o) {
     options.evaluate.firstMip = o.firstMip;
     options.evaluate.lastMip = o.lastMip;
     options.evaluate.viewAngleDeg = o.viewAngle;
+    if (!o.halfAngles.empty()) options.evaluate.halfAnglesDeg = o.halfAngles;
+    options.evaluate.azimuths = o.azimuths;
     options.evaluate.border = o.border == "clamp" ? BorderMode::Clamp : BorderMode::Wrap;
     options.evaluate.errorMaps = o.errorMaps;
     options.evaluate.params.toksvigMapPower = o.toksvigMapPower;
@@ -130,6 +134,15 @@ const CommandRegistration registration{
         sub->add_option("--view-angle", o->viewAngle,
                         "View angle from the macro normal in degrees (default 30).")
             ->check(CLI::Range(0.0, 89.0));
+        sub->add_option("--half-angles", o->halfAngles,
+                        "Polar angles of the half vectors in degrees, comma separated (default "
+                        "0,2.5,5,10,15,20,30; e.g. every degree to 40 for a dense set).")
+            ->delimiter(',')
+            ->check(CLI::Range(0.0, 89.0))
+            ->type_name("LIST");
+        sub->add_option("--azimuths", o->azimuths,
+                        "Half-vector azimuths per polar angle, evenly spaced (default 8).")
+            ->check(CLI::Range(1, 360));
         sub->add_option("--methods", o->methods,
                         "Methods to evaluate, comma separated (default all: naive, toksvig, toksvig-map, "
                         "variance-to-gloss, lean, clean, vmf, mixture).")

@@ -54,6 +54,7 @@ constexpr int kBenchWarmupFrames = 2;
 
 struct RenderCliOptions {
     std::string input;
+    int lobes = kDefaultMixtureLobes;
     std::string out;
     std::string sample = "hammered";
     int sampleSize = 256;
@@ -168,6 +169,7 @@ Result<Scene> buildScene(const RenderCliOptions& o) {
         if (!method) return Error{"--method: " + method.error()};
         m.method = *method;
     }
+    m.methodParams.mixtureLobes = o.lobes;
 
     // Base power: --power, or --gloss as a value in the encoding or as an authored gloss map (read
     // after the normal map, whose size it must have).
@@ -566,8 +568,12 @@ const CommandRegistration registration{
         sub->add_option(
                "--method", o->method,
                "Prefiltering method: naive, toksvig, toksvig-map, variance-to-gloss (default), lean, "
-               "clean, vmf.")
+               "clean, vmf, mixture.")
             ->type_name("NAME");
+        sub->add_option("--lobes", o->lobes,
+                        "Lobes per texel of --method mixture, 1..4 (default 3; 1 is LEAN).")
+            ->check(CLI::Range(1, 4))
+            ->type_name("K");
         sub->add_option("--power", o->power, "Base Blinn-Phong power (default 1024).")
             ->check(CLI::Range(1.0, 1e9))
             ->type_name("S");

@@ -40,10 +40,13 @@ TEST(MethodTable, EveryMethodHasOneRowWithAUniqueNameThatRoundTrips) {
         EXPECT_FALSE(spec.shader.empty());
         EXPECT_GT(spec.storage.textureFetches, 0);
         EXPECT_GT(spec.storage.bytesPerTexel, 0.0);
+        // The row's storage is the method's with its default parameters.
+        EXPECT_EQ(methodStorage(m, {}).textureFetches, spec.storage.textureFetches) << spec.name;
+        EXPECT_EQ(methodStorage(m, {}).bytesPerTexel, spec.storage.bytesPerTexel) << spec.name;
         ASSERT_FALSE(spec.textures.empty());
         EXPECT_EQ(spec.textures.front().role, TextureRole::Normal) << spec.name;
     }
-    EXPECT_EQ(names.size(), 7u);
+    EXPECT_EQ(names.size(), 8u);
     EXPECT_FALSE(methodFromName("lean2"));
 }
 
@@ -84,7 +87,7 @@ TEST(MethodTable, ChannelDecodesFollowTheScales) {
 
 TEST(MethodTable, OnlyTheSlopeMethodsStoreSlopesAndHaveNoGlossTexture) {
     for (Method m : allMethods()) {
-        const bool slope = m == Method::Lean || m == Method::Clean;
+        const bool slope = m == Method::Lean || m == Method::Clean || m == Method::Mixture;
         EXPECT_EQ(storesSlopes(m), slope) << methodName(m);
         EXPECT_EQ(hasTexture(m, TextureRole::Gloss), !slope) << methodName(m);
         EXPECT_TRUE(hasTexture(m, TextureRole::Normal)) << methodName(m);
@@ -102,10 +105,15 @@ TEST(MethodTable, TheBakeProducesExactlyTheRowsTextures) {
         const auto out = bake(map, options);
         ASSERT_TRUE(out) << out.error();
         const MethodSpec& spec = methodSpec(m);
-        ASSERT_EQ(out->textures.size(), spec.textures.size()) << spec.name;
-        for (size_t i = 0; i < spec.textures.size(); ++i) {
+        // The row's textures this bake writes (the mixture's lobes up to its default count).
+        std::vector<TextureRole> baked;
+        for (const MethodTexture& t : spec.textures)
+            if (bakesTexture(m, t.role, options.params)) baked.push_back(t.role);
+        EXPECT_EQ(baked.size() == spec.textures.size(), m != Method::Mixture) << spec.name;
+        ASSERT_EQ(out->textures.size(), baked.size()) << spec.name;
+        for (size_t i = 0; i < baked.size(); ++i) {
             const BakedTexture& t = out->textures[i];
-            const TextureSpec& row = textureSpec(spec.textures[i].role);
+            const TextureSpec& row = textureSpec(baked[i]);
             EXPECT_EQ(t.role, row.role);
             EXPECT_EQ(t.needsHighPrecision, row.needsHighPrecision);
             ASSERT_EQ(t.decode.size(), row.channels.size());

@@ -39,8 +39,8 @@ std::string replaced(std::string text, const std::string& from, const std::strin
 
 TEST(Presets, BuiltinsLoadAndValidate) {
     EXPECT_TRUE(builtinPresetErrors().empty()) << builtinPresetErrors().front();
-    const std::set<std::string> expected{"blackops", "exp2",     "gltf",        "unreal", "unity",
-                                         "godot",    "filament", "toksvig-map", "lean",   "clean"};
+    const std::set<std::string> expected{"blackops", "exp2",        "gltf", "unreal", "unity",  "godot",
+                                         "filament", "toksvig-map", "lean", "clean",  "mixture"};
     const auto names = builtinPresetNames();
     EXPECT_EQ(std::set<std::string>(names.begin(), names.end()), expected);
     for (const auto& p : builtinPresets()) {

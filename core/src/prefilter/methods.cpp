@@ -209,8 +209,8 @@ const MethodSpec kMethodTable[] = {
      "from "
      "filtered (w, w.b, w.M)",
      "METHOD_MIXTURE",
-     // Filled per lobe count by methodStorage.
-     {0, 0.0, ""}},
+     // At the default 3 lobes; methodStorage gives it for any count.
+     {5, 40.0, "weights + 3 lobes + cross moments, 5 RGBA16"}},
 };
 
 } // namespace

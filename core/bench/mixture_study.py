@@ -1,0 +1,113 @@
+#!/usr/bin/env python3
+"""The lobe mixture against LEAN on many real maps: `burnish evaluate --json` per map and power,
+gathered into one table (Markdown on stdout, the rows as JSON with --json-out).
+
+    core/bench/mixture_study.py BIN MAP... [--powers 64,256,1024] [--lobes 1,2,3,4] [--mips 1:4]
+                                [--dense] [--json-out FILE]
+
+For every map, power and mip it reads LEAN's and each mixture-kK row's relative L1 and energy ratio
+and prints: per K the mean relative L1 over all (map, power, mip) cases next to LEAN's, the mean of
+the per-case ratio to LEAN, the worst ratio (a case where the mixture is worse than LEAN has a ratio
+above 1), the energy range, and the per-map worst ratio. `--dense` evaluates with 1° half-angle
+steps to 40° and 16 azimuths instead of the default 49 directions. Bake and shading costs come from
+the first map's report. Figures only: nothing here passes or fails.
+"""
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+
+def evaluate(binary, path, power, lobes, mips, dense):
+    first, last = mips
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [binary, "evaluate", path, "--power", str(power), "--methods", "lean,mixture",
+               "--lobes", ",".join(map(str, lobes)), "--first-mip", str(first), "--last-mip", str(last),
+               "--bake-runs", "1", "--out", out, "--json", "--allow-implausible"]
+        if dense:
+            cmd += ["--half-angles", ",".join(str(a) for a in range(0, 41)), "--azimuths", "16"]
+        run = subprocess.run(cmd, capture_output=True, text=True)
+        if run.returncode != 0:
+            print(f"skipped {path} s={power}: {run.stderr.strip().splitlines()[-1]}", file=sys.stderr)
+            return None
+        return json.loads(run.stdout)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("binary")
+    ap.add_argument("maps", nargs="+")
+    ap.add_argument("--powers", default="64,256,1024")
+    ap.add_argument("--lobes", default="1,2,3,4")
+    ap.add_argument("--mips", default="1:4")
+    ap.add_argument("--dense", action="store_true")
+    ap.add_argument("--json-out")
+    a = ap.parse_args()
+    powers = [float(p) for p in a.powers.split(",")]
+    lobes = [int(k) for k in a.lobes.split(",")]
+    mips = tuple(int(m) for m in a.mips.split(":"))
+
+    rows, costs = [], None
+    for path in a.maps:
+        for s in powers:
+            report = evaluate(a.binary, path, s, lobes, mips, a.dense)
+            if report is None:
+                continue
+            if costs is None:
+                costs = report["costs"]
+            by = {(e["variant"], e["mip"]): e for e in report["errors"]}
+            for mip in range(mips[0], mips[1] + 1):
+                lean = by.get(("lean", mip))
+                if lean is None:
+                    continue
+                row = {"map": os.path.basename(path), "size": f'{report["width"]}x{report["height"]}',
+                       "power": s, "mip": mip, "lean": lean["relative_l1"], "lean_energy": lean["energy_ratio"]}
+                for k in lobes:
+                    e = by[(f"mixture-k{k}", mip)]
+                    row[f"k{k}"] = e["relative_l1"]
+                    row[f"k{k}_energy"] = e["energy_ratio"]
+                rows.append(row)
+            print(f"done {path} s={s:g}", file=sys.stderr)
+    if not rows:
+        sys.exit("no case evaluated")
+
+    maps = sorted({r["map"] for r in rows})
+    print(f"{len(maps)} maps, powers {a.powers}, mips {a.mips}, {len(rows)} cases"
+          f"{' (dense directions: 0..40 deg every 1 deg x 16 azimuths)' if a.dense else ''}\n")
+    print("| method | mean rel. L1 | median | mean ratio to LEAN | worst ratio | cases worse than LEAN | energy min | energy max |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    lean = [r["lean"] for r in rows]
+    le = [r["lean_energy"] for r in rows]
+    print(f"| lean | {statistics.mean(lean):.4f} | {statistics.median(lean):.4f} | 1 | 1 | - | {min(le):.3f} | {max(le):.3f} |")
+    for k in lobes:
+        v = [r[f"k{k}"] for r in rows]
+        ratio = [r[f"k{k}"] / r["lean"] if r["lean"] > 0 else 1.0 for r in rows]
+        en = [r[f"k{k}_energy"] for r in rows]
+        worse = sum(1 for x in ratio if x > 1.0)
+        print(f"| mixture-k{k} | {statistics.mean(v):.4f} | {statistics.median(v):.4f} | {statistics.mean(ratio):.3f} | "
+              f"{max(ratio):.3f} | {worse} | {min(en):.3f} | {max(en):.3f} |")
+    print("\nPer map, the worst ratio to LEAN over powers and mips (and LEAN's mean rel. L1):\n")
+    print("| map | size | lean | " + " | ".join(f"k{k}" for k in lobes) + " |")
+    print("| --- | --- | ---: | " + " | ".join("---:" for _ in lobes) + " |")
+    for m in maps:
+        rs = [r for r in rows if r["map"] == m]
+        worst = [max(r[f"k{k}"] / r["lean"] if r["lean"] > 0 else 1.0 for r in rs) for k in lobes]
+        print(f"| {m} | {rs[0]['size']} | {statistics.mean(r['lean'] for r in rs):.4f} | "
+              + " | ".join(f"{w:.3f}" for w in worst) + " |")
+    if costs:
+        print("\nCost (first map):\n")
+        print("| method | bake s | shading ns/lobe | fetches | bytes/texel |")
+        print("| --- | ---: | ---: | ---: | ---: |")
+        for c in costs:
+            print(f"| {c['variant']} | {c['bake_seconds_median']:.3g} | {c['shading_ns_per_lobe']:.3g} | "
+                  f"{c['texture_fetches']} | {c['bytes_per_texel']:g} |")
+    if a.json_out:
+        with open(a.json_out, "w") as f:
+            json.dump({"rows": rows, "costs": costs}, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()

@@ -8,6 +8,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 
@@ -300,49 +301,46 @@ struct ClampCounts {
 // One role's texels of a row into `px` (`channels` floats a texel); the gloss role counts the powers
 // it clamps to the encoding's range. sB and sM are powers of two, so multiplying by their
 // reciprocals is exact.
-// One mixture role's texels of row y of level k: each texel's lobes as premultiplied moments over
-// its total weight (weights summing to 1), scaled into [0, 1]. Level 0 is one lobe per finest
-// normal, at the index of the parent's lobe it belongs to (MixturePyramid::finestLobe).
-void mixtureRow(const RowPlan& plan, TextureRole role, int k, int y, int width, float* px) {
+// The mixture roles' texels of row y of level k, every texture of them in one pass (px[r] for role
+// MixtureWeights + r, null when not produced): each texel's lobes as premultiplied moments over its
+// total weight (weights summing to 1), scaled into [0, 1]. Level 0 is one lobe per finest normal, at
+// the index of the parent's lobe it belongs to (MixturePyramid::finestLobe).
+constexpr int kMixtureRoles = int(TextureRole::MixtureCross) - int(TextureRole::MixtureWeights) + 1;
+
+void mixtureRows(const RowPlan& plan, int k, int y, int width, const std::array<float*, kMixtureRoles>& px) {
     const MixturePyramid& mix = *plan.mixture;
     const BakeOptions& o = plan.options;
     const double sB = plan.scales.slope, sM = plan.scales.moment;
     const double invB2 = 1.0 / (2 * sB), invM = 1.0 / sM, invM2 = 1.0 / (2 * sM);
-    LobeMixture single;
-    single.count = 1;
+    float* weights = px[0];
+    float* cross = px[kMixtureRoles - 1];
     for (int x = 0; x < width; ++x) {
-        const LobeMixture* m = nullptr;
-        int slot0 = 0; // level 0: the finest lobe's slot
+        std::array<LobeMoments, kMaxMixtureLobes> lobes{}; // empty lobes store zero moments
         if (k == 0) {
             const double s = o.authoredGloss
                                  ? o.encoding.power((*o.authoredGloss)[size_t(y) * size_t(width) + size_t(x)])
                                  : o.basePower;
-            single.lobes[0] = LobeMoments::ofNormal(plan.finestMap->at(x, y), s);
-            slot0 = mix.finestLobe(x, y);
-            m = &single;
+            lobes[size_t(mix.finestLobe(x, y))] = LobeMoments::ofNormal(plan.finestMap->at(x, y), s);
         } else {
-            m = &mix.at(k, x, y);
+            const LobeMixture& m = mix.at(k, x, y);
+            for (int i = 0; i < m.count; ++i)
+                lobes[size_t(i)] = m.lobes[size_t(i)];
         }
-        const double total = m->totalWeight();
+        double total = 0.0;
+        for (const LobeMoments& l : lobes)
+            total += l.w;
         const double inv = total > 0.0 ? 1.0 / total : 0.0;
-        // Lobe i of the texel, or an empty one.
-        auto lobeAt = [&](int i) {
-            if (k == 0) return i == slot0 ? m->lobes[0] : LobeMoments{};
-            return i < m->count ? m->lobes[size_t(i)] : LobeMoments{};
-        };
-        if (role == TextureRole::MixtureWeights) {
-            for (int i = 0; i < kMaxMixtureLobes; ++i)
-                px[4 * x + i] = unit(lobeAt(i).w * inv);
-        } else if (role == TextureRole::MixtureCross) {
-            for (int i = 0; i < kMaxMixtureLobes; ++i)
-                px[4 * x + i] = unit(lobeAt(i).mxy * inv * invM2 + 0.5);
-        } else {
-            const LobeMoments l = lobeAt(mixtureLobeIndex(role));
-            // An empty lobe stores zeros as its moments: 0 decodes to w·b = 0 only at 0.5.
-            px[4 * x] = unit(l.bx * inv * invB2 + 0.5);
-            px[4 * x + 1] = unit(l.by * inv * invB2 + 0.5);
-            px[4 * x + 2] = unit(l.mxx * inv * invM);
-            px[4 * x + 3] = unit(l.myy * inv * invM);
+        for (int i = 0; i < kMaxMixtureLobes; ++i) {
+            const LobeMoments& l = lobes[size_t(i)];
+            if (weights) weights[4 * x + i] = unit(l.w * inv);
+            if (cross) cross[4 * x + i] = unit(l.mxy * inv * invM2 + 0.5);
+            if (float* p = px[size_t(1 + i)]) {
+                // An empty lobe stores zeros as its moments: w·b = 0 is 0.5.
+                p[4 * x] = unit(l.bx * inv * invB2 + 0.5);
+                p[4 * x + 1] = unit(l.by * inv * invB2 + 0.5);
+                p[4 * x + 2] = unit(l.mxx * inv * invM);
+                p[4 * x + 3] = unit(l.myy * inv * invM);
+            }
         }
     }
 }
@@ -400,10 +398,7 @@ ClampCounts writeRoleRow(const RowPlan& plan, TextureRole role, int k, int y, co
     case TextureRole::MixtureLobe2:
     case TextureRole::MixtureLobe3:
     case TextureRole::MixtureCross:
-        if (plan.mixture) {
-            mixtureRow(plan, role, k, y, width, px);
-            break;
-        }
+        if (plan.mixture) break; // bakeLevel writes them all at once (mixtureRows)
         // K = 1: one lobe of weight 1 with LEAN's moments B and M + I/s (leanMRow's values).
         for (int x = 0; x < width; ++x, px += 4) {
             const double invS = v.invBase[size_t(x)];
@@ -445,6 +440,15 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
         const size_t first = size_t(y) * size_t(width);
         thread_local RowValues values;
         values.fill(plan, k, y, row, width);
+        if (plan.mixture) {
+            std::array<float*, kMixtureRoles> px{};
+            for (size_t r = 0; r < plan.roles.size(); ++r) {
+                const int i = int(plan.roles[r]) - int(TextureRole::MixtureWeights);
+                BakedTexture& tex = out.textures[r];
+                if (i >= 0 && i < kMixtureRoles) px[size_t(i)] = &tex.mips[size_t(k)].texels[first * 4];
+            }
+            mixtureRows(plan, k, y, width, px);
+        }
         for (size_t r = 0; r < plan.roles.size(); ++r) {
             BakedTexture& tex = out.textures[r];
             float* px = &tex.mips[size_t(k)].texels[first * size_t(tex.channels)];

@@ -32,6 +32,44 @@ bool canonicalLess(const LobeMoments& a, const LobeMoments& b) {
 
 } // namespace
 
+// A mixture's lobes decoded once for assigning many slopes to them: per lobe its mean, Σ's entries
+// and det Σ, and log w − ½ log det Σ.
+class LobeScorer {
+public:
+    LobeScorer(const LobeMixture& mixture, double minVariance)
+        : m_count(mixture.count) {
+        for (int i = 0; i < m_count; ++i) {
+            const LobeMoments& l = mixture.lobes[size_t(i)];
+            const auto c = l.covariance(minVariance);
+            Lobe& d = m_lobes[size_t(i)];
+            d.mean = l.mean();
+            d.xx = c[0], d.yy = c[1], d.xy = c[2], d.det = c[0] * c[1] - c[2] * c[2];
+            d.offset = std::log(l.w) - 0.5 * std::log(d.det);
+        }
+    }
+    /// The lobe with the largest log(w N(b; μ, Σ)) (up to a constant); ties to the lower index.
+    int assign(const glm::dvec2& b) const {
+        int best = 0;
+        double bestScore = -std::numeric_limits<double>::infinity();
+        for (int i = 0; i < m_count; ++i) {
+            const Lobe& l = m_lobes[size_t(i)];
+            const glm::dvec2 d = b - l.mean;
+            const double e = (d.x * d.x * l.yy + d.y * d.y * l.xx - 2.0 * d.x * d.y * l.xy) / l.det;
+            const double score = l.offset - 0.5 * e;
+            if (score > bestScore) bestScore = score, best = i;
+        }
+        return best;
+    }
+
+private:
+    struct Lobe {
+        glm::dvec2 mean{0.0};
+        double xx = 1.0, yy = 1.0, xy = 0.0, det = 1.0, offset = 0.0;
+    };
+    std::array<Lobe, kMaxMixtureLobes> m_lobes{};
+    int m_count = 0;
+};
+
 glm::dvec2 LobeMoments::mean() const {
     return w > 0.0 ? glm::dvec2(bx / w, by / w) : glm::dvec2(0.0);
 }
@@ -90,7 +128,11 @@ double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance)
     return mergeCostOf(a, weightedLogDet(a, minVariance), b, weightedLogDet(b, minVariance), minVariance);
 }
 
-LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance) {
+namespace {
+
+// reduceLobes on the caller's vector (changed), with the pair costs in per-thread buffers: no
+// allocation per texel once the buffers have grown.
+LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lobes, int k, double minVariance) {
     k = std::clamp(k, 1, kMaxMixtureLobes);
     std::erase_if(lobes, [](const LobeMoments& l) { return !(l.w > 0.0); });
     double total = 0.0;
@@ -131,8 +173,11 @@ LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVarianc
     // recomputes only the merged lobe's row.
     const size_t n = lobes.size();
     if (n > 1) {
-        std::vector<double> cost(n * n, 0.0), wl(n);
-        std::vector<char> alive(n, 1);
+        thread_local std::vector<double> cost, wl;
+        thread_local std::vector<char> alive;
+        cost.assign(n * n, 0.0);
+        wl.assign(n, 0.0);
+        alive.assign(n, 1);
         for (size_t i = 0; i < n; ++i)
             wl[i] = weightedLogDet(lobes[i], minVariance);
         for (size_t i = 0; i < n; ++i)
@@ -167,6 +212,12 @@ LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVarianc
     for (size_t i = 0; i < lobes.size(); ++i)
         out.lobes[i] = lobes[i];
     return out;
+}
+
+} // namespace
+
+LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance) {
+    return reduceLobesInPlace(lobes, k, minVariance);
 }
 
 MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int k, int lastLevel,
@@ -209,7 +260,7 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
                             lobes.push_back(m.lobes[size_t(c)]);
                     }
                 built.texels[size_t(y) * size_t(l.width) + size_t(x)] =
-                    reduceLobes(lobes, out.m_k, out.m_minVariance);
+                    reduceLobesInPlace(lobes, out.m_k, out.m_minVariance);
             }
         });
         out.m_levels.push_back(std::move(built));
@@ -221,14 +272,13 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         out.m_finestLobe.assign(finest.texelCount(), 0);
         tbb::parallel_for(0, l1.height, [&](int y) {
             for (int x = 0; x < l1.width; ++x) {
-                const LobeMixture& parent = out.at(1, x, y);
+                const LobeScorer parent(out.at(1, x, y), out.m_minVariance);
                 for (int j = l1.yChild[size_t(y)]; j < l1.yChild[size_t(y) + 1]; ++j)
                     for (int i = l1.xChild[size_t(x)]; i < l1.xChild[size_t(x) + 1]; ++i) {
                         const double p =
                             texelPowers ? (*texelPowers)[size_t(j) * size_t(finest.width) + size_t(i)] : s;
                         out.m_finestLobe[size_t(j) * size_t(finest.width) + size_t(i)] =
-                            (unsigned char)assignLobe(parent, LobeMoments::ofNormal(finest.at(i, j), p),
-                                                      out.m_minVariance);
+                            (unsigned char)parent.assign(LobeMoments::ofNormal(finest.at(i, j), p).mean());
                     }
             }
         });
@@ -242,20 +292,7 @@ int MixturePyramid::finestLobe(int x, int y) const {
 }
 
 int assignLobe(const LobeMixture& mixture, const LobeMoments& lobe, double minVariance) {
-    const glm::dvec2 b = lobe.mean();
-    int best = 0;
-    double bestScore = -std::numeric_limits<double>::infinity();
-    for (int i = 0; i < mixture.count; ++i) {
-        const LobeMoments& l = mixture.lobes[size_t(i)];
-        const auto c = l.covariance(minVariance);
-        const double det = c[0] * c[1] - c[2] * c[2];
-        const glm::dvec2 d = b - l.mean();
-        const double e = (d.x * d.x * c[1] + d.y * d.y * c[0] - 2.0 * d.x * d.y * c[2]) / det;
-        // log(w N(b; μ, Σ)) up to a constant.
-        const double score = std::log(l.w) - 0.5 * std::log(det) - 0.5 * e;
-        if (score > bestScore) bestScore = score, best = i;
-    }
-    return best;
+    return LobeScorer(mixture, minVariance).assign(lobe.mean());
 }
 
 const LobeMixture& MixturePyramid::at(int level, int x, int y) const {

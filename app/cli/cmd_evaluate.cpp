@@ -33,6 +33,7 @@ struct EvaluateCliOptions {
     std::vector<std::string> kernels{"box"};
     std::string out = "burnish-evaluate";
     bool errorMaps = false;
+    bool betweenTexels = false;
     int bakeRuns = 3;
     std::string border = "wrap";
     double toksvigMapPower = 100.0;
@@ -72,6 +73,7 @@ int runEvaluate(const EvaluateCliOptions& o) {
     options.evaluate.azimuths = o.azimuths;
     options.evaluate.border = o.border == "clamp" ? BorderMode::Clamp : BorderMode::Wrap;
     options.evaluate.errorMaps = o.errorMaps;
+    options.evaluate.betweenTexels = o.betweenTexels;
     options.evaluate.params.toksvigMapPower = o.toksvigMapPower;
     options.evaluate.mixtureLobes = o.lobes;
     if (!o.methods.empty()) {
@@ -159,6 +161,11 @@ const CommandRegistration registration{
         sub->add_flag(
             "--error-maps", o->errorMaps,
             "Also write per-texel relative error maps as EXR (errors/<method>-s<power>-mip<k>.exr).");
+        sub->add_flag(
+            "--between-texels", o->betweenTexels,
+            "Also evaluate at texel corners, where rendering samples: the truth is the bilinear-weighted "
+            "union of four footprints, each method its shader's value from bilinearly filtered textures "
+            "(extra tables and JSON rows with between_texels).");
         sub->add_option("--bake-runs", o->bakeRuns,
                         "Bake timings are the median of this many runs (default 3).")
             ->check(CLI::Range(1, 100));

@@ -3,7 +3,7 @@
 gathered into one table (Markdown on stdout, the rows as JSON with --json-out).
 
     core/bench/mixture_study.py BIN MAP... [--powers 64,256,1024] [--lobes 1,2,3,4] [--mips 1:4]
-                                [--dense] [--json-out FILE]
+                                [--dense] [--between] [--json-out FILE]
 
 For every map, power and mip it reads LEAN's and each mixture-kK row's relative L1 and energy ratio
 and prints: per K the mean relative L1 over all (map, power, mip) cases next to LEAN's, the mean of
@@ -21,7 +21,7 @@ import sys
 import tempfile
 
 
-def evaluate(binary, path, power, lobes, mips, dense):
+def evaluate(binary, path, power, lobes, mips, dense, between):
     first, last = mips
     with tempfile.TemporaryDirectory() as out:
         cmd = [binary, "evaluate", path, "--power", str(power), "--methods", "lean,mixture",
@@ -29,6 +29,8 @@ def evaluate(binary, path, power, lobes, mips, dense):
                "--bake-runs", "1", "--out", out, "--json", "--allow-implausible"]
         if dense:
             cmd += ["--half-angles", ",".join(str(a) for a in range(0, 41)), "--azimuths", "16"]
+        if between:
+            cmd += ["--between-texels"]
         run = subprocess.run(cmd, capture_output=True, text=True)
         if run.returncode != 0:
             print(f"skipped {path} s={power}: {run.stderr.strip().splitlines()[-1]}", file=sys.stderr)
@@ -44,6 +46,7 @@ def main():
     ap.add_argument("--lobes", default="1,2,3,4")
     ap.add_argument("--mips", default="1:4")
     ap.add_argument("--dense", action="store_true")
+    ap.add_argument("--between", action="store_true", help="also evaluate between texels (--between-texels)")
     ap.add_argument("--json-out")
     a = ap.parse_args()
     powers = [float(p) for p in a.powers.split(",")]
@@ -53,12 +56,13 @@ def main():
     rows, costs = [], None
     for path in a.maps:
         for s in powers:
-            report = evaluate(a.binary, path, s, lobes, mips, a.dense)
+            report = evaluate(a.binary, path, s, lobes, mips, a.dense, a.between)
             if report is None:
                 continue
             if costs is None:
                 costs = report["costs"]
-            by = {(e["variant"], e["mip"]): e for e in report["errors"]}
+            by = {(e["variant"], e["mip"]): e for e in report["errors"] if not e.get("between_texels")}
+            between = {(e["variant"], e["mip"]): e for e in report["errors"] if e.get("between_texels")}
             for mip in range(mips[0], mips[1] + 1):
                 lean = by.get(("lean", mip))
                 if lean is None:
@@ -69,6 +73,12 @@ def main():
                     e = by[(f"mixture-k{k}", mip)]
                     row[f"k{k}"] = e["relative_l1"]
                     row[f"k{k}_energy"] = e["energy_ratio"]
+                    if between:
+                        row[f"k{k}_between"] = between[(f"mixture-k{k}", mip)]["relative_l1"]
+                        row[f"k{k}_between_energy"] = between[(f"mixture-k{k}", mip)]["energy_ratio"]
+                if between:
+                    row["lean_between"] = between[("lean", mip)]["relative_l1"]
+                    row["lean_between_energy"] = between[("lean", mip)]["energy_ratio"]
                 rows.append(row)
             print(f"done {path} s={s:g}", file=sys.stderr)
     if not rows:
@@ -97,6 +107,19 @@ def main():
         worst = [max(r[f"k{k}"] / r["lean"] if r["lean"] > 0 else 1.0 for r in rs) for k in lobes]
         print(f"| {m} | {rs[0]['size']} | {statistics.mean(r['lean'] for r in rs):.4f} | "
               + " | ".join(f"{w:.3f}" for w in worst) + " |")
+    if a.between:
+        print("\nBetween texels (--between-texels):\n")
+        print("| method | mean rel. L1 | mean ratio to LEAN between | worst ratio | energy min | energy max |")
+        print("| --- | ---: | ---: | ---: | ---: | ---: |")
+        lb = [r["lean_between"] for r in rows]
+        lbe = [r["lean_between_energy"] for r in rows]
+        print(f"| lean | {statistics.mean(lb):.4f} | 1 | 1 | {min(lbe):.3f} | {max(lbe):.3f} |")
+        for k in lobes:
+            v = [r[f"k{k}_between"] for r in rows]
+            ratio = [r[f"k{k}_between"] / r["lean_between"] if r["lean_between"] > 0 else 1.0 for r in rows]
+            en = [r[f"k{k}_between_energy"] for r in rows]
+            print(f"| mixture-k{k} | {statistics.mean(v):.4f} | {statistics.mean(ratio):.3f} | {max(ratio):.3f} | "
+                  f"{min(en):.3f} | {max(en):.3f} |")
     if costs:
         print("\nCost (first map):\n")
         print("| method | bake s | shading ns/lobe | fetches | bytes/texel |")

@@ -332,3 +332,65 @@ TEST(MixtureMethod, PresetStoresThreeLobesAndLobesMustMatchIt) {
     EXPECT_FALSE(checkPresetMethod(*findPreset("mixture"), Method::Lean));
     fs::remove_all(dir);
 }
+
+TEST(MixtureMethod, BetweenTexelsAgreesWithABruteForceSumOnATinyMap) {
+    // At each texel's corner the truth is ¼ of each of the four footprints' mean, the method's value
+    // its lobe from the averaged moments (LEAN) or the averaged stored lobes (the mixture).
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-0.6f, 0.6f);
+    const NormalMap map = mapOf(8, 8, [&](int, int) { return glm::vec3(u(rng), u(rng), 1.0f); });
+    EvaluateOptions o;
+    o.basePowers = {64.0};
+    o.methods = {Method::Lean};
+    o.firstMip = 1;
+    o.lastMip = 2;
+    o.betweenTexels = true;
+    auto r = evaluateMethods(map, o);
+    ASSERT_TRUE(r) << r.error();
+    const auto shared = std::make_shared<NormalMap>(map);
+    const NormalPyramid pyramid = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
+    for (int mip = 1; mip <= 2; ++mip) {
+        const PyramidLevel& level = pyramid.level(mip);
+        double abs = 0.0, truthSum = 0.0, valueSum = 0.0;
+        for (const DirectionPair& d : r->directions)
+            for (int y = 0; y < level.height; ++y)
+                for (int x = 0; x < level.width; ++x) {
+                    std::array<NormalMoments, 4> moments;
+                    double truth = 0.0;
+                    for (int c = 0; c < 4; ++c) {
+                        const int xi = (x + (c & 1)) % level.width, yi = (y + (c >> 1)) % level.height;
+                        truth += 0.25 * groundTruthTexel(pyramid, mip, xi, yi, 64.0, d);
+                        moments[size_t(c)] = pyramid.boxMoments(mip, xi, yi);
+                    }
+                    const double value = methodValue(
+                        methodLobeBetween(Method::Lean, moments, {64.0, 64.0, 64.0, 64.0}, {}), d);
+                    abs += std::abs(value - truth);
+                    truthSum += truth;
+                    valueSum += value;
+                }
+        bool found = false;
+        for (const MipError& e : r->errors)
+            if (e.betweenTexels && e.mip == mip) {
+                found = true;
+                EXPECT_NEAR(e.relativeL1, abs / truthSum, 1e-9 * abs / truthSum) << "mip " << mip;
+                EXPECT_NEAR(e.energyRatio, valueSum / truthSum, 1e-9) << "mip " << mip;
+            }
+        EXPECT_TRUE(found);
+    }
+    // The mixture between texels: finite, and K = 1 equal to LEAN there too.
+    o.methods = {Method::Lean, Method::Mixture};
+    o.mixtureLobes = {1, 3};
+    auto m = evaluateMethods(map, o);
+    ASSERT_TRUE(m) << m.error();
+    for (int mip = 1; mip <= 2; ++mip) {
+        double lean = -1, one = -2;
+        for (const MipError& e : m->errors) {
+            if (!e.betweenTexels || e.mip != mip) continue;
+            EXPECT_TRUE(std::isfinite(e.relativeL1));
+            EXPECT_TRUE(std::isfinite(e.energyRatio) && e.energyRatio > 0.0);
+            if (e.method == Method::Lean) lean = e.relativeL1;
+            if (e.method == Method::Mixture && e.lobes == 1) one = e.relativeL1;
+        }
+        EXPECT_EQ(lean, one) << "mip " << mip;
+    }
+}

@@ -124,6 +124,46 @@ std::vector<DirectionPair> evaluationDirections(const EvaluateOptions& options) 
     return pairs;
 }
 
+TexelLobe methodLobeBetween(Method method, const std::array<NormalMoments, 4>& moments,
+                            const std::array<double, 4>& powers, const MethodParams& params) {
+    // The authored power the filtered moments carry: 1/s averaged, as the bake's 1/s on M's diagonal.
+    double invS = 0.0;
+    for (double p : powers)
+        invS += 0.25 / std::max(clampPower(p), kMinBasePower);
+    const double s = 1.0 / invS;
+    if (method == Method::Mixture) method = Method::Lean;
+    if (method == Method::Toksvig || method == Method::Lean || method == Method::Clean) {
+        // Stored values linear in the moments (Na; B and M): filtering averages the moments.
+        const double w[4] = {0.25, 0.25, 0.25, 0.25};
+        return methodLobe(method, combineMoments(moments.data(), w, 4), s, params);
+    }
+    // The stored normal is each texel's renormalized mean: averaged, renormalized by the shader.
+    glm::dvec3 n(0.0);
+    for (const NormalMoments& m : moments)
+        n += 0.25 * glm::dvec3(m.meanDirection());
+    TexelLobe lobe;
+    lobe.normal = glm::length(n) > 0.0 ? glm::vec3(glm::normalize(n)) : glm::vec3(0.0f, 0.0f, 1.0f);
+    if (method == Method::Naive) {
+        lobe.power = std::max(clampPower(s), kMinBasePower);
+    } else if (method == Method::ToksvigMap) {
+        // The 8-bit Toksvig factors filtered, converted at run time.
+        double ft = 0.0;
+        for (const NormalMoments& m : moments)
+            ft += 0.25 * std::round(toksvigFactor(double(m.lengthNa()), params.toksvigMapPower) * 255.0) /
+                  255.0;
+        lobe.power = convertToksvigFactor(ft, params.toksvigMapPower, s) * s;
+    } else {
+        // Variance-to-gloss and vMF store the adjusted gloss: averaged in the encoding (the bake's
+        // default, blackops), decoded by the shader.
+        const GlossEncoding encoding = GlossEncoding::blackOps();
+        double g = 0.0;
+        for (size_t i = 0; i < 4; ++i)
+            g += 0.25 * encoding.value(methodPower(method, moments[i], powers[i], params));
+        lobe.power = encoding.power(float(g));
+    }
+    return lobe;
+}
+
 double methodValue(const TexelLobe& lobe, const DirectionPair& d) {
     return methodNdf(lobe, d.h) * std::max(0.0, glm::dot(glm::dvec3(lobe.normal), d.l));
 }
@@ -246,6 +286,11 @@ ErrorMap errorMapOf(const std::vector<double>& absSum, const std::vector<double>
 // per-texel sums of the error maps ([method][mip] |M − GT|, [mip] GT) when they are asked for.
 struct Pass {
     std::vector<std::vector<std::vector<TexelLobe>>> lobes;
+    // Between texels (options.betweenTexels): per variant and mip the lobe at each texel's corner
+    // point, a decoded mixture for the mixture's variants (K >= 2), and the sums.
+    std::vector<std::vector<std::vector<TexelLobe>>> betweenLobes;
+    std::vector<std::vector<std::vector<DecodedMixture>>> betweenMixtures;
+    std::vector<std::vector<Accumulator>> betweenAcc;
     // Per variant: the mixture's lobes (K >= 2), or none (its TexelLobes above).
     std::vector<const MixturePyramid*> mixtures;
     std::vector<std::vector<Accumulator>> acc;
@@ -286,6 +331,128 @@ void accumulateLevel(const NormalPyramid& pyramid, int k, size_t mi, const std::
             pass.acc[m][mi].absError += r.absError;
             pass.acc[m][mi].method += r.method;
             pass.acc[m][mi].truth += r.truth;
+        }
+}
+
+// The four texels whose shared corner is the point of texel (x, y): (x, y), (x+1, y), (x, y+1),
+// (x+1, y+1) through the border mode.
+std::array<size_t, 4> cornerTexels(const PyramidLevel& level, int x, int y, BorderMode border) {
+    const int x1 = borderIndex(x + 1, level.width, border), y1 = borderIndex(y + 1, level.height, border);
+    const size_t w = size_t(level.width);
+    return {size_t(y) * w + size_t(x), size_t(y) * w + size_t(x1), size_t(y1) * w + size_t(x),
+            size_t(y1) * w + size_t(x1)};
+}
+
+// A mixture texel as its stored textures hold it: lobes over the texel's total weight (shares summing
+// to 1) in their slots; level 0 is the finest normal's lobe in the slot of its parent's lobe.
+std::array<LobeMoments, kMaxMixtureLobes> storedMixture(const MixturePyramid& mix, const NormalMap& map,
+                                                        const std::vector<double>* texelPowers, double s,
+                                                        int k, int x, int y) {
+    std::array<LobeMoments, kMaxMixtureLobes> out{};
+    if (k == 0) {
+        const double p = texelPowers ? (*texelPowers)[size_t(y) * size_t(map.width) + size_t(x)] : s;
+        out[size_t(mix.finestLobe(x, y))] = LobeMoments::ofNormal(map.at(x, y), p);
+        return out;
+    }
+    const LobeMixture& m = mix.at(k, x, y);
+    const double total = m.totalWeight();
+    const double inv = total > 0.0 ? 1.0 / total : 0.0;
+    for (int i = 0; i < m.count; ++i) {
+        LobeMoments l = m.lobes[size_t(i)];
+        l.w *= inv, l.bx *= inv, l.by *= inv, l.mxx *= inv, l.myy *= inv, l.mxy *= inv;
+        out[size_t(i)] = l;
+    }
+    return out;
+}
+
+// Every variant's lobe at every corner point of level k (mip index mi) into the pass.
+void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, size_t mi,
+                  const std::vector<EvaluatedVariant>& variants, const AuthoredPowers* authored,
+                  const std::vector<double>* texelPowers, double s, const MethodParams& params, Pass& pass) {
+    const PyramidLevel& level = pyramid.level(k);
+    const BorderMode border = pyramid.options().border;
+    const size_t n = size_t(level.width) * size_t(level.height);
+    for (size_t m = 0; m < variants.size(); ++m) {
+        const MixturePyramid* mix = pass.mixtures[m];
+        if (mix) {
+            auto& out = pass.betweenMixtures[m][mi];
+            out.assign(n, {});
+            tbb::parallel_for(0, level.height, [&](int y) {
+                for (int x = 0; x < level.width; ++x) {
+                    // Bilinear filtering at the corner: ¼ of each texel's stored lobes, by slot.
+                    const auto t = cornerTexels(level, x, y, border);
+                    std::array<LobeMoments, kMaxMixtureLobes> sum{};
+                    for (size_t c = 0; c < 4; ++c) {
+                        const int xi = int(t[c] % size_t(level.width)), yi = int(t[c] / size_t(level.width));
+                        const auto stored = storedMixture(*mix, map, texelPowers, s, k, xi, yi);
+                        for (size_t i = 0; i < stored.size(); ++i) {
+                            LobeMoments l = stored[i];
+                            l.w *= 0.25, l.bx *= 0.25, l.by *= 0.25, l.mxx *= 0.25, l.myy *= 0.25,
+                                l.mxy *= 0.25;
+                            sum[i] += l;
+                        }
+                    }
+                    LobeMixture filtered;
+                    for (const LobeMoments& l : sum)
+                        if (l.w > 0.0) filtered.lobes[size_t(filtered.count++)] = l;
+                    out[size_t(y) * size_t(level.width) + size_t(x)] =
+                        decodeMixture(filtered, mix->minVariance());
+                }
+            });
+            continue;
+        }
+        auto& out = pass.betweenLobes[m][mi];
+        out.assign(n, {});
+        tbb::parallel_for(0, level.height, [&](int y) {
+            for (int x = 0; x < level.width; ++x) {
+                const auto t = cornerTexels(level, x, y, border);
+                std::array<NormalMoments, 4> moments;
+                std::array<double, 4> powers;
+                for (size_t c = 0; c < 4; ++c) {
+                    const int xi = int(t[c] % size_t(level.width)), yi = int(t[c] / size_t(level.width));
+                    moments[c] = pyramid.boxMoments(k, xi, yi);
+                    powers[c] = authored ? authored->power(k, xi, yi, FilterKernel::Box) : s;
+                }
+                out[size_t(y) * size_t(level.width) + size_t(x)] =
+                    methodLobeBetween(variants[m].method, moments, powers, params);
+            }
+        });
+    }
+}
+
+// One direction pair's error at the corner points of level k: the truth is ¼ of each of the four
+// footprints' means (the bilinear-weighted union), against every variant's filtered lobe.
+void accumulateBetween(const NormalPyramid& pyramid, int k, size_t mi, const std::vector<double>& levelSums,
+                       const DirectionPair& d, Pass& pass) {
+    const PyramidLevel& level = pyramid.level(k);
+    const BorderMode border = pyramid.options().border;
+    const size_t methodCount = pass.lobes.size();
+    std::vector<Accumulator> rows(size_t(level.height) * methodCount);
+    tbb::parallel_for(0, level.height, [&](int y) {
+        for (int x = 0; x < level.width; ++x) {
+            const auto t = cornerTexels(level, x, y, border);
+            double truth = 0.0;
+            for (size_t c = 0; c < 4; ++c) {
+                const int xi = int(t[c] % size_t(level.width)), yi = int(t[c] / size_t(level.width));
+                truth += 0.25 * levelSums[t[c]] / pyramid.footprintCount(k, xi, yi);
+            }
+            const size_t p = size_t(y) * size_t(level.width) + size_t(x);
+            for (size_t m = 0; m < methodCount; ++m) {
+                const double value = pass.mixtures[m] ? mixtureValue(pass.betweenMixtures[m][mi][p], d.l, d.h)
+                                                      : methodValue(pass.betweenLobes[m][mi][p], d);
+                Accumulator& a = rows[size_t(y) * methodCount + m];
+                a.absError += std::abs(value - truth);
+                a.method += value;
+                a.truth += truth;
+            }
+        }
+    });
+    for (int y = 0; y < level.height; ++y)
+        for (size_t m = 0; m < methodCount; ++m) {
+            const Accumulator& r = rows[size_t(y) * methodCount + m];
+            pass.betweenAcc[m][mi].absError += r.absError;
+            pass.betweenAcc[m][mi].method += r.method;
+            pass.betweenAcc[m][mi].truth += r.truth;
         }
 }
 
@@ -381,6 +548,17 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             }
 
         pass.acc.assign(methodCount, std::vector<Accumulator>(size_t(mipCount)));
+        if (options.betweenTexels) {
+            pass.betweenLobes.assign(methodCount, std::vector<std::vector<TexelLobe>>(size_t(mipCount)));
+            pass.betweenMixtures.assign(methodCount,
+                                        std::vector<std::vector<DecodedMixture>>(size_t(mipCount)));
+            pass.betweenAcc.assign(methodCount, std::vector<Accumulator>(size_t(mipCount)));
+            for (int k = firstMip; k <= lastMip; ++k) {
+                if (cancelled()) return Error{std::string(kCancelledMessage)};
+                betweenLevel(map, pyramid, k, size_t(k - firstMip), variants, authored ? &*authored : nullptr,
+                             texelPowers, s, options.params, pass);
+            }
+        }
         auto& texelAbs = pass.texelAbs;
         auto& texelTruth = pass.texelTruth;
         if (options.errorMaps) {
@@ -400,6 +578,8 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             for (int k = firstMip; k <= lastMip; ++k) {
                 if (cancelled()) return Error{std::string(kCancelledMessage)};
                 accumulateLevel(pyramid, k, size_t(k - firstMip), sums[size_t(k)], d, pass);
+                if (options.betweenTexels)
+                    accumulateBetween(pyramid, k, size_t(k - firstMip), sums[size_t(k)], d, pass);
             }
             stepsDone += 1.0;
             if (progress) progress(stepsDone / totalSteps);
@@ -409,6 +589,10 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             for (int k = firstMip; k <= lastMip; ++k) {
                 const size_t mi = size_t(k - firstMip);
                 result.errors.push_back(errorOf(pass.acc[m][mi], variants[m], s, k));
+                if (options.betweenTexels) {
+                    result.errors.push_back(errorOf(pass.betweenAcc[m][mi], variants[m], s, k));
+                    result.errors.back().betweenTexels = true;
+                }
                 if (options.errorMaps)
                     result.maps.push_back(
                         errorMapOf(texelAbs[m][mi], texelTruth[mi], variants[m], s, k, pyramid.level(k)));

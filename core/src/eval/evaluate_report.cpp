@@ -191,22 +191,32 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
             header.push_back("mip " + std::to_string(k));
         std::vector<Align> align(header.size(), Align::Right);
         align[0] = Align::Left;
-        MarkdownTable errors(header, align);
-        MarkdownTable energy(header, align);
-        for (const EvaluatedVariant& v : evaluatedVariants(r.options)) {
-            std::vector<std::string> e{variantLabel(v)}, en{variantLabel(v)};
-            for (int k = r.result.firstMip; k <= r.result.lastMip; ++k)
-                for (const auto& x : r.result.errors)
-                    if (variantOf(x) == v && x.basePower == s && x.mip == k) {
-                        e.push_back(formatNumber(x.relativeL1));
-                        en.push_back(formatNumber(x.energyRatio));
-                    }
-            errors.addRow(e);
-            energy.addRow(en);
+        for (const bool between : {false, true}) {
+            if (between && !r.options.betweenTexels) continue;
+            MarkdownTable errors(header, align);
+            MarkdownTable energy(header, align);
+            for (const EvaluatedVariant& v : evaluatedVariants(r.options)) {
+                std::vector<std::string> e{variantLabel(v)}, en{variantLabel(v)};
+                for (int k = r.result.firstMip; k <= r.result.lastMip; ++k)
+                    for (const auto& x : r.result.errors)
+                        if (variantOf(x) == v && x.betweenTexels == between && x.basePower == s &&
+                            x.mip == k) {
+                            e.push_back(formatNumber(x.relativeL1));
+                            en.push_back(formatNumber(x.energyRatio));
+                        }
+                errors.addRow(e);
+                energy.addRow(en);
+            }
+            if (between)
+                md << "Between texels (at each texel's corner: the truth is the bilinear-weighted union of "
+                      "the four "
+                      "footprints, each method what its shader computes from bilinearly filtered "
+                      "textures):\n\n";
+            md << "Relative L1 error against the ground truth" << (between ? " between texels" : "")
+               << ":\n\n"
+               << errors.render() << "\nEnergy ratio" << (between ? " between texels" : "") << ":\n\n"
+               << energy.render() << "\n";
         }
-        md << "Relative L1 error against the ground truth:\n\n"
-           << errors.render() << "\nEnergy ratio:\n\n"
-           << energy.render() << "\n";
     }
 
     md << "## Cost\n\n";
@@ -255,6 +265,7 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
         j["errors"].push_back({{"method", methodName(e.method)},
                                {"variant", variantLabel(variantOf(e))},
                                {"lobes", e.lobes},
+                               {"between_texels", e.betweenTexels},
                                {"kernel", kernelName(e.kernel)},
                                {"base_power", e.basePower},
                                {"mip", e.mip},
@@ -291,7 +302,7 @@ PlotSpec evaluationErrorPerMipPlot(const EvaluationReport& r) {
             series.color = plotPalette(colour++);
             series.line = true;
             for (const auto& e : r.result.errors)
-                if (variantOf(e) == v && e.basePower == s) {
+                if (variantOf(e) == v && !e.betweenTexels && e.basePower == s) {
                     series.x.push_back(e.mip);
                     series.y.push_back(e.relativeL1);
                 }
@@ -311,8 +322,8 @@ PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& r) {
     std::vector<std::string> names;
     for (const auto& c : r.costs)
         for (const auto& e : r.result.errors)
-            if (e.method == c.method && e.lobes == c.lobes && e.kernel == FilterKernel::Box &&
-                e.basePower == s && e.mip == r.result.lastMip) {
+            if (e.method == c.method && e.lobes == c.lobes && !e.betweenTexels &&
+                e.kernel == FilterKernel::Box && e.basePower == s && e.mip == r.result.lastMip) {
                 points.push_back({"methods", c.nsPerLobe, e.relativeL1});
                 names.emplace_back(variantLabel({c.method, FilterKernel::Box, c.lobes}));
             }

@@ -47,6 +47,43 @@ public:
             d.offset = std::log(l.w) - 0.5 * std::log(d.det);
         }
     }
+    /// Puts the lobes of `child` into the slots of this mixture's lobes: the assignment of child lobes
+    /// to distinct slots 0..slots−1 (the lobe count K, at least child.count) with the largest total score (an
+    /// empty slot scores kEmptySlotScore, below any lobe's); ties to the first in lexicographic order. Empty
+    /// slots get empty lobes; count becomes the last used slot + 1.
+    void reorder(LobeMixture& child, int slots) const {
+        const int n = child.count;
+        if (n == 0) return;
+        std::array<std::array<double, kMaxMixtureLobes>, kMaxMixtureLobes> score{};
+        for (int c = 0; c < n; ++c)
+            for (int slot = 0; slot < slots; ++slot)
+                score[size_t(c)][size_t(slot)] =
+                    slot < m_count && m_lobes[size_t(slot)].offset > -std::numeric_limits<double>::infinity()
+                        ? scoreOf(slot, child.lobes[size_t(c)].mean())
+                        : kEmptySlotScore;
+        std::array<int, kMaxMixtureLobes> best{}, current{};
+        double bestTotal = -std::numeric_limits<double>::infinity();
+        // Depth-first over injective maps of the n child lobes into the slots (at most 4·3·2·1).
+        auto search = [&](auto&& self, int c, unsigned used, double total) -> void {
+            if (c == n) {
+                if (total > bestTotal) bestTotal = total, best = current;
+                return;
+            }
+            for (int slot = 0; slot < slots; ++slot) {
+                if (used & (1u << slot)) continue;
+                current[size_t(c)] = slot;
+                self(self, c + 1, used | (1u << slot), total + score[size_t(c)][size_t(slot)]);
+            }
+        };
+        search(search, 0, 0u, 0.0);
+        LobeMixture out;
+        for (int c = 0; c < n; ++c) {
+            out.lobes[size_t(best[size_t(c)])] = child.lobes[size_t(c)];
+            out.count = std::max(out.count, best[size_t(c)] + 1);
+        }
+        child = out;
+    }
+
     /// The lobe with the largest log(w N(b; μ, Σ)) (up to a constant); ties to the lower index.
     int assign(const glm::dvec2& b) const {
         int best = 0;
@@ -62,6 +99,15 @@ public:
     }
 
 private:
+    // Scores are log-likelihoods; an empty slot is worth less than any lobe a float can score.
+    static constexpr double kEmptySlotScore = -1e300;
+
+    double scoreOf(int slot, const glm::dvec2& b) const {
+        const Lobe& l = m_lobes[size_t(slot)];
+        const glm::dvec2 d = b - l.mean;
+        return l.offset - 0.5 * (d.x * d.x * l.yy + d.y * d.y * l.xx - 2.0 * d.x * d.y * l.xy) / l.det;
+    }
+
     struct Lobe {
         glm::dvec2 mean{0.0};
         double xx = 1.0, yy = 1.0, xy = 0.0, det = 1.0, offset = 0.0;
@@ -265,6 +311,24 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         });
         out.m_levels.push_back(std::move(built));
     }
+    // Top-down, each texel's lobes take the slots of its parent's lobes they belong to most, so the
+    // texels under one parent, and the levels between, give one cluster one slot: bilinear and
+    // trilinear filtering then merge like with like. The top level keeps the canonical order.
+    for (int level = last - 1; level >= 1; --level) {
+        const PyramidLevel& pl = pyramid.level(level + 1);
+        const Level& parents = out.m_levels[size_t(level)];
+        Level& children = out.m_levels[size_t(level - 1)];
+        tbb::parallel_for(0, pl.height, [&](int y) {
+            for (int x = 0; x < pl.width; ++x) {
+                const LobeScorer parent(parents.texels[size_t(y) * size_t(pl.width) + size_t(x)],
+                                        out.m_minVariance);
+                for (int j = pl.yChild[size_t(y)]; j < pl.yChild[size_t(y) + 1]; ++j)
+                    for (int i = pl.xChild[size_t(x)]; i < pl.xChild[size_t(x) + 1]; ++i)
+                        parent.reorder(children.texels[size_t(j) * size_t(children.width) + size_t(i)],
+                                       out.m_k);
+            }
+        });
+    }
     // Level 0's lobe indices, from the level-1 parents.
     out.m_finestWidth = finest.width;
     if (last >= 1 && out.m_k > 1) {
@@ -317,6 +381,7 @@ DecodedMixture decodeMixture(const LobeMixture& mixture, double minVariance) {
     if (!(total > 0.0)) return out;
     for (int i = 0; i < mixture.count; ++i) {
         const LobeMoments& l = mixture.lobes[size_t(i)];
+        if (!(l.w > 0.0)) continue; // an empty slot
         DecodedMixture::Lobe& d = out.lobes[size_t(out.count++)];
         d.share = l.w / total;
         d.mean = l.mean();

@@ -27,6 +27,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <atomic>
 #include <functional>
 #include <optional>
@@ -62,6 +63,14 @@ struct EvaluateOptions {
     BorderMode border = BorderMode::Wrap;
     /// Keep per-texel error maps (relative L1 per texel: Σ_dir|M − GT| / Σ_dir GT).
     bool errorMaps = false;
+    /// Also evaluate between texels, where real rendering samples: at the corner shared by texels
+    /// (x, y)..(x+1, y+1) of each mip. There the ground truth is the bilinear-weighted union of the
+    /// four footprints (¼ of each footprint's mean), and each method's value is what its shader
+    /// computes from bilinearly filtered textures: the stored values averaged (moments for Toksvig,
+    /// LEAN, CLEAN and the mixture's premultiplied lobes of the same index; normals renormalized and
+    /// gloss averaged in the gloss encoding, blackops, for the others). Reported as extra rows with
+    /// betweenTexels set.
+    bool betweenTexels = false;
     /// Authored power per finest texel (row-major, the map's texel count, each in (0, 1e9]). When
     /// set, it replaces basePowers: the evaluation runs once, and results carry the arithmetic
     /// mean of the powers as their basePower label.
@@ -85,7 +94,8 @@ struct MipError {
     double relativeL1;  // Σ|M − GT| / Σ GT over texels and directions
     double energyRatio; // Σ M / Σ GT
     FilterKernel kernel = FilterKernel::Box;
-    int lobes = 0; // the mixture's K (0 for the other methods)
+    int lobes = 0;              // the mixture's K (0 for the other methods)
+    bool betweenTexels = false; // evaluated between texels (EvaluateOptions::betweenTexels)
 };
 
 struct ErrorMap {
@@ -137,6 +147,12 @@ double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,
 
 /// A method's value for one texel and direction.
 double methodValue(const TexelLobe& lobe, const DirectionPair& d);
+
+/// The lobe a method's shader reconstructs halfway between four texels from their bilinearly
+/// filtered stored values (EvaluateOptions::betweenTexels): `moments` and `powers` of the four
+/// texels, equal weights. Not for the mixture (its lobes are not NormalMoments).
+TexelLobe methodLobeBetween(Method method, const std::array<NormalMoments, 4>& moments,
+                            const std::array<double, 4>& powers, const MethodParams& params);
 
 /// Errors of every requested method, power and mip. Fails on bad options (no directions left,
 /// empty power list, non-positive power, mip range outside the map, texelPowers of the wrong size

@@ -11,11 +11,13 @@
 // The fit is hierarchical and deterministic: level 0 has one lobe per finest normal; each texel
 // above reduces the lobes of its children (up to 4K of them) to K by merging, again and again, the
 // pair whose merge loses the least information (Runnalls' bound on the KL divergence of the
-// merge). Lobes whose share of the footprint falls below kMinLobeShare are absorbed first (their
-// weight goes to the cheapest partner, whose shape stays): no lobe is left with a junk mean, and a
-// few steep outlier normals keep their energy without dragging a lobe's moments as they drag LEAN's. Lobes
-// are then put in a canonical order (by mean slope, x then y), so neighbouring texels and levels give the
-// same index to the same cluster.
+// merge), and equal lobes always merge. Lobes whose share of the footprint falls below kMinLobeShare are
+// absorbed first (their weight goes to the cheapest partner, whose shape stays): no lobe is left with a junk
+// mean, and a few steep outlier normals keep their energy without dragging a lobe's moments as they drag
+// LEAN's. Lobes are then put in a canonical order (by mean slope, x then y). Last, top-down, each texel's
+// lobes move to the slots of the parent lobes they belong to most (the assignment of largest likelihood), so
+// the texels under one parent and the levels between give one cluster one slot, and filtering between texels
+// and mips merges like with like.
 #pragma once
 
 #include <burnish/core/prefilter/methods.h>
@@ -59,7 +61,9 @@ struct LobeMoments {
     static LobeMoments ofNormal(const glm::vec3& n, double s);
 };
 
-/// Up to kMaxMixtureLobes lobes of one footprint, in canonical order.
+/// Up to kMaxMixtureLobes lobes of one footprint in slots 0..count−1, an empty slot a lobe of weight
+/// 0. reduceLobes packs them in canonical order; MixturePyramid then moves every level's lobes below
+/// the top into the slots of their parent's lobes.
 struct LobeMixture {
     std::array<LobeMoments, kMaxMixtureLobes> lobes{};
     int count = 0;

@@ -14,13 +14,9 @@ namespace burnish {
 namespace {
 
 // Correlations are kept inside (−kMaxCorrelation, kMaxCorrelation): det Σ stays positive.
-constexpr double kMaxCorrelation = 0.999;
+constexpr double kMaxCorrelation = 0.999; // as methods.glsl: det Σ stays positive in float too
 // A merge costing less than this per unit of weight loses nothing a float texture could store.
-constexpr double kNegligibleMergeCost = 1e-9; // as methods.glsl: det Σ stays positive in float too
-
-double logDet(const std::array<double, 3>& c) {
-    return std::log(c[0] * c[1] - c[2] * c[2]);
-}
+constexpr double kNegligibleMergeCost = 1e-9;
 
 // Canonical order: by mean slope x, then y, then weight (a total order on distinct lobes).
 bool canonicalLess(const LobeMoments& a, const LobeMoments& b) {
@@ -52,7 +48,7 @@ public:
     /// empty slot scores kEmptySlotScore, below any lobe's); ties to the first in lexicographic order. Empty
     /// slots get empty lobes; count becomes the last used slot + 1.
     void reorder(LobeMixture& child, int slots) const {
-        const int n = child.count;
+        const int n = std::min(child.count, kMaxMixtureLobes);
         if (n == 0) return;
         std::array<std::array<double, kMaxMixtureLobes>, kMaxMixtureLobes> score{};
         for (int c = 0; c < n; ++c)
@@ -65,7 +61,7 @@ public:
         double bestTotal = -std::numeric_limits<double>::infinity();
         // Depth-first over injective maps of the n child lobes into the slots (at most 4·3·2·1).
         auto search = [&](auto&& self, int c, unsigned used, double total) -> void {
-            if (c == n) {
+            if (c >= n || c >= kMaxMixtureLobes) {
                 if (total > bestTotal) bestTotal = total, best = current;
                 return;
             }
@@ -156,15 +152,34 @@ double LobeMixture::totalWeight() const {
 
 namespace {
 
+// log det Σ of the lobe with raw moments (w, w·b, w·M), w > 0: LobeMoments::covariance's clamps
+// (variances at least minVariance, |ρ| <= kMaxCorrelation) on det directly, without the square root,
+// and the logarithm without a call (log2Positive: det is a positive normal double, at least
+// minVariance²·(1 − kMaxCorrelation²)). The merge costs' inner loop: no branch, no call.
+double logDetOfMoments(double w, double bx, double by, double mxx, double myy, double mxy,
+                       double minVariance) {
+    const double inv = 1.0 / w;
+    const double mx = bx * inv, my = by * inv;
+    double xx = mxx * inv - mx * mx, yy = myy * inv - my * my;
+    xx = xx > minVariance ? xx : minVariance; // also NaN → minVariance
+    yy = yy > minVariance ? yy : minVariance;
+    const double xy = mxy * inv - mx * my;
+    const double limit = kMaxCorrelation * kMaxCorrelation * xx * yy;
+    double xy2 = xy * xy;
+    xy2 = xy2 < limit ? xy2 : limit; // also NaN → the limit
+    return kLn2<double> * log2Positive(xx * yy - xy2);
+}
+
 // w · log det Σ of a lobe: the part of the merge cost each lobe brings, computed once per lobe.
 double weightedLogDet(const LobeMoments& a, double minVariance) {
-    return a.w * logDet(a.covariance(minVariance));
+    return a.w * logDetOfMoments(a.w, a.bx, a.by, a.mxx, a.myy, a.mxy, minVariance);
 }
 
 double mergeCostOf(const LobeMoments& a, double wlA, const LobeMoments& b, double wlB, double minVariance) {
-    LobeMoments ab = a;
-    ab += b;
-    const double cost = 0.5 * (ab.w * logDet(ab.covariance(minVariance)) - wlA - wlB);
+    const double w = a.w + b.w;
+    const double ld = logDetOfMoments(w, a.bx + b.bx, a.by + b.by, a.mxx + b.mxx, a.myy + b.myy,
+                                      a.mxy + b.mxy, minVariance);
+    const double cost = 0.5 * (w * ld - wlA - wlB);
     return cost > 0.0 ? cost : 0.0; // rounding below the bound's 0
 }
 

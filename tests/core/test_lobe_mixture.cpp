@@ -5,6 +5,8 @@
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/methods.h>
 
+#include "normal_map_of.h"
+
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -21,13 +23,7 @@ using namespace burnish;
 
 namespace {
 
-NormalMap mapOf(int w, int h, const std::function<glm::vec3(int, int)>& normal) {
-    std::vector<glm::vec3> n;
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            n.push_back(glm::normalize(normal(x, y)));
-    return makeNormalMap(w, h, std::move(n));
-}
+using test::mapOf;
 
 struct Built {
     std::shared_ptr<NormalMap> map;

@@ -9,6 +9,8 @@
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/methods.h>
 
+#include "normal_map_of.h"
+
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -24,13 +26,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-NormalMap mapOf(int w, int h, const std::function<glm::vec3(int, int)>& normal) {
-    std::vector<glm::vec3> n;
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            n.push_back(glm::normalize(normal(x, y)));
-    return makeNormalMap(w, h, std::move(n));
-}
+using test::mapOf;
 
 // Normals tilted one way on black squares and the other on white (a two-cluster footprint).
 NormalMap checker(int size, float tilt) {
@@ -284,8 +280,9 @@ TEST(MixtureMethod, EvaluateReportsEveryKAndOneLobeIsLean) {
         for (int k = 2; k <= 4; ++k) {
             const MipError e = find(Method::Mixture, k, mip);
             EXPECT_LT(e.relativeL1, previous) << "k " << k << " mip " << mip;
-            if (k >= 3 && mip >= 2)
+            if (k >= 3 && mip >= 2) {
                 EXPECT_LT(e.relativeL1, 0.5 * lean.relativeL1) << "k " << k << " mip " << mip;
+            }
             EXPECT_NEAR(e.energyRatio, 1.0, 0.03);
             previous = e.relativeL1;
         }

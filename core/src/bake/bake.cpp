@@ -345,8 +345,8 @@ void mixtureRows(const RowPlan& plan, int k, int y, int width, const std::array<
     }
 }
 
-ClampCounts writeRoleRow(const RowPlan& plan, TextureRole role, int k, int y, const NormalMoments* row,
-                         const RowValues& v, int width, float* px) {
+ClampCounts writeRoleRow(const RowPlan& plan, TextureRole role, const NormalMoments* row, const RowValues& v,
+                         int width, float* px) {
     const BakeOptions& o = plan.options;
     const double sB = plan.scales.slope, sM = plan.scales.moment;
     const double invB2 = 1.0 / (2 * sB), invM = 1.0 / sM, invM2 = 1.0 / (2 * sM);
@@ -452,7 +452,7 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
         for (size_t r = 0; r < plan.roles.size(); ++r) {
             BakedTexture& tex = out.textures[r];
             float* px = &tex.mips[size_t(k)].texels[first * size_t(tex.channels)];
-            const ClampCounts c = writeRoleRow(plan, plan.roles[r], k, y, row, values, width, px);
+            const ClampCounts c = writeRoleRow(plan, plan.roles[r], row, values, width, px);
             rowCounts[size_t(y)].low += c.low;
             rowCounts[size_t(y)].high += c.high;
         }

@@ -15,9 +15,14 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <Imath/half.h>
+
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <random>
 
@@ -163,8 +168,8 @@ TEST(MixtureMethod, FlatMapStoresTheBasePowerIn8BitAndHalfFloat) {
     const double scale = lobe.decode[2].scale;
     const double eight = std::round(double(stored) * 255.0) / 255.0 * scale;
     EXPECT_NEAR(eight * s, 1.0, scale * s / 255.0);
-    const double half = double(stored) * scale; // exact in half: a power of two over s = 16
-    EXPECT_NEAR(half * s, 1.0, 1.0 / 2048.0);
+    const double asHalf = double(stored) * scale; // exact in half: a power of two over s = 16
+    EXPECT_NEAR(asHalf * s, 1.0, 1.0 / 2048.0);
 }
 
 TEST(MixtureMethod, SteepOutliersNanTexelsAndOddSizesStayFinite) {
@@ -390,4 +395,50 @@ TEST(MixtureMethod, BetweenTexelsAgreesWithABruteForceSumOnATinyMap) {
         }
         EXPECT_EQ(lean, one) << "mip " << mip;
     }
+}
+
+TEST(MixtureMethod, DdsExportIsHalfFloatWithTheWholeChain) {
+    // The mixture preset's DDS files are RGBA16F with a DX10 header (nvtt 2.0 writes neither): every
+    // level, each stored value as a half, so the moments keep 11 bits of mantissa.
+    const fs::path dir = fs::temp_directory_path() / ("burnish-mixture-dds-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    BakeJobSpec spec;
+    spec.input = std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png";
+    spec.out = dir.string();
+    spec.preset = "mixture";
+    spec.format = "dds";
+    auto job = resolveBakeJob(spec);
+    ASSERT_TRUE(job) << job.error();
+    ASSERT_TRUE(runBakeJob(*job));
+    auto loaded = loadNormalMap(spec.input);
+    ASSERT_TRUE(loaded);
+    const BakeOutput baked = bakeMixture(*loaded, 3, job->bake.basePower);
+    const BakedTexture& lobe = *baked.find(TextureRole::MixtureLobe1);
+    std::ifstream in(dir / "trak-rust1_nm_mixture-lobe1.dds", std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    auto u32 = [&](size_t at) {
+        return std::uint32_t(std::uint8_t(bytes[at])) | std::uint32_t(std::uint8_t(bytes[at + 1])) << 8 |
+               std::uint32_t(std::uint8_t(bytes[at + 2])) << 16 |
+               std::uint32_t(std::uint8_t(bytes[at + 3])) << 24;
+    };
+    ASSERT_GT(bytes.size(), 148u);
+    EXPECT_EQ(bytes.substr(0, 4), "DDS ");
+    EXPECT_EQ(bytes.substr(84, 4), "DX10");
+    EXPECT_EQ(u32(128), 10u); // DXGI_FORMAT_R16G16B16A16_FLOAT
+    EXPECT_EQ(u32(16), std::uint32_t(loaded->width));
+    EXPECT_EQ(u32(12), std::uint32_t(loaded->height));
+    EXPECT_EQ(u32(28), std::uint32_t(lobe.mips.size()));
+    size_t texels = 0;
+    for (const auto& m : lobe.mips)
+        texels += size_t(m.width) * size_t(m.height);
+    EXPECT_EQ(bytes.size(), 148u + texels * 8u);
+    // Mip 0 decodes to the bake's values within half precision.
+    double worst = 0.0;
+    for (size_t i = 0; i < lobe.mips[0].texels.size(); ++i) {
+        Imath::half h;
+        h.setBits(std::uint16_t(std::uint8_t(bytes[148 + 2 * i]) | std::uint8_t(bytes[149 + 2 * i]) << 8));
+        worst = std::max(worst, std::abs(double(float(h)) - double(lobe.mips[0].texels[i])));
+    }
+    EXPECT_LT(worst, 1.0 / 2048.0);
+    fs::remove_all(dir);
 }

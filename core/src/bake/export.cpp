@@ -87,6 +87,7 @@ std::string storageName(ExportFormat format, std::optional<DdsCompression> compr
     case ExportFormat::TiffFloat:
         return "float";
     case ExportFormat::Dds:
+        if (compression == DdsCompression::Rgba16f) return "half";
         return compression && *compression != DdsCompression::Rgba8
                    ? std::string(ddsCompressionName(*compression))
                    : std::string("uint8");
@@ -107,6 +108,7 @@ int storedChannelCount(ExportFormat format, std::optional<DdsCompression> compre
             return 2;
         case DdsCompression::Bc3:
         case DdsCompression::Rgba8:
+        case DdsCompression::Rgba16f:
             return 4;
         }
     }
@@ -280,7 +282,8 @@ Result<PlannedFile> planFile(const BakeOutput& bake, const Preset& preset, const
                          " channels; bc5 holds two (a normal's x and y)"};
         // Hill 2011: run-time Toksvig reads the variance from |Na|; a two-channel normal rebuilds
         // a unit z and block compression changes the length.
-        if (methodSpec(bake.method).unnormalizedNormal && holdsNormal && c != DdsCompression::Rgba8)
+        if (methodSpec(bake.method).unnormalizedNormal && holdsNormal && c != DdsCompression::Rgba8 &&
+            c != DdsCompression::Rgba16f)
             return Error{"method toksvig reads the variance from the stored normal's length, which " + cname +
                          " destroys (Hill 2011); store the normal uncompressed (rgba8 or a non-DDS format)"};
         if (c == DdsCompression::Bc5 && zLast) {
@@ -289,13 +292,14 @@ Result<PlannedFile> planFile(const BakeOutput& bake, const Preset& preset, const
             pf.info.notes.push_back("bc5 keeps x and y; rebuild z = sqrt(max(0, 1 - x^2 - y^2))");
         }
     }
-    if (highPrecision && exportFormatIsEightBit(format) && !options.allowEightBit)
+    const bool eightBit = storesEightBits(format, pf.info.compression);
+    if (highPrecision && eightBit && !options.allowEightBit)
         return Error{
             "file '" + file.name + "' holds " + std::string(methodName(bake.method)) +
             " moments that need 16-bit or float storage, and " + std::string(exportFormatName(format)) +
-            " stores 8 bits (choose png16, tiff16, exr-half, exr-float or tiff-float, or allow 8-bit "
+            " stores 8 bits (choose png16, tiff16, exr-half, exr-float, tiff-float or dds with --compression rgba16f, or allow 8-bit "
             "storage with --allow-8bit)"};
-    if (highPrecision && exportFormatIsEightBit(format))
+    if (highPrecision && eightBit)
         pf.info.notes.push_back("8-bit storage of a high-precision texture was allowed explicitly");
     if (flipGreen && std::any_of(sources.begin(), sources.end(), [](const Source& s) { return s.flip; }))
         pf.info.notes.push_back(

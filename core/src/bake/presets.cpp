@@ -54,11 +54,12 @@ struct CompressionInfo {
     const char* name;
 };
 
-constexpr std::array<CompressionInfo, 4> kCompressions{{
+constexpr std::array<CompressionInfo, 5> kCompressions{{
     {DdsCompression::Bc4, "bc4"},
     {DdsCompression::Bc5, "bc5"},
     {DdsCompression::Bc3, "bc3"},
     {DdsCompression::Rgba8, "rgba8"},
+    {DdsCompression::Rgba16f, "rgba16f"},
 }};
 
 template <class Names> std::string joinNames(const Names& names) {
@@ -441,6 +442,11 @@ bool exportFormatIsEightBit(ExportFormat format) {
     for (const auto& f : kFormats)
         if (f.format == format) return f.eightBit;
     return true;
+}
+
+bool storesEightBits(ExportFormat format, std::optional<DdsCompression> compression) {
+    if (format == ExportFormat::Dds && compression == DdsCompression::Rgba16f) return false;
+    return exportFormatIsEightBit(format);
 }
 
 const std::vector<DdsCompression>& allDdsCompressions() {

@@ -3,6 +3,8 @@
 #include <burnish/core/env/storage.h>
 #include <burnish/core/util/files.h>
 
+#include "dds_dx10.h"
+
 #include <Imath/half.h>
 #include <fmt/format.h>
 
@@ -17,11 +19,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-void put32(std::string& s, std::uint32_t v) {
-    for (int i = 0; i < 4; ++i)
-        s.push_back(char((v >> (8 * i)) & 0xFF));
-}
-
 std::uint32_t get32(std::string_view s, size_t at) {
     std::uint32_t v = 0;
     for (int i = 0; i < 4; ++i)
@@ -29,19 +26,7 @@ std::uint32_t get32(std::string_view s, size_t at) {
     return v;
 }
 
-// Microsoft, "DDS_HEADER structure" and "DDS_HEADER_DXT10 structure" (Direct3D 10+ DDS files)
-constexpr std::uint32_t kDdsMagic = 0x20534444; // "DDS "
-constexpr std::uint32_t kDdsHeaderSize = 124;
-constexpr std::uint32_t kDdsCaps = 0x1, kDdsHeight = 0x2, kDdsWidth = 0x4, kDdsPitch = 0x8;
-constexpr std::uint32_t kDdsPixelFormat = 0x1000, kDdsMipMapCount = 0x20000;
-constexpr std::uint32_t kDdpfFourCC = 0x4;
-constexpr std::uint32_t kFourCCDx10 = 0x30315844; // "DX10"
-constexpr std::uint32_t kCapsComplex = 0x8, kCapsTexture = 0x1000, kCapsMipMap = 0x400000;
-constexpr std::uint32_t kCaps2Cubemap = 0x200, kCaps2AllFaces = 0xFC00; // +X..−Z face bits
-constexpr std::uint32_t kDxgiR16G16B16A16Float = 10;
-constexpr std::uint32_t kD3d10ResourceTexture2D = 3;
-constexpr std::uint32_t kResourceMiscTextureCube = 0x4;
-constexpr size_t kDdsDataOffset = 4 + kDdsHeaderSize + 20;
+using namespace dds;
 
 std::uint16_t toHalfBits(float v) {
     // Finite and within half's range: above 65504 half would round to +Inf; a sun texel is stored at the
@@ -53,34 +38,8 @@ std::uint16_t toHalfBits(float v) {
 } // namespace
 
 std::string encodeCubeDds(const CubeMap& cube) {
-    std::string s;
     const std::uint32_t size = std::uint32_t(cube.faceSize());
-    const std::uint32_t mips = std::uint32_t(cube.mipCount());
-    put32(s, kDdsMagic);
-    put32(s, kDdsHeaderSize);
-    put32(s, kDdsCaps | kDdsHeight | kDdsWidth | kDdsPitch | kDdsPixelFormat | kDdsMipMapCount);
-    put32(s, size);     // height
-    put32(s, size);     // width
-    put32(s, size * 8); // pitch: 4 half channels per texel
-    put32(s, 0);        // depth
-    put32(s, mips);
-    for (int i = 0; i < 11; ++i)
-        put32(s, 0); // reserved
-    put32(s, 32);    // DDS_PIXELFORMAT size
-    put32(s, kDdpfFourCC);
-    put32(s, kFourCCDx10);
-    for (int i = 0; i < 5; ++i)
-        put32(s, 0); // RGB bit count and masks: unused with a FourCC
-    put32(s, kCapsComplex | kCapsTexture | (mips > 1 ? kCapsMipMap : 0));
-    put32(s, kCaps2Cubemap | kCaps2AllFaces);
-    put32(s, 0); // caps3
-    put32(s, 0); // caps4
-    put32(s, 0); // reserved2
-    put32(s, kDxgiR16G16B16A16Float);
-    put32(s, kD3d10ResourceTexture2D);
-    put32(s, kResourceMiscTextureCube);
-    put32(s, 1); // array size: one cube
-    put32(s, 0); // miscFlags2: alpha mode unknown
+    std::string s = rgba16fHeader(size, size, std::uint32_t(cube.mipCount()), true);
     const std::uint16_t one = Imath::half(1.0f).bits();
     for (int f = 0; f < kCubeFaces; ++f)
         for (const CubeLevel& level : cube.levels) {
@@ -97,7 +56,7 @@ std::string encodeCubeDds(const CubeMap& cube) {
 }
 
 Result<CubeMap> decodeCubeDds(std::string_view s) {
-    if (s.size() < kDdsDataOffset || get32(s, 0) != kDdsMagic || get32(s, 4) != kDdsHeaderSize)
+    if (s.size() < kDataOffset || get32(s, 0) != kMagic || get32(s, 4) != kHeaderSize)
         return Error{"not a DDS file (no 'DDS ' header)"};
     if (get32(s, 4 + 80) != kFourCCDx10 || get32(s, 4 + 124) != kDxgiR16G16B16A16Float)
         return Error{"DDS is not a DX10 RGBA16F texture"};
@@ -110,7 +69,7 @@ Result<CubeMap> decodeCubeDds(std::string_view s) {
         return Error{fmt::format("DDS cube {}x{} with {} mips is not a square power-of-two chain", width,
                                  height, mips)};
     CubeMap cube = CubeMap::zeros(int(width), int(mips));
-    size_t at = kDdsDataOffset;
+    size_t at = kDataOffset;
     size_t need = at;
     for (const CubeLevel& l : cube.levels)
         need += size_t(kCubeFaces) * size_t(l.size) * size_t(l.size) * 8;

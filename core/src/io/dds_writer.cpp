@@ -2,6 +2,8 @@
 // collected in memory (export.cpp stages and renames the bytes).
 #include <burnish/core/bake/export.h>
 
+#include "dds_dx10.h"
+
 #include <nvtt/nvtt.h>
 
 #include <algorithm>
@@ -42,9 +44,24 @@ nvtt::Format nvttFormat(DdsCompression compression) {
     case DdsCompression::Bc3:
         return nvtt::Format_BC3;
     case DdsCompression::Rgba8:
+    case DdsCompression::Rgba16f: // written by hand (encodeRgba16f)
         return nvtt::Format_RGBA;
     }
     return nvtt::Format_RGBA;
+}
+
+// RGBA16F with a DX10 header, every level in order: the stored values in [0, 1] as half floats
+// (missing colour channels 0, missing alpha 1), for moments that 8 bits would ruin.
+std::string encodeRgba16f(const std::vector<TextureMip>& mips, int channels) {
+    std::string s = dds::rgba16fHeader(std::uint32_t(mips[0].width), std::uint32_t(mips[0].height),
+                                       std::uint32_t(mips.size()), false);
+    for (const auto& m : mips)
+        for (size_t t = 0; t < size_t(m.width) * size_t(m.height); ++t)
+            for (int c = 0; c < 4; ++c)
+                dds::putHalf(s, c < channels ? std::clamp(float(m.texels[t * size_t(channels) + size_t(c)]),
+                                                          0.0f, 1.0f)
+                                             : (c == 3 ? 1.0f : 0.0f));
+    return s;
 }
 
 } // namespace
@@ -71,6 +88,7 @@ Result<std::string> encodeDds(const std::vector<TextureMip>& mips, int channels,
             return Error{"DDS: mip " + std::to_string(k) + " has the wrong number of values"};
     }
 
+    if (compression == DdsCompression::Rgba16f) return encodeRgba16f(mips, channels);
     nvtt::InputOptions input;
     input.setTextureLayout(nvtt::TextureType_2D, mips[0].width, mips[0].height);
     input.setFormat(nvtt::InputFormat_BGRA_8UB);

@@ -38,6 +38,7 @@ enum class DdsCompression {
     Bc5,   // two channels (ATI2): normal x, y; z is rebuilt by the shader
     Bc3,   // RGB + alpha (DXT5): normal + gloss in alpha
     Rgba8, // uncompressed 8-bit A8R8G8B8
+    Rgba16f, // uncompressed half float R16G16B16A16_FLOAT (DX10 header): moments that need 16 bits
 };
 
 const std::vector<ExportFormat>& allExportFormats();
@@ -47,6 +48,8 @@ Result<ExportFormat> exportFormatFromName(std::string_view name);
 std::string_view exportFormatExtension(ExportFormat format);
 /// 8 bits or fewer per stored channel (PNG8, TGA, every DDS variant).
 bool exportFormatIsEightBit(ExportFormat format);
+/// The same for a file with its DDS compression: DDS stores 8 bits except as rgba16f.
+bool storesEightBits(ExportFormat format, std::optional<DdsCompression> compression);
 
 const std::vector<DdsCompression>& allDdsCompressions();
 std::string_view ddsCompressionName(DdsCompression compression);

@@ -294,11 +294,12 @@ Result<PlannedFile> planFile(const BakeOutput& bake, const Preset& preset, const
     }
     const bool eightBit = storesEightBits(format, pf.info.compression);
     if (highPrecision && eightBit && !options.allowEightBit)
-        return Error{
-            "file '" + file.name + "' holds " + std::string(methodName(bake.method)) +
-            " moments that need 16-bit or float storage, and " + std::string(exportFormatName(format)) +
-            " stores 8 bits (choose png16, tiff16, exr-half, exr-float, tiff-float or dds with --compression rgba16f, or allow 8-bit "
-            "storage with --allow-8bit)"};
+        return Error{"file '" + file.name + "' holds " + std::string(methodName(bake.method)) +
+                     " moments that need 16-bit or float storage, and " +
+                     std::string(exportFormatName(format)) +
+                     " stores 8 bits (choose png16, tiff16, exr-half, exr-float, tiff-float or dds with "
+                     "--compression rgba16f, or allow 8-bit "
+                     "storage with --allow-8bit)"};
     if (highPrecision && eightBit)
         pf.info.notes.push_back("8-bit storage of a high-precision texture was allowed explicitly");
     if (flipGreen && std::any_of(sources.begin(), sources.end(), [](const Source& s) { return s.flip; }))

@@ -34,10 +34,10 @@ enum class ExportFormat {
 
 /// DDS block compression (or none) of one file.
 enum class DdsCompression {
-    Bc4,   // one channel (ATI1)
-    Bc5,   // two channels (ATI2): normal x, y; z is rebuilt by the shader
-    Bc3,   // RGB + alpha (DXT5): normal + gloss in alpha
-    Rgba8, // uncompressed 8-bit A8R8G8B8
+    Bc4,     // one channel (ATI1)
+    Bc5,     // two channels (ATI2): normal x, y; z is rebuilt by the shader
+    Bc3,     // RGB + alpha (DXT5): normal + gloss in alpha
+    Rgba8,   // uncompressed 8-bit A8R8G8B8
     Rgba16f, // uncompressed half float R16G16B16A16_FLOAT (DX10 header): moments that need 16 bits
 };
 

@@ -299,6 +299,19 @@ struct Pass {
     bool errorMaps = false;
 };
 
+// Adds per-row partial sums (rows[y·M + m], M variants) to acc[m][mi] in row order: deterministic.
+void addRows(const std::vector<Accumulator>& rows, int height, size_t mi,
+             std::vector<std::vector<Accumulator>>& acc) {
+    const size_t methodCount = acc.size();
+    for (int y = 0; y < height; ++y)
+        for (size_t m = 0; m < methodCount; ++m) {
+            const Accumulator& r = rows[size_t(y) * methodCount + m];
+            acc[m][mi].absError += r.absError;
+            acc[m][mi].method += r.method;
+            acc[m][mi].truth += r.truth;
+        }
+}
+
 // Adds one direction pair's error at level k (evaluated mip mi) to the pass: per texel the truth
 // (the mean of its footprint's sum) against every variant's value. Per-row partial sums, added in
 // row order afterwards: deterministic results.
@@ -325,13 +338,7 @@ void accumulateLevel(const NormalPyramid& pyramid, int k, size_t mi, const std::
             }
         }
     });
-    for (int y = 0; y < level.height; ++y)
-        for (size_t m = 0; m < methodCount; ++m) {
-            const Accumulator& r = rows[size_t(y) * methodCount + m];
-            pass.acc[m][mi].absError += r.absError;
-            pass.acc[m][mi].method += r.method;
-            pass.acc[m][mi].truth += r.truth;
-        }
+    addRows(rows, level.height, mi, pass.acc);
 }
 
 // The four texels whose shared corner is the point of texel (x, y): (x, y), (x+1, y), (x, y+1),
@@ -447,13 +454,7 @@ void accumulateBetween(const NormalPyramid& pyramid, int k, size_t mi, const std
             }
         }
     });
-    for (int y = 0; y < level.height; ++y)
-        for (size_t m = 0; m < methodCount; ++m) {
-            const Accumulator& r = rows[size_t(y) * methodCount + m];
-            pass.betweenAcc[m][mi].absError += r.absError;
-            pass.betweenAcc[m][mi].method += r.method;
-            pass.betweenAcc[m][mi].truth += r.truth;
-        }
+    addRows(rows, level.height, mi, pass.betweenAcc);
 }
 
 } // namespace

@@ -38,6 +38,20 @@ def evaluate(binary, path, power, lobes, mips, dense, between):
         return json.loads(run.stdout)
 
 
+def summary(rows, lobes, suffix):
+    """LEAN's and each K's row of the summary table, from the fields lean<suffix>, k<K><suffix> and
+    their _energy ones (suffix "" for the aligned figures, "_between" between texels)."""
+    print("| method | mean rel. L1 | median | mean ratio to LEAN | worst ratio | cases worse than LEAN | energy min | energy max |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for name, key in [("lean", "lean")] + [(f"mixture-k{k}", f"k{k}") for k in lobes]:
+        v = [r[key + suffix] for r in rows]
+        ratio = [r[key + suffix] / r["lean" + suffix] if r["lean" + suffix] > 0 else 1.0 for r in rows]
+        en = [r[key + suffix + "_energy"] for r in rows]
+        worse = sum(1 for x in ratio if x > 1.0)
+        print(f"| {name} | {statistics.mean(v):.4f} | {statistics.median(v):.4f} | {statistics.mean(ratio):.3f} | "
+              f"{max(ratio):.3f} | {worse} | {min(en):.3f} | {max(en):.3f} |")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("binary")
@@ -87,18 +101,7 @@ def main():
     maps = sorted({r["map"] for r in rows})
     print(f"{len(maps)} maps, powers {a.powers}, mips {a.mips}, {len(rows)} cases"
           f"{' (dense directions: 0..40 deg every 1 deg x 16 azimuths)' if a.dense else ''}\n")
-    print("| method | mean rel. L1 | median | mean ratio to LEAN | worst ratio | cases worse than LEAN | energy min | energy max |")
-    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-    lean = [r["lean"] for r in rows]
-    le = [r["lean_energy"] for r in rows]
-    print(f"| lean | {statistics.mean(lean):.4f} | {statistics.median(lean):.4f} | 1 | 1 | - | {min(le):.3f} | {max(le):.3f} |")
-    for k in lobes:
-        v = [r[f"k{k}"] for r in rows]
-        ratio = [r[f"k{k}"] / r["lean"] if r["lean"] > 0 else 1.0 for r in rows]
-        en = [r[f"k{k}_energy"] for r in rows]
-        worse = sum(1 for x in ratio if x > 1.0)
-        print(f"| mixture-k{k} | {statistics.mean(v):.4f} | {statistics.median(v):.4f} | {statistics.mean(ratio):.3f} | "
-              f"{max(ratio):.3f} | {worse} | {min(en):.3f} | {max(en):.3f} |")
+    summary(rows, lobes, "")
     print("\nPer map, the worst ratio to LEAN over powers and mips (and LEAN's mean rel. L1):\n")
     print("| map | size | lean | " + " | ".join(f"k{k}" for k in lobes) + " |")
     print("| --- | --- | ---: | " + " | ".join("---:" for _ in lobes) + " |")
@@ -109,17 +112,7 @@ def main():
               + " | ".join(f"{w:.3f}" for w in worst) + " |")
     if a.between:
         print("\nBetween texels (--between-texels):\n")
-        print("| method | mean rel. L1 | mean ratio to LEAN between | worst ratio | energy min | energy max |")
-        print("| --- | ---: | ---: | ---: | ---: | ---: |")
-        lb = [r["lean_between"] for r in rows]
-        lbe = [r["lean_between_energy"] for r in rows]
-        print(f"| lean | {statistics.mean(lb):.4f} | 1 | 1 | {min(lbe):.3f} | {max(lbe):.3f} |")
-        for k in lobes:
-            v = [r[f"k{k}_between"] for r in rows]
-            ratio = [r[f"k{k}_between"] / r["lean_between"] if r["lean_between"] > 0 else 1.0 for r in rows]
-            en = [r[f"k{k}_between_energy"] for r in rows]
-            print(f"| mixture-k{k} | {statistics.mean(v):.4f} | {statistics.mean(ratio):.3f} | {max(ratio):.3f} | "
-                  f"{min(en):.3f} | {max(en):.3f} |")
+        summary(rows, lobes, "_between")
     if costs:
         print("\nCost (first map):\n")
         print("| method | bake s | shading ns/lobe | fetches | bytes/texel |")

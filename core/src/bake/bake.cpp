@@ -298,9 +298,6 @@ struct ClampCounts {
     size_t low = 0, high = 0;
 };
 
-// One role's texels of a row into `px` (`channels` floats a texel); the gloss role counts the powers
-// it clamps to the encoding's range. sB and sM are powers of two, so multiplying by their
-// reciprocals is exact.
 // The mixture roles' texels of row y of level k, every texture of them in one pass (px[r] for role
 // MixtureWeights + r, null when not produced): each texel's lobes as premultiplied moments over its
 // total weight (weights summing to 1), scaled into [0, 1]. Level 0 is one lobe per finest normal, at
@@ -315,36 +312,28 @@ void mixtureRows(const RowPlan& plan, int k, int y, int width, const std::array<
     float* weights = px[0];
     float* cross = px[kMixtureRoles - 1];
     for (int x = 0; x < width; ++x) {
-        std::array<LobeMoments, kMaxMixtureLobes> lobes{}; // empty lobes store zero moments
-        if (k == 0) {
-            const double s = o.authoredGloss
-                                 ? o.encoding.power((*o.authoredGloss)[size_t(y) * size_t(width) + size_t(x)])
-                                 : o.basePower;
-            lobes[size_t(mix.finestLobe(x, y))] = LobeMoments::ofNormal(plan.finestMap->at(x, y), s);
-        } else {
-            const LobeMixture& m = mix.at(k, x, y);
-            for (int i = 0; i < m.count; ++i)
-                lobes[size_t(i)] = m.lobes[size_t(i)];
-        }
-        double total = 0.0;
-        for (const LobeMoments& l : lobes)
-            total += l.w;
-        const double inv = total > 0.0 ? 1.0 / total : 0.0;
+        const double s = k == 0 && o.authoredGloss
+                             ? o.encoding.power((*o.authoredGloss)[size_t(y) * size_t(width) + size_t(x)])
+                             : o.basePower;
+        const std::array<LobeMoments, kMaxMixtureLobes> lobes = mix.storedTexel(*plan.finestMap, k, x, y, s);
         for (int i = 0; i < kMaxMixtureLobes; ++i) {
             const LobeMoments& l = lobes[size_t(i)];
-            if (weights) weights[4 * x + i] = unit(l.w * inv);
-            if (cross) cross[4 * x + i] = unit(l.mxy * inv * invM2 + 0.5);
+            if (weights) weights[4 * x + i] = unit(l.w);
+            if (cross) cross[4 * x + i] = unit(l.mxy * invM2 + 0.5);
             if (float* p = px[size_t(1 + i)]) {
                 // An empty lobe stores zeros as its moments: w·b = 0 is 0.5.
-                p[4 * x] = unit(l.bx * inv * invB2 + 0.5);
-                p[4 * x + 1] = unit(l.by * inv * invB2 + 0.5);
-                p[4 * x + 2] = unit(l.mxx * inv * invM);
-                p[4 * x + 3] = unit(l.myy * inv * invM);
+                p[4 * x] = unit(l.bx * invB2 + 0.5);
+                p[4 * x + 1] = unit(l.by * invB2 + 0.5);
+                p[4 * x + 2] = unit(l.mxx * invM);
+                p[4 * x + 3] = unit(l.myy * invM);
             }
         }
     }
 }
 
+// One role's texels of a row into `px` (`channels` floats a texel); the gloss role counts the powers
+// it clamps to the encoding's range. sB and sM are powers of two, so multiplying by their
+// reciprocals is exact.
 ClampCounts writeRoleRow(const RowPlan& plan, TextureRole role, const NormalMoments* row, const RowValues& v,
                          int width, float* px) {
     const BakeOptions& o = plan.options;

@@ -350,28 +350,6 @@ std::array<size_t, 4> cornerTexels(const PyramidLevel& level, int x, int y, Bord
             size_t(y1) * w + size_t(x1)};
 }
 
-// A mixture texel as its stored textures hold it: lobes over the texel's total weight (shares summing
-// to 1) in their slots; level 0 is the finest normal's lobe in the slot of its parent's lobe.
-std::array<LobeMoments, kMaxMixtureLobes> storedMixture(const MixturePyramid& mix, const NormalMap& map,
-                                                        const std::vector<double>* texelPowers, double s,
-                                                        int k, int x, int y) {
-    std::array<LobeMoments, kMaxMixtureLobes> out{};
-    if (k == 0) {
-        const double p = texelPowers ? (*texelPowers)[size_t(y) * size_t(map.width) + size_t(x)] : s;
-        out[size_t(mix.finestLobe(x, y))] = LobeMoments::ofNormal(map.at(x, y), p);
-        return out;
-    }
-    const LobeMixture& m = mix.at(k, x, y);
-    const double total = m.totalWeight();
-    const double inv = total > 0.0 ? 1.0 / total : 0.0;
-    for (int i = 0; i < m.count; ++i) {
-        LobeMoments l = m.lobes[size_t(i)];
-        l.w *= inv, l.bx *= inv, l.by *= inv, l.mxx *= inv, l.myy *= inv, l.mxy *= inv;
-        out[size_t(i)] = l;
-    }
-    return out;
-}
-
 // Every variant's lobe at every corner point of level k (mip index mi) into the pass.
 void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, size_t mi,
                   const std::vector<EvaluatedVariant>& variants, const AuthoredPowers* authored,
@@ -391,7 +369,10 @@ void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, siz
                     std::array<LobeMoments, kMaxMixtureLobes> sum{};
                     for (size_t c = 0; c < 4; ++c) {
                         const int xi = int(t[c] % size_t(level.width)), yi = int(t[c] / size_t(level.width));
-                        const auto stored = storedMixture(*mix, map, texelPowers, s, k, xi, yi);
+                        const double p = k == 0 && texelPowers
+                                             ? (*texelPowers)[size_t(yi) * size_t(map.width) + size_t(xi)]
+                                             : s;
+                        const auto stored = mix->storedTexel(map, k, xi, yi, p);
                         for (size_t i = 0; i < stored.size(); ++i) {
                             LobeMoments l = stored[i];
                             l.w *= 0.25, l.bx *= 0.25, l.by *= 0.25, l.mxx *= 0.25, l.myy *= 0.25,

@@ -85,10 +85,7 @@ public:
         int best = 0;
         double bestScore = -std::numeric_limits<double>::infinity();
         for (int i = 0; i < m_count; ++i) {
-            const Lobe& l = m_lobes[size_t(i)];
-            const glm::dvec2 d = b - l.mean;
-            const double e = (d.x * d.x * l.yy + d.y * d.y * l.xx - 2.0 * d.x * d.y * l.xy) / l.det;
-            const double score = l.offset - 0.5 * e;
+            const double score = scoreOf(i, b);
             if (score > bestScore) bestScore = score, best = i;
         }
         return best;
@@ -101,7 +98,8 @@ private:
     double scoreOf(int slot, const glm::dvec2& b) const {
         const Lobe& l = m_lobes[size_t(slot)];
         const glm::dvec2 d = b - l.mean;
-        return l.offset - 0.5 * (d.x * d.x * l.yy + d.y * d.y * l.xx - 2.0 * d.x * d.y * l.xy) / l.det;
+        const double e = (d.x * d.x * l.yy + d.y * d.y * l.xx - 2.0 * d.x * d.y * l.xy) / l.det;
+        return l.offset - 0.5 * e;
     }
 
     struct Lobe {
@@ -370,8 +368,22 @@ int MixturePyramid::finestLobe(int x, int y) const {
     return m_finestLobe[size_t(y) * size_t(m_finestWidth) + size_t(x)];
 }
 
-int assignLobe(const LobeMixture& mixture, const LobeMoments& lobe, double minVariance) {
-    return LobeScorer(mixture, minVariance).assign(lobe.mean());
+std::array<LobeMoments, kMaxMixtureLobes> MixturePyramid::storedTexel(const NormalMap& finest, int k, int x,
+                                                                      int y, double finestPower) const {
+    std::array<LobeMoments, kMaxMixtureLobes> out{}; // empty slots store zero moments
+    if (k == 0) {
+        out[size_t(finestLobe(x, y))] = LobeMoments::ofNormal(finest.at(x, y), finestPower); // weight 1
+        return out;
+    }
+    const LobeMixture& m = at(k, x, y);
+    const double total = m.totalWeight();
+    const double inv = total > 0.0 ? 1.0 / total : 0.0;
+    for (int i = 0; i < m.count; ++i) {
+        LobeMoments l = m.lobes[size_t(i)];
+        l.w *= inv, l.bx *= inv, l.by *= inv, l.mxx *= inv, l.myy *= inv, l.mxy *= inv;
+        out[size_t(i)] = l;
+    }
+    return out;
 }
 
 const LobeMixture& MixturePyramid::at(int level, int x, int y) const {

@@ -100,9 +100,15 @@ public:
     /// Texel (x, y) of level `level` (1 <= level < levelCount()).
     const LobeMixture& at(int level, int x, int y) const;
     /// The lobe index a finest texel's own lobe takes at level 0: that of the lobe of its level-1
-    /// parent it belongs to most (assignLobe), so trilinear filtering between levels 0 and 1 merges
-    /// a normal into its own cluster. 0 without a level 1.
+    /// parent it belongs to most (the largest w_i N(b; b_i, Σ_i)), so trilinear filtering between levels 0
+    /// and 1 merges a normal into its own cluster. 0 without a level 1.
     int finestLobe(int x, int y) const;
+    /// Texel (x, y) of level k as the mixture's textures store it: each lobe in its slot, its moments
+    /// over the texel's total weight (the weights sum to 1). Level 0 is the finest normal of `finest`
+    /// with base power `finestPower`, in slot finestLobe(x, y). What the bake writes and what
+    /// evaluate filters between texels.
+    std::array<LobeMoments, kMaxMixtureLobes> storedTexel(const NormalMap& finest, int k, int x, int y,
+                                                          double finestPower) const;
 
 private:
     struct Level {
@@ -116,10 +122,6 @@ private:
     int m_finestWidth = 0;
     std::vector<unsigned char> m_finestLobe; // per finest texel, row-major (empty: all 0)
 };
-
-/// The index of the lobe of `mixture` that `lobe` belongs to most: the largest w_i N(b; b_i, Σ_i)
-/// (log form; ties to the lower index). 0 for an empty mixture.
-int assignLobe(const LobeMixture& mixture, const LobeMoments& lobe, double minVariance);
 
 /// The mixture's NDF at tangent-space half vector h: Σ_i (w_i/Σw) D_i(h), each D_i the
 /// slope-space Gaussian of lobe i (slopeGaussianNdf, methods.h). 0 for h_z <= 0 or no weight.

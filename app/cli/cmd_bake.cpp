@@ -85,7 +85,10 @@ std::string helpFooter() {
         "\"preset\": "
         "\"unity\", ...}]}\n  any option by its long name; relative paths from the manifest's folder; "
         "options given "
-        "on the\n  command line are every job's defaults. All jobs are checked before the first runs.\n"
+        "on the\n  command line are every job's defaults. Output paths may be absolute or lead out of the "
+        "manifest's\n  folder (../); --out-root DIR refuses any job whose output folder is not inside DIR.\n"
+        "  Before the first job runs, every job is checked: its inputs open as images, its options resolve,\n"
+        "  and no two jobs write the same file.\n"
         "\nEach output folder gets bake.json: every file's channels and decode rule (value = stored*scale + "
         "bias).\n"
         "--detail FILE adds <stem>_detail.<ext> ([x, y, 0, variance], its own mip chain) to every preset, "
@@ -105,6 +108,7 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     auto manifest = std::make_shared<std::string>();
     auto json = std::make_shared<bool>(false);
     auto ninja = std::make_shared<std::string>();
+    auto outRoot = std::make_shared<std::string>();
 
     cmd->add_option("input", spec->input, "Tangent-space normal map (PNG, TGA, EXR, TIFF, DDS, ...)");
     cmd->add_option("--preset", spec->preset, "Engine preset: a name listed below, or a preset FILE.json");
@@ -127,6 +131,9 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                     "Green convention of the INPUT map: opengl (+Y, default) or directx (-Y)");
     cmd->add_option("--layout", spec->layout,
                     "Input channels holding the normal: auto (default), rgb, rg (z rebuilt)");
+    cmd->add_option("--encoding", spec->encoding,
+                    "How the INPUT's stored values map to [-1, 1]: auto (default: integer files and float "
+                    "files without negative finite values are unsigned, 2v-1), unsigned, or signed");
     cmd->add_option("--metallic", spec->metallic,
                     "Metalness in [0, 1] for presets with a metallic channel (gltf, unity)");
     cmd->add_option("--lobes", spec->lobes,
@@ -147,6 +154,10 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     cmd->add_flag("--allow-8bit", spec->allowEightBit, "Store LEAN/CLEAN moments in 8-bit formats anyway");
     cmd->add_flag("--json", *json, "Print a machine-readable summary on stdout");
     cmd->add_option("--manifest", *manifest, "JSON file listing many jobs, run in order");
+    cmd->add_option("--out-root", *outRoot,
+                    "Refuse any job whose output folder is not inside DIR (links resolved); for manifests "
+                    "from others")
+        ->type_name("DIR");
     cmd->add_option("--ninja", *ninja,
                     "With --manifest: write a Ninja build file (one `burnish bake` per job) instead of "
                     "baking");
@@ -156,7 +167,7 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     // Built lazily: listing the presets parses them, which other subcommands need not pay for.
     cmd->footer([] { return helpFooter(); });
 
-    return [spec, manifest, json, ninja]() -> int {
+    return [spec, manifest, json, ninja, outRoot]() -> int {
         if (!builtinPresetErrors().empty()) return fail(builtinPresetErrors().front());
         std::vector<BakeJobSpec> specs;
         if (!manifest->empty()) {
@@ -180,6 +191,10 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                                 : job.error());
             jobs.push_back(std::move(job.value()));
         }
+        std::optional<fs::path> root;
+        if (!outRoot->empty()) root = fs::path(*outRoot);
+        if (!manifest->empty() || root)
+            if (const Status s = checkBakeJobs(jobs, root, !manifest->empty()); !s) return fail(s.error());
         if (!ninja->empty()) {
             // The build statements run this very binary.
             std::error_code ec;

@@ -1,11 +1,18 @@
 // burnish: the command line over burnish_core.
 #include "command.h"
 
+#include <burnish/core/util/files.h>
+
 #include <malloc.h>
 
 #include <algorithm>
+#include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
+#include <set>
+#include <string>
 
 namespace burnish::cli {
 
@@ -18,6 +25,51 @@ int fail(const std::string& message) {
     std::fprintf(stderr, "burnish: error: %s\n", message.c_str());
     return 1;
 }
+
+namespace {
+
+/// A token that reads entirely as a number but is not a finite one ("nan", "inf", "-Infinity",
+/// "1e999"): the reason, or "" for anything else (finite numbers and words alike).
+std::string nonFiniteReason(const std::string& token) {
+    if (token.empty()) return {};
+    const char* begin = token.c_str();
+    char* end = nullptr;
+    const double value = std::strtod(begin, &end);
+    if (end != begin + token.size() || std::isfinite(value)) return {};
+    return "'" + token + "' is not a finite number";
+}
+
+/// Every option that takes numbers refuses NaN and infinities (and numbers too large for a double)
+/// with one clear line, before the command runs: each comma- or colon-separated part of the
+/// value is checked. Options that name files or folders are left alone, so a file called "inf"
+/// can still be read.
+void requireFiniteNumbers(CLI::App& app) {
+    static const std::set<std::string> pathTypes{"TEXT", "FILE", "DIR", "PATH", "NORMAL_MAP", "IN", "MESH"};
+    const CLI::Validator finite(
+        [](std::string& value) -> std::string {
+            std::string token;
+            for (size_t i = 0; i <= value.size(); ++i) {
+                const char c = i < value.size() ? value[i] : ',';
+                if (c == ',' || c == ':') {
+                    if (auto why = nonFiniteReason(token); !why.empty()) return why;
+                    token.clear();
+                } else {
+                    token += c;
+                }
+            }
+            return {};
+        },
+        "");
+    for (CLI::Option* option : app.get_options()) {
+        const std::string type = option->get_type_name();
+        if (pathTypes.count(type.substr(0, type.find(':')))) continue;
+        option->check(finite);
+    }
+    for (CLI::App* sub : app.get_subcommands({}))
+        requireFiniteNumbers(*sub);
+}
+
+} // namespace
 
 } // namespace burnish::cli
 
@@ -47,6 +99,15 @@ int main(int argc, char** argv) {
         const auto subs = app.get_subcommands({});
         for (size_t i = before; i < subs.size(); ++i)
             runners.emplace_back(subs[i], run);
+    }
+    requireFiniteNumbers(app);
+    // Fault injection for the tests of interrupted commits (test_cli_hostile.cpp): the process kills
+    // itself after that many steps of a file set's commit, as a power cut or `kill -9` would.
+    if (const char* step = std::getenv("BURNISH_FAULT_KILL_AT_COMMIT_STEP")) {
+        const int at = std::atoi(step);
+        burnish::setCommitStepHookForTesting([at](int done) {
+            if (done == at) std::raise(SIGKILL);
+        });
     }
 
     try {

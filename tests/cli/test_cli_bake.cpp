@@ -270,6 +270,54 @@ TEST(CliBake, BadManifestEntryFailsBeforeAnythingIsWritten) {
     EXPECT_NE(r.err.find("unknown field 'metalic'"), std::string::npos) << r.err;
 }
 
+// Every job of a manifest is checked before the first writes anything: two jobs writing one file,
+// a job whose input is not a readable image, a NUL in a string, an output outside --out-root.
+TEST(CliBake, ManifestJobsAreAllCheckedBeforeTheFirstRuns) {
+    TempDir dir;
+    writeNormalMap(dir / "one.png");
+    std::ofstream(dir / "garbage.png") << "\x89PNG\r\n\x1a\n this is no image";
+    auto write = [&](const char* name, const std::string& text) { std::ofstream(dir / name) << text; };
+    write("clash.json", R"({"jobs": [{"input": "one.png", "out": "out1", "preset": "godot"},
+                                   {"input": "one.png", "out": "out1", "preset": "gltf"}]})");
+    write("garbage.json", R"({"jobs": [{"input": "one.png", "out": "out1", "preset": "godot"},
+                                     {"input": "garbage.png", "out": "out2", "preset": "godot"}]})");
+    write("missing.json", R"({"jobs": [{"input": "one.png", "out": "out1", "preset": "godot"},
+                                     {"input": "gone.png", "out": "out2", "preset": "godot"}]})");
+    write("nul.json", R"({"jobs": [{"input": "one.png", "out": "out1\u0000/etc", "preset": "godot"}]})");
+    write("away.json", R"({"jobs": [{"input": "one.png", "out": "inside/a", "preset": "godot"},
+                                  {"input": "one.png", "out": "../away", "preset": "godot"}]})");
+    for (const auto& [manifest, needle] : std::vector<std::pair<std::string, std::string>>{
+             {"clash.json", "which job 1 writes too"},
+             {"garbage.json", "garbage.png"},
+             {"missing.json", "does not exist"},
+             {"nul.json", "NUL"},
+             {"away.json --out-root " + quote((dir / "inside").string()), "outside --out-root"}}) {
+        SCOPED_TRACE(manifest);
+        const auto r =
+            runBurnish("bake --manifest " + quote((dir / manifest.substr(0, manifest.find(' '))).string()) +
+                       (manifest.find(' ') == std::string::npos ? "" : manifest.substr(manifest.find(' '))));
+        EXPECT_NE(r.exitCode, 0);
+        EXPECT_EQ(countLines(r.err), 1) << r.err;
+        EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(dir / "out1"));
+        EXPECT_FALSE(fs::exists(dir / "inside"));
+        EXPECT_FALSE(fs::exists(dir.path().parent_path() / "away"));
+    }
+    // Inside the root, both jobs run; a single job is held to --out-root too.
+    write("inside.json", R"({"jobs": [{"input": "one.png", "out": "inside/a", "preset": "godot"},
+                                    {"input": "one.png", "out": "inside/b/../c", "preset": "godot"}]})");
+    auto ok = runBurnish("bake --manifest " + quote((dir / "inside.json").string()) + " --out-root " +
+                         quote((dir / "inside").string()));
+    EXPECT_EQ(ok.exitCode, 0) << ok.err;
+    EXPECT_TRUE(fs::exists(dir / "inside" / "c" / "bake.json"));
+    auto single =
+        runBurnish("bake " + quote((dir / "one.png").string()) + " --preset godot --out " +
+                   quote((dir / "elsewhere").string()) + " --out-root " + quote((dir / "inside").string()));
+    EXPECT_NE(single.exitCode, 0);
+    EXPECT_NE(single.err.find("outside --out-root"), std::string::npos) << single.err;
+    EXPECT_FALSE(fs::exists(dir / "elsewhere"));
+}
+
 // Every level of a file as OpenImageIO decodes it (float values, bit-exact for float storage).
 std::vector<std::vector<float>> readLevels(const fs::path& path) {
     std::vector<std::vector<float>> levels;

@@ -187,4 +187,12 @@ TEST(CliNinja, RefusesWhatItCannotWrite) {
     EXPECT_NE(r.err.find("job 2"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("which job 1 writes too"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "b.ninja"));
+    // '|' ends a path in Ninja's syntax and has no escape: refused, not written broken.
+    writeText(dir / "bar.json", R"({"jobs": [{"input": "one.png", "out": "a|b", "preset": "godot"}]})");
+    r = runBurnish("bake --manifest " + shellQuote((dir / "bar.json").string()) + " --ninja " +
+                   shellQuote((dir / "b.ninja").string()));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_EQ(burnish::test::lineCount(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("'|'"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "b.ninja"));
 }

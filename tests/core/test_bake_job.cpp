@@ -378,6 +378,7 @@ BakeJobSpec specFromCommand(const std::vector<std::string>& args) {
                                                                    {"--border", &spec.border},
                                                                    {"--green", &spec.green},
                                                                    {"--layout", &spec.layout},
+                                                                   {"--encoding", &spec.encoding},
                                                                    {"--gloss", &spec.gloss},
                                                                    {"--detail", &spec.detail},
                                                                    {"--detail-fade", &spec.detailFade},

@@ -10,10 +10,13 @@
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <sys/stat.h>
 #include <thread>
 #include <unistd.h>
@@ -199,7 +202,7 @@ std::vector<std::string> listFolder(const fs::path& dir) {
 
 bool hasTemporaries(const fs::path& dir) {
     for (const auto& name : listFolder(dir))
-        if (name.find(".tmp-") != std::string::npos) return true;
+        if (name.find(".tmp-") != std::string::npos || name.rfind(kStagingPrefix, 0) == 0) return true;
     return false;
 }
 
@@ -532,6 +535,52 @@ TEST(Export, ExistingFilesNeedOverwrite) {
     EXPECT_TRUE(fs::exists(dir / "m_normal.png"));
     EXPECT_NE(readFile(dir / "m_roughness.png").value(), before);
     EXPECT_FALSE(hasTemporaries(dir.path()));
+}
+
+// Replacing a set with another format and fewer mips leaves exactly the new set: the files the old
+// bake.json names that the new set does not write are removed, and nothing else is touched.
+TEST(Export, ReplacingLeavesExactlyTheNewSet) {
+    TempDir dir, fresh;
+    const Preset p = preset("godot");
+    const BakeOutput b = bakeWith(smoothMap(), p.method, p);
+    ExportOptions o;
+    o.stem = "m";
+    o.format = ExportFormat::Png8; // one file per mip: 6 levels
+    ASSERT_TRUE(exportBake(b, p, o, dir.path()));
+    std::ofstream(dir / "notes.txt") << "the artist's own file";
+    // A hostile or stale bake.json naming files outside the folder is not followed.
+    std::ofstream(fresh / "victim.txt") << "precious";
+
+    ExportOptions smaller = o;
+    smaller.format = ExportFormat::ExrHalf;
+    smaller.overwrite = Overwrite::Allow;
+    const BakeOutput fewer = [&] {
+        BakeOptions bo;
+        bo.method = p.method;
+        bo.encoding = p.encoding;
+        bo.basePower = 256.0;
+        bo.mipCount = 2;
+        return bake(smoothMap(), bo).value();
+    }();
+    ASSERT_TRUE(exportBake(fewer, p, smaller, dir.path()));
+    std::vector<std::string> expected;
+    const auto planned = planExport(fewer, p, smaller);
+    ASSERT_TRUE(planned) << planned.error();
+    for (const auto& f : planned->files)
+        for (const auto& path : f.paths)
+            expected.push_back(path);
+    expected.push_back("bake.json");
+    expected.push_back("notes.txt");
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(listFolder(dir.path()), expected);
+
+    auto json = nlohmann::json::parse(readFile(dir / "bake.json").value());
+    json["files"][0]["paths"].push_back((fresh / "victim.txt").string());
+    json["files"][0]["paths"].push_back("../" + fresh.path().filename().string() + "/victim.txt");
+    ASSERT_TRUE(writeFileAtomic(dir / "bake.json", json.dump()));
+    ASSERT_TRUE(exportBake(b, p, smaller, dir.path()));
+    EXPECT_EQ(readFile(fresh / "victim.txt").value(), "precious");
+    EXPECT_EQ(readFile(dir / "notes.txt").value(), "the artist's own file");
 }
 
 // Same bake, same bytes: every format and DDS compression, exported twice more than a second

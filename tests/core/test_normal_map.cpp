@@ -120,6 +120,58 @@ TEST(NormalMap, NanTexelsAreReportedAndReplaced) {
         EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z));
 }
 
+// One -Inf (or +Inf, NaN) texel in an unsigned float map (an EXR of 2v-1 codes) does not switch
+// the automatic encoding to signed: non-finite texels are left out of the detection and replaced.
+TEST(NormalMap, NonFiniteTexelsDoNotChangeTheEncoding) {
+    const glm::vec3 n = glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f));
+    for (float bad : {-std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                      std::numeric_limits<float>::quiet_NaN()}) {
+        auto image = encodeRgb(3, 1, {n, n, glm::vec3(0, 0, 1)});
+        image.source.isFloat = true;
+        image.pixels[6] = bad;
+        auto map = decodeNormalMap(image);
+        ASSERT_TRUE(map.ok()) << map.error();
+        EXPECT_FALSE(map->diagnostics.signedValues) << bad;
+        EXPECT_EQ(map->diagnostics.nonFiniteTexels, 1u);
+        EXPECT_NEAR(map->at(0, 0).x, n.x, 1e-6f);
+        EXPECT_EQ(map->at(2, 0), glm::vec3(0, 0, 1));
+    }
+    // The explicit encoding still overrides the detection.
+    auto image = makeImage(1, 1, 3, {0.5f, 0.5f, 1.0f}, true);
+    NormalMapOptions options;
+    options.encoding = NormalValueEncoding::Signed;
+    auto map = decodeNormalMap(image, options);
+    ASSERT_TRUE(map.ok()) << map.error();
+    EXPECT_TRUE(map->diagnostics.signedValues);
+    EXPECT_NEAR(map->at(0, 0).x, 0.5f / std::sqrt(1.5f), 1e-6f);
+}
+
+// Two-channel maps: (x, y) longer than 1 counts against plausibility like a bad RGB vector, so a
+// map of zeros (decoded to (-1, -1)) is refused as its RGB twin is; the rim of a real map passes.
+TEST(NormalMap, TwoChannelVectorsLongerThanOneAreImplausible) {
+    auto zeros = decodeNormalMap(makeImage(4, 4, 2, std::vector<float>(32, 0.0f)));
+    ASSERT_FALSE(zeros.ok());
+    EXPECT_NE(zeros.error().find("longer than 1"), std::string::npos) << zeros.error();
+    auto zerosRgb = decodeNormalMap(makeImage(4, 4, 3, std::vector<float>(48, 0.0f)));
+    EXPECT_FALSE(zerosRgb.ok());
+    NormalMapOptions allow;
+    allow.allowImplausible = true;
+    auto allowed = decodeNormalMap(makeImage(4, 4, 2, std::vector<float>(32, 0.0f)), allow);
+    ASSERT_TRUE(allowed.ok()) << allowed.error();
+    EXPECT_EQ(allowed->diagnostics.offLengthTexels, 16u);
+    // A steep but valid map with a corner texel at (1, 1) (8-bit rounding of a grazing normal).
+    std::vector<float> px;
+    for (int i = 0; i < 16; ++i) {
+        const float x = i == 0 ? 1.0f : 0.5f + 0.4f * std::cos(float(i));
+        const float y = i == 0 ? 1.0f : 0.5f + 0.4f * std::sin(float(i));
+        px.push_back(x);
+        px.push_back(y);
+    }
+    auto real = decodeNormalMap(makeImage(4, 4, 2, px));
+    ASSERT_TRUE(real.ok()) << real.error();
+    EXPECT_EQ(real->diagnostics.offLengthTexels, 1u);
+}
+
 TEST(NormalMap, RejectsOneChannelImages) {
     auto map = decodeNormalMap(makeImage(1, 1, 1, {0.5f}));
     ASSERT_FALSE(map.ok());
@@ -216,6 +268,49 @@ TEST(ImageIo, TruncatedFileIsAnError) {
     std::filesystem::copy_file(dir / "full.png", dir / "cut.png");
     std::filesystem::resize_file(dir / "cut.png", size / 2);
     EXPECT_FALSE(readImage(dir / "cut.png").ok());
+}
+
+// OpenImageIO hands back zeros (DDS) or grey (JPEG) for the missing part of a file cut short and
+// reports success: that is an error naming the file as truncated, never texels.
+TEST(ImageIo, FilesCutShortAreTruncatedNotTexels) {
+    test::TempDir dir;
+    std::vector<float> px(64 * 64 * 3);
+    for (size_t i = 0; i < px.size(); ++i)
+        px[i] = float(i % 97) / 96.0f;
+    ASSERT_TRUE(writeImage(dir / "full.jpg", 64, 64, 3, OIIO::TypeDesc::UINT8, px));
+    ASSERT_TRUE(writeImage(dir / "full.tif", 64, 64, 3, OIIO::TypeDesc::UINT8, px));
+    ASSERT_TRUE(readImage(dir / "full.jpg").ok());
+    for (const char* name : {"full.jpg", "full.tif"}) {
+        const auto cut = dir / (std::string("cut-") + name);
+        std::filesystem::copy_file(dir / name, cut);
+        std::filesystem::resize_file(cut, std::filesystem::file_size(cut) / 2);
+        const auto r = readImage(cut);
+        ASSERT_FALSE(r.ok()) << name;
+        EXPECT_NE(r.error().find(cut.filename().string()), std::string::npos) << r.error();
+        EXPECT_NE(r.error().find("truncated"), std::string::npos) << r.error();
+        EXPECT_EQ(r.error().find('\n'), std::string::npos) << r.error();
+    }
+    // A DDS header (128 bytes: 64x64 uncompressed RGBA8) and no data at all.
+    std::string header(128, '\0');
+    auto put32 = [&](size_t at, uint32_t v) { std::memcpy(header.data() + at, &v, 4); };
+    std::memcpy(header.data(), "DDS ", 4);
+    put32(4, 124);                      // header size
+    put32(8, 0x1 | 0x2 | 0x4 | 0x1000); // caps, height, width, pixel format
+    put32(12, 64);
+    put32(16, 64);
+    put32(76, 32);         // pixel format size
+    put32(80, 0x40 | 0x1); // RGB | alpha pixels
+    put32(88, 32);         // bits per pixel
+    put32(92, 0x00ff0000);
+    put32(96, 0x0000ff00);
+    put32(100, 0x000000ff);
+    put32(104, 0xff000000);
+    put32(108, 0x1000); // texture
+    std::ofstream(dir / "header-only.dds", std::ios::binary) << header;
+    const auto dds = readImage(dir / "header-only.dds");
+    ASSERT_FALSE(dds.ok());
+    EXPECT_NE(dds.error().find("truncated"), std::string::npos) << dds.error();
+    EXPECT_FALSE(loadNormalMap(dir / "header-only.dds").ok());
 }
 
 TEST(ImageIo, AlphaIsNotPremultipliedIntoTheColour) {

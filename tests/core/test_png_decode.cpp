@@ -13,7 +13,9 @@
 #include "temp_dir.h"
 
 #include <OpenImageIO/imageio.h>
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <zlib.h>
 
 #include <cstdint>
@@ -21,6 +23,7 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -355,6 +358,12 @@ TEST(PngDecode, DataPastTheRowsAndACutTrailerLoseNothing) {
     const Decoded skipped = decode(pngOf(s, rows, 997, text));
     ASSERT_TRUE(skipped.status.ok()) << skipped.status.error();
     EXPECT_TRUE(skipped.raw == s.raw);
+    // A wrong CRC in IEND, which holds no data (seen in real files that libpng reads).
+    std::string badEnd = pngOf(s, rows);
+    badEnd.back() = char(badEnd.back() ^ 1);
+    const Decoded end = decode(badEnd);
+    ASSERT_TRUE(end.status.ok()) << end.status.error();
+    EXPECT_TRUE(end.raw == s.raw);
 }
 
 TEST(PngDecode, DamagedFilesNeverCrashOrHang) {
@@ -387,6 +396,71 @@ TEST(PngDecode, DamagedFilesNeverCrashOrHang) {
             EXPECT_FALSE(d.status.ok()) << "cut at " << length << " of " << good.size();
         else
             EXPECT_TRUE(d.status.ok() && d.raw == s.raw) << "cut at " << length << " of " << good.size();
+    }
+}
+
+// What core leaves to libpng (interlaced, palette, low depths) is checked before libpng reads it:
+// a damaged file is one error from core, and libpng prints nothing of its own on stderr.
+TEST(PngDecode, FilesLeftToLibpngAreCheckedFirst) {
+    TempDir dir;
+    // A 9×9 Adam7 RGB image: the rows of all seven passes, filter type 0, grey ramps.
+    const int passes[7][4] = {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4},
+                              {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};
+    std::string rows;
+    std::vector<std::size_t> rowStarts;
+    for (const auto& p : passes) {
+        const int w = (9 - p[0] + p[2] - 1) / p[2], h = (9 - p[1] + p[3] - 1) / p[3];
+        for (int y = 0; y < h; ++y) {
+            rowStarts.push_back(rows.size());
+            rows += '\0';
+            for (int x = 0; x < 3 * w; ++x)
+                rows += char(17 * x + y);
+        }
+    }
+    auto pngWith = [&](const std::string& stream) {
+        return kSignature + ihdr(9, 9, 8, 2, 1) + idats(stream, 40) + chunk("IEND", "");
+    };
+    const std::string good = pngWith(zlibCompress(rows));
+    const auto layout = parsePng(good);
+    ASSERT_TRUE(layout.ok()) << layout.error();
+    EXPECT_FALSE(layout->decodable);
+    EXPECT_TRUE(layout->interlaced);
+    EXPECT_TRUE(checkPngData(*layout).ok()) << checkPngData(*layout).error();
+    ASSERT_TRUE(writeFileAtomic(dir / "good.png", good).ok());
+    expectReadsLikeOiio(dir / "good.png", "9x9 interlaced");
+
+    std::string badFilter = rows;
+    badFilter[rowStarts[9]] = 7; // a row of pass 4
+    std::string adler = zlibCompress(rows);
+    adler.back() = char(adler.back() ^ 1);
+    const std::vector<std::tuple<std::string, std::string, std::string>> damaged{
+        {"filter.png", pngWith(zlibCompress(badFilter)), "unknown filter type 7"},
+        {"short.png", pngWith(zlibCompress(rows.substr(0, rows.size() / 2))), "truncated PNG image data"},
+        {"adler.png", pngWith(adler), "adler32"},
+        {"garbage.png", pngWith(std::string("\x78\x9c\xff\xff\xff\xff\xff", 7)), "corrupt PNG image data"}};
+    for (const auto& [name, png, needle] : damaged) {
+        SCOPED_TRACE(name);
+        const auto parsed = parsePng(png);
+        ASSERT_TRUE(parsed.ok()) << parsed.error();
+        const Status checked = checkPngData(*parsed);
+        ASSERT_FALSE(checked.ok());
+        EXPECT_NE(checked.error().find(needle), std::string::npos) << checked.error();
+        ASSERT_TRUE(writeFileAtomic(dir / name, png).ok());
+        // stderr into a file while the image is read: nothing may arrive there.
+        const auto errPath = dir / (name + ".stderr");
+        std::fflush(stderr);
+        const int saved = ::dup(2);
+        const int to = ::open(errPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        ::dup2(to, 2);
+        const auto image = readImage(dir / name);
+        std::fflush(stderr);
+        ::dup2(saved, 2);
+        ::close(to);
+        ::close(saved);
+        ASSERT_FALSE(image.ok());
+        EXPECT_NE(image.error().find(name), std::string::npos) << image.error();
+        EXPECT_NE(image.error().find(needle), std::string::npos) << image.error();
+        EXPECT_EQ(std::filesystem::file_size(errPath), 0u) << readFile(errPath).value();
     }
 }
 

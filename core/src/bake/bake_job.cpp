@@ -203,6 +203,14 @@ Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
         if (!l) return Error{l.error()};
         job.normalMap.layout = *l;
     }
+    if (spec.encoding) {
+        const auto e = choice<NormalValueEncoding>("--encoding", *spec.encoding,
+                                                   {{"auto", NormalValueEncoding::Auto},
+                                                    {"unsigned", NormalValueEncoding::Unsigned},
+                                                    {"signed", NormalValueEncoding::Signed}});
+        if (!e) return Error{e.error()};
+        job.normalMap.encoding = *e;
+    }
     if (spec.mips) {
         if (*spec.mips < 1) return Error{fmt::format("--mips {} must be at least 1", *spec.mips)};
         job.bake.mipCount = *spec.mips;
@@ -359,6 +367,7 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
         {"border", job.spec.border.value_or("wrap")},
         {"green", job.spec.green.value_or("opengl")},
         {"layout", job.spec.layout.value_or("auto")},
+        {"encoding", job.spec.encoding.value_or("auto")},
         {"mips", job.spec.mips ? Json(*job.spec.mips) : Json(nullptr)},
         {"allow8bit", job.spec.allowEightBit},
         {"allowImplausible", job.spec.allowImplausible}};
@@ -375,6 +384,8 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
         if (message.rfind("refusing to overwrite", 0) == 0) message += " (use --force to replace the set)";
         return Error{message};
     }
+    for (const auto& n : exported->notes)
+        notes.push_back(n);
     // The time of the bake and its export; the report's evaluation (its own timed bakes) is not in it.
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
 
@@ -456,14 +467,24 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
         if (!j.is_object()) return Error{at + ": must be an object"};
         BakeJobSpec spec = defaults;
         for (const auto& [key, value] : j.items()) {
-            auto str = [&](std::string& dest) -> Status {
+            // JSON strings may hold "\u0000", which no path or name can: refused, not cut short.
+            auto stringValue = [&]() -> Result<std::string> {
                 if (!value.is_string()) return Error{at + ": '" + key + "' must be a string"};
-                dest = value.get<std::string>();
+                std::string v = value.get<std::string>();
+                if (v.find('\0') != std::string::npos)
+                    return Error{at + ": '" + key + "' holds a NUL character"};
+                return v;
+            };
+            auto str = [&](std::string& dest) -> Status {
+                auto v = stringValue();
+                if (!v) return Error{v.error()};
+                dest = std::move(v).value();
                 return {};
             };
             auto optStr = [&](std::optional<std::string>& dest) -> Status {
-                if (!value.is_string()) return Error{at + ": '" + key + "' must be a string"};
-                dest = value.get<std::string>();
+                auto v = stringValue();
+                if (!v) return Error{v.error()};
+                dest = std::move(v).value();
                 return {};
             };
             auto num = [&](std::optional<double>& dest) -> Status {
@@ -501,6 +522,8 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
                 s = optStr(spec.green);
             else if (key == "layout")
                 s = optStr(spec.layout);
+            else if (key == "encoding")
+                s = optStr(spec.encoding);
             else if (key == "metallic")
                 s = num(spec.metallic);
             else if (key == "mips") {
@@ -524,12 +547,12 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
             else if (key == "allow-8bit")
                 s = flag(spec.allowEightBit);
             else
-                s = Error{
-                    at + ": unknown field '" + key +
-                    "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
-                    "border, "
-                    "green, layout, metallic, mips, lobes, detail, detail-fade, force, allow-implausible, "
-                    "allow-8bit)"};
+                s = Error{at + ": unknown field '" + key +
+                          "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
+                          "border, "
+                          "green, layout, encoding, metallic, mips, lobes, detail, detail-fade, force, "
+                          "allow-implausible, "
+                          "allow-8bit)"};
             if (!s) return Error{s.error()};
         }
         if (j.contains("input") && !isSampleBakeInput(spec.input)) spec.input = rebase(spec.input);

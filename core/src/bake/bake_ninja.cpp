@@ -5,7 +5,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <iterator>
 #include <map>
 #include <utility>
 
@@ -33,12 +35,14 @@ std::string shellQuote(const std::string& text) {
     return q + "'";
 }
 
-/// A path in a ninja build line: '$', ' ' and ':' are escaped with '$'; a newline cannot be written.
+/// A path in a ninja build line: '$', ' ' and ':' are escaped with '$'; a line break or '|' (which
+/// ends a path in Ninja's lexer, with no escape) cannot be written.
 Result<std::string> ninjaPath(const std::string& p) {
     std::string out;
     for (char c : p) {
         if (c == '\n' || c == '\r')
             return Error{"path '" + p + "' holds a line break, which Ninja cannot express"};
+        if (c == '|') return Error{"path '" + p + "' holds '|', which Ninja cannot express in a path"};
         if (c == '$' || c == ' ' || c == ':') out += '$';
         out += c;
     }
@@ -61,12 +65,14 @@ struct NinjaJob {
     std::string description;
 };
 
-/// The extent of a job's input: read from its file, or the size a sample is baked at.
+/// The extent of a job's input: read from its file's header, or the size a sample is baked at.
 Result<std::pair<int, int>> inputExtent(const std::string& input) {
     if (isSampleBakeInput(input)) return std::pair{kSampleBakeSize, kSampleBakeSize};
-    const auto image = readImage(input);
-    if (!image) return Error{image.error()};
-    return std::pair{image->width, image->height};
+    const auto header = readImageHeader(input);
+    if (!header) return Error{header.error()};
+    if (header->channels < 2)
+        return Error{"'" + input + "' has 1 channel; a normal map needs 2 (RG) to 4 (RGBA)"};
+    return std::pair{header->width, header->height};
 }
 
 /// What one job reads and writes, without baking: the input's extent from its file, the file
@@ -77,8 +83,11 @@ Result<NinjaJob> planNinjaJob(const std::string& exe, const BakeJob& job, const 
     auto shape = bakeShape(job.bake, extent->first, extent->second);
     if (!shape) return Error{shape.error()};
     BakeRecord record;
+    if (job.spec.gloss)
+        if (const auto gloss = readImageHeader(*job.spec.gloss); !gloss)
+            return Error{"--gloss: " + gloss.error()};
     if (job.spec.detail) {
-        const auto detailImage = readImage(*job.spec.detail);
+        const auto detailImage = readImageHeader(*job.spec.detail);
         if (!detailImage) return Error{"--detail: " + detailImage.error()};
         auto detail = detailShape(detailImage->width, detailImage->height, job.detail);
         if (!detail) return Error{"--detail: " + detail.error()};
@@ -109,7 +118,37 @@ Result<NinjaJob> planNinjaJob(const std::string& exe, const BakeJob& job, const 
     return nj;
 }
 
+/// Whether `path` lies inside `root` (both made absolute, links resolved as far as they exist).
+bool inside(const fs::path& path, const fs::path& root) {
+    std::error_code ec;
+    const fs::path p = fs::weakly_canonical(fs::absolute(path), ec);
+    const fs::path r = fs::weakly_canonical(fs::absolute(root), ec);
+    const auto [rootEnd, pathAt] = std::mismatch(r.begin(), r.end(), p.begin(), p.end());
+    return rootEnd == r.end() || (std::next(rootEnd) == r.end() && rootEnd->empty());
+}
+
 } // namespace
+
+Status checkBakeJobs(const std::vector<BakeJob>& jobs, const std::optional<std::filesystem::path>& outRoot,
+                     bool fromManifest) {
+    std::map<std::string, size_t> owner; // output -> job number
+    for (size_t i = 0; i < jobs.size(); ++i) {
+        const std::string at =
+            fromManifest ? "manifest job " + std::to_string(i + 1) + " (" + jobs[i].spec.input + "): " : "";
+        if (outRoot && !inside(jobs[i].spec.out, *outRoot))
+            return Error{at + "its output folder '" + jobs[i].spec.out + "' is outside --out-root '" +
+                         outRoot->string() + "'"};
+        auto nj = planNinjaJob("burnish", jobs[i], "manifest");
+        if (!nj) return Error{at + nj.error()};
+        for (const auto& o : nj->outputs) {
+            const auto [it, fresh] = owner.emplace(o, i + 1);
+            if (!fresh)
+                return Error{at + "writes '" + o + "', which job " + std::to_string(it->second) +
+                             " writes too"};
+        }
+    }
+    return {};
+}
 
 std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& job) {
     const BakeJobSpec& s = job.spec;
@@ -135,6 +174,8 @@ std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& j
         s.green.value_or("opengl"),
         "--layout",
         s.layout.value_or("auto"),
+        "--encoding",
+        s.encoding.value_or("auto"),
         "--force"};
     // Options whose absence means "each file's own choice" or "none" stay absent.
     if (s.gloss) args.insert(args.end(), {"--gloss", absolutePath(*s.gloss)});

@@ -565,15 +565,22 @@ OIIO::TypeDesc fileType(ExportFormat format) {
     return OIIO::TypeDesc::UINT8;
 }
 
-Status syncFile(const fs::path& path) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) return Error{"cannot write '" + path.string() + "': " + std::strerror(errno)};
-    // fsync before the rename, as writeFileAtomic does: a crash must not leave an empty file.
-    const bool ok = ::fsync(fd) == 0;
-    const int err = errno;
-    ::close(fd);
-    if (!ok) return Error{"cannot write '" + path.string() + "': " + std::strerror(err)};
-    return {};
+/// The files a previous export's bake.json names (its files' paths), for removal of those the new
+/// set does not write. Nothing when there is no bake.json or it cannot be read: then no file is
+/// removed. commitSet removes only plain names inside the folder.
+std::vector<fs::path> previousSetFiles(const fs::path& index) {
+    std::vector<fs::path> files;
+    auto text = readFile(index);
+    if (!text) return files;
+    const Json old = Json::parse(*text, nullptr, false);
+    if (old.is_discarded() || !old.is_object() || !old.contains("files") || !old["files"].is_array())
+        return files;
+    for (const auto& f : old["files"]) {
+        if (!f.is_object() || !f.contains("paths") || !f["paths"].is_array()) continue;
+        for (const auto& p : f["paths"])
+            if (p.is_string()) files.push_back(index.parent_path() / p.get<std::string>());
+    }
+    return files;
 }
 
 /// Writes level k of a PNG file to `staging` with core's parallel encoder: libpng compresses one
@@ -598,7 +605,7 @@ Status writePng(const PlannedFile& file, size_t k, const fs::path& target, const
     };
     const auto bytes = encodePng(png);
     if (!bytes) return Error{"cannot write '" + target.string() + "': " + bytes.error()};
-    return writeFileAtomic(staging, *bytes, Overwrite::Refuse);
+    return writeNewFile(staging, *bytes, target);
 }
 
 /// Writes levels [first, last) of a file through OpenImageIO to `staging`; the plugin is chosen
@@ -653,12 +660,7 @@ Status writeOiio(const PlannedFile& file, size_t first, size_t last, const fs::p
     }
     if (!out->close()) return fail(out->geterror());
     out.reset();
-    if (const Status s = syncFile(staging); !s) {
-        std::error_code ec;
-        fs::remove(staging, ec);
-        return s;
-    }
-    return {};
+    return syncFile(staging, target);
 }
 
 } // namespace
@@ -726,56 +728,54 @@ Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, co
     std::error_code ec;
     if (!fs::is_directory(outDir, ec)) return Error{"output folder '" + outDir.string() + "' does not exist"};
 
+    // Staging folders and temporaries that killed runs left here: an interrupted commit is finished
+    // first, so the old set this one replaces is whole.
+    const StagingRecovery recovered = recoverStaging(outDir);
+    plan.result.notes = recovered.notes;
+
     // Every target first: if one exists and may not be replaced, nothing is written.
     struct Target {
         fs::path path;
         fs::path staging;
-        bool existed = false;
         const PlannedFile* file = nullptr; // nullptr: bake.json
         size_t mip = 0;                    // first level written (one-file-per-level formats)
     };
     std::vector<Target> targets;
     for (const auto& pf : plan.files)
         for (size_t i = 0; i < pf.info.paths.size(); ++i)
-            targets.push_back({outDir / pf.info.paths[i], {}, false, &pf, i});
-    targets.push_back({outDir / plan.result.manifestPath, {}, false, nullptr, 0});
-    for (auto& t : targets) {
-        t.existed = fs::exists(fs::symlink_status(t.path, ec));
-        if (t.existed && options.overwrite == Overwrite::Refuse)
+            targets.push_back({outDir / pf.info.paths[i], {}, &pf, i});
+    const fs::path index = outDir / plan.result.manifestPath;
+    targets.push_back({index, {}, nullptr, 0});
+    for (auto& t : targets)
+        if (options.overwrite == Overwrite::Refuse && fs::exists(fs::symlink_status(t.path, ec)))
             return Error{"refusing to overwrite existing file '" + t.path.string() + "'"};
-    }
 
-    auto removeStaged = [&]() {
-        for (const auto& t : targets)
-            if (!t.staging.empty()) fs::remove(t.staging, ec);
-    };
-
-    // Stage: every file under a temporary name beside its target. Files and PNG/TGA levels are
-    // independent, so OpenImageIO writes them in parallel (the zlib/EXR encoding dominates large
-    // bakes); DDS files go through nvtt one at a time.
+    // Stage: every file in one private folder. Files and PNG/TGA levels are independent, so they
+    // are written in parallel (the zlib/EXR encoding dominates large bakes); DDS files go through
+    // nvtt one at a time.
+    auto staging = StagingFolder::create(outDir);
+    if (!staging) return Error{staging.error()};
+    for (auto& t : targets)
+        t.staging = staging.value().fileFor(t.path);
     std::vector<Status> staged(targets.size());
     auto stage = [&](size_t i) {
-        Target& t = targets[i];
-        const fs::path staging = temporaryPathFor(t.path);
-        Status s;
+        const Target& t = targets[i];
         if (!t.file) {
-            s = writeFileAtomic(staging, plan.result.manifest.dump(2) + "\n", Overwrite::Refuse);
+            staged[i] = writeNewFile(t.staging, plan.result.manifest.dump(2) + "\n", t.path);
         } else if (t.file->info.format == ExportFormat::Dds) {
             std::vector<TextureMip> mips;
             for (size_t k = 0; k < t.file->info.mipSizes.size(); ++k)
                 mips.push_back(t.file->packedLevel(k));
             const auto bytes = encodeDds(mips, t.file->channels(), *t.file->info.compression);
-            s = bytes ? writeFileAtomic(staging, *bytes, Overwrite::Refuse)
-                      : Status(Error{"cannot write '" + t.path.string() + "': " + bytes.error()});
+            staged[i] = bytes ? writeNewFile(t.staging, *bytes, t.path)
+                              : Status(Error{"cannot write '" + t.path.string() + "': " + bytes.error()});
         } else if (t.file->info.format == ExportFormat::Png8 || t.file->info.format == ExportFormat::Png16) {
-            s = writePng(*t.file, t.mip, t.path, staging);
+            staged[i] = writePng(*t.file, t.mip, t.path, t.staging);
         } else if (onePerMip(t.file->info.format)) {
-            s = writeOiio(*t.file, t.mip, t.mip + 1, t.path, staging);
+            staged[i] = writeOiio(*t.file, t.mip, t.mip + 1, t.path, t.staging);
         } else {
-            s = writeOiio(*t.file, 0, t.file->info.mipSizes.size(), t.path, staging);
+            staged[i] = writeOiio(*t.file, 0, t.file->info.mipSizes.size(), t.path, t.staging);
         }
-        if (s) t.staging = staging;
-        staged[i] = s;
     };
     auto isDds = [&](const Target& t) { return t.file && t.file->info.format == ExportFormat::Dds; };
     tbb::parallel_for(size_t(0), targets.size(), [&](size_t i) {
@@ -784,26 +784,21 @@ Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, co
     for (size_t i = 0; i < targets.size(); ++i)
         if (isDds(targets[i])) stage(i);
     for (const Status& s : staged)
-        if (!s) {
-            removeStaged();
-            return Error{s.error()};
-        }
+        if (!s) return Error{s.error()};
 
-    // Commit: rename every staged file; on a failure, undo the renames that created new files.
-    const Overwrite commitMode = options.overwrite;
-    for (size_t i = 0; i < targets.size(); ++i) {
-        Target& t = targets[i];
-        if (const Status s = commitTemporary(t.staging, t.path, commitMode); !s) {
-            t.staging.clear(); // commitTemporary removed it
-            for (size_t j = 0; j < i; ++j)
-                if (!targets[j].existed) fs::remove(targets[j].path, ec);
-            for (size_t j = i + 1; j < targets.size(); ++j)
-                fs::remove(targets[j].staging, ec);
-            return Error{s.error()};
-        }
-        t.staging.clear();
+    // Commit as one set: the old bake.json goes first, the new one last; files the previous set
+    // wrote (its bake.json names them) that this one does not are removed, so exactly the new set
+    // is left.
+    SetCommit commit;
+    commit.index = index;
+    commit.overwrite = options.overwrite;
+    if (options.overwrite == Overwrite::Allow) commit.obsolete = previousSetFiles(index);
+    std::vector<StagedFile> files;
+    for (const auto& t : targets)
+        files.push_back({t.staging, t.path});
+    if (const Status s = commitSet(staging.value(), files, commit); !s) return Error{s.error()};
+    for (const auto& t : targets)
         plan.result.written.push_back(t.path);
-    }
     return std::move(plan.result);
 }
 

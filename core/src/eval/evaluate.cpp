@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 namespace burnish {
@@ -272,13 +273,25 @@ MipError errorOf(const Accumulator& a, const EvaluatedVariant& v, double s, int 
             v.kernel, v.lobes};
 }
 
-// The per-texel relative error map of one method at one mip.
+// The per-texel relative error map of one method at one mip: Σ|M − GT| / max(Σ GT, floor), the
+// floor kErrorMapTruthFloor of the level's mean truth per texel (a texel whose footprint faces
+// away from every light gets its absolute error in units of that floor, not a division by almost
+// zero), clamped to the largest float.
 ErrorMap errorMapOf(const std::vector<double>& absSum, const std::vector<double>& truthSum,
                     const EvaluatedVariant& v, double s, int k, const PyramidLevel& level) {
     ErrorMap em{v.method, s, k, level.width, level.height, {}, v.kernel, v.lobes};
     em.relativeError.resize(absSum.size());
-    for (size_t t = 0; t < absSum.size(); ++t)
-        em.relativeError[t] = truthSum[t] > 0.0 ? float(absSum[t] / truthSum[t]) : 0.0f;
+    double meanTruth = 0.0;
+    for (double t : truthSum)
+        meanTruth += t;
+    meanTruth /= double(std::max<size_t>(1, truthSum.size()));
+    const double floor = kErrorMapTruthFloor * meanTruth;
+    for (size_t t = 0; t < absSum.size(); ++t) {
+        const double denominator = std::max(truthSum[t], floor);
+        const double e = denominator > 0.0 ? absSum[t] / denominator : 0.0;
+        em.relativeError[t] = std::isfinite(e) ? float(std::min(e, double(std::numeric_limits<float>::max())))
+                                               : std::numeric_limits<float>::max();
+    }
     return em;
 }
 

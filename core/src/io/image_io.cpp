@@ -56,6 +56,44 @@ Result<FileBytes> readFileBytes(const fs::path& path) {
     return bytes;
 }
 
+/// A library's message as one line: its line breaks become "; ", trailing ones go.
+std::string oneLine(std::string text) {
+    while (!text.empty() && (text.back() == '\n' || text.back() == ' '))
+        text.pop_back();
+    for (size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
+        text.replace(at, 1, "; ");
+    return text;
+}
+
+/// Whether the file starts with the 8-byte PNG signature.
+bool hasPngSignature(const fs::path& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return false;
+    unsigned char head[8] = {};
+    const ssize_t got = ::read(fd, head, sizeof head);
+    ::close(fd);
+    static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    return got == ssize_t(sizeof head) && std::memcmp(head, kSignature, sizeof head) == 0;
+}
+
+/// A library's reason for a failed read, named as what it is: "the file is truncated (…)" when the
+/// data ended early, "the file is corrupt (…)" otherwise.
+std::string damaged(const std::string& why) {
+    const bool truncated =
+        why.find("end of file") != std::string::npos || why.find("EOF") != std::string::npos ||
+        why.find("Premature end") != std::string::npos || why.find("truncat") != std::string::npos ||
+        why.find("Failed to read") != std::string::npos || why.find("Read error") != std::string::npos;
+    return std::string("the file is ") + (truncated ? "truncated" : "corrupt") + " (" + oneLine(why) + ")";
+}
+
+/// The error OpenImageIO recorded while reading pixels it nonetheless handed back (a DDS or JPEG
+/// cut short is filled with zeros or grey and read_image succeeds): an error, never texels.
+std::optional<Error> pendingReadError(OIIO::ImageInput& in, const fs::path& path) {
+    const std::string why = in.geterror();
+    if (why.empty()) return std::nullopt;
+    return Error{"cannot read image '" + path.string() + "': " + damaged(why)};
+}
+
 } // namespace
 
 Result<OpenedImage> openImage(const fs::path& path) {
@@ -63,18 +101,37 @@ Result<OpenedImage> openImage(const fs::path& path) {
     if (!fs::exists(path, ec)) return Error{"image '" + path.string() + "' does not exist"};
     if (fs::is_directory(path, ec)) return Error{"'" + path.string() + "' is a folder, not an image"};
 
+    // PNG files are read and their chunks checked first: libpng, which OpenImageIO reads them with,
+    // prints its own multi-line messages for damaged headers before any error reaches us.
+    OpenedImage opened;
+    if (hasPngSignature(path)) {
+        auto file = readFileBytes(path);
+        if (!file) return Error{"cannot read image '" + path.string() + "': " + file.error()};
+        auto layout = parsePng(std::string_view(file->data(), file->size()));
+        if (!layout) return Error{"cannot read image '" + path.string() + "': " + layout.error()};
+        // Files core's decoder leaves to libpng: their data checked here, before libpng reads it.
+        if (!layout->decodable)
+            if (const Status data = checkPngData(*layout); !data)
+                return Error{"cannot read image '" + path.string() + "': " + data.error()};
+        opened.pngFile = std::move(file).value();
+    }
+
     // Data maps are read as stored: OpenImageIO would otherwise premultiply the colour of PNG/TGA
     // files by their alpha ("associated alpha"), scaling an RGBA normal map's vectors by the
     // height map in its alpha.
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
-    OpenedImage opened;
     opened.path = path;
     opened.input = OIIO::ImageInput::open(path.string(), &config);
     if (!opened.input) {
-        std::string why = OIIO::geterror();
-        if (why.empty()) why = "unknown or unsupported format";
-        return Error{"cannot read image '" + path.string() + "': " + why};
+        const std::string why = OIIO::geterror();
+        // A format OpenImageIO knows by the file's name that it could not open is damaged.
+        const bool known = !why.empty() && OIIO::ImageInput::create(path.string(), false) != nullptr &&
+                           why.find("Could not open file") != std::string::npos;
+        return Error{"cannot read image '" + path.string() + "': " +
+                     (why.empty() ? std::string("unknown or unsupported format")
+                      : known     ? damaged(why)
+                                  : oneLine(why))};
     }
     const OIIO::ImageSpec& spec = opened.input->spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
@@ -124,9 +181,9 @@ std::optional<Status> readPngCodes(const OpenedImage& opened, PngCodes& codes,
                                    const std::function<void(int, int)>& rowsDone) {
     if (opened.source.formatName != "png" || opened.bitDepth == 0) return std::nullopt;
     const std::string name = opened.path.string();
-    auto file = readFileBytes(opened.path);
-    if (!file) return Status(Error{"cannot read image '" + name + "': " + file.error()});
-    auto layout = parsePng(std::string_view(file->data(), file->size()));
+    const auto& file = opened.pngFile;
+    if (file.empty()) return std::nullopt;
+    auto layout = parsePng(std::string_view(file.data(), file.size()));
     if (!layout) return Status(Error{"cannot read image '" + name + "': " + layout.error()});
     if (!layout->decodable || layout->width != opened.width || layout->height != opened.height ||
         layout->channels != opened.channels || layout->bitDepth != opened.bitDepth)
@@ -158,9 +215,9 @@ Result<Image> readOpenedImage(OpenedImage&& opened) {
     OIIO::ImageInput& in = *opened.input;
     const OIIO::ImageSpec& spec = in.spec();
     auto readFailed = [&]() -> Error {
-        std::string why = in.geterror();
-        if (why.empty()) why = "corrupt or truncated data";
-        return Error{"cannot read image '" + path.string() + "': " + why};
+        const std::string why = in.geterror();
+        return Error{"cannot read image '" + path.string() +
+                     "': " + (why.empty() ? std::string("the file is truncated or corrupt") : damaged(why))};
     };
     const std::vector<float>& table = opened.table;
     if (opened.bitDepth != 0) {
@@ -199,6 +256,7 @@ Result<Image> readOpenedImage(OpenedImage&& opened) {
         }
         void* raw = eightBit ? static_cast<void*>(raw8.data()) : static_cast<void*>(raw16.data());
         if (!in.read_image(0, 0, 0, spec.nchannels, spec.format, raw)) return readFailed();
+        if (auto pending = pendingReadError(in, path)) return *pending;
         constexpr size_t kBlock = size_t(1) << 16;
         tbb::parallel_for(size_t(0), (samples + kBlock - 1) / kBlock, [&](size_t block) {
             const size_t end = std::min(samples, (block + 1) * kBlock);
@@ -207,9 +265,17 @@ Result<Image> readOpenedImage(OpenedImage&& opened) {
         });
     } else if (!in.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
         return readFailed();
+    } else if (auto pending = pendingReadError(in, path)) {
+        return *pending;
     }
     in.close();
     return image;
+}
+
+Result<ImageHeader> readImageHeader(const fs::path& path) {
+    auto opened = openImage(path);
+    if (!opened) return Error{opened.error()};
+    return ImageHeader{opened->width, opened->height, opened->channels, opened->source};
 }
 
 Result<Image> readImage(const fs::path& path) {
@@ -237,17 +303,13 @@ Status writeImageAtomic(const fs::path& path, int width, int height, int channel
     spec.attribute("DateTime", "");
     for (const auto& [name, value] : options.attributes)
         spec.attribute(name, value);
-    const fs::path tmp = temporaryPathFor(path);
-    if (!out->open(tmp.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) ||
-        !out->close()) {
-        const std::string why = out->geterror();
+    return writeAtomicWith(path, [&](const fs::path& staged) -> Status {
+        if (!out->open(staged.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) ||
+            !out->close())
+            return Error{"cannot write '" + path.string() + "': " + out->geterror()};
         out.reset();
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        return Error{"cannot write '" + path.string() + "': " + why};
-    }
-    out.reset();
-    return commitTemporary(tmp, path);
+        return {};
+    });
 }
 
 } // namespace burnish

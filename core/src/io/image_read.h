@@ -30,6 +30,10 @@ struct OpenedImage {
     /// For 8/16-bit files: each stored code's float, OpenImageIO's own conversion (bit for bit what
     /// read_image(FLOAT) gives).
     std::vector<float> table;
+    /// A PNG file's bytes, read and parsed (parsePng) before OpenImageIO saw the file, so a damaged
+    /// header or chunk is refused with core's own one-line reason and libpng never prints its own;
+    /// core's decoder reads them again from here. Empty for other formats.
+    std::vector<char, TexelAllocator<char>> pngFile;
 };
 
 /// OpenImageIO's open and the checks readImage documents.

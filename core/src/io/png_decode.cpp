@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <span>
 #include <string>
 
 #if defined(__SSE2__)
@@ -67,6 +68,7 @@ Result<PngLayout> parseHeader(std::string_view ihdr) {
                       : colourType == 6 ? 4
                                         : 1;
     layout.decodable = colourType != 3 && depth >= 8 && interlace == 0;
+    layout.interlaced = interlace == 1;
     return layout;
 }
 
@@ -245,6 +247,59 @@ std::string inflateError(int rc) {
     return "corrupt PNG image data: " + std::string(what);
 }
 
+/// The zlib stream of a layout's IDAT chunks, inflated by ISA-L piece by piece.
+class IdatInflater {
+public:
+    explicit IdatInflater(const PngLayout& layout)
+        : m_layout(layout)
+        , m_state(std::make_unique<inflate_state>()) { // ~50 KiB of history and tables: on the heap
+        isal_inflate_init(m_state.get());
+        m_state->crc_flag = ISAL_ZLIB; // parse the zlib header, check the adler32 trailer
+    }
+
+    /// Inflates until `bytes` bytes are out at `to`; false: the data ended first.
+    Result<bool> into(uint8_t* to, std::size_t bytes) {
+        inflate_state& state = *m_state;
+        state.next_out = to;
+        state.avail_out = uint32_t(bytes);
+        while (state.avail_out > 0) {
+            if (state.block_state == ISAL_BLOCK_FINISH) return false;
+            if (state.avail_in == 0 && m_nextIdat < m_layout.idat.size()) {
+                const std::string_view chunk = m_layout.idat[m_nextIdat++];
+                state.next_in = reinterpret_cast<uint8_t*>(const_cast<char*>(chunk.data())); // only read
+                state.avail_in = uint32_t(chunk.size());
+            }
+            // Called even with no input left: ISA-L reads ahead into its bit buffer, and the bits
+            // there may still hold output.
+            const uint32_t inBefore = state.avail_in, outBefore = state.avail_out;
+            const isal_block_state blockBefore = state.block_state;
+            const int rc = isal_inflate(&state);
+            if (rc < 0 || rc == ISAL_NEED_DICT) return Error{inflateError(rc)};
+            if (state.avail_in == inBefore && state.avail_out == outBefore &&
+                state.block_state == blockBefore && m_nextIdat == m_layout.idat.size())
+                return false; // no progress and no more data
+        }
+        return true;
+    }
+
+    /// Drains the stream to its end so the adler32 is checked. Bytes beyond the rows (libpng warns
+    /// "extra compressed data") and a stream cut off after the last row lose no pixel: accepted.
+    Status drain() {
+        uint8_t spare[4096];
+        while (m_state->block_state != ISAL_BLOCK_FINISH) {
+            auto more = into(spare, sizeof spare);
+            if (!more) return Error{more.error()};
+            if (!*more && m_state->block_state != ISAL_BLOCK_FINISH) break;
+        }
+        return {};
+    }
+
+private:
+    const PngLayout& m_layout;
+    std::unique_ptr<inflate_state> m_state;
+    std::size_t m_nextIdat = 0;
+};
+
 } // namespace
 
 Result<PngLayout> parsePng(std::string_view file) {
@@ -271,7 +326,9 @@ Result<PngLayout> parsePng(std::string_view file) {
         const std::string_view data = file.substr(at + 8, length);
         // PNG 1.2 §5.4: bit 5 of the first type byte set = ancillary.
         const bool critical = (uint8_t(type[0]) & 0x20) == 0;
-        if (critical && chunkCrc(file.data() + at + 4, length + 4) != readU32(file.data() + at + 8 + length))
+        // IEND carries no data: a wrong CRC there loses nothing (libpng reads such files too).
+        if (critical && type != "IEND" &&
+            chunkCrc(file.data() + at + 4, length + 4) != readU32(file.data() + at + 8 + length))
             return Error{"corrupt PNG file (CRC mismatch in chunk " + std::string(type) + ")"};
         at += kChunkOverhead + length;
 
@@ -305,34 +362,8 @@ Status decodePngRows(const PngLayout& layout, uint8_t* out, const std::function<
     std::vector<uint8_t> filtered(batchRows * filteredRowBytes + kPngDecodePadding);
     const std::vector<uint8_t> zeroRow(rowBytes + kPngDecodePadding, 0);
 
-    // ISA-L's inflate state holds its history and tables (~50 KiB): on the heap.
-    auto state = std::make_unique<inflate_state>();
-    isal_inflate_init(state.get());
-    state->crc_flag = ISAL_ZLIB; // parse the zlib header, check the adler32 trailer
-    std::size_t nextIdat = 0;
-    // Runs inflate until `bytes` bytes are out at `to`; false: the data ended first.
-    auto inflateInto = [&](uint8_t* to, std::size_t bytes) -> Result<bool> {
-        state->next_out = to;
-        state->avail_out = uint32_t(bytes);
-        while (state->avail_out > 0) {
-            if (state->block_state == ISAL_BLOCK_FINISH) return false;
-            if (state->avail_in == 0 && nextIdat < layout.idat.size()) {
-                const std::string_view chunk = layout.idat[nextIdat++];
-                state->next_in = reinterpret_cast<uint8_t*>(const_cast<char*>(chunk.data())); // only read
-                state->avail_in = uint32_t(chunk.size());
-            }
-            // Called even with no input left: ISA-L reads ahead into its bit buffer, and the bits
-            // there may still hold output.
-            const uint32_t inBefore = state->avail_in, outBefore = state->avail_out;
-            const isal_block_state blockBefore = state->block_state;
-            const int rc = isal_inflate(state.get());
-            if (rc < 0 || rc == ISAL_NEED_DICT) return Error{inflateError(rc)};
-            if (state->avail_in == inBefore && state->avail_out == outBefore &&
-                state->block_state == blockBefore && nextIdat == layout.idat.size())
-                return false; // no progress and no more data
-        }
-        return true;
-    };
+    IdatInflater inflater(layout);
+    auto inflateInto = [&](uint8_t* to, std::size_t bytes) { return inflater.into(to, bytes); };
 
     const int height = layout.height;
     for (int y0 = 0; y0 < height;) {
@@ -384,15 +415,39 @@ Status decodePngRows(const PngLayout& layout, uint8_t* out, const std::function<
         rowsDone(y0, y0 + rows);
         y0 += rows;
     }
-    // Drain the stream to its end so the adler32 is checked. Bytes beyond the rows (libpng warns
-    // "extra compressed data") and a stream cut off after the last row lose no pixel: accepted.
-    uint8_t spare[4096];
-    while (state->block_state != ISAL_BLOCK_FINISH) {
-        auto more = inflateInto(spare, sizeof spare);
-        if (!more) return Error{more.error()};
-        if (!*more && state->block_state != ISAL_BLOCK_FINISH) break;
+    return inflater.drain();
+}
+
+Status checkPngData(const PngLayout& layout) {
+    // PNG 1.2 §8.2: Adam7's passes (first column and row, steps); a plain image is one pass.
+    struct Pass {
+        int x0, y0, dx, dy;
+    };
+    static const Pass kAdam7[7] = {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4},
+                                   {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};
+    static const Pass kPlain[1] = {{0, 0, 1, 1}};
+    const std::size_t bitsPerPixel = std::size_t(layout.channels) * std::size_t(layout.bitDepth);
+    IdatInflater inflater(layout);
+    std::vector<uint8_t> row;
+    for (const Pass& pass :
+         layout.interlaced ? std::span<const Pass>(kAdam7) : std::span<const Pass>(kPlain)) {
+        const std::size_t w = layout.width > pass.x0
+                                  ? std::size_t(layout.width - pass.x0 + pass.dx - 1) / std::size_t(pass.dx)
+                                  : 0;
+        const std::size_t h = layout.height > pass.y0
+                                  ? std::size_t(layout.height - pass.y0 + pass.dy - 1) / std::size_t(pass.dy)
+                                  : 0;
+        if (w == 0 || h == 0) continue; // an empty pass has no rows, not even filter bytes
+        row.resize(1 + (w * bitsPerPixel + 7) / 8);
+        for (std::size_t y = 0; y < h; ++y) {
+            auto full = inflater.into(row.data(), row.size());
+            if (!full) return Error{full.error()};
+            if (!*full) return Error{"truncated PNG image data (the rows end early)"};
+            if (row[0] > 4)
+                return Error{"corrupt PNG image data: unknown filter type " + std::to_string(row[0])};
+        }
     }
-    return {};
+    return inflater.drain();
 }
 
 } // namespace burnish

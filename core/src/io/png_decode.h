@@ -21,6 +21,7 @@ struct PngLayout {
     int channels = 0;                   // 1 grey, 2 grey+alpha, 3 RGB, 4 RGBA (colour types 0, 4, 2, 6)
     int bitDepth = 0;                   // 8 or 16 when decodable
     bool decodable = false;             // false: interlaced, palette, tRNS or < 8 bits (left to libpng)
+    bool interlaced = false;            // Adam7
     std::vector<std::string_view> idat; // the IDAT chunks' data, in order (views into the file)
 
     std::size_t rowBytes() const {
@@ -33,7 +34,7 @@ inline constexpr std::size_t kPngDecodePadding = 16;
 
 /// Parses the chunks of a PNG file held in `file` (which must outlive the layout). Errors: not a
 /// PNG (signature), a truncated or malformed chunk before any image data, a CRC mismatch in a
-/// critical chunk (IHDR, PLTE, IDAT), a bad IHDR (sizes of 0 or over 2^31 - 1, an invalid colour
+/// critical chunk with data (IHDR, PLTE, IDAT), a bad IHDR (sizes of 0 or over 2^31 - 1, an invalid colour
 /// type, depth, compression, filter or interlace method), no IDAT, IDAT chunks that are not
 /// consecutive. Ancillary chunks are skipped unchecked, as libpng does.
 Result<PngLayout> parsePng(std::string_view file);
@@ -45,5 +46,10 @@ Result<PngLayout> parsePng(std::string_view file);
 /// little image data, an unknown filter type.
 Status decodePngRows(const PngLayout& layout, std::uint8_t* out,
                      const std::function<void(int, int)>& rowsDone);
+
+/// Checks the image data of any layout, decodable or not (interlaced, palette, low depths): the
+/// zlib stream inflates without error to at least every row of every pass, each row's filter type
+/// is known, the adler32 matches. What libpng would stop on with messages of its own, found first.
+Status checkPngData(const PngLayout& layout);
 
 } // namespace burnish

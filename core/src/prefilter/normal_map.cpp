@@ -24,11 +24,19 @@ std::string percent(size_t count, size_t total) {
     return buf;
 }
 
+/// Whether any finite texel has a negative value in its first `channels` channels. Texels with a
+/// NaN or infinite channel are left out: the decoder replaces them, and one -Inf must not turn a
+/// whole unsigned map signed.
 bool anyNegative(const Image& image, int channels) {
-    for (size_t i = 0; i < image.texelCount(); ++i)
-        for (int c = 0; c < channels; ++c)
-            if (image.pixels[i * static_cast<size_t>(image.channels) + static_cast<size_t>(c)] < -1e-6f)
-                return true;
+    for (size_t i = 0; i < image.texelCount(); ++i) {
+        const float* texel = image.pixels.data() + i * static_cast<size_t>(image.channels);
+        bool finite = true, negative = false;
+        for (int c = 0; c < channels; ++c) {
+            finite = finite && std::isfinite(texel[c]);
+            negative = negative || texel[c] < -1e-6f;
+        }
+        if (finite && negative) return true;
+    }
     return false;
 }
 
@@ -80,6 +88,9 @@ void decodeTexels(const Sample& sample, size_t begin, size_t end, const DecodeSe
         if (settings.greenFlipped) v[1] = -v[1];
         if (rg) {
             const double r2 = v[0] * v[0] + v[1] * v[1];
+            // A stored (x, y) longer than 1 is no unit vector's projection: as bad as an RGB vector
+            // of the wrong length.
+            if (r2 > (1.0 + kOffLengthTolerance) * (1.0 + kOffLengthTolerance)) ++tally.offLength;
             if (r2 > 1.0) {
                 const double s = 1.0 / std::sqrt(r2);
                 v[0] *= s;
@@ -185,6 +196,12 @@ Result<NormalMap> finishDecode(NormalMap map, const std::vector<BlockTally>& tal
     if (static_cast<double>(diag.negativeZTexels) > kMaxNegativeZFraction * static_cast<double>(valid))
         implausible = percent(diag.negativeZTexels, valid) +
                       " of texels point below the surface (z < 0); tangent-space normal maps face +z";
+    else if (rg &&
+             static_cast<double>(diag.offLengthTexels) > kMaxOffLengthFraction * static_cast<double>(valid))
+        implausible =
+            percent(diag.offLengthTexels, valid) +
+            " of texels store (x, y) longer than 1 by more than 25% (x^2 + y^2 > 1.56), which no unit "
+            "normal has";
     else if (!rg &&
              static_cast<double>(diag.offLengthTexels) > kMaxOffLengthFraction * static_cast<double>(valid)) {
         char buf[64];

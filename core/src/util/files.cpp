@@ -1,17 +1,25 @@
 #include <burnish/core/util/files.h>
 
-#include <atomic>
+#include <nlohmann/json.hpp>
+
 #include <cerrno>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fcntl.h>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace burnish {
 
 namespace fs = std::filesystem;
+using Json = nlohmann::json;
 
 namespace {
 
@@ -19,39 +27,175 @@ std::string describe(const fs::path& path, const char* what, int err) {
     return std::string(what) + " '" + path.string() + "': " + std::strerror(err);
 }
 
+std::function<void(int)>& commitStepHook() {
+    static std::function<void(int)> hook;
+    return hook;
+}
+
+void stepDone(int& step) {
+    ++step;
+    if (const auto& hook = commitStepHook()) hook(step);
+}
+
+/// A name that stays inside its folder: not empty, no '/', not "." or "..".
+bool plainName(const std::string& name) {
+    return !name.empty() && name != "." && name != ".." && name.find('/') == std::string::npos &&
+           name.find('\0') == std::string::npos;
+}
+
+fs::path folderOf(const fs::path& path) {
+    return path.has_parent_path() ? path.parent_path() : fs::path(".");
+}
+
+bool sameFolder(const fs::path& a, const fs::path& b) {
+    std::error_code ec;
+    return fs::equivalent(a, b, ec);
+}
+
+/// fsync of a folder, so the renames in it survive a crash. Best effort: some file systems refuse.
+void syncFolder(const fs::path& folder) {
+    const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) return;
+    (void)::fsync(fd);
+    ::close(fd);
+}
+
+constexpr const char* kJournal = "journal";
+constexpr const char* kJournalPartial = "journal.partial";
+
+/// A commit as its journal records it: file names only, staged ones inside the staging folder and
+/// targets inside its parent.
+struct Journal {
+    std::vector<std::pair<std::string, std::string>> files; // staged name, target name
+    std::string index;                                      // staged name of the index, "" none
+    std::string indexTarget;
+    std::vector<std::string> obsolete;
+};
+
+std::optional<Journal> parseJournal(const std::string& text) {
+    const Json j = Json::parse(text, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || j.value("burnish-commit", 0) != 1) return std::nullopt;
+    Journal journal;
+    try {
+        for (const auto& f : j.at("files")) {
+            const auto staged = f.at(0).get<std::string>();
+            const auto target = f.at(1).get<std::string>();
+            if (!plainName(staged) || !plainName(target)) return std::nullopt;
+            journal.files.emplace_back(staged, target);
+        }
+        journal.index = j.at("index").get<std::string>();
+        journal.indexTarget = j.at("indexTarget").get<std::string>();
+        if (!journal.index.empty() && (!plainName(journal.index) || !plainName(journal.indexTarget)))
+            return std::nullopt;
+        for (const auto& o : j.at("obsolete")) {
+            const auto name = o.get<std::string>();
+            if (plainName(name)) journal.obsolete.push_back(name);
+        }
+    } catch (const Json::exception&) {
+        return std::nullopt;
+    }
+    return journal;
+}
+
+std::string journalText(const Journal& journal) {
+    Json files = Json::array();
+    for (const auto& [staged, target] : journal.files)
+        files.push_back({staged, target});
+    return Json{{"burnish-commit", 1},
+                {"files", files},
+                {"index", journal.index},
+                {"indexTarget", journal.indexTarget},
+                {"obsolete", journal.obsolete}}
+        .dump();
+}
+
+/// Removes a file of the old set: a regular file or a link (never what a link points to), never a
+/// folder.
+void removeObsolete(const fs::path& path) {
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) != 0) return;
+    if (S_ISREG(st.st_mode) || S_ISLNK(st.st_mode)) ::unlink(path.c_str());
+}
+
+/// Carries a journal's commit to its end from wherever it stopped: every step is skipped when it
+/// was done already (a staged file that is gone was renamed). Used by recoverStaging.
+int finishJournal(const fs::path& staging, const fs::path& parent, const Journal& journal) {
+    int renamed = 0;
+    const bool indexPending =
+        !journal.index.empty() && fs::exists(fs::symlink_status(staging / journal.index));
+    if (indexPending) ::unlink((parent / journal.indexTarget).c_str());
+    for (const auto& [staged, target] : journal.files)
+        if (::rename((staging / staged).c_str(), (parent / target).c_str()) == 0) ++renamed;
+    if (indexPending) {
+        for (const auto& name : journal.obsolete)
+            removeObsolete(parent / name);
+        if (::rename((staging / journal.index).c_str(), (parent / journal.indexTarget).c_str()) == 0)
+            ++renamed;
+    }
+    syncFolder(parent);
+    return renamed;
+}
+
+/// "<name>.tmp-<pid>-<n>": the pid of a temporary of the previous naming scheme, or 0.
+pid_t oldTemporaryPid(const std::string& name) {
+    const size_t dash = name.rfind('-');
+    const size_t tmp = name.rfind(".tmp-");
+    if (tmp == std::string::npos || tmp == 0 || dash == std::string::npos || dash <= tmp + 5 ||
+        dash + 1 == name.size())
+        return 0;
+    const std::string pid = name.substr(tmp + 5, dash - tmp - 5);
+    const std::string counter = name.substr(dash + 1);
+    auto digits = [](const std::string& s) { return s.find_first_not_of("0123456789") == std::string::npos; };
+    if (pid.empty() || pid.size() > 9 || !digits(pid) || !digits(counter)) return 0;
+    return pid_t(std::stol(pid));
+}
+
 } // namespace
 
-fs::path temporaryPathFor(const fs::path& path) {
-    static std::atomic<unsigned> counter{0};
-    fs::path tmp = path;
-    tmp += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-    return tmp;
+StagingFolder::StagingFolder(fs::path path, fs::path parent, int lock)
+    : m_path(std::move(path))
+    , m_parent(std::move(parent))
+    , m_lock(lock) {}
+
+StagingFolder::StagingFolder(StagingFolder&& other) noexcept
+    : m_path(std::move(other.m_path))
+    , m_parent(std::move(other.m_parent))
+    , m_lock(other.m_lock)
+    , m_count(other.m_count) {
+    other.m_lock = -1;
+    other.m_path.clear();
 }
 
-Status commitTemporary(const fs::path& temporary, const fs::path& path, Overwrite overwrite) {
+StagingFolder::~StagingFolder() {
+    if (m_path.empty()) return;
     std::error_code ec;
-    if (overwrite == Overwrite::Refuse && fs::exists(path, ec)) {
-        fs::remove(temporary, ec);
-        return Error{"refusing to overwrite existing file '" + path.string() + "'"};
-    }
-    if (::rename(temporary.c_str(), path.c_str()) != 0) {
+    fs::remove_all(m_path, ec); // the lock is held until the folder is gone
+    if (m_lock >= 0) ::close(m_lock);
+}
+
+Result<StagingFolder> StagingFolder::create(const fs::path& folder) {
+    std::error_code ec;
+    if (!fs::is_directory(folder, ec)) return Error{"folder '" + folder.string() + "' does not exist"};
+    std::string name = (folder / (std::string(kStagingPrefix) + "XXXXXX")).string();
+    if (::mkdtemp(name.data()) == nullptr) return Error{describe(folder, "cannot write into folder", errno)};
+    const int lock = ::open(name.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+    if (lock < 0 || ::flock(lock, LOCK_EX) != 0) {
         const int err = errno;
-        fs::remove(temporary, ec);
-        return Error{describe(path, "cannot write", err)};
+        if (lock >= 0) ::close(lock);
+        fs::remove_all(name, ec);
+        return Error{describe(folder, "cannot write into folder", err)};
     }
-    return {};
+    return StagingFolder(fs::path(name), folder, lock);
 }
 
-Status writeFileAtomic(const fs::path& path, std::string_view bytes, Overwrite overwrite) {
-    const fs::path parent = path.has_parent_path() ? path.parent_path() : fs::path(".");
-    std::error_code ec;
-    if (!fs::is_directory(parent, ec)) return Error{"folder '" + parent.string() + "' does not exist"};
-    if (overwrite == Overwrite::Refuse && fs::exists(path, ec))
-        return Error{"refusing to overwrite existing file '" + path.string() + "'"};
+fs::path StagingFolder::fileFor(const fs::path& target) {
+    return m_path / (std::to_string(m_count++) + "-" + target.filename().string());
+}
 
-    const fs::path tmp = temporaryPathFor(path);
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (fd < 0) return Error{describe(path, "cannot write", errno)};
+Status writeNewFile(const fs::path& path, std::string_view bytes, const fs::path& target) {
+    const fs::path& named = target.empty() ? path : target;
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (fd < 0) return Error{describe(named, "cannot write", errno)};
     const char* data = bytes.data();
     size_t left = bytes.size();
     while (left > 0) {
@@ -60,19 +204,193 @@ Status writeFileAtomic(const fs::path& path, std::string_view bytes, Overwrite o
             if (errno == EINTR) continue;
             const int err = errno;
             ::close(fd);
-            fs::remove(tmp, ec);
-            return Error{describe(path, "cannot write", err)};
+            ::unlink(path.c_str());
+            return Error{describe(named, "cannot write", err)};
         }
         data += n;
         left -= static_cast<size_t>(n);
     }
-    // fsync before rename: a crash after the rename must not leave an empty file in its place.
+    // fsync before the rename: a crash after it must not leave an empty file in the target's place.
     if (::fsync(fd) != 0 || ::close(fd) != 0) {
         const int err = errno;
-        fs::remove(tmp, ec);
-        return Error{describe(path, "cannot write", err)};
+        ::unlink(path.c_str());
+        return Error{describe(named, "cannot write", err)};
     }
-    return commitTemporary(tmp, path, overwrite);
+    return {};
+}
+
+Status syncFile(const fs::path& path, const fs::path& target) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0) return Error{describe(target, "cannot write", errno)};
+    const bool ok = ::fsync(fd) == 0;
+    const int err = errno;
+    ::close(fd);
+    if (!ok) return Error{describe(target, "cannot write", err)};
+    return {};
+}
+
+Status installFile(const fs::path& staged, const fs::path& target, Overwrite overwrite) {
+    if (overwrite == Overwrite::Refuse) {
+        if (::renameat2(AT_FDCWD, staged.c_str(), AT_FDCWD, target.c_str(), RENAME_NOREPLACE) == 0) return {};
+        const int err = errno;
+        if (err == EEXIST) return Error{"refusing to overwrite existing file '" + target.string() + "'"};
+        if (err != EINVAL && err != ENOSYS) return Error{describe(target, "cannot write", err)};
+        // A file system without RENAME_NOREPLACE: check, then rename.
+        std::error_code ec;
+        if (fs::exists(fs::symlink_status(target, ec)))
+            return Error{"refusing to overwrite existing file '" + target.string() + "'"};
+    }
+    if (::rename(staged.c_str(), target.c_str()) != 0) return Error{describe(target, "cannot write", errno)};
+    return {};
+}
+
+Status writeAtomicWith(const fs::path& path, const std::function<Status(const fs::path&)>& write,
+                       Overwrite overwrite) {
+    std::error_code ec;
+    if (overwrite == Overwrite::Refuse && fs::exists(fs::symlink_status(path, ec)))
+        return Error{"refusing to overwrite existing file '" + path.string() + "'"};
+    auto staging = StagingFolder::create(folderOf(path));
+    if (!staging) return Error{"cannot write '" + path.string() + "': " + staging.error()};
+    const fs::path staged = staging.value().fileFor(path);
+    if (const Status s = write(staged); !s) return s;
+    if (const Status s = syncFile(staged, path); !s) return s;
+    return installFile(staged, path, overwrite);
+}
+
+Status writeFileAtomic(const fs::path& path, std::string_view bytes, Overwrite overwrite) {
+    return writeAtomicWith(
+        path, [&](const fs::path& staged) { return writeNewFile(staged, bytes, path); }, overwrite);
+}
+
+Status commitSet(StagingFolder& staging, const std::vector<StagedFile>& files, const SetCommit& commit) {
+    const fs::path& parent = staging.parent();
+    Journal journal;
+    std::vector<fs::path> order; // staged files in rename order, the index last
+    std::vector<fs::path> targets;
+    for (const auto& f : files) {
+        if (!sameFolder(folderOf(f.target), parent) || !sameFolder(folderOf(f.staged), staging.path()))
+            return Error{"cannot write '" + f.target.string() + "': not in the set's folder '" +
+                         parent.string() + "'"};
+        if (!commit.index.empty() && f.target == commit.index) {
+            journal.index = f.staged.filename().string();
+            journal.indexTarget = f.target.filename().string();
+            continue;
+        }
+        journal.files.emplace_back(f.staged.filename().string(), f.target.filename().string());
+        order.push_back(f.staged);
+        targets.push_back(f.target);
+    }
+    if (!commit.index.empty() && journal.index.empty())
+        return Error{"cannot write '" + commit.index.string() + "': the set's index is not among its files"};
+    for (const auto& o : commit.obsolete) {
+        const std::string name = o.filename().string();
+        if (!sameFolder(folderOf(o), parent) || !plainName(name) || name == journal.indexTarget) continue;
+        bool written = false;
+        for (const auto& [staged, target] : journal.files)
+            written = written || target == name;
+        if (!written) journal.obsolete.push_back(name);
+    }
+
+    std::error_code ec;
+    std::vector<bool> existed;
+    for (const auto& t : targets)
+        existed.push_back(fs::exists(fs::symlink_status(t, ec)));
+    const fs::path indexTarget = journal.index.empty() ? fs::path() : parent / journal.indexTarget;
+    if (commit.overwrite == Overwrite::Refuse) {
+        for (size_t i = 0; i < targets.size(); ++i)
+            if (existed[i]) return Error{"refusing to overwrite existing file '" + targets[i].string() + "'"};
+        if (!indexTarget.empty() && fs::exists(fs::symlink_status(indexTarget, ec)))
+            return Error{"refusing to overwrite existing file '" + indexTarget.string() + "'"};
+    }
+
+    // The journal, complete or absent: written beside, then renamed inside the private folder.
+    int step = 0;
+    if (const Status s = writeNewFile(staging.path() / kJournalPartial, journalText(journal)); !s) return s;
+    if (::rename((staging.path() / kJournalPartial).c_str(), (staging.path() / kJournal).c_str()) != 0)
+        return Error{describe(parent, "cannot write into folder", errno)};
+    stepDone(step);
+
+    bool indexRemoved = false;
+    if (!indexTarget.empty() && fs::exists(fs::symlink_status(indexTarget, ec))) {
+        if (::unlink(indexTarget.c_str()) != 0) return Error{describe(indexTarget, "cannot replace", errno)};
+        indexRemoved = true;
+        stepDone(step);
+    }
+    for (size_t i = 0; i < order.size(); ++i) {
+        if (const Status s = installFile(order[i], targets[i], commit.overwrite); !s) {
+            for (size_t j = 0; j < i; ++j)
+                if (!existed[j]) fs::remove(targets[j], ec);
+            std::remove((staging.path() / kJournal).c_str()); // nothing to finish: this commit failed
+            if (indexRemoved)
+                return Error{s.error() + "; the set in '" + parent.string() + "' is incomplete (its " +
+                             indexTarget.filename().string() + " was removed): write it again"};
+            return s;
+        }
+        stepDone(step);
+    }
+    for (const auto& name : journal.obsolete) {
+        removeObsolete(parent / name);
+        stepDone(step);
+    }
+    if (!indexTarget.empty()) {
+        if (const Status s = installFile(staging.path() / journal.index, indexTarget, commit.overwrite); !s) {
+            std::remove((staging.path() / kJournal).c_str());
+            return s;
+        }
+        stepDone(step);
+    }
+    syncFolder(parent);
+    return {};
+}
+
+StagingRecovery recoverStaging(const fs::path& folder) {
+    StagingRecovery recovery;
+    std::error_code ec;
+    if (!fs::is_directory(folder, ec)) return recovery;
+    std::vector<fs::path> entries;
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
+        entries.push_back(it->path());
+    const uid_t me = ::geteuid();
+    for (const auto& entry : entries) {
+        const std::string name = entry.filename().string();
+        struct stat st {};
+        if (::lstat(entry.c_str(), &st) != 0 || st.st_uid != me) continue;
+        if (name.rfind(kStagingPrefix, 0) == 0 && S_ISDIR(st.st_mode)) {
+            const int fd = ::open(entry.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+            if (fd < 0) continue;
+            if (::flock(fd, LOCK_EX | LOCK_NB) != 0) { // a live process is using it
+                ::close(fd);
+                continue;
+            }
+            std::optional<Journal> journal;
+            if (auto text = readFile(entry / kJournal)) journal = parseJournal(*text);
+            if (journal) {
+                const int renamed = finishJournal(entry, folder, *journal);
+                ++recovery.commitsFinished;
+                recovery.notes.push_back("finished an interrupted commit in '" + folder.string() + "' (" +
+                                         std::to_string(renamed) + " files put in place)");
+            } else {
+                ++recovery.foldersRemoved;
+                recovery.notes.push_back("removed the staging folder of an interrupted write: '" +
+                                         entry.string() + "'");
+            }
+            fs::remove_all(entry, ec);
+            ::close(fd);
+        } else if (S_ISREG(st.st_mode)) {
+            const pid_t pid = oldTemporaryPid(name);
+            if (pid <= 0 || ::kill(pid, 0) == 0 || errno != ESRCH) continue; // not ours, or still running
+            if (::unlink(entry.c_str()) == 0) {
+                ++recovery.temporariesRemoved;
+                recovery.notes.push_back("removed a temporary file of an interrupted write: '" +
+                                         entry.string() + "'");
+            }
+        }
+    }
+    return recovery;
+}
+
+void setCommitStepHookForTesting(std::function<void(int)> hook) {
+    commitStepHook() = std::move(hook);
 }
 
 Result<std::string> readFile(const fs::path& path) {

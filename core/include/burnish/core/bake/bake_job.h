@@ -54,6 +54,8 @@ struct BakeJobSpec {
     std::optional<std::string> border;
     std::optional<std::string> green;
     std::optional<std::string> layout;
+    /// How the input's stored values map to [-1, 1]: auto (detected), unsigned or signed.
+    std::optional<std::string> encoding;
     std::optional<double> metallic;
     /// Mip levels to write (absent = the whole chain down to 1×1); must be >= 1.
     std::optional<int> mips;

@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +20,14 @@ namespace burnish {
 /// outputs, --report when the spec asks for it. Options whose absence means "each file's own choice"
 /// or "none" (compression, metallic, mips, gloss, detail) stay absent when the spec leaves them out.
 std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& job);
+
+/// Checks resolved jobs before the first one writes anything, reading only file headers: every
+/// input (normal map, gloss, detail) opens as an image with a plausible header (a normal map has 2
+/// to 4 channels), each job's plan (its files, bake.json, report files) is valid, no two jobs write
+/// one file, and with `outRoot` every job's output folder lies inside it (links resolved).
+/// Errors: "manifest job N (input): ..." (`fromManifest`), otherwise the reason alone.
+Status checkBakeJobs(const std::vector<BakeJob>& jobs,
+                     const std::optional<std::filesystem::path>& outRoot = {}, bool fromManifest = true);
 
 /// Writes (atomically, replacing any previous file) a Ninja build file at `path` with one
 /// `burnish_bake` build statement per job (restat, so unchanged outputs stop the rebuild), run by

@@ -92,6 +92,8 @@ struct ExportResult {
     nlohmann::json manifest;  // bake.json's content
     /// Every path written, absolute or as given under outDir.
     std::vector<std::filesystem::path> written;
+    /// What exportBake cleaned up after killed runs in outDir first (recoverStaging's notes).
+    std::vector<std::string> notes;
 };
 
 /// The file set of an export without writing anything: names, format and precision checks (no
@@ -104,10 +106,13 @@ struct ExportResult {
 Result<ExportResult> planExport(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const BakeRecord& record = {});
 
-/// Writes the files of planExport and `bake.json` into `outDir` (which must exist). If any target
-/// exists and overwrite is Refuse, nothing is written. A failure leaves no temporary file and no
-/// partial set: staged files are removed, and files renamed before a later rename failed are
-/// removed again unless they replaced an existing file.
+/// Writes the files of planExport and `bake.json` into `outDir` (which must exist) as one set
+/// (files.h's commitSet): staged in a private folder, bake.json removed first and written last, so a
+/// folder with a bake.json holds a complete set; with Overwrite::Allow the files the previous
+/// bake.json names that this set does not write are removed. Interrupted commits of killed runs
+/// in outDir are finished first (recoverStaging). If any target exists and overwrite is Refuse,
+/// nothing is written. A failure leaves no temporary file: staged files are removed, and files
+/// renamed before a later rename failed are removed again unless they replaced an existing file.
 Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const std::filesystem::path& outDir, const BakeRecord& record = {});
 

@@ -98,13 +98,18 @@ struct MipError {
     bool betweenTexels = false; // evaluated between texels (EvaluateOptions::betweenTexels)
 };
 
+/// Error maps divide a texel's absolute error by its truth, or by this fraction of the level's mean
+/// truth per texel where the truth is smaller (footprints that face away from every light), so no
+/// map holds an infinity or a division by almost zero.
+inline constexpr double kErrorMapTruthFloor = 0.01;
+
 struct ErrorMap {
     Method method;
     double basePower;
     int mip;
     int width;
     int height;
-    std::vector<float> relativeError; // per texel, row-major
+    std::vector<float> relativeError; // per texel, row-major: Σ|M − GT| / max(Σ GT, floor), finite
     FilterKernel kernel = FilterKernel::Box;
     int lobes = 0;
 };

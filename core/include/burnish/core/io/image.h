@@ -51,6 +51,19 @@ inline constexpr std::uint64_t kMaxImageTexels = std::uint64_t(1) << 30;
 /// (missing, unreadable, corrupt or truncated, too large, no channels).
 Result<Image> readImage(const std::filesystem::path& path);
 
+/// What an image file's header says, read without its pixels.
+struct ImageHeader {
+    int width = 0;
+    int height = 0;
+    int channels = 0;
+    ImageSourceInfo source;
+};
+
+/// Opens an image and checks its header as readImage does (size limits, 1 to 4 channels, not a
+/// volume; for PNG files every chunk and, for files libpng decodes, the image data), reading no
+/// pixels otherwise. For checking many inputs before any work starts.
+Result<ImageHeader> readImageHeader(const std::filesystem::path& path);
+
 /// How writeImageAtomic stores the channels.
 enum class StoredType { UInt8, Half, Float };
 

@@ -44,7 +44,7 @@ struct NormalMapDiagnostics {
     size_t nonFiniteTexels = 0;    // NaN/Inf in any used channel: replaced by a flat normal
     size_t zeroLengthTexels = 0;   // decoded to (near) zero length: replaced by a flat normal
     size_t negativeZTexels = 0;    // z < 0 before renormalization (impossible in tangent space)
-    size_t offLengthTexels = 0;    // RGB maps: stored length off 1 by more than 25%
+    size_t offLengthTexels = 0;    // stored length off 1 by more than 25% (RG maps: only longer)
     double meanStoredLength = 1.0; // RGB maps: mean length of the stored vectors
     bool zRebuilt = false;
     bool alphaIgnored = false;

@@ -1,29 +1,135 @@
-// Atomic file output: bytes go to a temporary file beside the target, are flushed to disk, and
-// the temporary is renamed over the target. A failed write (full disk, no permission, missing
-// folder) leaves any existing file untouched and no temporary behind.
+// Atomic file output through one path that no planted link can redirect.
+//
+// Every file Burnish writes is first written into a private staging folder that mkdtemp(3) makes
+// inside the target's folder (".burnish-staging-XXXXXX", mode 0700): no other user can create a
+// name in it, so a symbolic link planted at a predictable temporary name cannot send a write
+// elsewhere, and it lies on the target's file system, so rename(2) into place is atomic. Bytes are
+// flushed to disk before the rename. A failed write (full disk, no permission, missing folder)
+// leaves any existing file untouched and nothing behind.
+//
+// A set of files that belong together (a bake's textures and its bake.json) is committed as one
+// unit: a journal naming every file is written into the staging folder first, the set's index file
+// (bake.json) is removed, the files are renamed into place, files of the old set that the new one
+// does not write are removed, and the new index is renamed last. A folder holding no index is
+// therefore in the middle of a commit; a process killed there leaves its staging folder and
+// journal, and the next recoverStaging() of that folder finishes the commit.
 #pragma once
 
 #include <burnish/core/util/result.h>
 
 #include <filesystem>
+#include <functional>
+#include <string>
 #include <string_view>
+#include <vector>
 
 namespace burnish {
 
 enum class Overwrite { Allow, Refuse };
 
-/// Writes `bytes` to `path` atomically. With Overwrite::Refuse an existing file is an error.
-/// Creates no folders: a missing parent folder is an error naming it.
+/// Name prefix of staging folders (followed by mkdtemp's six characters).
+inline constexpr std::string_view kStagingPrefix = ".burnish-staging-";
+
+/// A private, locked staging folder inside an existing folder. While the object lives it holds an
+/// exclusive flock(2) on the folder, which tells recoverStaging() of another process that it is in
+/// use; the destructor removes the folder and whatever is still in it.
+class StagingFolder {
+public:
+    /// Makes one inside `folder`; an error names `folder` when it is missing or not writable.
+    static Result<StagingFolder> create(const std::filesystem::path& folder);
+
+    StagingFolder(StagingFolder&& other) noexcept;
+    StagingFolder& operator=(StagingFolder&&) = delete;
+    StagingFolder(const StagingFolder&) = delete;
+    StagingFolder& operator=(const StagingFolder&) = delete;
+    ~StagingFolder();
+
+    /// The staging folder itself.
+    const std::filesystem::path& path() const { return m_path; }
+    /// The folder the staged files are committed into (where the staging folder lies).
+    const std::filesystem::path& parent() const { return m_parent; }
+    /// A new name inside the staging folder for the file that will become `target`. It ends in
+    /// target's file name, so libraries that pick a format by extension see the right one.
+    /// Not thread-safe: name every file before writing them in parallel.
+    std::filesystem::path fileFor(const std::filesystem::path& target);
+
+private:
+    StagingFolder(std::filesystem::path path, std::filesystem::path parent, int lock);
+    std::filesystem::path m_path;
+    std::filesystem::path m_parent;
+    int m_lock = -1;
+    unsigned m_count = 0;
+};
+
+/// Writes `bytes` to a new file at `path` (created exclusively, never through a link) and flushes
+/// it to disk. For files inside a StagingFolder; errors name `target` when given.
+Status writeNewFile(const std::filesystem::path& path, std::string_view bytes,
+                    const std::filesystem::path& target = {});
+
+/// Flushes a file that a library wrote (OpenImageIO) to disk, so a crash after its rename cannot
+/// leave an empty file in the target's place. `target` names the file in the error.
+Status syncFile(const std::filesystem::path& path, const std::filesystem::path& target);
+
+/// Renames a staged file to `target`. With Overwrite::Refuse an existing target is an error and
+/// stays as it was (renameat2 with RENAME_NOREPLACE: no window between check and rename).
+Status installFile(const std::filesystem::path& staged, const std::filesystem::path& target,
+                   Overwrite overwrite = Overwrite::Allow);
+
+/// Writes `bytes` to `path` atomically (a StagingFolder beside it, writeNewFile, installFile).
+/// With Overwrite::Refuse an existing file is an error. Creates no folders: a missing parent
+/// folder is an error naming it.
 Status writeFileAtomic(const std::filesystem::path& path, std::string_view bytes,
                        Overwrite overwrite = Overwrite::Allow);
 
-/// A temporary path in the same folder as `path` (so rename(2) is atomic), unique per process
-/// and call: "<name>.tmp-<pid>-<counter>".
-std::filesystem::path temporaryPathFor(const std::filesystem::path& path);
-
-/// Makes a temporary path the file at `path` (rename), removing the temporary on failure.
-Status commitTemporary(const std::filesystem::path& temporary, const std::filesystem::path& path,
+/// Writes a file atomically with a writer that fills a staged path (a library that opens files by
+/// name, such as OpenImageIO): `write(staged)` writes the whole file there; it is then flushed to
+/// disk and renamed to `path`. The writer's error is returned as it is.
+Status writeAtomicWith(const std::filesystem::path& path,
+                       const std::function<Status(const std::filesystem::path& staged)>& write,
                        Overwrite overwrite = Overwrite::Allow);
+
+/// One file of a set: the staged file and the target it becomes (in the staging folder's parent).
+struct StagedFile {
+    std::filesystem::path staged;
+    std::filesystem::path target;
+};
+
+/// What commitSet does besides renaming the files.
+struct SetCommit {
+    /// The set's index (bake.json), one of the files: an existing index is removed before the first
+    /// rename and the new one is renamed last. Empty: no index.
+    std::filesystem::path index;
+    /// Files of the previous set the new one does not write, removed after the renames. Only plain
+    /// file names inside the parent folder are removed; anything else is ignored.
+    std::vector<std::filesystem::path> obsolete;
+    Overwrite overwrite = Overwrite::Allow;
+};
+
+/// Commits staged files as one set through the staging folder's journal (see the top of this
+/// file). Every target must lie directly in staging.parent(). On a failed rename the files that
+/// were new are removed again and the error says the folder's set is incomplete.
+Status commitSet(StagingFolder& staging, const std::vector<StagedFile>& files, const SetCommit& commit);
+
+/// What recoverStaging found and did.
+struct StagingRecovery {
+    int commitsFinished = 0;    // interrupted commits carried to their end (files renamed)
+    int foldersRemoved = 0;     // abandoned staging folders (no journal) removed with their files
+    int temporariesRemoved = 0; // "<name>.tmp-<pid>-<n>" files of dead processes (the old scheme)
+    /// One line per action, for the user ("finished an interrupted commit of 14 files in ...").
+    std::vector<std::string> notes;
+};
+
+/// Cleans up after killed processes in `folder`: staging folders that no live process holds are
+/// finished (a complete journal: the commit is carried to its end) or removed (no journal: nothing
+/// had been renamed), and temporaries of the previous naming scheme whose process is gone are
+/// removed. Only entries of the current user that match Burnish's own names are touched; a missing
+/// folder is not an error.
+StagingRecovery recoverStaging(const std::filesystem::path& folder);
+
+/// For tests: called after every step of a commit with the number of steps done so far (journal
+/// written = 1, then one per removal or rename), so a test can kill the process at any point.
+/// Null (the default) does nothing.
+void setCommitStepHookForTesting(std::function<void(int step)> hook);
 
 /// Reads a whole file; a clear error when it cannot.
 Result<std::string> readFile(const std::filesystem::path& path);

@@ -1,0 +1,343 @@
+// End to end: what a hostile or careless user gives the command line. Every numeric option of every
+// command refuses NaN and infinities with one line; links planted in an output folder are never
+// written through; the encoding of an input can be forced; error maps and reports of real maps
+// hold no NaN or infinity.
+#include <burnish/core/io/image.h>
+#include <burnish/core/util/files.h>
+
+#include "cli_run.h"
+#include "temp_dir.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using burnish::test::CliResult;
+using burnish::test::lineCount;
+using burnish::test::shellQuote;
+using burnish::test::TempDir;
+
+// `burnish render` loads Mesa's drivers, whose allocations LeakSanitizer cannot attribute (see
+// BURNISH_GL_TEST_ENV in tests/CMakeLists.txt); the setting reaches only this file's children.
+CliResult runBurnish(const std::string& args) {
+    ::setenv("ASAN_OPTIONS", "detect_leaks=0", 1);
+    return burnish::test::runBurnish(args);
+}
+
+// The subcommand names in a --help text's "Subcommands:" section.
+std::vector<std::string> subcommandsOf(const std::string& help) {
+    std::vector<std::string> names;
+    std::istringstream in(help);
+    std::string line;
+    bool inside = false;
+    while (std::getline(in, line)) {
+        if (line.rfind("Subcommands:", 0) == 0) {
+            inside = true;
+            continue;
+        }
+        if (inside) {
+            std::smatch m;
+            if (std::regex_match(line, m, std::regex(R"(\s+([a-z][a-z0-9-]*)\b.*)")))
+                names.push_back(m[1]);
+            else if (!line.empty() && line[0] != ' ')
+                inside = false;
+        }
+    }
+    return names;
+}
+
+struct HelpOption {
+    std::string name;
+    std::string type;
+};
+
+// The options of a --help text that take a value, with the type name CLI11 shows.
+std::vector<HelpOption> valueOptionsOf(const std::string& help) {
+    std::vector<HelpOption> options;
+    std::istringstream in(help);
+    std::string line;
+    const std::regex option(R"(\s+(?:-\w,)?(--[A-Za-z0-9-]+)(?:,-\w)?\s([A-Z][^\s]*).*)");
+    while (std::getline(in, line)) {
+        std::smatch m;
+        if (std::regex_match(line, m, option)) options.push_back({m[1], m[2]});
+    }
+    return options;
+}
+
+// Every command path ("bake", "report approximations", ...) with its --help text.
+void collectCommands(const std::string& path, std::vector<std::pair<std::string, std::string>>& out) {
+    const CliResult help = runBurnish(path + " --help");
+    ASSERT_EQ(help.exitCode, 0) << path << ": " << help.err;
+    if (!path.empty()) out.emplace_back(path, help.out);
+    for (const auto& sub : subcommandsOf(help.out))
+        collectCommands(path.empty() ? sub : path + " " + sub, out);
+}
+
+// Every option that takes numbers, on every command, refuses "nan" before the command runs: exit
+// non-zero, one line on stderr naming the option. The options come from each command's own
+// --help, so a new option is covered as soon as it exists. Options of files and folders (types
+// TEXT, FILE, DIR, PATH, NORMAL_MAP, IN, MESH) are left out: a file may be called "nan".
+TEST(CliHostile, EveryNumericOptionRefusesNanAndInfinity) {
+    std::vector<std::pair<std::string, std::string>> commands;
+    collectCommands("", commands);
+    ASSERT_GE(commands.size(), 7u);
+    const std::set<std::string> pathTypes{"TEXT", "FILE", "DIR", "PATH", "NORMAL_MAP", "IN", "MESH"};
+    int checked = 0;
+    for (const auto& [command, help] : commands)
+        for (const auto& option : valueOptionsOf(help)) {
+            const std::string type = option.type.substr(0, option.type.find_first_of(":="));
+            if (pathTypes.count(type)) continue;
+            SCOPED_TRACE(command + " " + option.name + " nan");
+            const CliResult r = runBurnish(command + " " + option.name + " nan");
+            EXPECT_NE(r.exitCode, 0);
+            EXPECT_EQ(lineCount(r.err), 1) << r.err;
+            EXPECT_EQ(r.err.rfind("burnish: error: ", 0), 0u) << r.err;
+            EXPECT_NE(r.err.find(option.name), std::string::npos) << r.err;
+            ++checked;
+        }
+    // render alone has more than twenty numeric options; a broken help parser finds none.
+    EXPECT_GT(checked, 40);
+    // Infinities, inside lists and values too large for a double, too. (Options with a range may
+    // answer with their range first: still one line naming the option.)
+    for (const auto& [args, option] : std::vector<std::pair<std::string, std::string>>{
+             {"render --light-dir 0,nan,1", "--light-dir"},
+             {"render --specular 0.04,inf,0.04", "--specular"},
+             {"evaluate x.png --power 64 1e999", "--power"},
+             {"evaluate x.png --half-angles 0,5,-inf", "--half-angles"},
+             {"render --yaw Infinity", "--yaw"},
+             {"render --pitch -inf", "--pitch"},
+             {"render --exposure NaN", "--exposure"},
+             {"render --distance 1e400", "--distance"},
+             {"bake x.png --power inf", "--power"},
+             {"env --out x --top-power -nan", "--top-power"}}) {
+        const CliResult r = runBurnish(args);
+        EXPECT_NE(r.exitCode, 0) << args;
+        EXPECT_EQ(lineCount(r.err), 1) << args << ": " << r.err;
+        EXPECT_NE(r.err.find(option + ":"), std::string::npos) << args << ": " << r.err;
+    }
+}
+
+// Links planted in a shared output folder at every name the old temporary scheme used
+// ("<target>.tmp-<pid>-<n>", pids being guessable) and at the targets themselves: bake (EXR, TIFF,
+// TGA, PNG, DDS), render --out and env's faces write their files and leave the outside file as it
+// was.
+TEST(CliHostile, PlantedLinksAreNeverWrittenThrough) {
+    TempDir dir;
+    const fs::path outside = dir / "outside";
+    const fs::path shared = dir / "shared";
+    fs::create_directories(outside);
+    fs::create_directories(shared);
+    const fs::path victim = outside / "victim.txt";
+    std::ofstream(victim) << "precious";
+    // The pids the next processes are likely to get, and a counter range.
+    const int next = int(::getpid());
+    auto plant = [&](const std::string& target) {
+        for (int pid = next; pid < next + 400; ++pid)
+            for (int n = 0; n < 4; ++n)
+                fs::create_symlink(
+                    victim, shared / (target + ".tmp-" + std::to_string(pid) + "-" + std::to_string(n)));
+        fs::create_symlink(victim, shared / target);
+    };
+    for (const char* name :
+         {"trak-rust1_nm_normal.exr", "trak-rust1_nm_roughness.exr", "bake.json", "shot.exr", "shot.png"})
+        plant(name);
+    const std::string input = shellQuote(std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png");
+    const CliResult bake =
+        runBurnish("bake " + input + " --preset godot --format exr-half --mips 2 --force --out " +
+                   shellQuote((shared).string()) + " --power 256");
+    ASSERT_EQ(bake.exitCode, 0) << bake.err;
+    const CliResult render = runBurnish("render --sample bumpy --sample-size 32 --size 32x32 --out " +
+                                        shellQuote((shared / "shot.exr").string()));
+    ASSERT_EQ(render.exitCode, 0) << render.err;
+    const CliResult renderPng = runBurnish("render --sample bumpy --sample-size 32 --size 32x32 --out " +
+                                           shellQuote((shared / "shot.png").string()));
+    ASSERT_EQ(renderPng.exitCode, 0) << renderPng.err;
+
+    std::ifstream in(victim);
+    std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(content, "precious");
+    for (const char* name :
+         {"trak-rust1_nm_normal.exr", "trak-rust1_nm_roughness.exr", "bake.json", "shot.exr", "shot.png"}) {
+        EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(shared / name))) << name;
+    }
+    const auto image = burnish::readImage(shared / "trak-rust1_nm_roughness.exr");
+    ASSERT_TRUE(image) << image.error();
+    EXPECT_EQ(image->width, 512);
+    for (const auto& e : fs::directory_iterator(shared))
+        EXPECT_NE(e.path().filename().string().rfind(burnish::kStagingPrefix, 0), 0u) << e.path();
+}
+
+// bake --encoding overrides the detection (a signed map written as float with its negative values).
+TEST(CliHostile, BakeEncodingOverridesDetection) {
+    TempDir dir;
+    // An unsigned float map (2v - 1 codes) with one -Inf texel: auto detection stays unsigned.
+    std::vector<float> px;
+    for (int i = 0; i < 64; ++i) {
+        // Normals tilted by 0.3 or 0.25 in x and y and their mirror images, stored (v + 1) / 2.
+        const float t = i % 3 ? 0.3f : 0.25f;
+        const float sx = i % 2 ? t : -t, sy = (i / 2) % 2 ? t : -t;
+        px.insert(px.end(),
+                  {0.5f + 0.5f * sx, 0.5f + 0.5f * sy, 0.5f + 0.5f * std::sqrt(1.0f - 2.0f * t * t)});
+    }
+    px[9] = -std::numeric_limits<float>::infinity();
+    ASSERT_TRUE(burnish::writeImageAtomic(dir / "n.exr", 8, 8, 3, px, {burnish::StoredType::Float, {}, {}}));
+    const CliResult autoBake = runBurnish("bake " + shellQuote((dir / "n.exr").string()) +
+                                          " --preset godot --json --out " + shellQuote((dir / "a").string()));
+    ASSERT_EQ(autoBake.exitCode, 0) << autoBake.err;
+    EXPECT_NE(autoBake.err.find("NaN or infinite"), std::string::npos) << autoBake.err;
+    const auto bakeJson = nlohmann::json::parse(std::ifstream(dir / "a" / "bake.json"));
+    EXPECT_FALSE(bakeJson["diagnostics"]["signedValues"].get<bool>());
+    EXPECT_EQ(bakeJson["options"]["encoding"], "auto");
+    // Forced signed: the same values read as stored are vectors of length about 1.3, which the
+    // plausibility check refuses and --allow-implausible bakes as signed.
+    const CliResult forced =
+        runBurnish("bake " + shellQuote((dir / "n.exr").string()) +
+                   " --preset godot --encoding signed --out " + shellQuote((dir / "s").string()));
+    EXPECT_NE(forced.exitCode, 0);
+    EXPECT_NE(forced.err.find("length"), std::string::npos) << forced.err;
+    const CliResult allowed =
+        runBurnish("bake " + shellQuote((dir / "n.exr").string()) + " --preset godot --encoding signed " +
+                   "--allow-implausible --out " + shellQuote((dir / "s").string()));
+    ASSERT_EQ(allowed.exitCode, 0) << allowed.err;
+    const auto signedJson = nlohmann::json::parse(std::ifstream(dir / "s" / "bake.json"));
+    EXPECT_TRUE(signedJson["diagnostics"]["signedValues"].get<bool>());
+    EXPECT_EQ(signedJson["options"]["encoding"], "signed");
+    const CliResult bad =
+        runBurnish("bake " + shellQuote((dir / "n.exr").string()) +
+                   " --preset godot --encoding sideways --out " + shellQuote((dir / "x").string()));
+    EXPECT_NE(bad.exitCode, 0);
+    EXPECT_EQ(lineCount(bad.err), 1) << bad.err;
+}
+
+// `burnish bake --force` killed (SIGKILL, through BURNISH_FAULT_KILL_AT_COMMIT_STEP) at every step
+// of the commit that replaces a TGA set with a PNG set: a bake.json in the folder always names a
+// whole set (the old one before the first rename, the new one after the last), and recovering the
+// folder (what the next export into it does first) leaves exactly what an uninterrupted bake
+// leaves, byte for byte.
+TEST(CliHostile, AKilledCommitIsFinishedByTheNextRun) {
+    TempDir dir;
+    std::vector<float> px;
+    for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 40; ++x)
+            px.insert(px.end(), {0.5f + 0.2f * std::sin(0.3f * float(x)),
+                                 0.5f + 0.2f * std::cos(0.4f * float(y)), 0.95f});
+    const fs::path map = dir / "map.png";
+    ASSERT_TRUE(burnish::writeImageAtomic(map, 40, 24, 3, px, {burnish::StoredType::UInt8, {}, {}}));
+    auto bake = [&](const fs::path& out, const char* format) {
+        return runBurnish("bake " + shellQuote(map.string()) +
+                          " --preset godot --power 256 --force --format " + format + " --out " +
+                          shellQuote(out.string()));
+    };
+    auto list = [](const fs::path& folder) {
+        std::set<std::string> names;
+        for (const auto& e : fs::directory_iterator(folder))
+            names.insert(e.path().filename().string());
+        return names;
+    };
+    auto slurp = [](const fs::path& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    const fs::path oldSet = dir / "old", newSet = dir / "new";
+    ASSERT_EQ(bake(oldSet, "tga").exitCode, 0);
+    ASSERT_EQ(bake(newSet, "tga").exitCode, 0);
+    ASSERT_EQ(bake(newSet, "png8").exitCode, 0);
+    const auto expected = list(newSet);
+    ASSERT_EQ(expected.size(), 13u); // 6 levels of two files, bake.json
+
+    int kills = 0;
+    for (int step = 1;; ++step) {
+        SCOPED_TRACE("killed after step " + std::to_string(step));
+        const fs::path out = dir / ("run" + std::to_string(step));
+        fs::copy(oldSet, out);
+        ::setenv("BURNISH_FAULT_KILL_AT_COMMIT_STEP", std::to_string(step).c_str(), 1);
+        const CliResult r = bake(out, "png8");
+        ::unsetenv("BURNISH_FAULT_KILL_AT_COMMIT_STEP");
+        if (r.exitCode == 0) break; // the commit has fewer steps: it ran to its end
+        ++kills;
+        if (fs::exists(out / "bake.json")) {
+            const std::string index = slurp(out / "bake.json");
+            EXPECT_TRUE(index == slurp(oldSet / "bake.json") || index == slurp(newSet / "bake.json"));
+            if (index == slurp(oldSet / "bake.json")) {
+                for (const auto& name : list(oldSet))
+                    EXPECT_EQ(slurp(out / name), slurp(oldSet / name)) << name;
+            }
+        }
+        const burnish::StagingRecovery recovered = burnish::recoverStaging(out);
+        EXPECT_EQ(recovered.commitsFinished, 1);
+        EXPECT_EQ(list(out), expected);
+        for (const auto& name : expected)
+            EXPECT_EQ(slurp(out / name), slurp(newSet / name)) << name;
+        fs::remove_all(out);
+    }
+    // journal, old bake.json, 12 renames, 12 old TGA levels removed, bake.json
+    EXPECT_EQ(kills, 27);
+}
+
+bool allFinite(const nlohmann::json& j) {
+    if (j.is_number_float()) return std::isfinite(j.get<double>());
+    if (j.is_structured()) {
+        for (const auto& v : j)
+            if (!allFinite(v)) return false;
+    }
+    return true;
+}
+
+// Error maps, the JSON report and the Markdown of real maps hold no NaN or infinity, down to a
+// sharp lobe (s = 10^5) on the map's steepest texels.
+TEST(CliHostile, EvaluateOutputsAreFiniteOnRealMaps) {
+    TempDir dir;
+    // The real map's top-left 128² (the whole map takes long under the sanitizers).
+    const auto full = burnish::readImage(std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png");
+    ASSERT_TRUE(full) << full.error();
+    constexpr int kCrop = 128;
+    std::vector<float> crop;
+    for (int y = 0; y < kCrop; ++y)
+        for (int x = 0; x < kCrop; ++x)
+            for (int c = 0; c < 3; ++c)
+                crop.push_back(
+                    full->pixels[(size_t(y) * size_t(full->width) + size_t(x)) * size_t(full->channels) +
+                                 size_t(c)]);
+    ASSERT_TRUE(burnish::writeImageAtomic(dir / "crop.png", kCrop, kCrop, 3, crop,
+                                          {burnish::StoredType::UInt8, {}, {}}));
+    const CliResult r = runBurnish("evaluate " + shellQuote((dir / "crop.png").string()) +
+                                   " --power 64 100000 --last-mip 3 --error-maps --bake-runs 1 --out " +
+                                   shellQuote((dir / "report").string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto report = nlohmann::json::parse(std::ifstream(dir / "report" / "evaluate.json"));
+    EXPECT_TRUE(allFinite(report));
+    std::ifstream md(dir / "report" / "evaluate.md");
+    const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+    for (const char* word : {"nan", "inf", "NaN", "Inf"})
+        EXPECT_EQ(text.find(std::string(" ") + word), std::string::npos) << word;
+    int maps = 0;
+    float worst = 0.0f;
+    for (const auto& e : fs::recursive_directory_iterator(dir / "report")) {
+        if (e.path().extension() != ".exr") continue;
+        const auto image = burnish::readImage(e.path());
+        ASSERT_TRUE(image) << image.error();
+        for (float v : image->pixels)
+            ASSERT_TRUE(std::isfinite(v) && v >= 0.0f && v < 1e6f) << e.path() << " " << v;
+        for (float v : image->pixels)
+            worst = std::max(worst, v);
+        ++maps;
+    }
+    EXPECT_GT(maps, 10);
+    std::printf("worst per-texel relative error: %g\n", double(worst));
+}
+
+} // namespace

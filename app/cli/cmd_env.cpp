@@ -152,6 +152,9 @@ Json envSummary(const EnvCliOptions& o, const EnvironmentSource& source,
     return Json{
         {"source", source.description},
         {"replacedTexels", source.replacedTexels},
+        {"aboveHalfValues", source.aboveHalfValues},
+        {"srgbDecoded", source.srgbDecoded},
+        {"warnings", source.warnings},
         {"faceSize", filtered.radiance.faceSize()},
         {"lobe", lobeModelName(filtered.lobe)},
         {"powerRule", prefilter.encoding ? "gloss encoding " + prefilter.encoding->name() + " (" +
@@ -206,6 +209,20 @@ Result<std::pair<Json, std::string>> writeReport(const EnvCliOptions& o, const f
 int runEnv(const EnvCliOptions& o) {
     if (o.out.empty()) return fail("--out DIR is required");
     if (!o.input.empty() && !o.faces.empty()) return fail("give either an input file or --faces, not both");
+    // Checked before any work: each is otherwise found only after the whole prefilter ran, or (a
+    // top power below 1 spreads every mip's lobe over the whole sphere) makes it run for minutes.
+    if (!isPowerOfTwo(o.irradianceSize) || o.irradianceSize > 4096)
+        return fail(
+            fmt::format("--irradiance-size {} must be a power of two in [1, 4096]", o.irradianceSize));
+    if (o.glossEncoding.empty() && !(o.topPower >= 1.0 && o.topPower <= 1e9))
+        return fail(fmt::format("--top-power {:g} must lie in [1, 1e9]: it is mip 0's power, the sharpest "
+                                "(below 1 the lobe covers the whole sphere)",
+                                o.topPower));
+    if (!(o.powerDrop > 0.0 && o.powerDrop <= 1.0))
+        return fail(
+            fmt::format("--power-drop {:g} must lie in (0, 1]: each mip is at most as sharp as the one "
+                        "above",
+                        o.powerDrop));
     PrefilterOptions prefilter;
     prefilter.lobe = o.lobe == "phong" ? LobeModel::Phong : LobeModel::BlinnPhong;
     prefilter.mips = o.mips;
@@ -222,6 +239,9 @@ int runEnv(const EnvCliOptions& o) {
     auto read = readSource(o);
     if (!read) return fail(read.error());
     EnvironmentSource source = std::move(read).value();
+    progress.finish();
+    for (const auto& w : source.warnings)
+        std::fprintf(stderr, "burnish: warning: %s\n", w.c_str());
     const auto start = std::chrono::steady_clock::now();
     Sh9 sh = projectSh9(source.cube);
     std::optional<glm::dvec3> divisor;
@@ -277,9 +297,6 @@ int runEnv(const EnvCliOptions& o) {
         std::printf("  mip %d: %4d², power %-10.4g (source level %d, %.3f s)\n", m,
                     filtered->radiance.levels[size_t(m)].size, filtered->powers[size_t(m)],
                     filtered->sourceLevels[size_t(m)], filtered->seconds[size_t(m)]);
-    if (source.replacedTexels > 0)
-        std::printf("  note: %llu NaN, infinite or negative source values were replaced by 0\n",
-                    static_cast<unsigned long long>(source.replacedTexels));
     return 0;
 }
 

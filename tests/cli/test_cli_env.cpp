@@ -5,13 +5,18 @@
 
 #include <burnish/core/env/cube.h>
 #include <burnish/core/io/cube_dds.h>
+#include <burnish/core/io/image.h>
+#include <burnish/core/shading/color.h>
 #include <burnish/core/util/files.h>
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+#include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -109,6 +114,75 @@ TEST(CliEnv, BadInputFailsWithOneLine) {
         EXPECT_NE(r.exitCode, 0) << args;
         EXPECT_EQ(burnish::test::lineCount(r.err), 1) << args << ": " << r.err;
         EXPECT_EQ(r.err.rfind("burnish: error:", 0), 0u) << r.err;
+    }
+}
+
+// What is checked before any work: a bad --irradiance-size, --top-power or --power-drop is the
+// error even when the input does not exist (it was found only after the whole prefilter ran, and
+// --top-power 0 ran 45 times longer than the default).
+TEST(CliEnv, OptionsAreCheckedBeforeAnyWork) {
+    TempDir dir;
+    for (const auto& [args, needle] : std::vector<std::pair<std::string, std::string>>{
+             {"--irradiance-size 3", "--irradiance-size 3"},
+             {"--irradiance-size 8192", "--irradiance-size 8192"},
+             {"--top-power 0", "--top-power 0"},
+             {"--top-power 0.5", "--top-power 0.5"},
+             {"--power-drop 2", "--power-drop 2"},
+             {"--power-drop 0", "--power-drop 0"}}) {
+        const auto r =
+            runBurnish("env /nonexistent/sky.exr --out " + shellQuote(dir.path().string()) + " " + args);
+        EXPECT_NE(r.exitCode, 0) << args;
+        EXPECT_EQ(burnish::test::lineCount(r.err), 1) << args << ": " << r.err;
+        EXPECT_NE(r.err.find(needle), std::string::npos) << args << ": " << r.err;
+    }
+}
+
+// Sources that are not plain radiance are said so: an 8-bit PNG is decoded from sRGB to linear
+// with a warning; NaN, infinite and negative texels are replaced by 0 and values above half
+// float's largest are counted, each with a warning on stderr and in the JSON summary; the outputs
+// stay finite and within half float's range.
+TEST(CliEnv, SuspectSourcesAreReportedAndConverted) {
+    TempDir dir;
+    const int w = 32, h = 16;
+    std::vector<float> grey(size_t(w * h * 3), 0.5f);
+    ASSERT_TRUE(
+        burnish::writeImageAtomic(dir / "ldr.png", w, h, 3, grey, {burnish::StoredType::UInt8, {}, {}}));
+    const auto ldr = runBurnish("env " + shellQuote((dir / "ldr.png").string()) +
+                                " --face-size 8 --json --out " + shellQuote((dir / "ldr").string()));
+    ASSERT_EQ(ldr.exitCode, 0) << ldr.err;
+    EXPECT_NE(ldr.err.find("burnish: warning:"), std::string::npos) << ldr.err;
+    EXPECT_NE(ldr.err.find("sRGB"), std::string::npos) << ldr.err;
+    const auto ldrJson = nlohmann::json::parse(ldr.out);
+    EXPECT_TRUE(ldrJson["srgbDecoded"].get<bool>());
+    // 0.5 in 8 bits is code 128: sRGB-decoded radiance 0.2158.
+    const auto face = burnish::readImage(dir / "ldr" / "irradiance_px.exr");
+    ASSERT_TRUE(face) << face.error();
+    EXPECT_NEAR(face->pixels[0], burnish::srgb8ToLinear(128), 0.01) << "irradiance of a constant sky";
+
+    std::vector<float> wild(size_t(w * h * 3), 1.0f);
+    wild[0] = std::numeric_limits<float>::quiet_NaN();
+    wild[3] = -std::numeric_limits<float>::infinity();
+    wild[6] = -2.0f;
+    wild[300] = 1e30f;
+    ASSERT_TRUE(
+        burnish::writeImageAtomic(dir / "wild.exr", w, h, 3, wild, {burnish::StoredType::Float, {}, {}}));
+    const auto r = runBurnish("env " + shellQuote((dir / "wild.exr").string()) +
+                              " --face-size 8 --json --out " + shellQuote((dir / "wild").string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.err.find("3 NaN, infinite or negative values were replaced by 0"), std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("exceed 65504"), std::string::npos) << r.err;
+    const auto json = nlohmann::json::parse(r.out);
+    EXPECT_EQ(json["replacedTexels"], 3);
+    EXPECT_GT(json["aboveHalfValues"].get<int>(), 0);
+    EXPECT_FALSE(json["srgbDecoded"].get<bool>());
+    EXPECT_EQ(json["warnings"].size(), 2u);
+    for (const auto& e : fs::directory_iterator(dir / "wild")) {
+        if (e.path().extension() != ".exr") continue;
+        const auto image = burnish::readImage(e.path());
+        ASSERT_TRUE(image) << image.error();
+        for (float v : image->pixels)
+            ASSERT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 65504.0f) << e.path() << " " << v;
     }
 }
 

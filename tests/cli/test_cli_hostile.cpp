@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -286,6 +287,33 @@ TEST(CliHostile, AKilledCommitIsFinishedByTheNextRun) {
     }
     // journal, old bake.json, 12 renames, 12 old TGA levels removed, bake.json
     EXPECT_EQ(kills, 27);
+}
+
+// A 200-byte PNG whose header claims 30000² texels (below the 2^30-texel limit): the bake's memory
+// need (about 79 GB at the default preset) is checked against what the system has before anything
+// is allocated, and refused with the size and the need in one line, at once.
+TEST(CliHostile, ABakeThatCannotFitIsRefusedBeforeAllocating) {
+    TempDir dir;
+    auto chunk = [](const std::string& type, const std::string& data) {
+        auto u32 = [](uint32_t v) {
+            return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+        };
+        const std::string body = type + data;
+        return u32(uint32_t(data.size())) + body +
+               u32(uint32_t(crc32(0, reinterpret_cast<const Bytef*>(body.data()), uInt(body.size()))));
+    };
+    std::string ihdr = {0, 0, 0x75, 0x30, 0, 0, 0x75, 0x30, 8, 2, 0, 0, 0}; // 30000 x 30000 RGB8
+    const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) +
+                            chunk("IDAT", std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8)) +
+                            chunk("IEND", "");
+    std::ofstream(dir / "claims-huge.png", std::ios::binary) << png;
+    const CliResult r = runBurnish("bake " + shellQuote((dir / "claims-huge.png").string()) +
+                                   " --preset godot --out " + shellQuote((dir / "out").string()));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_EQ(lineCount(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("30000x30000"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("needs about"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out" / "bake.json"));
 }
 
 bool allFinite(const nlohmann::json& j) {

@@ -496,4 +496,29 @@ TEST(BakeNinja, OutputsAreExactlyWhatTheJobWrites) {
 }
 
 } // namespace
+// The memory check: the estimate grows with the texels and the mixture's lobes, covers the peaks
+// core/bench/bake_memory.sh measured (2048²: at most 90 bytes a texel for one lobe, 216 for K = 3),
+// and a need beyond what is available is one error naming the size, the need and what there is.
+TEST(BakeMemory, EstimateCoversTheMeasuredPeaksAndRefusesWhatCannotFit) {
+    EXPECT_GE(bakeBytesPerTexel(Method::Lean, 1), 90.0);
+    EXPECT_GE(bakeBytesPerTexel(Method::VarianceToGloss, 1), 70.0);
+    EXPECT_GE(bakeBytesPerTexel(Method::Mixture, 3), 216.0);
+    EXPECT_GT(bakeBytesPerTexel(Method::Mixture, 4), bakeBytesPerTexel(Method::Mixture, 3));
+    EXPECT_GT(estimatedBakeBytes(Method::Lean, 1, 8192, 8192),
+              estimatedBakeBytes(Method::Lean, 1, 4096, 4096));
+    EXPECT_GT(estimatedBakeBytes(Method::Lean, 1, 8192, 8192), 8192ull * 8192ull * 90ull);
+
+    EXPECT_TRUE(checkBakeMemory(1000, std::uint64_t(2000), 10, 10).ok());
+    EXPECT_TRUE(checkBakeMemory(1000, std::nullopt, 10, 10).ok()); // unknown: not refused
+    const Status refused = checkBakeMemory(std::uint64_t(9.4e9), std::uint64_t(3.1e9), 8192, 8192);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_NE(refused.error().find("8192x8192"), std::string::npos) << refused.error();
+    EXPECT_NE(refused.error().find("9.4 GB"), std::string::npos) << refused.error();
+    EXPECT_NE(refused.error().find("3.1 GB"), std::string::npos) << refused.error();
+
+    const auto available = availableMemoryBytes(); // Linux: /proc/meminfo
+    ASSERT_TRUE(available.has_value());
+    EXPECT_GT(*available, 0u);
+}
+
 } // namespace burnish

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <initializer_list>
 #include <utility>
 #include <vector>
@@ -273,6 +274,46 @@ Result<std::string> writeBakeReport(const BakeJob& job, const NormalMap& map, co
 
 } // namespace
 
+double bakeBytesPerTexel(Method method, int mixtureLobes) {
+    constexpr double kMargin = 1.25;
+    if (method == Method::Mixture) return kMargin * (40.0 + 60.0 * std::clamp(mixtureLobes, 1, 4));
+    if (method == Method::Lean) return kMargin * 90.0;
+    return kMargin * 70.0;
+}
+
+std::uint64_t estimatedBakeBytes(Method method, int mixtureLobes, int width, int height) {
+    constexpr double kProcessBytes = 150e6;
+    return std::uint64_t(kProcessBytes +
+                         bakeBytesPerTexel(method, mixtureLobes) * double(width) * double(height));
+}
+
+std::optional<std::uint64_t> availableMemoryBytes() {
+    std::ifstream meminfo("/proc/meminfo");
+    if (!meminfo) return std::nullopt;
+    std::uint64_t available = 0;
+    bool found = false;
+    std::string key;
+    std::uint64_t kb = 0;
+    std::string unit;
+    while (meminfo >> key >> kb) {
+        std::getline(meminfo, unit);
+        if (key == "MemAvailable:" || key == "SwapFree:") {
+            available += kb * 1024;
+            found = found || key == "MemAvailable:";
+        }
+    }
+    if (!found) return std::nullopt;
+    return available;
+}
+
+Status checkBakeMemory(std::uint64_t need, std::optional<std::uint64_t> available, int width, int height) {
+    if (!available || need <= *available) return {};
+    return Error{
+        fmt::format("baking a {}x{} map needs about {:.1f} GB of memory, and {:.1f} GB are available "
+                    "(close other programs, or bake a smaller map)",
+                    width, height, double(need) / 1e9, double(*available) / 1e9)};
+}
+
 Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& progress) {
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
@@ -284,6 +325,16 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
     const Error cancelled{"cancelled"};
 
     if (!step(0, "reading")) return cancelled;
+    // The memory the bake will need, checked against what the system has before anything is
+    // allocated: from the file's header (a small file can claim a huge image).
+    if (!isSampleBakeInput(job.spec.input)) {
+        const auto header = readImageHeader(job.spec.input);
+        if (!header) return Error{header.error()};
+        const Status memory = checkBakeMemory(
+            estimatedBakeBytes(job.method, job.bake.params.mixtureLobes, header->width, header->height),
+            availableMemoryBytes(), header->width, header->height);
+        if (!memory) return Error{"'" + job.spec.input + "': " + memory.error()};
+    }
     auto map = loadBakeInput(job.spec.input, job.normalMap);
     if (!map) return Error{map.error()};
     const double readSeconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -466,7 +517,10 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
         const std::string at = where + " job " + std::to_string(i + 1);
         if (!j.is_object()) return Error{at + ": must be an object"};
         BakeJobSpec spec = defaults;
-        for (const auto& [key, value] : j.items()) {
+        for (const auto& item : j.items()) {
+            // Plain references: clang 14's lambdas cannot capture structured bindings.
+            const std::string& key = item.key();
+            const Json& value = item.value();
             // JSON strings may hold "\u0000", which no path or name can: refused, not cut short.
             auto stringValue = [&]() -> Result<std::string> {
                 if (!value.is_string()) return Error{at + ": '" + key + "' must be a string"};

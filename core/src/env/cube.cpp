@@ -1,8 +1,10 @@
 #include <burnish/core/env/cube.h>
 
-#include "env/cube_faces.h"
-
+#include <burnish/core/env/storage.h>
+#include <burnish/core/shading/color.h>
 #include <burnish/core/util/numeric.h>
+
+#include "env/cube_faces.h"
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -210,6 +212,40 @@ double softDisc(const dvec3& d, const dvec3& centre, double radius) {
 
 } // namespace
 
+/// The warnings a source's counts call for; values above half float's largest are counted here.
+void finishSource(EnvironmentSource& out, const std::string& name) {
+    for (const auto& face : out.cube.levels[0].faces)
+        for (const float v : face)
+            out.aboveHalfValues += v > kHalfMax ? 1 : 0;
+    if (out.replacedTexels > 0)
+        out.warnings.push_back(fmt::format("{}: {} NaN, infinite or negative values were replaced by 0", name,
+                                           out.replacedTexels));
+    if (out.aboveHalfValues > 0)
+        out.warnings.push_back(
+            fmt::format("{}: {} cube values exceed 65504, half float's largest; the half-float "
+                        "outputs (DDS RGBA16F, EXR half) clamp them to 65504",
+                        name, out.aboveHalfValues));
+}
+
+/// An 8- or 16-bit image holds display-encoded colours, not radiance: decoded from sRGB to linear
+/// (every colour channel; alpha is not read), with a warning that it cannot hold a light's range.
+bool decodeDisplayImage(Image& image) {
+    if (image.source.isFloat) return false;
+    const int colour = std::min(image.channels, 3);
+    for (size_t t = 0; t < image.texelCount(); ++t)
+        for (int c = 0; c < colour; ++c) {
+            float& v = image.pixels[t * size_t(image.channels) + size_t(c)];
+            v = float(srgbToLinear(double(std::clamp(v, 0.0f, 1.0f))));
+        }
+    return true;
+}
+
+std::string displayWarning(const std::string& name, const ImageSourceInfo& source) {
+    return fmt::format("{}: a {}-bit image holds display colours, not radiance: read as sRGB and converted "
+                       "to linear, it tops out at 1 (use EXR or HDR for lights brighter than white)",
+                       name, source.bitsPerChannel);
+}
+
 Result<EnvironmentSource> equirectToCube(const Image& image, int faceSize) {
     if (const Status s = checkFaceSize(faceSize); !s) return Error{s.error()};
     if (image.width <= 0 || image.height <= 0 || image.channels <= 0 || image.pixels.empty())
@@ -223,6 +259,7 @@ Result<EnvironmentSource> equirectToCube(const Image& image, int faceSize) {
     out.sourceHeight = image.height;
     out.description =
         fmt::format("equirectangular {}x{} ({}x{} samples per texel)", image.width, image.height, k, k);
+    finishSource(out, image.source.path.empty() ? std::string("environment") : image.source.path);
     return out;
 }
 
@@ -247,29 +284,44 @@ Result<EnvironmentSource> cubeFromFaces(const std::array<Image, kCubeFaces>& fac
     out.sourceWidth = size;
     out.sourceHeight = size;
     out.description = fmt::format("six {}x{} cube faces", size, size);
+    finishSource(out, "cube faces");
     return out;
 }
 
 Result<EnvironmentSource> loadEquirectEnvironment(const fs::path& path, int faceSize) {
     auto image = readImage(path);
     if (!image) return Error{image.error()};
+    const bool display = decodeDisplayImage(image.value());
     if (image->width != 2 * image->height)
         return Error{fmt::format("'{}' is {}x{}: an equirectangular environment is twice as wide as high",
                                  path.string(), image->width, image->height)};
     auto cube = equirectToCube(*image, faceSize);
     if (!cube) return Error{path.string() + ": " + cube.error()};
     cube.value().description = path.filename().string() + ", " + cube->description;
+    if (display) {
+        cube.value().srgbDecoded = true;
+        cube.value().warnings.insert(cube.value().warnings.begin(),
+                                     displayWarning(path.string(), image->source));
+    }
     return cube;
 }
 
 Result<EnvironmentSource> loadCubeFaceEnvironment(const std::array<fs::path, kCubeFaces>& paths) {
     std::array<Image, kCubeFaces> faces;
+    std::vector<std::string> display;
     for (int f = 0; f < kCubeFaces; ++f) {
         auto image = readImage(paths[size_t(f)]);
         if (!image) return Error{image.error()};
+        if (decodeDisplayImage(image.value()))
+            display.push_back(displayWarning(paths[size_t(f)].string(), image->source));
         faces[size_t(f)] = std::move(image.value());
     }
-    return cubeFromFaces(faces);
+    auto cube = cubeFromFaces(faces);
+    if (cube && !display.empty()) {
+        cube.value().srgbDecoded = true;
+        cube.value().warnings.insert(cube.value().warnings.begin(), display.begin(), display.end());
+    }
+    return cube;
 }
 
 glm::dvec3 studioRadiance(const glm::dvec3& dirIn) {

@@ -64,7 +64,8 @@ void checkObject(const Json& v, const std::string& where) {
 
 // Unknown fields are errors: a misspelt "fo" must not silently drop a value.
 void checkKeys(const Json& obj, std::initializer_list<const char*> allowed, const std::string& where) {
-    for (const auto& [key, value] : obj.items()) {
+    for (const auto& item : obj.items()) {
+        const std::string& key = item.key(); // a plain reference: clang 14 lambdas cannot capture bindings
         const bool known =
             std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; });
         if (!known) failAt(where, fmt::format("unknown field '{}'", key));

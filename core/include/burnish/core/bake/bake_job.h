@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -74,6 +75,19 @@ struct BakeJobSpec {
 
 /// bake.json's inputs.gloss.source for a job with an in-memory authored gloss.
 inline constexpr std::string_view kPaintedGlossSource = "painted layers";
+
+/// Peak memory of a bake per texel of its input, an upper bound over the presets measured by
+/// core/bench/bake_memory.sh (2048² maps, every preset with its defaults, full chains: 38-90 bytes
+/// for one-lobe methods, 216 for the mixture at K = 3), with a quarter more for margin.
+double bakeBytesPerTexel(Method method, int mixtureLobes);
+/// The memory a bake of a width×height map needs at its peak: the process's own ~150 MB plus
+/// bakeBytesPerTexel per texel.
+std::uint64_t estimatedBakeBytes(Method method, int mixtureLobes, int width, int height);
+/// What the system can still hand out now: MemAvailable plus SwapFree of /proc/meminfo; nullopt
+/// where that cannot be read.
+std::optional<std::uint64_t> availableMemoryBytes();
+/// An error naming the map's size, the need and what is available when `need` exceeds `available`.
+Status checkBakeMemory(std::uint64_t need, std::optional<std::uint64_t> available, int width, int height);
 
 /// A job with every name resolved and checked: nothing of it is read or written yet.
 struct BakeJob {

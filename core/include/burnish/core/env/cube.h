@@ -94,6 +94,12 @@ struct EnvironmentSource {
     std::string description;
     /// Texels that were NaN, infinite or negative and became 0.
     std::uint64_t replacedTexels = 0;
+    /// Cube values above half float's largest (65504), which the half-float outputs clamp.
+    std::uint64_t aboveHalfValues = 0;
+    /// Whether an 8/16-bit source was decoded from sRGB to linear radiance.
+    bool srgbDecoded = false;
+    /// One line each for the user: replaced texels, clamped values, an sRGB source.
+    std::vector<std::string> warnings;
     int sourceWidth = 0;
     int sourceHeight = 0;
 };

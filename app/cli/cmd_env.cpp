@@ -46,6 +46,7 @@ struct EnvCliOptions {
     bool normalizeDiffuse = false;
     bool json = false;
     bool report = false;
+    bool force = false;
     bool faceSizeGiven = false;
 };
 
@@ -234,6 +235,11 @@ int runEnv(const EnvCliOptions& o) {
         prefilter.encoding = encoding.value();
     }
 
+    // One rule for every command: a previous set (its env.json) is replaced only with --force.
+    const fs::path index = fs::path(o.out) / "env.json";
+    if (!o.force && fs::exists(index))
+        return fail("refusing to replace the environment in '" + o.out + "' (use --force)");
+    const std::vector<std::string> previous = indexedFiles(index);
     ProgressBar progress("env");
     progress.update(0.0, "reading");
     auto read = readSource(o);
@@ -270,19 +276,24 @@ int runEnv(const EnvCliOptions& o) {
     manifest.erase("seconds");
     for (auto& m : manifest["mips"])
         m.erase("seconds");
-    if (const Status s = writeFileAtomic(dir / "env.json", manifest.dump(2) + "\n"); !s)
-        return fail(s.error());
-
     if (o.report) {
         progress.update(0.9, "comparing with brute force");
         auto report = writeReport(o, dir, *filtered, source.cube);
         if (!report) return fail(report.error());
         const std::string& md = report->second;
         summary["report"] = report->first;
-        summary["files"].push_back("report.json");
-        summary["files"].push_back("report.md");
+        for (const char* name : {"report.json", "report.md"}) {
+            summary["files"].push_back(name);
+            manifest["files"].push_back(name);
+        }
         if (!o.json) std::fputs(md.c_str(), stdout);
     }
+    // env.json last: it names the whole set, and with --force what the previous set held beyond it goes.
+    if (const Status s = writeFileAtomic(dir / "env.json", manifest.dump(2) + "\n"); !s)
+        return fail(s.error());
+    std::vector<std::string> current = manifest["files"].get<std::vector<std::string>>();
+    current.push_back("env.json");
+    removeStaleFiles(dir, previous, current);
     progress.finish();
 
     if (o.json) {
@@ -345,6 +356,9 @@ const CommandRegistration kRegistration{
         cmd->add_flag("--normalize-diffuse", o->normalizeDiffuse,
                       "Divide the probe by its average diffuse lighting, per channel (Lazarov 2011)");
         cmd->add_flag("--json", o->json, "Print the summary as JSON");
+        cmd->add_flag("--force", o->force,
+                      "Replace the environment already in --out: exactly the new set is left (files the old "
+                      "env.json names that this run does not write are removed)");
         cmd->add_flag(
             "--report", o->report,
             "Error per mip against the brute-force integral, with times, and FIS (report.json, report.md)");

@@ -39,6 +39,7 @@ struct EvaluateCliOptions {
     double toksvigMapPower = 100.0;
     std::vector<int> lobes{kDefaultMixtureLobes};
     bool json = false;
+    bool force = false;
     NormalMapCliOptions normalMap;
 };
 
@@ -91,6 +92,10 @@ int runEvaluate(const EvaluateCliOptions& o) {
                                            : k == "gaussian" ? FilterKernel::Gaussian
                                                              : FilterKernel::Box);
 
+    // One rule for every command: a previous report is replaced only with --force (checked before
+    // the evaluation runs).
+    if (!o.force && std::filesystem::exists(std::filesystem::path(o.out) / "evaluate.json"))
+        return fail("refusing to replace the report in '" + o.out + "' (use --force)");
     ProgressBar bar("evaluating");
     auto report = buildEvaluationReport(*map, options, [&](double f) { bar.update(f); });
     bar.finish();
@@ -182,6 +187,10 @@ const CommandRegistration registration{
             ->check(CLI::Range(1, 4))
             ->type_name("LIST");
         sub->add_flag("--json", o->json, "Print the report as JSON on stdout instead of Markdown.");
+        sub->add_flag(
+            "--force", o->force,
+            "Replace the report already in --out (its error maps included: exactly the new report is "
+            "left)");
         addNormalMapOptions(sub, o->normalMap);
         return [o] { return runEvaluate(*o); };
     }};

@@ -83,6 +83,7 @@ struct RenderCliOptions {
     std::string specularAa = "none";
     bool diffuseAa = false;
     bool explain = false;
+    bool force = false;
     bool ubershader = false;
     int sequence = 0;
     float orbitDegrees = 0.5f;
@@ -479,6 +480,10 @@ int runRender(const RenderCliOptions& o, bool sizeGiven) {
     if (!o.out.empty()) {
         const std::string ext = lower(fs::path(o.out).extension().string());
         if (ext != ".png" && ext != ".exr") return fail("--out: '" + o.out + "' must end in .png or .exr");
+        // One rule for every command: an existing file is replaced only with --force.
+        std::error_code ec;
+        if (!o.force && fs::exists(fs::symlink_status(o.out, ec)))
+            return fail("refusing to overwrite existing file '" + o.out + "' (use --force)");
     }
 
     int width = o.bench ? kBenchWidth : o.sequence > 0 ? kSequenceSize : kImageSize;
@@ -644,6 +649,7 @@ const CommandRegistration registration{
                         "Geometric specular AA: none (default), kaplanyan-valient, tokuyoshi-kaplanyan.")
             ->type_name("NAME");
         sub->add_flag("--diffuse-aa", o->diffuseAa, "Diffuse AA (cone of normals).");
+        sub->add_flag("--force", o->force, "Replace an existing --out file.");
         sub->add_flag("--explain", o->explain,
                       "Print the program's features, defines, uniforms and samplers (alone: then exit).");
         sub->add_flag("--ubershader", o->ubershader,

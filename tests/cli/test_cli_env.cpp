@@ -77,7 +77,7 @@ TEST(CliEnv, ConstantEquirectGivesConstantRadianceAndNormalizesToOne) {
                 ASSERT_NEAR(v, 2.5, kHalfRelative * 2.5);
     // --normalize-diffuse divides by the average diffuse lighting (2.5): everything becomes 1.
     r = runBurnish("env " + shellQuote(in.string()) + " --out " + shellQuote(out) +
-                   " --face-size 8 --format dds --normalize-diffuse");
+                   " --face-size 8 --format dds --normalize-diffuse --force");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     cube = burnish::decodeCubeDds(burnish::readFile(dir / "out" / "irradiance.dds").value());
     ASSERT_TRUE(cube);

@@ -161,11 +161,13 @@ TEST(CliHostile, PlantedLinksAreNeverWrittenThrough) {
         runBurnish("bake " + input + " --preset godot --format exr-half --mips 2 --force --out " +
                    shellQuote((shared).string()) + " --power 256");
     ASSERT_EQ(bake.exitCode, 0) << bake.err;
-    const CliResult render = runBurnish("render --sample bumpy --sample-size 32 --size 32x32 --out " +
+    // --force: a link at the target itself is replaced (never followed) only when replacing is asked.
+    const CliResult render = runBurnish("render --sample bumpy --sample-size 32 --size 32x32 --force --out " +
                                         shellQuote((shared / "shot.exr").string()));
     ASSERT_EQ(render.exitCode, 0) << render.err;
-    const CliResult renderPng = runBurnish("render --sample bumpy --sample-size 32 --size 32x32 --out " +
-                                           shellQuote((shared / "shot.png").string()));
+    const CliResult renderPng =
+        runBurnish("render --sample bumpy --sample-size 32 --size 32x32 --force --out " +
+                   shellQuote((shared / "shot.png").string()));
     ASSERT_EQ(renderPng.exitCode, 0) << renderPng.err;
 
     std::ifstream in(victim);
@@ -314,6 +316,69 @@ TEST(CliHostile, ABakeThatCannotFitIsRefusedBeforeAllocating) {
     EXPECT_NE(r.err.find("30000x30000"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("needs about"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "out" / "bake.json"));
+}
+
+std::set<std::string> namesIn(const fs::path& folder) {
+    std::set<std::string> names;
+    for (const auto& e : fs::directory_iterator(folder))
+        names.insert(e.path().filename().string());
+    return names;
+}
+
+// One rule for every command that writes: an existing output is replaced only with --force, and
+// with it exactly the new set is left (render's file; env's set named by env.json; evaluate's
+// report and its error maps).
+TEST(CliHostile, EveryCommandReplacesOnlyWithForceAndLeavesExactlyTheNewSet) {
+    TempDir dir;
+    const std::string shot = shellQuote((dir / "shot.png").string());
+    ASSERT_EQ(runBurnish("render --sample bumpy --sample-size 16 --size 16x16 --out " + shot).exitCode, 0);
+    const auto before = fs::last_write_time(dir / "shot.png");
+    const CliResult again = runBurnish("render --sample bumpy --sample-size 16 --size 24x24 --out " + shot);
+    EXPECT_NE(again.exitCode, 0);
+    EXPECT_EQ(lineCount(again.err), 1) << again.err;
+    EXPECT_NE(again.err.find("--force"), std::string::npos) << again.err;
+    EXPECT_EQ(fs::last_write_time(dir / "shot.png"), before);
+    ASSERT_EQ(
+        runBurnish("render --sample bumpy --sample-size 16 --size 24x24 --force --out " + shot).exitCode, 0);
+    EXPECT_EQ(burnish::readImage(dir / "shot.png")->width, 24);
+
+    // env: 16² faces (5 mips, EXR and DDS), then 4² faces as EXR only with --force.
+    const std::string env = shellQuote((dir / "env").string());
+    ASSERT_EQ(runBurnish("env --face-size 16 --report --directions 4 --out " + env).exitCode, 0);
+    const auto big = namesIn(dir / "env");
+    const CliResult refused = runBurnish("env --face-size 4 --out " + env);
+    EXPECT_NE(refused.exitCode, 0);
+    EXPECT_NE(refused.err.find("--force"), std::string::npos) << refused.err;
+    EXPECT_EQ(namesIn(dir / "env"), big);
+    ASSERT_EQ(runBurnish("env --face-size 4 --format exr --force --out " + shellQuote((dir / "env").string()))
+                  .exitCode,
+              0);
+    ASSERT_EQ(
+        runBurnish("env --face-size 4 --format exr --out " + shellQuote((dir / "fresh").string())).exitCode,
+        0);
+    EXPECT_EQ(namesIn(dir / "env"), namesIn(dir / "fresh"));
+    EXPECT_LT(namesIn(dir / "env").size(), big.size());
+
+    // evaluate: error maps at two powers, then at one with --force: only its maps are left.
+    std::vector<float> px;
+    for (int i = 0; i < 16 * 16; ++i)
+        px.insert(px.end(),
+                  {0.5f + 0.2f * std::sin(float(i)), 0.5f + 0.2f * std::cos(0.7f * float(i)), 0.95f});
+    ASSERT_TRUE(
+        burnish::writeImageAtomic(dir / "m.png", 16, 16, 3, px, {burnish::StoredType::UInt8, {}, {}}));
+    const std::string eval = "evaluate " + shellQuote((dir / "m.png").string()) +
+                             " --methods naive,lean --last-mip 2 --bake-runs 1 --error-maps --out " +
+                             shellQuote((dir / "report").string());
+    ASSERT_EQ(runBurnish(eval + " --power 64 256").exitCode, 0);
+    EXPECT_EQ(namesIn(dir / "report" / "errors").size(), 8u); // 2 methods x 2 powers x 2 mips
+    const CliResult again2 = runBurnish(eval + " --power 512");
+    EXPECT_NE(again2.exitCode, 0);
+    EXPECT_NE(again2.err.find("--force"), std::string::npos) << again2.err;
+    ASSERT_EQ(runBurnish(eval + " --power 512 --force").exitCode, 0);
+    const auto maps = namesIn(dir / "report" / "errors");
+    EXPECT_EQ(maps.size(), 4u);
+    for (const auto& name : maps)
+        EXPECT_NE(name.find("-s512-"), std::string::npos) << name;
 }
 
 bool allFinite(const nlohmann::json& j) {

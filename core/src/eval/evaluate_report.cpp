@@ -361,6 +361,7 @@ Status writeEvaluationReport(const EvaluationReport& r, const fs::path& dir) {
         return st;
     if (auto st = savePlotPng(evaluationErrorVsCostPlot(r), dir / "evaluate-error-vs-cost.png"); !st)
         return st;
+    std::vector<std::string> written;
     if (!r.result.maps.empty()) {
         fs::create_directories(dir / "errors", ec);
         if (ec) return Error{"cannot create folder '" + (dir / "errors").string() + "': " + ec.message()};
@@ -371,8 +372,15 @@ Status writeEvaluationReport(const EvaluationReport& r, const fs::path& dir) {
                                      powerLabel(m.basePower) + "-mip" + std::to_string(m.mip) + ".exr";
             if (auto st = writeFloatExr(dir / "errors" / name, m.width, m.height, m.relativeError); !st)
                 return st;
+            written.push_back(name);
         }
     }
+    // The error maps of an earlier report in this folder that this one did not write (other powers,
+    // methods or mips) go: the folder holds exactly this report.
+    std::vector<std::string> previous;
+    for (fs::directory_iterator it(dir / "errors", ec), end; !ec && it != end; it.increment(ec))
+        if (it->path().extension() == ".exr") previous.push_back(it->path().filename().string());
+    removeStaleFiles(dir / "errors", previous, written);
     return {};
 }
 

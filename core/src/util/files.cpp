@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -387,6 +388,30 @@ StagingRecovery recoverStaging(const fs::path& folder) {
         }
     }
     return recovery;
+}
+
+int removeStaleFiles(const fs::path& folder, const std::vector<std::string>& previous,
+                     const std::vector<std::string>& written) {
+    int removed = 0;
+    for (const auto& name : previous) {
+        if (!plainName(name) || std::find(written.begin(), written.end(), name) != written.end()) continue;
+        struct stat st {};
+        const fs::path path = folder / name;
+        if (::lstat(path.c_str(), &st) != 0 || !(S_ISREG(st.st_mode) || S_ISLNK(st.st_mode))) continue;
+        removed += ::unlink(path.c_str()) == 0 ? 1 : 0;
+    }
+    return removed;
+}
+
+std::vector<std::string> indexedFiles(const fs::path& index) {
+    std::vector<std::string> names;
+    auto text = readFile(index);
+    if (!text) return names;
+    const Json j = Json::parse(*text, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("files") || !j["files"].is_array()) return names;
+    for (const auto& f : j["files"])
+        if (f.is_string()) names.push_back(f.get<std::string>());
+    return names;
 }
 
 void setCommitStepHookForTesting(std::function<void(int)> hook) {

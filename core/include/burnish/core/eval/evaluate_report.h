@@ -57,7 +57,8 @@ PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& report);
 
 /// Writes evaluate.md, evaluate.json, evaluate-error-per-mip.png, evaluate-error-vs-cost.png and,
 /// when the result holds error maps, errors/<method>-s<power>-mip<k>.exr (one float channel),
-/// every file atomically. Creates `dir` and `dir/errors` when missing.
+/// every file atomically. Creates `dir` and `dir/errors` when missing; error maps an earlier report
+/// left in `dir/errors` that this one does not write are removed, so the folder holds one report.
 Status writeEvaluationReport(const EvaluationReport& report, const std::filesystem::path& dir);
 
 /// Writes a one-channel float EXR atomically.

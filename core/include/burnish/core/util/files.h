@@ -126,6 +126,16 @@ struct StagingRecovery {
 /// folder is not an error.
 StagingRecovery recoverStaging(const std::filesystem::path& folder);
 
+/// Removes from `folder` the files of a previous run that this run did not write: every name of
+/// `previous` not in `written`, when it is a plain name (no '/', not "." or "..") of a regular
+/// file or link there; nothing else is touched. Returns how many were removed.
+int removeStaleFiles(const std::filesystem::path& folder, const std::vector<std::string>& previous,
+                     const std::vector<std::string>& written);
+
+/// The names under "files" of a previous run's JSON index (env.json), or none when it is missing
+/// or unreadable (then nothing is removed).
+std::vector<std::string> indexedFiles(const std::filesystem::path& index);
+
 /// For tests: called after every step of a commit with the number of steps done so far (journal
 /// written = 1, then one per removal or rename), so a test can kill the process at any point.
 /// Null (the default) does nothing.

@@ -186,7 +186,7 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
     Json root;
     try {
         root = Json::parse(text);
-    } catch (const Json::parse_error& e) {
+    } catch (const Json::exception& e) { // parse errors, and numbers out of range (out_of_range.406)
         return Error{where + ": not valid JSON (" + e.what() + ")"};
     }
     if (!root.is_object()) return Error{where + ": not a Burnish project (expected a JSON object)"};

@@ -279,6 +279,14 @@ TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
           }(),
           "'file' must be a path when the source is \"file\""}},
         {"corrupt", {valid.substr(0, valid.size() / 2), "not valid JSON"}},
+        // A number beyond a double (found by fuzzing the readers): an error, not an escaping exception.
+        {"number-out-of-range",
+         {[&] {
+              std::string text = materialGloss("HUGE");
+              text.replace(text.find("\"HUGE\""), 6, "1e999");
+              return text;
+          }(),
+          "not valid JSON"}},
         {"wrong-type", {materialGloss("high"), "'gloss' must be a number in [0"}},
         {"newer", {withField("version", 2), "written by a newer Burnish (project version 2"}},
         {"unknown-preset", {withField("preset", "no-such-preset"), "preset 'no-such-preset' is not known"}},

@@ -493,7 +493,7 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
     Json root;
     try {
         root = Json::parse(*text);
-    } catch (const Json::parse_error& e) {
+    } catch (const Json::exception& e) { // parse errors, and numbers out of range (out_of_range.406)
         return Error{"manifest '" + path + "': invalid JSON: " + e.what()};
     }
     const std::string where = "manifest '" + path + "'";

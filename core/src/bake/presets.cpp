@@ -540,7 +540,7 @@ Result<Preset> parsePreset(std::string_view json, const std::string& origin) {
     Json root;
     try {
         root = Json::parse(json.begin(), json.end());
-    } catch (const Json::parse_error& e) {
+    } catch (const Json::exception& e) { // parse errors, and numbers out of range (out_of_range.406)
         // nlohmann's message carries the byte offset; keep only what follows its "parse error" tag.
         std::string what = e.what();
         const auto colon = what.find(": ");

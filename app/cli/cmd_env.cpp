@@ -67,7 +67,7 @@ std::string reportMarkdown(const ReferenceComparison& c, LobeModel lobe, int fac
                       "| FIS taps | FIS rel. RMS | FIS s | taps to match map within {:g}% |\n",
                       100.0 * c.fisTolerance);
     md += "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
-    for (const MipError& r : c.mips)
+    for (const EnvironmentMipError& r : c.mips)
         md += fmt::format(
             "| {} | {} | {:.4g} | {} | {:.3f} | {:.3e} | {:.3e} | {:.3e} | {:.3f} | {} | {:.3e} "
             "| {:.4f} | {} |\n",
@@ -181,7 +181,7 @@ Result<std::pair<Json, std::string>> writeReport(const EnvCliOptions& o, const f
     auto comparison = compareWithReference(filtered, source, o.directions, o.samples);
     if (!comparison) return Error{comparison.error()};
     Json rows = Json::array();
-    for (const MipError& r : comparison->mips)
+    for (const EnvironmentMipError& r : comparison->mips)
         rows.push_back({{"mip", r.mip},
                         {"size", r.size},
                         {"power", r.power},

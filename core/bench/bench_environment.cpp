@@ -55,7 +55,7 @@ void BM_Prefilter256FullChain(benchmark::State& state) {
     if (c) {
         double worst = 0.0, worstLookup = 0.0;
         unsigned taps = 0;
-        for (const MipError& row : c->mips) {
+        for (const EnvironmentMipError& row : c->mips) {
             worst = std::max(worst, row.relativeRms);
             worstLookup = std::max(worstLookup, row.lookupRelativeRms);
             state.counters["mip" + std::to_string(row.mip) + "_relRms"] = row.relativeRms;

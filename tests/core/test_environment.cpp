@@ -297,7 +297,7 @@ TEST(Prefilter, MatchesTheBruteForceReference) {
         ASSERT_TRUE(p) << p.error();
         const auto c = compareWithReference(*p, *studio, 24, 16);
         ASSERT_TRUE(c) << c.error();
-        for (const MipError& row : c->mips) {
+        for (const EnvironmentMipError& row : c->mips) {
             EXPECT_LT(row.relativeRms, kPrefilterRms) << lobeModelName(lobe) << " mip " << row.mip;
             EXPECT_TRUE(std::isfinite(row.fisRelativeRms) && std::isfinite(row.lookupRelativeRms));
         }

@@ -45,8 +45,6 @@ constexpr int kFaceSize = 32;
 constexpr float kCoveredThreshold = 1e-6f;
 // Float32 unit round-off: the GLSL side computes in float, core in double.
 constexpr double kFloatEps = 5.96e-8;
-// Half-float (RGB16F) storage: 11 significant bits, a relative rounding of 2^-11.
-constexpr double kHalfRel = 4.9e-4;
 
 class EnvironmentRender : public burnish::test::RendererFixture {
 protected:

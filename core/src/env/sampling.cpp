@@ -323,7 +323,7 @@ Result<ReferenceComparison> compareWithReference(const PrefilteredEnvironment& p
     for (unsigned i = 0; i < directions; ++i)
         dirs.push_back(sphereDirection(i, directions));
     for (int m = 0; m < prefiltered.radiance.mipCount(); ++m) {
-        MipError row;
+        EnvironmentMipError row;
         row.mip = m;
         row.size = prefiltered.radiance.levels[size_t(m)].size;
         row.power = prefiltered.powers[size_t(m)];

@@ -73,7 +73,7 @@ glm::dvec3 referenceLobeRadiance(const CubeMap& cube, const glm::dvec3& N, const
 // ---------------------------------------------------------------------------------------------
 // Error of a prefiltered map per mip against the brute-force reference, with run times.
 
-struct MipError {
+struct EnvironmentMipError {
     int mip = 0;
     int size = 0;
     double power = 0.0;
@@ -101,7 +101,7 @@ struct MipError {
 struct ReferenceComparison {
     unsigned directions = 0;
     double fisTolerance = 0.0;
-    std::vector<MipError> mips;
+    std::vector<EnvironmentMipError> mips;
 };
 
 inline constexpr unsigned kMaxFisSamples = 4096;

@@ -133,9 +133,9 @@ TEST(CliHostile, EveryNumericOptionRefusesNanAndInfinity) {
 }
 
 // Links planted in a shared output folder at every name the old temporary scheme used
-// ("<target>.tmp-<pid>-<n>", pids being guessable) and at the targets themselves: bake (EXR, TIFF,
-// TGA, PNG, DDS), render --out and env's faces write their files and leave the outside file as it
-// was.
+// ("<target>.tmp-<pid>-<n>", pids being guessable) and at the targets themselves: a bake's EXR set
+// and render --out (EXR and PNG) write their files and leave the outside file as it was. Every
+// other writer goes through the same files.h path (test_atomic_file.cpp).
 TEST(CliHostile, PlantedLinksAreNeverWrittenThrough) {
     TempDir dir;
     const fs::path outside = dir / "outside";

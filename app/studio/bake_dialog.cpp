@@ -127,6 +127,7 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
     m_mips = new QSpinBox(this);
     m_mips->setRange(0, 32); // 32 levels cover a 2^31-texel side: more than any image holds
     m_mips->setSpecialValueText("all, down to 1×1");
+    m_mips->setKeyboardTracking(false);
     m_output = new QLineEdit(this);
     m_output->setPlaceholderText("output folder");
     auto* browseButton = new QPushButton("Browse…", this);

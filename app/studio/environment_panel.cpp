@@ -68,6 +68,7 @@ EnvironmentPanel::EnvironmentPanel(MaterialDocument* doc, QWidget* parent)
     m_intensity->setRange(0.0, kMaxEnvironmentIntensity);
     m_intensity->setDecimals(3);
     m_intensity->setSingleStep(0.1);
+    m_intensity->setKeyboardTracking(false); // commit on Enter or focus-out, not per keystroke
     form->addRow("Intensity", m_intensity);
 
     m_lobe = new QComboBox(this);
@@ -84,6 +85,7 @@ EnvironmentPanel::EnvironmentPanel(MaterialDocument* doc, QWidget* parent)
     m_samples->setObjectName("environmentSamples");
     m_samples->setRange(1, int(kMaxFisSamples));
     m_samples->setSuffix(" samples");
+    m_samples->setKeyboardTracking(false);
     auto* fisRow = new QHBoxLayout;
     fisRow->addWidget(m_fis);
     fisRow->addWidget(m_samples);

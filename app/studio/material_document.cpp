@@ -43,6 +43,7 @@ public:
         if (o->m_epoch != m_epoch) return false;
         m_after = o->m_after;
         m_afterMaps = o->m_afterMaps;
+        setText(o->text()); // a drag is one step named by the value where it ended
         return true;
     }
 

@@ -157,6 +157,8 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
     m_glossSpin->setRange(0.0, 1.0);
     m_glossSpin->setDecimals(3);
     m_glossSpin->setSingleStep(0.01);
+    m_glossSpin->setKeyboardTracking(false); // commit on Enter or focus-out, not per keystroke
+    m_glossSpin->setObjectName("materialGloss");
     m_power = new QLabel(this);
     m_power->setMinimumWidth(90);
     m_encoding = new QLabel(this);

@@ -78,12 +78,17 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
         s->setSingleStep(step);
         s->setDecimals(decimals);
         s->setToolTip(tip);
+        s->setKeyboardTracking(false); // commit on Enter or focus-out, not per keystroke
         return s;
     };
     m_radiusSpin = spin(kMinBrushRadius, 1024.0, 1.0, 1, "Brush radius in texels of the finest level");
     m_hardnessSpin = spin(0.0, 1.0, 0.05, 2, "Fraction of the radius painted at full strength");
     m_opacitySpin = spin(0.0, 1.0, 0.05, 2, "The most one stroke changes a texel");
     m_valueSpin = spin(0.0, 1.0, 0.01, 3, "Gloss (preset encoding) or variance painted");
+    m_radiusSpin->setObjectName("paintRadius");
+    m_hardnessSpin->setObjectName("paintHardness");
+    m_opacitySpin->setObjectName("paintOpacity");
+    m_valueSpin->setObjectName("paintValue");
     m_eyedropperButton = new QPushButton("Eyedropper", this);
     m_eyedropperButton->setCheckable(true);
     m_eyedropperButton->setToolTip("Pick the value under the cursor on the next click");
@@ -97,6 +102,7 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     m_mipSpin = new QSpinBox(this);
     m_mipSpin->setPrefix("mip ");
     m_mipSpin->setRange(0, 16);
+    m_mipSpin->setKeyboardTracking(false);
     m_status = new QLabel(this);
     m_status->setWordWrap(true);
 

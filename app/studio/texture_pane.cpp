@@ -66,6 +66,7 @@ TexturePane::TexturePane(MaterialDocument* doc, QWidget* parent)
     m_mipSpin->setPrefix("mip ");
     m_mipSpin->setRange(0, 0);
     m_mipSpin->setToolTip("Mip level of the baked texture");
+    m_mipSpin->setKeyboardTracking(false);
     m_info = new QLabel(this);
     m_info->setTextInteractionFlags(Qt::TextSelectableByMouse);
 

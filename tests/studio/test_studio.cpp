@@ -5,6 +5,7 @@
 #include "bake_dialog.h"
 #include "main_window.h"
 #include "material_panel.h"
+#include "paint_tool.h"
 #include "project.h"
 #include "studio_app.h"
 #include "texture_pane.h"
@@ -18,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include <QApplication>
+#include <QCheckBox>
 #include <QComboBox>
 #include <QDateTime>
 #include <QDoubleSpinBox>
@@ -30,6 +32,7 @@
 #include <QSignalSpy>
 #include <QSlider>
 #include <QStandardPaths>
+#include <QTest>
 
 #include <cstdio>
 #include <filesystem>
@@ -38,6 +41,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <tuple>
 
 namespace burnish::studio {
 namespace {
@@ -97,6 +101,91 @@ TEST(MaterialPanel, GlossSliderEditsTheDocumentAndUndoRestores) {
     doc.undoStack()->undo();
     EXPECT_EQ(doc.settings().gloss, before);
     EXPECT_EQ(panel.glossSlider()->value(), int(std::lround(before * MaterialPanel::kGlossSteps)));
+}
+
+// Types `text` into a spin box as a user does (select all, type, Enter).
+void typeInto(QAbstractSpinBox* box, const QString& text) {
+    box->selectAll();
+    QTest::keyClicks(box, text);
+}
+
+// Typing into a numeric field commits the whole number on Enter, as one undo step named by the
+// final value: each keystroke used to be committed and the box reformatted before the rest was
+// typed ("0.45" gave 0.000). The locale's decimal point is what the box takes.
+TEST(MaterialPanel, TypedGlossCommitsWholeOnEnterAsOneUndoStep) {
+    MaterialDocument doc;
+    MaterialPanel panel(&doc);
+    QDoubleSpinBox* spin = panel.glossSpin();
+    const int steps = doc.undoStack()->count();
+    typeInto(spin, "0.45");
+    EXPECT_EQ(doc.undoStack()->count(), steps) << "nothing is committed while typing";
+    QTest::keyClick(spin, Qt::Key_Return);
+    EXPECT_DOUBLE_EQ(doc.settings().gloss, 0.45);
+    ASSERT_EQ(doc.undoStack()->count(), steps + 1);
+    EXPECT_EQ(doc.undoStack()->text(steps).toStdString(), "Gloss 0.450");
+    doc.undoStack()->undo();
+    EXPECT_NE(doc.settings().gloss, 0.45);
+
+    const QLocale before;
+    QLocale::setDefault(QLocale(QLocale::German, QLocale::Germany));
+    {
+        MaterialPanel german(&doc);
+        typeInto(german.glossSpin(), "0,62");
+        QTest::keyClick(german.glossSpin(), Qt::Key_Return);
+        EXPECT_DOUBLE_EQ(doc.settings().gloss, 0.62);
+    }
+    QLocale::setDefault(before);
+}
+
+// A slider drag is one undo step named by the value where it ended (it was named by the first
+// value of the drag).
+TEST(MaterialPanel, ASliderDragIsOneStepNamedByItsLastValue) {
+    MaterialDocument doc;
+    MaterialPanel panel(&doc);
+    QSlider* slider = panel.glossSlider();
+    const int steps = doc.undoStack()->count();
+    slider->setSliderDown(true);
+    for (int v : {387, 500, 650, 810})
+        slider->setValue(v);
+    slider->setSliderDown(false); // emits sliderReleased: the drag's step is closed
+    ASSERT_EQ(doc.undoStack()->count(), steps + 1);
+    EXPECT_EQ(doc.undoStack()->text(steps).toStdString(), "Gloss 0.810");
+    EXPECT_DOUBLE_EQ(doc.settings().gloss, 0.81);
+    doc.undoStack()->undo();
+    EXPECT_NE(doc.settings().gloss, 0.81);
+}
+
+// Every other numeric field of the window takes what is typed: the environment's intensity and
+// sample count, and the paint brush's radius, hardness, opacity and value.
+TEST(MainWindow, EveryNumericFieldTakesWhatIsTyped) {
+    TestWindow w;
+    auto* intensity = w.window.findChild<QDoubleSpinBox*>("environmentIntensity");
+    ASSERT_NE(intensity, nullptr);
+    typeInto(intensity, "2.5");
+    QTest::keyClick(intensity, Qt::Key_Return);
+    EXPECT_DOUBLE_EQ(w.window.document()->settings().environment.intensity, 2.5);
+    auto* fis = w.window.findChild<QCheckBox*>("environmentFis");
+    ASSERT_NE(fis, nullptr);
+    fis->setChecked(true); // the sample count is offered with filtered importance sampling
+    auto* samples = w.window.findChild<QSpinBox*>("environmentSamples");
+    ASSERT_NE(samples, nullptr);
+    ASSERT_TRUE(samples->isEnabled());
+    typeInto(samples, "48");
+    QTest::keyClick(samples, Qt::Key_Return);
+    EXPECT_EQ(w.window.document()->settings().environment.fisSamples, 48);
+    for (const auto& [name, text, value] :
+         std::vector<std::tuple<const char*, const char*, double>>{{"paintRadius", "37.5", 37.5},
+                                                                   {"paintHardness", "0.35", 0.35},
+                                                                   {"paintOpacity", "0.6", 0.6},
+                                                                   {"paintValue", "0.2", 0.2}}) {
+        auto* box = w.window.findChild<QDoubleSpinBox*>(name);
+        ASSERT_NE(box, nullptr) << name;
+        typeInto(box, text);
+        QTest::keyClick(box, Qt::Key_Return);
+        EXPECT_DOUBLE_EQ(box->value(), value) << name;
+    }
+    EXPECT_FLOAT_EQ(w.window.paintTool()->brush().value, 0.2f);
+    EXPECT_DOUBLE_EQ(w.window.paintTool()->brush().radius, 37.5);
 }
 
 TEST(MaterialPanel, SpecularComboTakesACalibratedMaterialAndUndoRestores) {

@@ -84,6 +84,7 @@ ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
     m_mipSpin->setPrefix("mip ");
     m_mipSpin->setRange(1, 4); // the evaluation's default mips; set from the result
     m_mipSpin->setValue(2);
+    m_mipSpin->setKeyboardTracking(false);
     m_costCombo = new QComboBox(methods);
     m_costCombo->setObjectName("errorCostAxis");
     m_costCombo->addItem("cost: ns per lobe evaluation (CPU, double)");

@@ -8,6 +8,7 @@
 #include <burnish/core/env/sampling.h>
 #include <burnish/core/env/storage.h>
 #include <burnish/core/io/cube_dds.h>
+#include <burnish/core/io/image.h>
 #include <burnish/core/shading/sh.h>
 #include <burnish/core/util/files.h>
 
@@ -113,29 +114,29 @@ Result<EnvironmentSource> readSource(const EnvCliOptions& o) {
     return source;
 }
 
-// The radiance and irradiance cubes in the asked formats and sh.json; the names written.
-Result<std::vector<std::string>> writeCubes(const EnvCliOptions& o, const fs::path& dir,
-                                            const CubeMap& radiance, const CubeMap& irradiance, const Sh9& sh,
-                                            const std::optional<glm::dvec3>& divisor) {
-    std::vector<std::string> files;
+// The radiance and irradiance cubes in the asked formats and sh.json, staged into the set.
+Status stageCubes(const EnvCliOptions& o, FileSet& set, const CubeMap& radiance, const CubeMap& irradiance,
+                  const Sh9& sh, const std::optional<glm::dvec3>& divisor) {
     if (o.format == "dds" || o.format == "both") {
-        if (const Status s = writeCubeDds(radiance, dir / "radiance.dds"); !s) return Error{s.error()};
-        if (const Status s = writeCubeDds(irradiance, dir / "irradiance.dds"); !s) return Error{s.error()};
-        files.insert(files.end(), {"radiance.dds", "irradiance.dds"});
+        if (const Status s = set.addBytes("radiance.dds", encodeCubeDds(radiance)); !s) return s;
+        if (const Status s = set.addBytes("irradiance.dds", encodeCubeDds(irradiance)); !s) return s;
     }
     if (o.format == "exr" || o.format == "both") {
-        for (const auto& [cube, stem] : {std::pair{&radiance, "radiance"}, {&irradiance, "irradiance"}}) {
-            auto names = writeCubeExrFaces(*cube, dir, stem);
-            if (!names) return Error{names.error()};
-            files.insert(files.end(), names->begin(), names->end());
-        }
+        for (const auto& [cube, stem] : {std::pair{&radiance, "radiance"}, {&irradiance, "irradiance"}})
+            for (int m = 0; m < cube->mipCount(); ++m)
+                for (int f = 0; f < kCubeFaces; ++f) {
+                    const std::string name = cubeExrFaceName(*cube, stem, m, f);
+                    const int size = cube->levels[size_t(m)].size;
+                    const Status s = set.add(name, [&](const fs::path& staged) {
+                        return writeImageFile(staged, size, size, 3, storedCubeFace(*cube, m, f),
+                                              {StoredType::Half, {}, {}}, fs::path(o.out) / name);
+                    });
+                    if (!s) return s;
+                }
     }
     Json shJson = sh9Json(sh);
     if (divisor) shJson["normalizedBy"] = vec3Json(*divisor);
-    if (const Status s = writeFileAtomic(dir / "sh.json", shJson.dump(2) + "\n"); !s) return Error{s.error()};
-    files.push_back("sh.json");
-
-    return files;
+    return set.addBytes("sh.json", shJson.dump(2) + "\n");
 }
 
 // What the run made: the source, every mip's power and source level, the files (with timings).
@@ -173,7 +174,7 @@ Json envSummary(const EnvCliOptions& o, const EnvironmentSource& source,
 }
 
 // --report: the prefilter against brute force per mip, written as report.json and report.md.
-Result<std::pair<Json, std::string>> writeReport(const EnvCliOptions& o, const fs::path& dir,
+Result<std::pair<Json, std::string>> stageReport(const EnvCliOptions& o, FileSet& set,
                                                  const PrefilteredEnvironment& filtered,
                                                  const CubeMap& source) {
     // Compare against the source as filtered (normalized when asked), so only the prefilter's error
@@ -200,10 +201,9 @@ Result<std::pair<Json, std::string>> writeReport(const EnvCliOptions& o, const f
                 {"lobe", lobeModelName(filtered.lobe)},
                 {"faceSize", filtered.radiance.faceSize()},
                 {"mips", rows}};
-    if (const Status s = writeFileAtomic(dir / "report.json", report.dump(2) + "\n"); !s)
-        return Error{s.error()};
+    if (const Status s = set.addBytes("report.json", report.dump(2) + "\n"); !s) return Error{s.error()};
     const std::string md = reportMarkdown(*comparison, filtered.lobe, filtered.radiance.faceSize());
-    if (const Status s = writeFileAtomic(dir / "report.md", md); !s) return Error{s.error()};
+    if (const Status s = set.addBytes("report.md", md); !s) return Error{s.error()};
     return std::pair{std::move(report), md};
 }
 
@@ -264,11 +264,16 @@ int runEnv(const EnvCliOptions& o) {
     std::error_code ec;
     fs::create_directories(o.out, ec);
     if (ec) return fail("cannot create '" + o.out + "': " + ec.message());
-    const fs::path dir(o.out);
+    // The whole set is staged, then committed as one unit (files.h): env.json is removed first and
+    // written last, and a run killed in between is finished by the next one into this folder.
+    auto set = FileSet::begin(o.out);
+    if (!set) return fail(set.error());
+    for (const auto& note : set->recoveryNotes())
+        std::fprintf(stderr, "burnish: note: %s\n", note.c_str());
     progress.update(0.87, "writing");
-    const auto written = writeCubes(o, dir, filtered->radiance, *irradiance, sh, divisor);
-    if (!written) return fail(written.error());
-    const std::vector<std::string>& files = *written;
+    if (const Status s = stageCubes(o, set.value(), filtered->radiance, *irradiance, sh, divisor); !s)
+        return fail(s.error());
+    const std::vector<std::string> files = set->names();
 
     Json summary = envSummary(o, source, *filtered, prefilter, sh, divisor, files, computeSeconds);
     // Timings vary run to run; env.json keeps only what the inputs determine, so reruns write the same bytes.
@@ -278,7 +283,7 @@ int runEnv(const EnvCliOptions& o) {
         m.erase("seconds");
     if (o.report) {
         progress.update(0.9, "comparing with brute force");
-        auto report = writeReport(o, dir, *filtered, source.cube);
+        auto report = stageReport(o, set.value(), *filtered, source.cube);
         if (!report) return fail(report.error());
         const std::string& md = report->second;
         summary["report"] = report->first;
@@ -288,12 +293,11 @@ int runEnv(const EnvCliOptions& o) {
         }
         if (!o.json) std::fputs(md.c_str(), stdout);
     }
-    // env.json last: it names the whole set, and with --force what the previous set held beyond it goes.
-    if (const Status s = writeFileAtomic(dir / "env.json", manifest.dump(2) + "\n"); !s)
+    if (const Status s = set.value().addBytes("env.json", manifest.dump(2) + "\n"); !s)
         return fail(s.error());
-    std::vector<std::string> current = manifest["files"].get<std::vector<std::string>>();
-    current.push_back("env.json");
-    removeStaleFiles(dir, previous, current);
+    // With --force, what the previous set held beyond this one goes (its env.json names it).
+    if (const Status s = set.value().commit("env.json", previous, Overwrite::Allow); !s)
+        return fail(s.error());
     progress.finish();
 
     if (o.json) {

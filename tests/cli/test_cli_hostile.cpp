@@ -318,6 +318,49 @@ TEST(CliHostile, ABakeThatCannotFitIsRefusedBeforeAllocating) {
     EXPECT_FALSE(fs::exists(dir / "out" / "bake.json"));
 }
 
+// `burnish env --force` killed at every step of its set's commit (the 8² set of DDS and EXR files
+// replaced by a 4² EXR set): an env.json in the folder names a whole set, and recovery leaves
+// exactly what an uninterrupted run leaves, byte for byte.
+TEST(CliHostile, AKilledEnvironmentCommitIsFinishedByTheNextRun) {
+    TempDir dir;
+    auto slurp = [](const fs::path& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    auto list = [](const fs::path& folder) {
+        std::set<std::string> names;
+        for (const auto& e : fs::directory_iterator(folder))
+            names.insert(e.path().filename().string());
+        return names;
+    };
+    const fs::path oldSet = dir / "old", newSet = dir / "new";
+    ASSERT_EQ(runBurnish("env --face-size 8 --out " + shellQuote(oldSet.string())).exitCode, 0);
+    const std::string newArgs = "env --face-size 4 --format exr --force --out ";
+    ASSERT_EQ(runBurnish(newArgs + shellQuote(newSet.string())).exitCode, 0);
+    const auto expected = list(newSet);
+    int kills = 0;
+    for (int step = 1; step < 200; ++step) {
+        SCOPED_TRACE("killed after step " + std::to_string(step));
+        const fs::path out = dir / ("run" + std::to_string(step));
+        fs::copy(oldSet, out);
+        ::setenv("BURNISH_FAULT_KILL_AT_COMMIT_STEP", std::to_string(step).c_str(), 1);
+        const CliResult r = runBurnish(newArgs + shellQuote(out.string()));
+        ::unsetenv("BURNISH_FAULT_KILL_AT_COMMIT_STEP");
+        if (r.exitCode == 0) break;
+        ++kills;
+        if (fs::exists(out / "env.json")) {
+            const std::string index = slurp(out / "env.json");
+            EXPECT_TRUE(index == slurp(oldSet / "env.json") || index == slurp(newSet / "env.json"));
+        }
+        EXPECT_EQ(burnish::recoverStaging(out).commitsFinished, 1);
+        EXPECT_EQ(list(out), expected);
+        for (const auto& name : expected)
+            EXPECT_EQ(slurp(out / name), slurp(newSet / name)) << name;
+        fs::remove_all(out);
+    }
+    EXPECT_GT(kills, 30); // journal, old env.json, 25 renames, the old set's DDS files, env.json
+}
+
 std::set<std::string> namesIn(const fs::path& folder) {
     std::set<std::string> names;
     for (const auto& e : fs::directory_iterator(folder))

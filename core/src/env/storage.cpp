@@ -11,26 +11,31 @@ namespace burnish {
 
 namespace fs = std::filesystem;
 
+std::string cubeExrFaceName(const CubeMap& cube, const std::string& stem, int mip, int face) {
+    return cube.mipCount() == 1 ? fmt::format("{}_{}.exr", stem, cubeFaceName(face))
+                                : fmt::format("{}_m{}_{}.exr", stem, mip, cubeFaceName(face));
+}
+
+std::vector<float> storedCubeFace(const CubeMap& cube, int mip, int face) {
+    std::vector<float> values = cube.levels[size_t(mip)].faces[size_t(face)];
+    for (float& v : values)
+        v = std::isfinite(v) ? std::clamp(v, 0.0f, kHalfMax) : 0.0f; // half storage: see toHalfBits
+    return values;
+}
+
 Result<std::vector<std::string>> writeCubeExrFaces(const CubeMap& cube, const fs::path& dir,
                                                    const std::string& stem) {
     std::vector<std::string> names;
-    for (int m = 0; m < cube.mipCount(); ++m) {
-        const CubeLevel& level = cube.levels[size_t(m)];
+    for (int m = 0; m < cube.mipCount(); ++m)
         for (int f = 0; f < kCubeFaces; ++f) {
-            const std::string name = cube.mipCount() == 1
-                                         ? fmt::format("{}_{}.exr", stem, cubeFaceName(f))
-                                         : fmt::format("{}_m{}_{}.exr", stem, m, cubeFaceName(f));
-            const fs::path path = dir / name;
-            std::vector<float> values = level.faces[size_t(f)];
-            for (float& v : values)
-                v = std::isfinite(v) ? std::clamp(v, 0.0f, kHalfMax) : 0.0f; // half storage: see toHalfBits
-            if (const Status s =
-                    writeImageAtomic(path, level.size, level.size, 3, values, {StoredType::Half, {}, {}});
+            const std::string name = cubeExrFaceName(cube, stem, m, f);
+            const int size = cube.levels[size_t(m)].size;
+            if (const Status s = writeImageAtomic(dir / name, size, size, 3, storedCubeFace(cube, m, f),
+                                                  {StoredType::Half, {}, {}});
                 !s)
                 return Error{s.error()};
             names.push_back(name);
         }
-    }
     return names;
 }
 

@@ -284,15 +284,16 @@ Result<Image> readImage(const fs::path& path) {
     return readOpenedImage(std::move(opened).value());
 }
 
-Status writeImageAtomic(const fs::path& path, int width, int height, int channels,
-                        const std::vector<float>& pixels, const ImageWriteOptions& options) {
+Status writeImageFile(const fs::path& path, int width, int height, int channels,
+                      const std::vector<float>& pixels, const ImageWriteOptions& options,
+                      const fs::path& target) {
     if (width < 1 || height < 1 || channels < 1 ||
         pixels.size() != size_t(width) * size_t(height) * size_t(channels))
-        return Error{"cannot write '" + path.string() + "': the pixels do not match a " +
+        return Error{"cannot write '" + target.string() + "': the pixels do not match a " +
                      std::to_string(width) + "x" + std::to_string(height) + "x" + std::to_string(channels) +
                      " image"};
-    auto out = OIIO::ImageOutput::create(path.string()); // the plugin chosen by the real name
-    if (!out) return Error{"cannot write '" + path.string() + "': " + OIIO::geterror()};
+    auto out = OIIO::ImageOutput::create(target.string()); // the plugin chosen by the real name
+    if (!out) return Error{"cannot write '" + target.string() + "': " + OIIO::geterror()};
     const OIIO::TypeDesc type = options.type == StoredType::UInt8  ? OIIO::TypeDesc::UINT8
                                 : options.type == StoredType::Half ? OIIO::TypeDesc::HALF
                                                                    : OIIO::TypeDesc::FLOAT;
@@ -303,12 +304,16 @@ Status writeImageAtomic(const fs::path& path, int width, int height, int channel
     spec.attribute("DateTime", "");
     for (const auto& [name, value] : options.attributes)
         spec.attribute(name, value);
-    return writeAtomicWith(path, [&](const fs::path& staged) -> Status {
-        if (!out->open(staged.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) ||
-            !out->close())
-            return Error{"cannot write '" + path.string() + "': " + out->geterror()};
-        out.reset();
-        return {};
+    if (!out->open(path.string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) ||
+        !out->close())
+        return Error{"cannot write '" + target.string() + "': " + oneLine(out->geterror())};
+    return {};
+}
+
+Status writeImageAtomic(const fs::path& path, int width, int height, int channels,
+                        const std::vector<float>& pixels, const ImageWriteOptions& options) {
+    return writeAtomicWith(path, [&](const fs::path& staged) {
+        return writeImageFile(staged, width, height, channels, pixels, options, path);
     });
 }
 

@@ -390,6 +390,41 @@ StagingRecovery recoverStaging(const fs::path& folder) {
     return recovery;
 }
 
+Result<FileSet> FileSet::begin(const fs::path& folder) {
+    const StagingRecovery recovered = recoverStaging(folder);
+    auto staging = StagingFolder::create(folder);
+    if (!staging) return Error{staging.error()};
+    FileSet set(std::move(staging).value());
+    set.m_notes = recovered.notes;
+    return set;
+}
+
+Status FileSet::add(const std::string& name, const std::function<Status(const fs::path&)>& write) {
+    if (!plainName(name)) return Error{"'" + name + "' is not a file name inside the folder"};
+    const fs::path target = m_staging.parent() / name;
+    const fs::path staged = m_staging.fileFor(target);
+    if (const Status s = write(staged); !s) return s;
+    if (const Status s = syncFile(staged, target); !s) return s;
+    m_names.push_back(name);
+    m_files.push_back({staged, target});
+    return {};
+}
+
+Status FileSet::addBytes(const std::string& name, std::string_view bytes) {
+    const fs::path target = m_staging.parent() / name;
+    return add(name, [&](const fs::path& staged) { return writeNewFile(staged, bytes, target); });
+}
+
+Status FileSet::commit(const std::string& index, const std::vector<std::string>& obsolete,
+                       Overwrite overwrite) {
+    SetCommit commit;
+    commit.index = m_staging.parent() / index;
+    commit.overwrite = overwrite;
+    for (const auto& name : obsolete)
+        if (plainName(name)) commit.obsolete.push_back(m_staging.parent() / name);
+    return commitSet(m_staging, m_files, commit);
+}
+
 int removeStaleFiles(const fs::path& folder, const std::vector<std::string>& previous,
                      const std::vector<std::string>& written) {
     int removed = 0;

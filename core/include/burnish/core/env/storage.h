@@ -13,8 +13,14 @@
 
 namespace burnish {
 
-/// Writes one half-float RGB OpenEXR per face and mip, "<stem>_m<k>_<face>.exr" (or
-/// "<stem>_<face>.exr" for a single-level cube), each atomically; returns the names written.
+/// The file of face `face` at mip `mip` in the EXR scheme: "<stem>_m<k>_<face>.exr", or
+/// "<stem>_<face>.exr" for a single-level cube.
+std::string cubeExrFaceName(const CubeMap& cube, const std::string& stem, int mip, int face);
+/// A face's RGB values as half-float storage holds them: non-finite values 0, the rest clamped to
+/// [0, kHalfMax].
+std::vector<float> storedCubeFace(const CubeMap& cube, int mip, int face);
+/// Writes one half-float RGB OpenEXR per face and mip (cubeExrFaceName, storedCubeFace), each
+/// atomically; returns the names written.
 Result<std::vector<std::string>> writeCubeExrFaces(const CubeMap& cube, const std::filesystem::path& dir,
                                                    const std::string& stem);
 /// The largest finite half float; larger values are stored as this.

@@ -73,6 +73,13 @@ struct ImageWriteOptions {
     std::vector<std::pair<std::string, std::string>> attributes; // extra string metadata
 };
 
+/// Writes an image to exactly `path`, which OpenImageIO opens as it is (for a file inside a
+/// StagingFolder: see writeImageAtomic for everything else). The format comes from `target`'s
+/// name, and errors name it.
+Status writeImageFile(const std::filesystem::path& path, int width, int height, int channels,
+                      const std::vector<float>& pixels, const ImageWriteOptions& options,
+                      const std::filesystem::path& target);
+
 /// Writes `pixels` (width·height·channels floats, row-major, top row first) in the format the
 /// path's extension names, through a temporary file renamed over the target: readers never see a
 /// partial file. UInt8 values are clamped to [0, 1] and rounded by OpenImageIO. EXR files are

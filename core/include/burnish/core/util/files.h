@@ -110,6 +110,37 @@ struct SetCommit {
 /// were new are removed again and the error says the folder's set is incomplete.
 Status commitSet(StagingFolder& staging, const std::vector<StagedFile>& files, const SetCommit& commit);
 
+struct StagingRecovery;
+
+/// A set of files written into one folder as one unit: each file is staged in a private folder as
+/// it is produced, and commit() puts them all in place through commitSet, the set's index renamed
+/// last. Interrupted commits of killed runs in the folder are finished first (begin()).
+class FileSet {
+public:
+    /// recoverStaging(folder), then a StagingFolder inside it (which must exist).
+    static Result<FileSet> begin(const std::filesystem::path& folder);
+    /// Stages the file `name` (a plain name in the folder) that `write(staged)` writes in full.
+    Status add(const std::string& name,
+               const std::function<Status(const std::filesystem::path& staged)>& write);
+    /// Stages the file `name` with these bytes.
+    Status addBytes(const std::string& name, std::string_view bytes);
+    /// The names staged so far, in order.
+    const std::vector<std::string>& names() const { return m_names; }
+    /// Commits every staged file; `index` (one of the names) is renamed last and a previous one
+    /// removed first; `obsolete` names of the previous set that this one does not hold are removed.
+    Status commit(const std::string& index, const std::vector<std::string>& obsolete, Overwrite overwrite);
+    /// recoverStaging's notes from begin().
+    const std::vector<std::string>& recoveryNotes() const { return m_notes; }
+
+private:
+    explicit FileSet(StagingFolder staging)
+        : m_staging(std::move(staging)) {}
+    StagingFolder m_staging;
+    std::vector<std::string> m_names;
+    std::vector<StagedFile> m_files;
+    std::vector<std::string> m_notes;
+};
+
 /// What recoverStaging found and did.
 struct StagingRecovery {
     int commitsFinished = 0;    // interrupted commits carried to their end (files renamed)

@@ -122,20 +122,8 @@ Status stageCubes(const EnvCliOptions& o, FileSet& set, const CubeMap& radiance,
         if (const Status s = set.addBytes("irradiance.dds", encodeCubeDds(irradiance)); !s) return s;
     }
     if (o.format == "exr" || o.format == "both") {
-        for (const auto& [cubePointer, stem] :
-             {std::pair{&radiance, "radiance"}, {&irradiance, "irradiance"}}) {
-            const CubeMap& cube = *cubePointer; // a plain reference: clang 14 lambdas cannot capture bindings
-            for (int m = 0; m < cube.mipCount(); ++m)
-                for (int f = 0; f < kCubeFaces; ++f) {
-                    const std::string name = cubeExrFaceName(cube, stem, m, f);
-                    const int size = cube.levels[size_t(m)].size;
-                    const Status s = set.add(name, [&](const fs::path& staged) {
-                        return writeImageFile(staged, size, size, 3, storedCubeFace(cube, m, f),
-                                              {StoredType::Half, {}, {}}, fs::path(o.out) / name);
-                    });
-                    if (!s) return s;
-                }
-        }
+        if (const Status s = stageCubeExrFaces(radiance, "radiance", set); !s) return s;
+        if (const Status s = stageCubeExrFaces(irradiance, "irradiance", set); !s) return s;
     }
     Json shJson = sh9Json(sh);
     if (divisor) shJson["normalizedBy"] = vec3Json(*divisor);

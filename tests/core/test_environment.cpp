@@ -451,10 +451,16 @@ TEST(Storage, ExrFacesRoundTripThroughOpenImageIo) {
     test::TempDir dir;
     const auto p = prefilterRadiance(*proceduralStudioEnvironment(8), PrefilterOptions{});
     ASSERT_TRUE(p);
-    const auto names = writeCubeExrFaces(p->radiance, dir.path(), "radiance");
-    ASSERT_TRUE(names) << names.error();
-    ASSERT_EQ(names->size(), size_t(kCubeFaces * p->radiance.mipCount()));
-    EXPECT_EQ((*names)[0], "radiance_m0_px.exr");
+    auto set = FileSet::begin(dir.path());
+    ASSERT_TRUE(set) << set.error();
+    const Status staged = stageCubeExrFaces(p->radiance, "radiance", set.value());
+    ASSERT_TRUE(staged.ok()) << staged.error();
+    const std::vector<std::string> names = set->names();
+    ASSERT_EQ(names.size(), size_t(kCubeFaces * p->radiance.mipCount()));
+    EXPECT_EQ(names[0], "radiance_m0_px.exr");
+    EXPECT_FALSE(std::filesystem::exists(dir / "radiance_m0_px.exr")); // staged, not yet in place
+    const Status committed = set.value().commit(names.back(), {}, Overwrite::Refuse);
+    ASSERT_TRUE(committed.ok()) << committed.error();
     const auto img = readImage(dir / "radiance_m1_nz.exr");
     ASSERT_TRUE(img) << img.error();
     ASSERT_EQ(img->width, 4);

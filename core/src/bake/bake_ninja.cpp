@@ -207,7 +207,8 @@ Result<nlohmann::json> writeBakeNinja(const std::vector<BakeJob>& jobs, const st
                        "  command = $cmd\n"
                        "  description = $desc\n"
                        "  restat = 1\n";
-    std::map<std::string, size_t> owner; // output -> job number, to refuse two jobs writing one file
+    // Two jobs writing one file would make ninja refuse the whole file.
+    if (const Status s = checkBakeJobs(jobs); !s) return Error{s.error()};
     Json outputs = Json::array();
     for (size_t i = 0; i < jobs.size(); ++i) {
         const std::string at = "manifest job " + std::to_string(i + 1) + " (" + jobs[i].spec.input + "): ";
@@ -215,10 +216,6 @@ Result<nlohmann::json> writeBakeNinja(const std::vector<BakeJob>& jobs, const st
         if (!nj) return Error{at + nj.error()};
         std::string line = "\nbuild";
         for (const auto& o : nj->outputs) {
-            const auto [it, fresh] = owner.emplace(o, i + 1);
-            if (!fresh)
-                return Error{at + "writes '" + o + "', which job " + std::to_string(it->second) +
-                             " writes too"};
             const auto e = ninjaPath(o);
             if (!e) return Error{at + e.error()};
             line += " " + *e;

@@ -6,12 +6,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
-#include <fcntl.h>
-#include <unistd.h>
 
 namespace burnish {
 

@@ -23,20 +23,18 @@ std::vector<float> storedCubeFace(const CubeMap& cube, int mip, int face) {
     return values;
 }
 
-Result<std::vector<std::string>> writeCubeExrFaces(const CubeMap& cube, const fs::path& dir,
-                                                   const std::string& stem) {
-    std::vector<std::string> names;
+Status stageCubeExrFaces(const CubeMap& cube, const std::string& stem, FileSet& set) {
     for (int m = 0; m < cube.mipCount(); ++m)
         for (int f = 0; f < kCubeFaces; ++f) {
             const std::string name = cubeExrFaceName(cube, stem, m, f);
             const int size = cube.levels[size_t(m)].size;
-            if (const Status s = writeImageAtomic(dir / name, size, size, 3, storedCubeFace(cube, m, f),
-                                                  {StoredType::Half, {}, {}});
-                !s)
-                return Error{s.error()};
-            names.push_back(name);
+            const Status s = set.add(name, [&](const fs::path& staged) {
+                return writeImageFile(staged, size, size, 3, storedCubeFace(cube, m, f),
+                                      {StoredType::Half, {}, {}}, set.folder() / name);
+            });
+            if (!s) return s;
         }
-    return names;
+    return {};
 }
 
 void scaleCube(CubeMap& cube, const glm::dvec3& scale) {

@@ -1,7 +1,6 @@
 #include <burnish/core/io/cube_dds.h>
 
 #include <burnish/core/env/storage.h>
-#include <burnish/core/util/files.h>
 
 #include "dds_dx10.h"
 
@@ -14,8 +13,6 @@
 #include <cstring>
 
 namespace burnish {
-
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -87,11 +84,6 @@ Result<CubeMap> decodeCubeDds(std::string_view s) {
             }
         }
     return cube;
-}
-
-Status writeCubeDds(const CubeMap& cube, const fs::path& path) {
-    if (cube.levels.empty()) return Error{"cannot write an empty cube to '" + path.string() + "'"};
-    return writeFileAtomic(path, encodeCubeDds(cube));
 }
 
 } // namespace burnish

@@ -66,14 +66,13 @@ std::string oneLine(std::string text) {
 }
 
 /// Whether the file starts with the 8-byte PNG signature.
-bool hasPngSignature(const fs::path& path) {
+bool fileHasPngSignature(const fs::path& path) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) return false;
-    unsigned char head[8] = {};
+    char head[8] = {};
     const ssize_t got = ::read(fd, head, sizeof head);
     ::close(fd);
-    static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    return got == ssize_t(sizeof head) && std::memcmp(head, kSignature, sizeof head) == 0;
+    return got > 0 && hasPngSignature(std::string_view(head, size_t(got)));
 }
 
 /// A library's reason for a failed read, named as what it is: "the file is truncated (…)" when the
@@ -104,7 +103,7 @@ Result<OpenedImage> openImage(const fs::path& path) {
     // PNG files are read and their chunks checked first: libpng, which OpenImageIO reads them with,
     // prints its own multi-line messages for damaged headers before any error reaches us.
     OpenedImage opened;
-    if (hasPngSignature(path)) {
+    if (fileHasPngSignature(path)) {
         auto file = readFileBytes(path);
         if (!file) return Error{"cannot read image '" + path.string() + "': " + file.error()};
         auto layout = parsePng(std::string_view(file->data(), file->size()));

@@ -302,9 +302,12 @@ private:
 
 } // namespace
 
+bool hasPngSignature(std::string_view head) {
+    return head.substr(0, kSignature.size()) == kSignature;
+}
+
 Result<PngLayout> parsePng(std::string_view file) {
-    if (file.size() < kSignature.size() || file.substr(0, kSignature.size()) != kSignature)
-        return Error{"not a PNG file (bad signature)"};
+    if (!hasPngSignature(file)) return Error{"not a PNG file (bad signature)"};
     PngLayout layout;
     bool haveHeader = false, idatEnded = false;
     std::size_t at = kSignature.size();

@@ -29,6 +29,9 @@ struct PngLayout {
     }
 };
 
+/// Whether `head` (a file's first bytes) starts with the 8-byte PNG signature.
+bool hasPngSignature(std::string_view head);
+
 /// Bytes decodePngRows may write past the last row (whole-pixel stores); `out` must have them.
 inline constexpr std::size_t kPngDecodePadding = 16;
 

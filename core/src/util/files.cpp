@@ -111,11 +111,11 @@ std::string journalText(const Journal& journal) {
 }
 
 /// Removes a file of the old set: a regular file or a link (never what a link points to), never a
-/// folder.
-void removeObsolete(const fs::path& path) {
+/// folder; whether it removed one.
+bool removeObsolete(const fs::path& path) {
     struct stat st {};
-    if (::lstat(path.c_str(), &st) != 0) return;
-    if (S_ISREG(st.st_mode) || S_ISLNK(st.st_mode)) ::unlink(path.c_str());
+    if (::lstat(path.c_str(), &st) != 0 || !(S_ISREG(st.st_mode) || S_ISLNK(st.st_mode))) return false;
+    return ::unlink(path.c_str()) == 0;
 }
 
 /// Carries a journal's commit to its end from wherever it stopped: every step is skipped when it
@@ -430,10 +430,7 @@ int removeStaleFiles(const fs::path& folder, const std::vector<std::string>& pre
     int removed = 0;
     for (const auto& name : previous) {
         if (!plainName(name) || std::find(written.begin(), written.end(), name) != written.end()) continue;
-        struct stat st {};
-        const fs::path path = folder / name;
-        if (::lstat(path.c_str(), &st) != 0 || !(S_ISREG(st.st_mode) || S_ISLNK(st.st_mode))) continue;
-        removed += ::unlink(path.c_str()) == 0 ? 1 : 0;
+        removed += removeObsolete(folder / name) ? 1 : 0;
     }
     return removed;
 }

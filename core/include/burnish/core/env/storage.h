@@ -3,6 +3,7 @@
 #pragma once
 
 #include <burnish/core/env/cube.h>
+#include <burnish/core/util/files.h>
 #include <burnish/core/util/result.h>
 
 #include <glm/vec3.hpp>
@@ -19,10 +20,9 @@ std::string cubeExrFaceName(const CubeMap& cube, const std::string& stem, int mi
 /// A face's RGB values as half-float storage holds them: non-finite values 0, the rest clamped to
 /// [0, kHalfMax].
 std::vector<float> storedCubeFace(const CubeMap& cube, int mip, int face);
-/// Writes one half-float RGB OpenEXR per face and mip (cubeExrFaceName, storedCubeFace), each
-/// atomically; returns the names written.
-Result<std::vector<std::string>> writeCubeExrFaces(const CubeMap& cube, const std::filesystem::path& dir,
-                                                   const std::string& stem);
+/// Stages one half-float RGB OpenEXR per face and mip (cubeExrFaceName, storedCubeFace) into a
+/// file set, which commits them with the rest of the set (files.h).
+Status stageCubeExrFaces(const CubeMap& cube, const std::string& stem, FileSet& set);
 /// The largest finite half float; larger values are stored as this.
 inline constexpr float kHalfMax = 65504.0f;
 

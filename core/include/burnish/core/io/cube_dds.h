@@ -7,7 +7,6 @@
 #include <burnish/core/env/cube.h>
 #include <burnish/core/util/result.h>
 
-#include <filesystem>
 #include <string>
 #include <string_view>
 
@@ -19,7 +18,5 @@ namespace burnish {
 std::string encodeCubeDds(const CubeMap& cube);
 /// Reads what encodeCubeDds writes (RGBA16F DX10 cube maps); clear errors for anything else.
 Result<CubeMap> decodeCubeDds(std::string_view bytes);
-/// Writes encodeCubeDds atomically.
-Status writeCubeDds(const CubeMap& cube, const std::filesystem::path& path);
 
 } // namespace burnish

@@ -126,6 +126,8 @@ public:
     Status addBytes(const std::string& name, std::string_view bytes);
     /// The names staged so far, in order.
     const std::vector<std::string>& names() const { return m_names; }
+    /// The folder the set is committed into.
+    const std::filesystem::path& folder() const { return m_staging.parent(); }
     /// Commits every staged file; `index` (one of the names) is renamed last and a previous one
     /// removed first; `obsolete` names of the previous set that this one does not hold are removed.
     Status commit(const std::string& index, const std::vector<std::string>& obsolete, Overwrite overwrite);

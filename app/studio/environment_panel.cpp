@@ -42,6 +42,8 @@ EnvironmentPanel::EnvironmentPanel(MaterialDocument* doc, QWidget* parent)
     auto* form = new QFormLayout(this);
 
     m_source = new QComboBox(this);
+    m_source->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+    m_source->setMinimumContentsLength(10);
     m_source->setObjectName("environmentSource");
     m_browse = new QPushButton("Browse…", this);
     auto* sourceRow = new QHBoxLayout;
@@ -72,10 +74,13 @@ EnvironmentPanel::EnvironmentPanel(MaterialDocument* doc, QWidget* parent)
     form->addRow("Intensity", m_intensity);
 
     m_lobe = new QComboBox(this);
+    m_lobe->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+    m_lobe->setMinimumContentsLength(12);
     m_lobe->setObjectName("environmentLobe");
     m_lobe->addItem("Blinn-Phong (matches the material's power)", int(LobeModel::BlinnPhong));
     m_lobe->addItem("Phong (read at a quarter of the power)", int(LobeModel::Phong));
-    form->addRow("Prefilter lobe", m_lobe);
+    form->addRow("Lobe", m_lobe);
+    m_lobe->setToolTip("The prefilter lobe of the environment map");
 
     m_fis = new QCheckBox("Filtered importance sampling", this);
     m_fis->setObjectName("environmentFis");
@@ -86,10 +91,8 @@ EnvironmentPanel::EnvironmentPanel(MaterialDocument* doc, QWidget* parent)
     m_samples->setRange(1, int(kMaxFisSamples));
     m_samples->setSuffix(" samples");
     m_samples->setKeyboardTracking(false);
-    auto* fisRow = new QHBoxLayout;
-    fisRow->addWidget(m_fis);
-    fisRow->addWidget(m_samples);
-    form->addRow("", fisRow);
+    form->addRow("", m_fis);
+    form->addRow("Samples", m_samples);
 
     connect(m_source, &QComboBox::activated, this, &EnvironmentPanel::sourceChosen);
     connect(m_browse, &QPushButton::clicked, this, [this] { chooseFile({}); });

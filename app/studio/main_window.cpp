@@ -29,6 +29,8 @@
 #include <QTimer>
 #include <QUndoView>
 
+#include <algorithm>
+
 namespace burnish::studio {
 
 namespace {
@@ -37,6 +39,9 @@ namespace {
 constexpr int kMaxRecent = 8;
 // Autosave every two minutes unless the settings say otherwise (Blender's default interval).
 constexpr int kDefaultAutosaveSeconds = 120;
+// Below this window width the first layout stacks the Paint panel behind Material (see
+// applyDefaultDockSizes): paint, views and material side by side need about 1500 px.
+constexpr int kStackedDocksBelowWidth = 1500;
 
 QString qs(std::string_view s) {
     return QString::fromUtf8(s.data(), int(s.size()));
@@ -49,6 +54,16 @@ bool isProjectFile(const QString& path) {
 const QString kProjectFilter = QString("Burnish projects (*.%1);;All files (*)").arg(kProjectSuffix);
 
 } // namespace
+
+QRect fitInside(const QRect& window, const QRect& available) {
+    if (available.isEmpty()) return window;
+    QRect r = window;
+    r.setWidth(std::min(r.width(), available.width()));
+    r.setHeight(std::min(r.height(), available.height()));
+    r.moveLeft(std::clamp(r.left(), available.left(), available.right() - r.width() + 1));
+    r.moveTop(std::clamp(r.top(), available.top(), available.bottom() - r.height() + 1));
+    return r;
+}
 
 MainWindow::MainWindow(QWidget* parent)
     : QMainWindow(parent)
@@ -89,7 +104,6 @@ MainWindow::MainWindow(QWidget* parent)
     m_materialDock = new QDockWidget("Material", this);
     m_materialDock->setObjectName("materialDock");
     m_materialDock->setWidget(scroll);
-    m_materialDock->setMinimumWidth(400);
     addDockWidget(Qt::RightDockWidgetArea, m_materialDock);
 
     auto* history = new QUndoView(m_doc->undoStack(), this);
@@ -433,6 +447,8 @@ void MainWindow::restoreSettings() {
     QSettings settings;
     if (settings.contains("window/geometry")) {
         restoreGeometry(settings.value("window/geometry").toByteArray());
+        // Clamped to the screen when first shown (fitToScreen), when the frame's size is known.
+        m_fitPending = true;
     } else if (const QScreen* screen = QGuiApplication::primaryScreen()) {
         // First run: most of the screen, up to 1600×1000 (the charts' labels need about 1000
         // rows beside the views), centred.
@@ -446,8 +462,25 @@ void MainWindow::restoreSettings() {
     setAutosaveInterval(settings.value("autosaveSeconds", kDefaultAutosaveSeconds).toInt());
 }
 
+void MainWindow::fitToScreen() {
+    // A geometry saved on a larger screen (or by an older, wider layout) is clamped to the screen
+    // the window opens on: every edge on screen, nothing out of reach.
+    const QScreen* screen = QGuiApplication::screenAt(geometry().center());
+    if (!screen) screen = this->screen();
+    if (!screen || isMaximized() || isFullScreen()) return;
+    const QRect frame = frameGeometry(), inner = geometry();
+    const QMargins margins(inner.left() - frame.left(), inner.top() - frame.top(),
+                           frame.right() - inner.right(), frame.bottom() - inner.bottom());
+    const QRect fitted = fitInside(frame, screen->availableGeometry());
+    if (fitted != frame) setGeometry(fitted.marginsRemoved(margins));
+}
+
 void MainWindow::showEvent(QShowEvent* event) {
     QMainWindow::showEvent(event);
+    if (m_fitPending) {
+        m_fitPending = false;
+        fitToScreen();
+    }
     if (!m_defaultLayoutPending) return;
     m_defaultLayoutPending = false;
     // After the first layout pass, when the docks have their real extents to share.
@@ -455,6 +488,12 @@ void MainWindow::showEvent(QShowEvent* event) {
 }
 
 void MainWindow::applyDefaultDockSizes() {
+    // A window narrower than the three columns need (a 1280 or 1366 px screen) stacks the Paint
+    // panel as a tab behind Material, so the views keep their width; a wide one keeps it at the left.
+    if (width() < kStackedDocksBelowWidth && !tabifiedDockWidgets(m_materialDock).contains(m_paintDock)) {
+        tabifyDockWidget(m_materialDock, m_paintDock);
+        m_materialDock->raise();
+    }
     const int h = height();
     // Material 70% of the right column, its history and environment tabs the rest; the charts
     // half the height under the views (the gloss spheres and their power labels fit at 880).

@@ -25,6 +25,9 @@ class MaterialPanel;
 class PaintTool;
 class TexturePane;
 
+/// `window` moved and shrunk as little as it takes to lie inside `available` (a screen's free area).
+QRect fitInside(const QRect& window, const QRect& available);
+
 class MainWindow : public QMainWindow {
     Q_OBJECT
 public:
@@ -87,6 +90,7 @@ private:
     /// The first-run proportions of the docks, for the window's actual size: the Material panel
     /// gets most of the right column, the charts under the views enough height for their labels.
     void applyDefaultDockSizes();
+    void fitToScreen();
 
     MaterialDocument* m_doc;
     QSplitter* m_central;
@@ -96,6 +100,7 @@ private:
     QDockWidget* m_historyDock;
     QDockWidget* m_chartsDock;
     bool m_defaultLayoutPending = false; // no saved layout: size the docks once shown
+    bool m_fitPending = false;           // a restored geometry: clamp it to the screen once shown
     PaintTool* m_paintTool;
     QDockWidget* m_paintDock;
     BakeDialog* m_bakeDialog = nullptr;

@@ -130,16 +130,24 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
     : QWidget(parent)
     , m_doc(doc) {
     m_preset = new QComboBox(this);
+    m_preset->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+    m_preset->setMinimumContentsLength(8);
     for (const auto& p : builtinPresets())
         m_preset->addItem(QString::fromStdString(p.name), QString::fromStdString(p.name));
     m_preset->setToolTip("Engine preset: gloss encoding, packing and default method");
     m_method = new QComboBox(this);
+    m_method->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+    m_method->setMinimumContentsLength(10);
     m_method->setToolTip("Prefiltering method (those the preset can store)");
     m_class = new QComboBox(this);
+    m_class->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+    m_class->setMinimumContentsLength(8);
     m_class->addItem("Metal", int(MaterialClass::Metal));
     m_class->addItem("Dielectric", int(MaterialClass::Dielectric));
 
     m_specular = new QComboBox(this);
+    m_specular->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+    m_specular->setMinimumContentsLength(10);
     for (const auto& m : builtinMaterialTable().materials)
         m_specular->addItem(QString("%1 (%2)").arg(QString::fromStdString(m.name), toString(m.materialClass)),
                             QString::fromStdString(m.name));

@@ -1,5 +1,7 @@
 #include "texture_pane.h"
 
+#include "elided_label.h"
+
 #include <QComboBox>
 #include <QCoreApplication>
 #include <QHBoxLayout>
@@ -67,20 +69,23 @@ TexturePane::TexturePane(MaterialDocument* doc, QWidget* parent)
     m_mipSpin->setRange(0, 0);
     m_mipSpin->setToolTip("Mip level of the baked texture");
     m_mipSpin->setKeyboardTracking(false);
-    m_info = new QLabel(this);
-    m_info->setTextInteractionFlags(Qt::TextSelectableByMouse);
+    // The header elides instead of widening the window; the whole text is in its tooltip.
+    m_info = new ElidedLabel(this);
+    m_modeCombo->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+    m_modeCombo->setMinimumContentsLength(10);
 
     auto* bar = new QHBoxLayout;
     bar->setContentsMargins(8, 6, 8, 6);
     bar->setSpacing(8);
     bar->addWidget(m_modeCombo);
     bar->addWidget(m_mipSpin);
-    bar->addSpacing(8);
-    bar->addWidget(m_info, 1);
+    bar->addStretch(1);
+    m_info->setContentsMargins(8, 0, 8, 4);
     auto* layout = new QVBoxLayout(this);
     layout->setContentsMargins(0, 0, 0, 0);
     layout->setSpacing(0);
     layout->addLayout(bar);
+    layout->addWidget(m_info); // its own line: readable beside a narrow view
     layout->addWidget(m_view, 1);
 
     connect(m_modeCombo, &QComboBox::currentIndexChanged, this,

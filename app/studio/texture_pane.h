@@ -20,6 +20,8 @@ class QSpinBox;
 
 namespace burnish::studio {
 
+class ElidedLabel;
+
 enum class TextureMode { Normal, Gloss, BakedGloss };
 
 /// The normal map as colours (n·0.5 + 0.5 in RGB).
@@ -56,7 +58,7 @@ private:
     TextureView* m_view;
     QComboBox* m_modeCombo;
     QSpinBox* m_mipSpin;
-    QLabel* m_info;
+    ElidedLabel* m_info;
     TextureMode m_mode = TextureMode::Normal;
     int m_mip = 0;
     std::shared_ptr<const BakeOutput> m_baked;

@@ -2,6 +2,8 @@
 
 #include "viewport.h"
 
+#include "flow_layout.h"
+
 #include <QCheckBox>
 #include <QComboBox>
 #include <QFileDialog>
@@ -13,6 +15,7 @@
 #include <QVBoxLayout>
 
 #include <cmath>
+#include <initializer_list>
 
 namespace burnish::studio {
 
@@ -37,7 +40,7 @@ QSlider* slider(int min, int max, int value, const QString& tip, QWidget* parent
     s->setRange(min, max);
     s->setValue(value);
     s->setToolTip(tip);
-    s->setMinimumWidth(70);
+    s->setMinimumWidth(80);
     return s;
 }
 
@@ -45,6 +48,26 @@ QLabel* caption(const QString& text, QWidget* parent) {
     auto* l = new QLabel(text, parent);
     l->setContentsMargins(6, 0, 2, 0);
     return l;
+}
+
+// A slider's value beside it, wide enough for its longest text so the row does not jump.
+QLabel* readout(QWidget* parent) {
+    auto* l = new QLabel(parent);
+    l->setMinimumWidth(l->fontMetrics().horizontalAdvance("+0.0 EV "));
+    return l;
+}
+
+// Widgets that wrap as one: a caption with its control and readout.
+QWidget* group(std::initializer_list<QWidget*> widgets, QWidget* parent) {
+    auto* box = new QWidget(parent);
+    auto* row = new QHBoxLayout(box);
+    row->setContentsMargins(0, 0, 0, 0);
+    row->setSpacing(2);
+    for (QWidget* w : widgets) {
+        w->setParent(box);
+        row->addWidget(w);
+    }
+    return box;
 }
 
 } // namespace
@@ -60,6 +83,8 @@ ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
     for (render::MeshKind k : kMeshes)
         m_mesh->addItem(k == render::MeshKind::Obj ? QString("OBJ…") : qs(render::meshKindName(k)));
     m_debug = new QComboBox(this);
+    m_debug->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+    m_debug->setMinimumContentsLength(8);
     for (render::DebugView d : kDebugViews)
         m_debug->addItem(qs(render::debugViewName(d)));
     m_debug->setToolTip("Debug view");
@@ -75,8 +100,12 @@ ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
     m_split = new QCheckBox("A/B", this);
     m_split->setToolTip("Split the view: the document's method (A) left, B right");
     m_methodA = new QComboBox(this);
+    m_methodA->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+    m_methodA->setMinimumContentsLength(10);
     m_methodA->setToolTip("A: the document's method");
     m_methodB = new QComboBox(this);
+    m_methodB->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+    m_methodB->setMinimumContentsLength(10);
     m_methodB->setToolTip("B: another method, or the supersampled reference");
     for (Method m : allMethods())
         m_methodB->addItem(qs(methodName(m)), int(m));
@@ -87,33 +116,29 @@ ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
     m_shimmer->setToolTip("Mean |ΔY'| per object pixel between consecutive auto-orbit frames (display "
                           "luma, 0–1), A and B, and A/B. Without the split B is the reference.");
     m_frame = new QLabel(this);
+    m_frame->setContentsMargins(8, 0, 0, 0);
 
-    auto* row1 = new QHBoxLayout;
-    row1->setContentsMargins(4, 2, 4, 0);
-    row1->addWidget(m_mesh);
-    row1->addWidget(caption("distance", this));
-    row1->addWidget(m_distance, 2);
-    row1->addWidget(caption("exposure", this));
-    row1->addWidget(m_exposure, 1);
-    row1->addWidget(caption("light", this));
-    row1->addWidget(m_azimuth, 1);
-    row1->addWidget(m_elevation, 1);
-    row1->addWidget(m_debug);
-    auto* row2 = new QHBoxLayout;
-    row2->setContentsMargins(4, 0, 4, 2);
-    row2->addWidget(m_split);
-    row2->addWidget(caption("A", this));
-    row2->addWidget(m_methodA);
-    row2->addWidget(caption("B", this));
-    row2->addWidget(m_methodB);
-    row2->addWidget(m_orbit);
-    row2->addWidget(m_shimmer, 1);
-    row2->addWidget(m_frame);
+    // The controls flow onto as many rows as the width needs: at 1280 px the viewport is a few
+    // hundred pixels wide, on a 4K screen one row holds everything. Each caption travels with its
+    // control, and a slider shows its value beside it.
+    m_distanceValue = readout(this);
+    m_exposureValue = readout(this);
+    m_lightValue = readout(this);
+    auto* controls = new FlowLayout(nullptr, 6, 2);
+    controls->setContentsMargins(4, 2, 4, 2);
+    controls->addWidget(m_mesh);
+    controls->addWidget(group({caption("distance", this), m_distance, m_distanceValue}, this));
+    controls->addWidget(group({caption("exposure", this), m_exposure, m_exposureValue}, this));
+    controls->addWidget(group({caption("light", this), m_azimuth, m_elevation, m_lightValue}, this));
+    controls->addWidget(m_debug);
+    controls->addWidget(group({m_split, caption("A", this), m_methodA}, this));
+    controls->addWidget(group({caption("B", this), m_methodB}, this));
+    controls->addWidget(m_orbit);
+    controls->addWidget(group({m_shimmer, m_frame}, this));
     auto* layout = new QVBoxLayout(this);
     layout->setContentsMargins(0, 0, 0, 0);
     layout->setSpacing(2);
-    layout->addLayout(row1);
-    layout->addLayout(row2);
+    layout->addLayout(controls);
     layout->addWidget(m_viewport, 1);
 
     connect(m_mesh, &QComboBox::activated, this, &ViewportPanel::chooseMesh);
@@ -163,6 +188,14 @@ void ViewportPanel::syncFromView() {
     m_exposure->setValue(int(std::lround(v.exposure * kExposureStepsPerStop)));
     m_azimuth->setValue(int(std::lround(v.lightAzimuthDegrees)));
     m_elevation->setValue(int(std::lround(v.lightElevationDegrees)));
+    m_distanceValue->setText(QString("%1 r").arg(double(v.distance), 0, 'f', v.distance < 10.0f ? 1 : 0));
+    m_distanceValue->setToolTip("Camera distance in radii of the sphere");
+    m_exposureValue->setText(
+        QString("%1%2 EV").arg(v.exposure >= 0.0f ? "+" : "").arg(double(v.exposure), 0, 'f', 1));
+    m_lightValue->setText(QString("%1° %2°")
+                              .arg(int(std::lround(v.lightAzimuthDegrees)))
+                              .arg(int(std::lround(v.lightElevationDegrees))));
+    m_lightValue->setToolTip("Light azimuth and elevation");
     m_split->setChecked(v.split);
     m_methodB->setCurrentIndex(m_methodB->findData(v.right.reference ? -1 : int(v.right.method)));
     m_orbit->setChecked(m_viewport->autoOrbit());

@@ -36,6 +36,9 @@ public:
     QSlider* distanceSlider() const { return m_distance; }
     QLabel* shimmerLabel() const { return m_shimmer; }
     QLabel* frameLabel() const { return m_frame; }
+    QLabel* distanceReadout() const { return m_distanceValue; }
+    QLabel* exposureReadout() const { return m_exposureValue; }
+    QLabel* lightReadout() const { return m_lightValue; }
 
 private:
     void syncFromView();
@@ -56,6 +59,9 @@ private:
     QSlider* m_exposure;
     QSlider* m_azimuth;
     QSlider* m_elevation;
+    QLabel* m_distanceValue;
+    QLabel* m_exposureValue;
+    QLabel* m_lightValue;
     QLabel* m_shimmer;
     QLabel* m_frame;
     bool m_syncing = false;

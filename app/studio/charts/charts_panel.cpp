@@ -25,16 +25,20 @@ ChartsPanel::ChartsPanel(MaterialDocument* doc, QWidget* parent)
     layout->addWidget(m_specular);
     layout->addWidget(m_gloss);
     layout->addStretch(1);
-    auto* scroll = new QScrollArea(m_tabs);
-    scroll->setWidget(page);
-    scroll->setWidgetResizable(true);
-    scroll->setFrameShape(QFrame::NoFrame);
-    m_tabs->addTab(scroll, "Specular && gloss");
-
-    m_brdf = new BrdfPlots(doc, m_tabs);
-    m_tabs->addTab(m_brdf, "BRDF plots");
-    m_errorCost = new ErrorCostChart(doc, m_tabs);
-    m_tabs->addTab(m_errorCost, "Error vs cost");
+    // Every page scrolls when the dock is shorter or narrower than the charts, so the dock never
+    // sets the window's minimum size (the window must fit 1280×720).
+    auto scrolled = [this](QWidget* content) {
+        auto* scroll = new QScrollArea(m_tabs);
+        scroll->setWidget(content);
+        scroll->setWidgetResizable(true);
+        scroll->setFrameShape(QFrame::NoFrame);
+        return scroll;
+    };
+    m_tabs->addTab(scrolled(page), "Specular && gloss");
+    m_brdf = new BrdfPlots(doc);
+    m_tabs->addTab(scrolled(m_brdf), "BRDF plots");
+    m_errorCost = new ErrorCostChart(doc);
+    m_tabs->addTab(scrolled(m_errorCost), "Error vs cost");
     setWidget(m_tabs);
 }
 

@@ -143,6 +143,8 @@ MainWindow::MainWindow(QWidget* parent)
 
     buildMenus();
     connect(m_doc, &MaterialDocument::changed, this, &MainWindow::updateStatus);
+    connect(m_doc, &MaterialDocument::notice, this,
+            [this](const QString& text) { statusBar()->showMessage(text, 10000); });
     connect(m_doc->undoStack(), &QUndoStack::cleanChanged, this, &MainWindow::updateTitle);
     connect(m_panel, &MaterialPanel::errorOccurred, this,
             [this](const QString& title, const QString& text) { showMessage(title, text); });
@@ -345,7 +347,7 @@ bool MainWindow::saveProjectAs(const QString& path) {
     }
     const QString oldAutosave = autosavePathFor(m_projectPath);
     m_projectPath = absolute;
-    QFile::remove(oldAutosave);
+    (void)removeProject(oldAutosave);
     removeAutosave();
     m_doc->undoStack()->setClean();
     addRecent(absolute);
@@ -380,7 +382,7 @@ void MainWindow::setAutosaveInterval(int seconds) {
 }
 
 void MainWindow::removeAutosave() {
-    QFile::remove(autosavePathFor(m_projectPath));
+    (void)removeProject(autosavePathFor(m_projectPath));
     m_autosavedIndex = -1;
 }
 
@@ -394,7 +396,7 @@ void MainWindow::offerRecovery() {
                                 .arg(what, QFileInfo(*copy).lastModified().toString(Qt::TextDate)),
                             QMessageBox::Yes | QMessageBox::No);
     if (answer != QMessageBox::Yes) {
-        QFile::remove(*copy);
+        (void)removeProject(*copy);
         return;
     }
     const auto project = loadProject(*copy);

@@ -25,22 +25,28 @@ enum MergeField {
 class EditCommand : public QUndoCommand {
 public:
     EditCommand(MaterialDocument* doc, MaterialSettings before, LoadedMaps beforeMaps, MaterialSettings after,
-                LoadedMaps afterMaps, const QString& text, int mergeField, int epoch)
+                LoadedMaps afterMaps, const QString& text, int mergeField, int epoch,
+                std::shared_ptr<const PaintLayers> beforeLayers = nullptr,
+                std::shared_ptr<const PaintLayers> afterLayers = nullptr)
         : QUndoCommand(text)
         , m_doc(doc)
         , m_before(std::move(before))
         , m_beforeMaps(std::move(beforeMaps))
         , m_after(std::move(after))
         , m_afterMaps(std::move(afterMaps))
+        , m_beforeLayers(std::move(beforeLayers))
+        , m_afterLayers(std::move(afterLayers))
         , m_mergeField(mergeField)
         , m_epoch(epoch) {}
 
-    void redo() override { m_doc->apply(m_after, m_afterMaps); }
-    void undo() override { m_doc->apply(m_before, m_beforeMaps); }
+    // An edit that carried the painted layers over (resampled, re-encoded) puts back exactly the
+    // layers it replaced on undo, and the carried ones on redo.
+    void redo() override { m_doc->apply(m_after, m_afterMaps, m_afterLayers.get()); }
+    void undo() override { m_doc->apply(m_before, m_beforeMaps, m_beforeLayers.get()); }
     int id() const override { return m_mergeField; }
     bool mergeWith(const QUndoCommand* other) override {
         const auto* o = static_cast<const EditCommand*>(other);
-        if (o->m_epoch != m_epoch) return false;
+        if (o->m_epoch != m_epoch || m_afterLayers || o->m_afterLayers) return false;
         m_after = o->m_after;
         m_afterMaps = o->m_afterMaps;
         setText(o->text()); // a drag is one step named by the value where it ended
@@ -53,6 +59,8 @@ private:
     LoadedMaps m_beforeMaps;
     MaterialSettings m_after;
     LoadedMaps m_afterMaps;
+    std::shared_ptr<const PaintLayers> m_beforeLayers; // null: the edit leaves the layers alone
+    std::shared_ptr<const PaintLayers> m_afterLayers;
     int m_mergeField;
     int m_epoch;
 };
@@ -196,11 +204,50 @@ QStringList MaterialDocument::diagnostics(MapSlot slot) const {
 }
 
 void MaterialDocument::push(const MaterialSettings& after, const LoadedMaps& maps, const QString& text,
-                            int mergeField) {
+                            int mergeField, std::shared_ptr<const PaintLayers> layersAfter) {
     if (after == m_settings && maps.normal == m_maps.normal && maps.gloss == m_maps.gloss &&
         maps.detail == m_maps.detail)
         return;
-    m_undo.push(new EditCommand(this, m_settings, m_maps, after, maps, text, mergeField, m_mergeEpoch));
+    std::shared_ptr<const PaintLayers> layersBefore;
+    if (layersAfter)
+        layersBefore = std::make_shared<const PaintLayers>(PaintLayers{m_glossLayer, m_offsetLayer});
+    m_undo.push(new EditCommand(this, m_settings, m_maps, after, maps, text, mergeField, m_mergeEpoch,
+                                std::move(layersBefore), std::move(layersAfter)));
+}
+
+std::shared_ptr<const PaintLayers>
+MaterialDocument::carriedLayers(int width, int height, const GlossEncoding& encoding, QString* what) const {
+    const bool glossPainted = m_glossLayer.painted(), offsetPainted = m_offsetLayer.painted();
+    if (!glossPainted && !offsetPainted) return nullptr;
+    const bool resize = width != m_glossLayer.width || height != m_glossLayer.height;
+    const GlossEncoding& current = preset().encoding;
+    const bool reencode = glossPainted && encoding.name() != current.name();
+    if (!resize && !reencode) return nullptr;
+    auto layers = std::make_shared<PaintLayers>(PaintLayers{m_glossLayer, m_offsetLayer});
+    QStringList done;
+    if (resize) {
+        // Both are checked layers of a real map's size, and the new size is a loaded map's: the
+        // resampling cannot fail; if it ever did, keeping the old layers would lose nothing.
+        auto gloss = resamplePaintLayer(m_glossLayer, width, height);
+        auto offset = resamplePaintLayer(m_offsetLayer, width, height);
+        if (!gloss || !offset) return nullptr;
+        layers->gloss = std::move(gloss).value();
+        layers->offset = std::move(offset).value();
+        done << QString("resampled from %1×%2 to %3×%4")
+                    .arg(m_glossLayer.width)
+                    .arg(m_glossLayer.height)
+                    .arg(width)
+                    .arg(height);
+    }
+    if (reencode) {
+        // The painted gloss means a power under the preset's encoding: keep the power, as the base
+        // gloss keeps it (setPreset).
+        for (float& v : layers->gloss.value)
+            v = float(saturate(encoding.value(current.power(v))));
+        done << "re-encoded for the new gloss encoding";
+    }
+    if (what) *what = "Painted layers " + done.join(" and ") + " (undo restores them as they were)";
+    return layers;
 }
 
 void MaterialDocument::setMaterialClass(MaterialClass c) {
@@ -256,7 +303,10 @@ Status MaterialDocument::setPreset(const QString& name) {
     s.gloss = (*p)->encoding.value(power());
     s.preset = name;
     if (!checkPresetMethod(**p, s.method)) s.method = (*p)->method;
-    push(s, m_maps, "Preset: " + name, kNoMerge);
+    QString what;
+    auto layers = carriedLayers(m_glossLayer.width, m_glossLayer.height, (*p)->encoding, &what);
+    push(s, m_maps, "Preset: " + name, kNoMerge, layers);
+    if (layers) emit notice(what);
     return {};
 }
 
@@ -280,7 +330,10 @@ Status MaterialDocument::loadMap(MapSlot slot, const QString& path) {
     if (slot == MapSlot::Normal) next.normal = maps->normal;
     if (slot == MapSlot::Gloss) next.gloss = maps->gloss;
     if (slot == MapSlot::Detail) next.detail = maps->detail;
-    push(s, next, QString("Load %1 map").arg(mapSlotName(slot)), kNoMerge);
+    QString what;
+    auto layers = carriedLayers(next.normal->width, next.normal->height, preset().encoding, &what);
+    push(s, next, QString("Load %1 map").arg(mapSlotName(slot)), kNoMerge, layers);
+    if (layers) emit notice(what);
     return {};
 }
 
@@ -307,7 +360,10 @@ void MaterialDocument::clearMap(MapSlot slot) {
         s.glossMapPath.clear();
         next.gloss.reset();
     }
-    push(s, next, QString("Clear %1 map").arg(mapSlotName(slot)), kNoMerge);
+    QString what;
+    auto layers = carriedLayers(next.normal->width, next.normal->height, preset().encoding, &what);
+    push(s, next, QString("Clear %1 map").arg(mapSlotName(slot)), kNoMerge, layers);
+    if (layers) emit notice(what);
 }
 
 void MaterialDocument::setExportSettings(const ExportSettings& exportSettings) {
@@ -404,15 +460,20 @@ Status MaterialDocument::reset(const MaterialSettings& settings, const std::vect
     return {};
 }
 
-void MaterialDocument::apply(const MaterialSettings& settings, const LoadedMaps& maps) {
+void MaterialDocument::apply(const MaterialSettings& settings, const LoadedMaps& maps,
+                             const PaintLayers* layers) {
     const LoadedMaps old = m_maps;
     const bool glossInputs = old.normal != maps.normal || old.gloss != maps.gloss ||
-                             m_settings.gloss != settings.gloss || m_settings.preset != settings.preset;
+                             m_settings.gloss != settings.gloss || m_settings.preset != settings.preset ||
+                             layers != nullptr;
     m_settings = settings;
     m_maps = maps;
     const int w = maps.normal->width, h = maps.normal->height;
-    if (m_glossLayer.width != w || m_glossLayer.height != h) {
-        // Layers are per normal-map texel: a map of another size starts unpainted.
+    if (layers && layers->gloss.width == w && layers->gloss.height == h) {
+        m_glossLayer = layers->gloss;
+        m_offsetLayer = layers->offset;
+    } else if (m_glossLayer.width != w || m_glossLayer.height != h) {
+        // Unpainted layers of another size (painted ones come with the edit, carriedLayers).
         m_glossLayer = PaintLayer::create(PaintLayerKind::Gloss, w, h).value();
         m_offsetLayer = PaintLayer::create(PaintLayerKind::VarianceOffset, w, h).value();
     }
@@ -420,6 +481,7 @@ void MaterialDocument::apply(const MaterialSettings& settings, const LoadedMaps&
     if (old.normal != maps.normal) emit mapChanged(MapSlot::Normal);
     if (old.gloss != maps.gloss) emit mapChanged(MapSlot::Gloss);
     if (old.detail != maps.detail) emit mapChanged(MapSlot::Detail);
+    if (layers) emit layersChanged(TexelRect::full(w, h));
     emit changed();
 }
 

@@ -81,6 +81,13 @@ struct LoadedMaps {
     std::shared_ptr<const NormalMap> detail; // null when no detail map
 };
 
+/// Both painted layers as one value: what an edit that changes them wholesale (a normal map of
+/// another size, a preset of another gloss encoding) keeps for its undo.
+struct PaintLayers {
+    PaintLayer gloss;
+    PaintLayer offset;
+};
+
 /// A painted layer saved as a file (a project's "layers" entry; path absolute).
 struct LayerFile {
     PaintLayerKind kind = PaintLayerKind::Gloss;
@@ -149,8 +156,9 @@ public:
     /// Checks the names of `settings` (preset, method for the preset, material, values in range).
     static Status validate(const MaterialSettings& settings);
 
-    /// Applies a state without an undo step (used by the undo commands).
-    void apply(const MaterialSettings& settings, const LoadedMaps& maps);
+    /// Applies a state without an undo step (used by the undo commands); `layers`, when given,
+    /// replace both painted layers (they match the normal map's size).
+    void apply(const MaterialSettings& settings, const LoadedMaps& maps, const PaintLayers* layers = nullptr);
 
     // Painting (paint_tool.h): two layers of the normal map's size, composited into the authored
     // gloss the bake and the renderer read. Strokes are undo steps of the paint tool.
@@ -171,11 +179,20 @@ signals:
     void changed();
     /// A slot's map changed (loaded, cleared, undone or reset).
     void mapChanged(MapSlot slot);
+    /// Something the artist should know happened to their work (painted layers resampled to a new
+    /// map's size, re-encoded for a new preset): one line for the status bar.
+    void notice(const QString& text);
     /// Painted texels changed inside `rect` (finest texels of the normal map).
     void layersChanged(burnish::TexelRect rect);
 
 private:
-    void push(const MaterialSettings& after, const LoadedMaps& maps, const QString& text, int mergeField);
+    void push(const MaterialSettings& after, const LoadedMaps& maps, const QString& text, int mergeField,
+              std::shared_ptr<const PaintLayers> layersAfter = nullptr);
+    /// The painted layers carried over to a normal map of `width` × `height` (resampled) and to
+    /// `encoding` (painted gloss re-encoded to keep its power); null when nothing is painted or
+    /// nothing changes for them. `what` says what happened, for notice().
+    std::shared_ptr<const PaintLayers> carriedLayers(int width, int height, const GlossEncoding& encoding,
+                                                     QString* what) const;
     /// Recomputes the authored gloss inside `rect` (all of it when the inputs changed).
     void recomposite(const TexelRect& rect, bool full);
 

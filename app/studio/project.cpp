@@ -2,14 +2,17 @@
 
 #include <burnish/core/env/sampling.h>
 #include <burnish/core/util/files.h>
+#include <burnish/core/util/hash.h>
 
 #include <nlohmann/json.hpp>
 
 #include <QCryptographicHash>
 #include <QDir>
 #include <QFileInfo>
+#include <QRegularExpression>
 #include <QStandardPaths>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -128,10 +131,53 @@ private:
 
 } // namespace
 
-QString layerPathFor(const QString& projectFile, PaintLayerKind kind) {
+QString layerFolderFor(const QString& projectFile) {
     const QFileInfo info(projectFile);
-    return info.absolutePath() + "/" + info.completeBaseName() + ".layers/" + qsv(paintLayerName(kind)) +
-           ".exr";
+    return info.absolutePath() + "/" + info.completeBaseName() + ".layers";
+}
+
+QString layerPathFor(const QString& projectFile, const PaintLayer& layer) {
+    // Named by content: a save never replaces a file the project on disk still names, so a save
+    // killed half-way leaves the old project whole.
+    std::uint64_t hash = fnv1a64(layer.value.data(), layer.value.size() * sizeof(float));
+    hash = fnv1a64(layer.coverage.data(), layer.coverage.size() * sizeof(float), hash);
+    hash = fnv1a64(&layer.width, sizeof layer.width, hash);
+    hash = fnv1a64(&layer.height, sizeof layer.height, hash);
+    return layerFolderFor(projectFile) + "/" + qsv(paintLayerName(layer.kind)) + "-" +
+           QString::fromStdString(hashHex(hash)) + ".exr";
+}
+
+namespace {
+
+// Layer files Burnish wrote into a project's layer folder: "<layer>.exr" (before content names)
+// and "<layer>-<16 hex digits>.exr". Nothing else there is ever removed.
+bool isLayerFileName(const QString& name) {
+    static const QRegularExpression pattern("^(gloss|variance-offset)(-[0-9a-f]{16})?\\.exr$");
+    return pattern.match(name).hasMatch();
+}
+
+} // namespace
+
+void removeStaleLayerFiles(const QString& projectFile, const std::vector<LayerFile>& keep) {
+    const QString folder = layerFolderFor(projectFile);
+    QDir dir(folder);
+    if (!dir.exists()) return;
+    for (const QString& name : dir.entryList(QDir::Files | QDir::Hidden)) {
+        if (!isLayerFileName(name)) continue;
+        const QString path = dir.absoluteFilePath(name);
+        const bool named = std::any_of(keep.begin(), keep.end(), [&](const LayerFile& l) {
+            return QFileInfo(l.path).absoluteFilePath() == path;
+        });
+        if (!named) QFile::remove(path);
+    }
+    QDir().rmdir(folder); // only when empty: someone else's files keep it
+}
+
+Status removeProject(const QString& projectFile) {
+    removeStaleLayerFiles(projectFile, {});
+    if (QFileInfo::exists(projectFile) && !QFile::remove(projectFile))
+        return Error{"cannot remove '" + projectFile.toStdString() + "'"};
+    return {};
 }
 
 std::string projectToJson(const MaterialSettings& s, const QString& projectFile, const QString& autosaveOf,
@@ -345,15 +391,22 @@ Status saveProject(const MaterialSettings& settings, const QString& projectFile,
     std::vector<LayerFile> files;
     for (const PaintLayer* layer : layers) {
         if (!layer || !layer->painted()) continue;
-        const QString path = layerPathFor(projectFile, layer->kind);
+        const QString path = layerPathFor(projectFile, *layer);
         if (!QDir().mkpath(QFileInfo(path).absolutePath()))
             return Error{"cannot create folder '" + QFileInfo(path).absolutePath().toStdString() + "'"};
-        // The layers first: the project never names a file that is not there.
-        if (Status st = writePaintLayerExr(*layer, path.toStdString()); !st) return st;
+        // The layers first: the project never names a file that is not there. A file of the same
+        // content name was written whole (atomically) by an earlier save: it is kept as it is.
+        if (!QFileInfo::exists(path))
+            if (Status st = writePaintLayerExr(*layer, path.toStdString()); !st) return st;
         files.push_back({layer->kind, path});
     }
-    return writeFileAtomic(projectFile.toStdString(),
-                           projectToJson(settings, projectFile, autosaveOf, files));
+    if (Status st = writeFileAtomic(projectFile.toStdString(),
+                                    projectToJson(settings, projectFile, autosaveOf, files));
+        !st)
+        return st;
+    // Only now that the new project names its layers: the files no save names any more go.
+    removeStaleLayerFiles(projectFile, files);
+    return {};
 }
 
 Result<ParsedProject> loadProject(const QString& projectFile) {

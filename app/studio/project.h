@@ -45,8 +45,15 @@ inline constexpr const char* kProjectSuffix = "burnish";
 std::string projectToJson(const MaterialSettings& settings, const QString& projectFile,
                           const QString& autosaveOf = {}, const std::vector<LayerFile>& layers = {});
 
-/// Where a layer of a project is saved: <folder>/<project name>.layers/<layer name>.exr.
-QString layerPathFor(const QString& projectFile, PaintLayerKind kind);
+/// The folder of a project's painted layers: <folder>/<project name>.layers.
+QString layerFolderFor(const QString& projectFile);
+/// Where a layer of a project is saved: <layer folder>/<layer name>-<content hash>.exr.
+QString layerPathFor(const QString& projectFile, const PaintLayer& layer);
+/// Removes the layer files Burnish wrote for `projectFile` that `keep` does not name (and the
+/// layer folder when that leaves it empty). Other files are never touched.
+void removeStaleLayerFiles(const QString& projectFile, const std::vector<LayerFile>& keep);
+/// Removes a project file and its layer files (an autosave copy no longer needed).
+Status removeProject(const QString& projectFile);
 
 struct ParsedProject {
     MaterialSettings settings;     // paths absolute
@@ -61,7 +68,8 @@ Result<ParsedProject> parseProject(std::string_view json, const QString& project
 
 /// Writes the project atomically (core's writeFileAtomic).
 /// Painted `layers` (those with any coverage) are written first, each atomically, as EXR files at
-/// layerPathFor(); the JSON names them.
+/// layerPathFor() (named by content); the JSON names them; then the layer files no longer named
+/// are removed. A save interrupted anywhere leaves the previous project and its layers whole.
 Status saveProject(const MaterialSettings& settings, const QString& projectFile,
                    const QString& autosaveOf = {}, const std::vector<const PaintLayer*>& layers = {});
 /// Reads and parses a project file.

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <random>
 #include <tuple>
+#include <utility>
 
 #include <unistd.h>
 
@@ -390,3 +391,69 @@ TEST(Paint, LayersRoundTripThroughExr) {
     EXPECT_EQ(files, 1);
     std::filesystem::remove_all(dir);
 }
+
+namespace burnish {
+namespace {
+
+PaintLayer patterned(int width, int height) {
+    PaintLayer layer = PaintLayer::create(PaintLayerKind::Gloss, width, height).value();
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const size_t i = layer.index(x, y);
+            layer.value[i] = float((x * 7 + y * 13) % 17) / 16.0f;
+            layer.coverage[i] = (x + y) % 3 == 0 ? 0.0f : float((x * 5 + y) % 11) / 10.0f;
+        }
+    return layer;
+}
+
+// A layer follows a normal map of another size over the same UV square: twice the size copies each
+// texel into its 2×2 block and half of that gives the layer back bit for bit; shrinking averages
+// coverage and coverage-weighted value, so unpainted texels do not dilute the paint beside them.
+TEST(Paint, ResampledLayersKeepPaintWhereItWasAndRoundTripExactly) {
+    const PaintLayer layer = patterned(6, 5);
+    const PaintLayer twice = resamplePaintLayer(layer, 12, 10).value();
+    for (int y = 0; y < 10; ++y)
+        for (int x = 0; x < 12; ++x) {
+            const size_t from = layer.index(x / 2, y / 2);
+            EXPECT_EQ(twice.coverage[twice.index(x, y)], layer.coverage[from]);
+            if (layer.coverage[from] > 0.0f) {
+                EXPECT_EQ(twice.value[twice.index(x, y)], layer.value[from]);
+            }
+        }
+    const PaintLayer back = resamplePaintLayer(twice, 6, 5).value();
+    for (size_t i = 0; i < layer.texelCount(); ++i) {
+        EXPECT_EQ(back.coverage[i], layer.coverage[i]) << i;
+        if (layer.coverage[i] > 0.0f) {
+            EXPECT_EQ(back.value[i], layer.value[i]) << i;
+        }
+    }
+
+    // Half of one painted and one unpainted texel: half the coverage at the painted value.
+    PaintLayer pair = PaintLayer::create(PaintLayerKind::Gloss, 2, 1).value();
+    pair.value = {0.8f, 0.1f};
+    pair.coverage = {1.0f, 0.0f};
+    const PaintLayer one = resamplePaintLayer(pair, 1, 1).value();
+    EXPECT_FLOAT_EQ(one.coverage[0], 0.5f);
+    EXPECT_FLOAT_EQ(one.value[0], 0.8f);
+
+    // Sizes that do not divide (5 → 3 → 7 → 1), 1×1 and back: finite values in [0, 1], the total
+    // coverage kept (area-weighted means).
+    const PaintLayer odd = patterned(5, 4);
+    double total = 0.0;
+    for (float c : odd.coverage)
+        total += c;
+    for (auto [w, h] : {std::pair{3, 3}, std::pair{7, 9}, std::pair{1, 1}, std::pair{640, 2}}) {
+        const PaintLayer r = resamplePaintLayer(odd, w, h).value();
+        double sum = 0.0;
+        for (size_t i = 0; i < r.texelCount(); ++i) {
+            ASSERT_TRUE(r.value[i] >= 0.0f && r.value[i] <= 1.0f);
+            ASSERT_TRUE(r.coverage[i] >= 0.0f && r.coverage[i] <= 1.0f);
+            sum += r.coverage[i];
+        }
+        EXPECT_NEAR(sum / double(w * h), total / 20.0, 1e-6) << w << "x" << h;
+    }
+    EXPECT_FALSE(resamplePaintLayer(odd, 0, 4)) << "an impossible size is an error";
+}
+
+} // namespace
+} // namespace burnish

@@ -181,8 +181,9 @@ TEST(StudioPaint, LayersSurviveASaveAndLoad) {
     const PaintLayer offset = doc->paintLayer(PaintLayerKind::VarianceOffset);
     const std::vector<float> authored = *doc->authoredGloss();
     ASSERT_TRUE(window.saveProjectAs(file));
-    EXPECT_TRUE(QFileInfo::exists(layerPathFor(file, PaintLayerKind::Gloss)));
-    EXPECT_TRUE(QFileInfo::exists(layerPathFor(file, PaintLayerKind::VarianceOffset)));
+    const QString glossFile = layerPathFor(file, gloss), offsetFile = layerPathFor(file, offset);
+    EXPECT_TRUE(QFileInfo::exists(glossFile));
+    EXPECT_TRUE(QFileInfo::exists(offsetFile));
 
     MainWindow other;
     other.setAutosaveInterval(0);
@@ -197,14 +198,141 @@ TEST(StudioPaint, LayersSurviveASaveAndLoad) {
     EXPECT_TRUE(sameBits(*loaded->authoredGloss(), authored));
 
     // A project naming a missing layer file loads nothing half-way.
-    QFile::remove(layerPathFor(file, PaintLayerKind::Gloss));
+    QFile::remove(glossFile);
     MainWindow third;
     third.setAutosaveInterval(0);
     QString message;
     third.showMessage = [&](const QString&, const QString& text) { message = text; };
     EXPECT_FALSE(third.openProject(file));
-    EXPECT_TRUE(message.contains("gloss.exr")) << message.toStdString();
+    EXPECT_TRUE(message.contains(QFileInfo(glossFile).fileName())) << message.toStdString();
     EXPECT_FALSE(third.document()->paintLayer(PaintLayerKind::VarianceOffset).painted());
+}
+
+// Loading a normal map of another size used to throw the painted layers away (undo brought the
+// map back but not the paint, and the next save wrote none). Now they are resampled to the new
+// size with a notice, and undo puts back exactly what was there: paint, load a map of another size,
+// undo, save, reopen, compare bit for bit.
+TEST(StudioPaint, PaintSurvivesAMapOfAnotherSizeAndUndoRestoresItExactly) {
+    test::TempDir dir;
+    MainWindow window;
+    window.setAutosaveInterval(0);
+    MaterialDocument* doc = window.document();
+    QStringList notices;
+    QObject::connect(doc, &MaterialDocument::notice, [&](const QString& text) { notices << text; });
+    PaintTool* tool = window.paintTool();
+    stroke(*tool, PaintLayerKind::Gloss, 0.9f, 30.0, {100.0, 100.0}, {300.0, 200.0});
+    stroke(*tool, PaintLayerKind::VarianceOffset, 0.3f, 20.0, {50.0, 400.0}, {200.0, 420.0});
+    const PaintLayer gloss = doc->paintLayer(PaintLayerKind::Gloss);
+    const PaintLayer offset = doc->paintLayer(PaintLayerKind::VarianceOffset);
+    ASSERT_TRUE(gloss.painted() && offset.painted());
+    ASSERT_EQ(gloss.width, kSampleSize);
+
+    for (const int size : {1, 1024, 300}) {
+        const fs::path map = dir / ("flat-" + std::to_string(size) + ".png");
+        QImage flat(size, size, QImage::Format_RGB888);
+        flat.fill(QColor(128, 128, 255));
+        ASSERT_TRUE(flat.save(QString::fromStdString(map.string())));
+        notices.clear();
+        ASSERT_TRUE(doc->loadMap(MapSlot::Normal, QString::fromStdString(map.string()))) << size;
+        const PaintLayer& carried = doc->paintLayer(PaintLayerKind::Gloss);
+        EXPECT_EQ(carried.width, size);
+        EXPECT_TRUE(carried.painted()) << "the paint goes with the map (" << size << ")";
+        EXPECT_TRUE(doc->paintLayer(PaintLayerKind::VarianceOffset).painted());
+        ASSERT_EQ(notices.size(), 1);
+        EXPECT_TRUE(notices[0].contains(QString("to %1×%1").arg(size))) << notices[0].toStdString();
+        if (size == 1024) {
+            // Twice the size: each texel copied into its 2×2 block, at the same place in UV.
+            EXPECT_EQ(carried.value[carried.index(400, 300)], gloss.value[gloss.index(200, 150)]);
+            EXPECT_EQ(carried.coverage[carried.index(401, 301)], gloss.coverage[gloss.index(200, 150)]);
+        }
+        doc->undoStack()->undo();
+        EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::Gloss).value, gloss.value)) << size;
+        EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::Gloss).coverage, gloss.coverage)) << size;
+        EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::VarianceOffset).value, offset.value)) << size;
+        EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::VarianceOffset).coverage, offset.coverage))
+            << size;
+    }
+    // Redo gives the carried layers again, and a stroke on them undoes on them.
+    doc->undoStack()->redo();
+    EXPECT_EQ(doc->paintLayer(PaintLayerKind::Gloss).width, 300);
+    EXPECT_TRUE(doc->paintLayer(PaintLayerKind::Gloss).painted());
+    doc->undoStack()->undo();
+
+    const QString file = QString::fromStdString((dir / "carried.burnish").string());
+    ASSERT_TRUE(window.saveProjectAs(file));
+    MainWindow reopened;
+    reopened.setAutosaveInterval(0);
+    reopened.showMessage = [](const QString&, const QString& text) { ADD_FAILURE() << text.toStdString(); };
+    ASSERT_TRUE(reopened.openProject(file));
+    const MaterialDocument* loaded = reopened.document();
+    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::Gloss).value, gloss.value));
+    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::Gloss).coverage, gloss.coverage));
+    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::VarianceOffset).value, offset.value));
+    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::VarianceOffset).coverage, offset.coverage));
+}
+
+// A preset of another gloss encoding keeps the painted powers, as it keeps the base gloss's power;
+// undo gives back the values as painted.
+TEST(StudioPaint, APresetChangeReencodesThePaintedGlossAndUndoRestoresIt) {
+    MainWindow window;
+    window.setAutosaveInterval(0);
+    MaterialDocument* doc = window.document();
+    ASSERT_EQ(doc->settings().preset, "blackops");
+    stroke(*window.paintTool(), PaintLayerKind::Gloss, 0.6f, 25.0, {200.0, 200.0}, {260.0, 240.0});
+    const PaintLayer painted = doc->paintLayer(PaintLayerKind::Gloss);
+    const GlossEncoding before = doc->preset().encoding;
+    ASSERT_TRUE(doc->setPreset("gltf"));
+    const GlossEncoding& after = doc->preset().encoding;
+    const PaintLayer& reencoded = doc->paintLayer(PaintLayerKind::Gloss);
+    const size_t i = painted.index(230, 220);
+    ASSERT_GT(painted.coverage[i], 0.0f);
+    EXPECT_NEAR(after.power(reencoded.value[i]), before.power(painted.value[i]),
+                1e-3 * before.power(painted.value[i]))
+        << "the same power under the new encoding";
+    EXPECT_EQ(reencoded.coverage[i], painted.coverage[i]);
+    doc->undoStack()->undo();
+    EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::Gloss).value, painted.value));
+}
+
+// Saves write layer files named by their content and remove those no longer named; removing an
+// autosave copy removes its layers, so no stray *.layers folders are left behind.
+TEST(StudioPaint, SavesAndAutosavesLeaveNoStrayLayerFiles) {
+    test::TempDir dir;
+    const QString file = QString::fromStdString((dir / "m.burnish").string());
+    MainWindow window;
+    window.setAutosaveInterval(0);
+    MaterialDocument* doc = window.document();
+    stroke(*window.paintTool(), PaintLayerKind::Gloss, 0.9f, 20.0, {100.0, 100.0}, {150.0, 100.0});
+    ASSERT_TRUE(window.saveProjectAs(file));
+    const QDir layers(layerFolderFor(file));
+    EXPECT_EQ(layers.entryList(QDir::Files).size(), 1);
+    // A stranger's file in the folder is never touched.
+    QFile note(layers.absoluteFilePath("notes.txt"));
+    ASSERT_TRUE(note.open(QIODevice::WriteOnly));
+    note.close();
+    stroke(*window.paintTool(), PaintLayerKind::Gloss, 0.2f, 20.0, {300.0, 300.0}, {350.0, 300.0});
+    ASSERT_TRUE(window.saveProjectAs(file));
+    const auto project = loadProject(file);
+    ASSERT_TRUE(project);
+    ASSERT_EQ(project->layers.size(), 1u);
+    EXPECT_EQ(layers.entryList(QDir::Files),
+              QStringList({QFileInfo(project->layers[0].path).fileName(), "notes.txt"}))
+        << "the first save's layer file is gone, the new one and the stranger's file stay";
+    // Nothing painted any more: the layer folder is emptied of Burnish's files.
+    doc->editablePaintLayer(PaintLayerKind::Gloss).clear();
+    doc->layerEdited(PaintLayerKind::Gloss, TexelRect::full(kSampleSize, kSampleSize));
+    ASSERT_TRUE(window.saveProjectAs(file));
+    EXPECT_EQ(layers.entryList(QDir::Files), QStringList({"notes.txt"}));
+
+    // An autosave with paint, then the project saved: the copy and its layer folder are removed.
+    stroke(*window.paintTool(), PaintLayerKind::Gloss, 0.7f, 20.0, {200.0, 200.0}, {250.0, 200.0});
+    ASSERT_TRUE(window.autosave());
+    const QString copy = autosavePathFor(file);
+    ASSERT_TRUE(QFileInfo::exists(copy));
+    ASSERT_TRUE(QDir(layerFolderFor(copy)).exists());
+    ASSERT_TRUE(window.saveProjectAs(file));
+    EXPECT_FALSE(QFileInfo::exists(copy));
+    EXPECT_FALSE(QDir(layerFolderFor(copy)).exists()) << "no stray autosave layer folder";
 }
 
 TEST(StudioPaint, TexturePaneShowsThePaintedGlossAndItsBake) {

@@ -4,6 +4,7 @@
 #include <burnish/core/io/image.h>
 #include <burnish/core/prefilter/sample_maps.h>
 #include <burnish/core/util/files.h>
+#include <burnish/core/util/hash.h>
 #include <burnish/core/util/numeric.h>
 
 #include <fmt/format.h>
@@ -13,7 +14,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -64,18 +64,8 @@ Result<std::vector<float>> checkedAuthoredGloss(const std::vector<float>& values
 }
 
 /// FNV-1a (64-bit) of the values' bytes, as 16 hex digits: names which painted gloss made a set.
-// Fowler, Noll & Vo, "FNV-1a": offset basis 14695981039346656037, prime 1099511628211
-std::string fnv1a64(const std::vector<float>& values) {
-    uint64_t hash = 14695981039346656037ull;
-    for (float v : values) {
-        unsigned char bytes[sizeof(float)];
-        std::memcpy(bytes, &v, sizeof v);
-        for (unsigned char b : bytes) {
-            hash ^= b;
-            hash *= 1099511628211ull;
-        }
-    }
-    return fmt::format("{:016x}", hash);
+std::string glossHash(const std::vector<float>& values) {
+    return hashHex(fnv1a64(values.data(), values.size() * sizeof(float)));
 }
 
 /// The file stem of the outputs: the input's file stem, or the sample's name.
@@ -403,7 +393,7 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
         record.inputs.erase("glossMap");
         record.inputs["gloss"] = {{"source", std::string(kPaintedGlossSource)},
                                   {"paintedOver", job.spec.gloss ? Json(*job.spec.gloss) : Json(nullptr)},
-                                  {"fnv1a64", fnv1a64(*options.authoredGloss)}};
+                                  {"fnv1a64", glossHash(*options.authoredGloss)}};
     }
     const ExportFormat format = job.exportOptions.format.value_or(job.preset.format);
     record.options = {

@@ -78,6 +78,74 @@ void PaintLayer::clear() {
     std::fill(coverage.begin(), coverage.end(), 0.0f);
 }
 
+namespace {
+
+// One axis of the area-weighted resampling: for each new texel, the old texels its interval
+// [j·from/to, (j+1)·from/to) overlaps and by how much (the weights of one texel sum to 1).
+struct AxisTaps {
+    std::vector<int> first;     // per new texel, index into taps
+    std::vector<int> index;     // old texel
+    std::vector<double> weight; // overlap / interval length
+};
+
+AxisTaps axisTaps(int from, int to) {
+    AxisTaps t;
+    t.first.reserve(size_t(to) + 1);
+    for (int j = 0; j < to; ++j) {
+        t.first.push_back(int(t.index.size()));
+        // In units of 1/to of an old texel, so the ends are exact integers.
+        const std::int64_t a = std::int64_t(j) * from, b = std::int64_t(j + 1) * from;
+        for (std::int64_t i = a / to; i * to < b; ++i) {
+            const std::int64_t lo = std::max(a, i * to), hi = std::min(b, (i + 1) * to);
+            if (hi > lo) {
+                t.index.push_back(int(i));
+                t.weight.push_back(double(hi - lo) / double(b - a));
+            }
+        }
+    }
+    t.first.push_back(int(t.index.size()));
+    return t;
+}
+
+} // namespace
+
+Result<PaintLayer> resamplePaintLayer(const PaintLayer& layer, int width, int height) {
+    if (const Status st = checkLayer(layer, "the resampled"); !st) return Error{st.error()};
+    auto out = PaintLayer::create(layer.kind, width, height);
+    if (!out) return Error{out.error()};
+    const AxisTaps tx = axisTaps(layer.width, width), ty = axisTaps(layer.height, height);
+    // Along x first (coverage and coverage·value in double), then along y.
+    std::vector<double> rowsCover(size_t(width) * size_t(layer.height)), rowsPaint(rowsCover.size());
+    tbb::parallel_for(0, layer.height, [&](int y) {
+        for (int x = 0; x < width; ++x) {
+            double cover = 0.0, paint = 0.0;
+            for (int t = tx.first[size_t(x)]; t < tx.first[size_t(x) + 1]; ++t) {
+                const size_t i = layer.index(tx.index[size_t(t)], y);
+                cover += tx.weight[size_t(t)] * layer.coverage[i];
+                paint += tx.weight[size_t(t)] * double(layer.coverage[i]) * double(layer.value[i]);
+            }
+            rowsCover[size_t(y) * size_t(width) + size_t(x)] = cover;
+            rowsPaint[size_t(y) * size_t(width) + size_t(x)] = paint;
+        }
+    });
+    PaintLayer& o = out.value();
+    tbb::parallel_for(0, height, [&](int y) {
+        for (int x = 0; x < width; ++x) {
+            double cover = 0.0, paint = 0.0;
+            for (int t = ty.first[size_t(y)]; t < ty.first[size_t(y) + 1]; ++t) {
+                const size_t i = size_t(ty.index[size_t(t)]) * size_t(width) + size_t(x);
+                cover += ty.weight[size_t(t)] * rowsCover[i];
+                paint += ty.weight[size_t(t)] * rowsPaint[i];
+            }
+            const size_t i = o.index(x, y);
+            o.coverage[i] = unit(cover);
+            // Where nothing was painted the value stays 0; elsewhere the coverage-weighted mean.
+            o.value[i] = cover > 0.0 ? unit(paint / cover) : 0.0f;
+        }
+    });
+    return out;
+}
+
 PaintPatch copyPatch(const PaintLayer& layer, const TexelRect& rect) {
     PaintPatch patch;
     patch.rect = {std::max(rect.x0, 0), std::max(rect.y0, 0), std::min(rect.x1, layer.width),

@@ -58,6 +58,13 @@ struct PaintLayer {
     void clear();
 };
 
+/// The layer at another size, over the same UV square (a normal map of another size was loaded):
+/// each new texel is the area-weighted mean of the old texels its square covers, coverage and
+/// coverage·value averaged separately (so unpainted texels do not darken the paint beside them).
+/// Enlarging by a whole factor copies each texel into its block, and shrinking back gives the
+/// layer again exactly. Errors: those of PaintLayer::create.
+Result<PaintLayer> resamplePaintLayer(const PaintLayer& layer, int width, int height);
+
 /// A rectangle of a layer's texels, before or after an edit (what an undo step stores).
 struct PaintPatch {
     TexelRect rect;

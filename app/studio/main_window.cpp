@@ -313,6 +313,8 @@ bool MainWindow::openProject(const QString& path) {
     addRecent(absolute);
     updateTitle();
     statusBar()->showMessage("Opened " + absolute, 4000);
+    // A newer autosave of this project (a crash after the last save) is offered right away.
+    offerRecovery();
     return true;
 }
 
@@ -391,14 +393,18 @@ void MainWindow::offerRecovery() {
     if (!copy) return;
     const QString what =
         m_projectPath.isEmpty() ? "an unsaved material" : QFileInfo(m_projectPath).fileName();
-    const auto answer = ask("Recover autosave",
-                            QString("An autosave of %1 from %2 is newer than the saved project. Recover it?")
-                                .arg(what, QFileInfo(*copy).lastModified().toString(Qt::TextDate)),
-                            QMessageBox::Yes | QMessageBox::No);
-    if (answer != QMessageBox::Yes) {
+    const auto answer =
+        ask("Recover autosave",
+            QString("An autosave of %1 from %2 is newer than the saved project. Recover it? (No keeps the "
+                    "autosave for later; Discard deletes it.)")
+                .arg(what, QFileInfo(*copy).lastModified().toString(Qt::TextDate)),
+            QMessageBox::Yes | QMessageBox::No | QMessageBox::Discard);
+    // Only an explicit Discard deletes the artist's unsaved work; anything else keeps the copy.
+    if (answer == QMessageBox::Discard) {
         (void)removeProject(*copy);
         return;
     }
+    if (answer != QMessageBox::Yes) return;
     const auto project = loadProject(*copy);
     if (!project) {
         showMessage("Cannot recover autosave", QString::fromStdString(project.error()));

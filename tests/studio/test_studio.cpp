@@ -451,8 +451,11 @@ TEST(Project, AutosaveIsWrittenAndOfferedForRecovery) {
         // The window "crashes" here: its destructor runs no close event, so the copy stays.
     }
     TestWindow again;
+    // Opening the project offers its newer autosave: No keeps the copy for later.
+    again.answer = QMessageBox::No;
     ASSERT_TRUE(again.window.openProject(file));
     EXPECT_NE(again.window.document()->settings().gloss, 0.125) << "the saved project has the old gloss";
+    EXPECT_TRUE(recoverableAutosave(file).has_value()) << "No keeps the autosave";
     again.answer = QMessageBox::Yes;
     again.window.offerRecovery();
     EXPECT_EQ(again.window.document()->settings().gloss, 0.125);
@@ -460,6 +463,20 @@ TEST(Project, AutosaveIsWrittenAndOfferedForRecovery) {
     ASSERT_TRUE(again.window.saveProjectAs(file));
     EXPECT_FALSE(QFile::exists(autosavePathFor(file))) << "saving removes the autosave copy";
     EXPECT_FALSE(recoverableAutosave(file).has_value());
+
+    // Only an explicit Discard deletes an autosave the artist was offered.
+    again.window.document()->setGloss(0.25);
+    ASSERT_TRUE(again.window.autosave());
+    QFile project(file);
+    ASSERT_TRUE(project.open(QIODevice::ReadWrite));
+    ASSERT_TRUE(
+        project.setFileTime(QDateTime::currentDateTime().addSecs(-60), QFileDevice::FileModificationTime));
+    project.close();
+    TestWindow third;
+    third.answer = QMessageBox::Discard;
+    ASSERT_TRUE(third.window.openProject(file));
+    EXPECT_FALSE(QFile::exists(autosavePathFor(file)));
+    EXPECT_NE(third.window.document()->settings().gloss, 0.25);
 }
 
 std::map<std::string, std::string> folderBytes(const fs::path& folder) {

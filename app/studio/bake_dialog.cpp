@@ -1,5 +1,7 @@
 #include "bake_dialog.h"
 
+#include <burnish/core/bake/bake_ninja.h>
+
 #include <QCheckBox>
 #include <QComboBox>
 #include <QCoreApplication>
@@ -16,6 +18,8 @@
 #include <QSpinBox>
 #include <QThread>
 #include <QVBoxLayout>
+
+#include <filesystem>
 
 namespace burnish::studio {
 
@@ -112,6 +116,9 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
     , m_doc(doc)
     , m_runner(new BakeRunner(this)) {
     setWindowTitle("Bake & Export Textures");
+    ask = [this](const QString& title, const QString& text, QMessageBox::StandardButtons buttons) {
+        return QMessageBox::question(this, title, text, buttons);
+    };
     m_preset = new QComboBox(this);
     for (const auto& p : builtinPresets())
         m_preset->addItem(QString::fromStdString(p.name + " — " + p.title), QString::fromStdString(p.name));
@@ -205,7 +212,10 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
                     .arg(summary["mipCount"].get<int>())
                     .arg(summary["seconds"].get<double>(), 0, 'f', 2));
         } else {
-            m_result->setText("Not exported: " + message);
+            // The command line's advice ("use --force") in the studio's words.
+            QString text = message;
+            text.replace("(use --force to replace the set)", "(tick \"Replace an existing set\")");
+            m_result->setText("Not exported: " + text);
         }
         emit bakeFinished(ok, message);
     });
@@ -254,13 +264,43 @@ void BakeDialog::startBake() {
         emit bakeFinished(false, m_result->text());
         return;
     }
+    BakeJobSpec spec = bakeJobSpecFor(*m_doc);
+    if (!spec.force) {
+        // The files this export writes, from the plan (nothing baked yet): ask before replacing.
+        QStringList existing;
+        if (const auto job = resolveBakeJob(spec))
+            if (const auto outputs = plannedBakeOutputs(*job)) {
+                std::error_code ec;
+                for (const auto& path : *outputs)
+                    if (std::filesystem::exists(std::filesystem::symlink_status(path, ec)))
+                        existing << QString::fromStdString(std::filesystem::path(path).filename().string());
+            }
+        if (!existing.isEmpty()) {
+            const QString shown =
+                existing.size() > 4 ? existing.mid(0, 4).join(", ") + ", …" : existing.join(", ");
+            const auto answer =
+                ask("Overwrite export",
+                    QString("%1 already holds %2 of the files this export writes (%3). Overwrite them? The "
+                            "folder is left with exactly the new set.")
+                        .arg(m_doc->settings().exportSettings.outputFolder)
+                        .arg(existing.size())
+                        .arg(shown),
+                    QMessageBox::Yes | QMessageBox::Cancel);
+            if (answer != QMessageBox::Yes) {
+                m_result->setText("Not exported: the folder's set was left as it was.");
+                emit bakeFinished(false, m_result->text());
+                return;
+            }
+            spec.force = true; // this export only: "Replace an existing set" stays as it was
+        }
+    }
     m_bake->setEnabled(false);
     m_result->setText("Baking…");
     m_progress = new QProgressDialog("Bake & export…", "Cancel", 0, kProgressSteps, this);
     m_progress->setWindowModality(Qt::WindowModal);
     m_progress->setMinimumDuration(300); // a quick bake finishes without a flashing dialog
     connect(m_progress, &QProgressDialog::canceled, m_runner, &BakeRunner::cancel);
-    m_runner->start(bakeJobSpecFor(*m_doc));
+    m_runner->start(spec);
 }
 
 } // namespace burnish::studio

@@ -8,9 +8,11 @@
 #include <burnish/core/bake/bake_job.h>
 
 #include <QDialog>
+#include <QMessageBox>
 #include <QObject>
 
 #include <atomic>
+#include <functional>
 #include <memory>
 
 class QCheckBox;
@@ -63,8 +65,14 @@ public:
     QLabel* resultLabel() const { return m_result; }
     /// The dialog's fields written to the document (one undo step when anything changed).
     void commitSettings();
-    /// Commits the settings and starts the bake; bakeFinished reports the outcome.
+    /// Commits the settings and starts the bake; bakeFinished reports the outcome. When the folder
+    /// already holds files of this export and replacing is not ticked, asks "Overwrite…?" first.
     void startBake();
+
+    /// Asks a question; returns the button chosen (tests replace it to answer without a box).
+    std::function<QMessageBox::StandardButton(const QString& title, const QString& text,
+                                              QMessageBox::StandardButtons buttons)>
+        ask;
 
 signals:
     void bakeFinished(bool ok, const QString& message);

@@ -219,7 +219,12 @@ bool MainWindow::isModified() const {
 }
 
 BakeDialog* MainWindow::bakeDialog() {
-    if (!m_bakeDialog) m_bakeDialog = new BakeDialog(m_doc, this);
+    if (!m_bakeDialog) {
+        m_bakeDialog = new BakeDialog(m_doc, this);
+        // One way of asking for the whole window (tests answer through it).
+        m_bakeDialog->ask = [this](const QString& title, const QString& text,
+                                   QMessageBox::StandardButtons b) { return ask(title, text, b); };
+    }
     return m_bakeDialog;
 }
 

@@ -489,6 +489,46 @@ std::map<std::string, std::string> folderBytes(const fs::path& folder) {
     return files;
 }
 
+// A second export into a folder that holds the set asks "Overwrite…?" in the studio's words (it
+// used to fail with the command line's "use --force"): Cancel leaves the set as it was, Yes replaces
+// it for this export only.
+TEST(BakeDialog, ExportIntoAFilledFolderAsksBeforeOverwriting) {
+    test::TempDir dir;
+    MaterialDocument doc;
+    BakeDialog dialog(&doc);
+    QStringList questions;
+    QMessageBox::StandardButton answer = QMessageBox::Cancel;
+    dialog.ask = [&](const QString&, const QString& text, QMessageBox::StandardButtons) {
+        questions << text;
+        return answer;
+    };
+    dialog.outputEdit()->setText(q(dir / "out"));
+    auto bake = [&] {
+        QSignalSpy finished(&dialog, &BakeDialog::bakeFinished);
+        dialog.startBake();
+        EXPECT_TRUE(finished.count() > 0 || finished.wait(kWorkerTimeoutMs));
+        return finished.isEmpty() ? false : finished.at(0).at(0).toBool();
+    };
+    ASSERT_TRUE(bake()) << dialog.resultLabel()->text().toStdString();
+    EXPECT_TRUE(questions.isEmpty()) << "an empty folder needs no question";
+    const auto first = folderBytes(dir / "out");
+
+    doc.setGloss(0.3);
+    EXPECT_FALSE(bake());
+    ASSERT_EQ(questions.size(), 1);
+    EXPECT_TRUE(questions[0].contains("Overwrite")) << questions[0].toStdString();
+    EXPECT_TRUE(questions[0].contains("bake.json")) << questions[0].toStdString();
+    EXPECT_FALSE(questions[0].contains("--force"));
+    EXPECT_EQ(dialog.resultLabel()->text().toStdString(),
+              "Not exported: the folder's set was left as it was.");
+    EXPECT_EQ(folderBytes(dir / "out"), first) << "Cancel changes nothing";
+
+    answer = QMessageBox::Yes;
+    ASSERT_TRUE(bake()) << dialog.resultLabel()->text().toStdString();
+    EXPECT_NE(folderBytes(dir / "out"), first) << "Yes replaces the set";
+    EXPECT_FALSE(doc.settings().exportSettings.overwrite) << "the setting itself is not changed";
+}
+
 TEST(BakeDialog, ExportWritesTheBytesOfBurnishBake) {
     struct Case {
         const char* preset;

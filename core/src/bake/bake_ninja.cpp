@@ -75,38 +75,13 @@ Result<std::pair<int, int>> inputExtent(const std::string& input) {
     return std::pair{header->width, header->height};
 }
 
-/// What one job reads and writes, without baking: the input's extent from its file, the file
-/// names from export's plan.
+/// What one job reads and writes, without baking: its outputs (plannedBakeOutputs), its inputs.
 Result<NinjaJob> planNinjaJob(const std::string& exe, const BakeJob& job, const std::string& manifest) {
-    const auto extent = inputExtent(job.spec.input);
-    if (!extent) return Error{extent.error()};
-    auto shape = bakeShape(job.bake, extent->first, extent->second);
-    if (!shape) return Error{shape.error()};
-    BakeRecord record;
-    if (job.spec.gloss)
-        if (const auto gloss = readImageHeader(*job.spec.gloss); !gloss)
-            return Error{"--gloss: " + gloss.error()};
-    if (job.spec.detail) {
-        const auto detailImage = readImageHeader(*job.spec.detail);
-        if (!detailImage) return Error{"--detail: " + detailImage.error()};
-        auto detail = detailShape(detailImage->width, detailImage->height, job.detail);
-        if (!detail) return Error{"--detail: " + detail.error()};
-        shape.value().textures.push_back(std::move(detail.value()));
-        // The constant variance is not known before the bake; the plan names files only.
-        record.detail = DetailRecord{*job.spec.detail, 0.0, job.detail.fadeStartMip, job.detail.fadeEndMip};
-    }
-    const auto plan = planExport(*shape, job.preset, job.exportOptions, record);
-    if (!plan) return Error{plan.error()};
-
+    auto outputs = plannedBakeOutputs(job);
+    if (!outputs) return Error{outputs.error()};
     NinjaJob nj;
+    nj.outputs = std::move(outputs).value();
     const fs::path out = absolutePath(job.spec.out);
-    for (const auto& f : plan->files)
-        for (const auto& p : f.paths)
-            nj.outputs.push_back((out / p).string());
-    nj.outputs.push_back((out / plan->manifestPath).string());
-    if (job.spec.report)
-        for (const auto f : kBakeReportFiles)
-            nj.outputs.push_back((out / kBakeReportFolder / f).string());
     if (!isSampleBakeInput(job.spec.input)) nj.inputs.push_back(absolutePath(job.spec.input));
     if (job.spec.gloss) nj.inputs.push_back(absolutePath(*job.spec.gloss));
     if (job.spec.detail) nj.inputs.push_back(absolutePath(*job.spec.detail));
@@ -128,6 +103,38 @@ bool inside(const fs::path& path, const fs::path& root) {
 }
 
 } // namespace
+
+Result<std::vector<std::string>> plannedBakeOutputs(const BakeJob& job) {
+    const auto extent = inputExtent(job.spec.input);
+    if (!extent) return Error{extent.error()};
+    auto shape = bakeShape(job.bake, extent->first, extent->second);
+    if (!shape) return Error{shape.error()};
+    BakeRecord record;
+    if (job.spec.gloss)
+        if (const auto gloss = readImageHeader(*job.spec.gloss); !gloss)
+            return Error{"--gloss: " + gloss.error()};
+    if (job.spec.detail) {
+        const auto detailImage = readImageHeader(*job.spec.detail);
+        if (!detailImage) return Error{"--detail: " + detailImage.error()};
+        auto detail = detailShape(detailImage->width, detailImage->height, job.detail);
+        if (!detail) return Error{"--detail: " + detail.error()};
+        shape.value().textures.push_back(std::move(detail.value()));
+        // The constant variance is not known before the bake; the plan names files only.
+        record.detail = DetailRecord{*job.spec.detail, 0.0, job.detail.fadeStartMip, job.detail.fadeEndMip};
+    }
+    const auto plan = planExport(*shape, job.preset, job.exportOptions, record);
+    if (!plan) return Error{plan.error()};
+    std::vector<std::string> outputs;
+    const fs::path out = absolutePath(job.spec.out);
+    for (const auto& f : plan->files)
+        for (const auto& p : f.paths)
+            outputs.push_back((out / p).string());
+    outputs.push_back((out / plan->manifestPath).string());
+    if (job.spec.report)
+        for (const auto f : kBakeReportFiles)
+            outputs.push_back((out / kBakeReportFolder / f).string());
+    return outputs;
+}
 
 Status checkBakeJobs(const std::vector<BakeJob>& jobs, const std::optional<std::filesystem::path>& outRoot,
                      bool fromManifest) {

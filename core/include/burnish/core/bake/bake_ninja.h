@@ -21,6 +21,11 @@ namespace burnish {
 /// or "none" (compression, metallic, mips, gloss, detail) stay absent when the spec leaves them out.
 std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& job);
 
+/// Every file a job will write (absolute paths: the export's files, bake.json, the report's files),
+/// from its input's header and the export's plan, without baking. Errors: an unreadable input
+/// header, an invalid plan.
+Result<std::vector<std::string>> plannedBakeOutputs(const BakeJob& job);
+
 /// Checks resolved jobs before the first one writes anything, reading only file headers: every
 /// input (normal map, gloss, detail) opens as an image with a plausible header (a normal map has 2
 /// to 4 channels), each job's plan (its files, bake.json, report files) is valid, no two jobs write

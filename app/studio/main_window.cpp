@@ -12,6 +12,7 @@
 #include <QAction>
 #include <QApplication>
 #include <QCloseEvent>
+#include <QDialog>
 #include <QDir>
 #include <QDockWidget>
 #include <QFileDialog>
@@ -26,10 +27,16 @@
 #include <QShowEvent>
 #include <QSplitter>
 #include <QStatusBar>
+#include <QTextBrowser>
 #include <QTimer>
 #include <QUndoView>
+#include <QVBoxLayout>
 
 #include <algorithm>
+
+namespace burnish::resources {
+extern const std::string_view kReadme;
+} // namespace burnish::resources
 
 namespace burnish::studio {
 
@@ -175,7 +182,8 @@ void MainWindow::buildMenus() {
     m_recentMenu = file->addMenu("Open &Recent");
     file->addSeparator();
     file->addAction("&Save", QKeySequence::Save, this, &MainWindow::save);
-    file->addAction("Save &As…", QKeySequence::SaveAs, this, &MainWindow::saveAs);
+    // QKeySequence::SaveAs is empty on some desktops: Ctrl+Shift+S is what every editor uses.
+    file->addAction("Save &As…", QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S), this, &MainWindow::saveAs);
     file->addSeparator();
     file->addAction("&Export Textures…", QKeySequence(Qt::CTRL | Qt::Key_E), this,
                     &MainWindow::exportTextures);
@@ -202,6 +210,15 @@ void MainWindow::buildMenus() {
         chartsToggle->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_3));
         m_viewMenu->addAction(chartsToggle);
     }
+    // Every panel, so one closed by its title bar's button can always be brought back.
+    QAction* paint = m_paintDock->toggleViewAction();
+    paint->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_4));
+    m_viewMenu->addAction(paint);
+    if (auto* environment = findChild<QDockWidget*>("environmentDock")) {
+        QAction* environmentToggle = environment->toggleViewAction();
+        environmentToggle->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_5));
+        m_viewMenu->addAction(environmentToggle);
+    }
     m_viewMenu->addSeparator();
     m_viewMenu->addAction("Normal Map", QKeySequence(Qt::Key_1), this,
                           [this] { m_texturePane->setMode(TextureMode::Normal); });
@@ -211,7 +228,45 @@ void MainWindow::buildMenus() {
                           [this] { m_texturePane->setMode(TextureMode::BakedGloss); });
     m_viewMenu->addAction("Fit Texture", QKeySequence(Qt::Key_F), this,
                           [this] { m_texturePane->view()->fit(); });
+
+    QMenu* help = menuBar()->addMenu("&Help");
+    help->addAction("Studio &Guide", QKeySequence::HelpContents, this, &MainWindow::showGuide);
+    help->addAction("&About Burnish Studio", this, [this] {
+        QMessageBox::about(
+            this, "About Burnish Studio",
+            QString("<b>Burnish Studio %1</b><p>Real-time material authoring: calibrated "
+                    "specular colour and gloss, normal-map detail below a pixel turned into "
+                    "roughness per mip, measured against the ground truth.</p><p>Help ▸ Studio "
+                    "Guide describes every panel; <code>burnish --help</code> the command "
+                    "line.</p>")
+                .arg(QApplication::applicationVersion()));
+    });
     updateRecentMenu();
+}
+
+QString studioGuideMarkdown() {
+    // The README's "## Studio" section, up to the next second-level heading.
+    const QString readme = QString::fromUtf8(resources::kReadme.data(), qsizetype(resources::kReadme.size()));
+    const qsizetype start = readme.indexOf("\n## Studio\n");
+    if (start < 0) return readme;
+    const qsizetype end = readme.indexOf("\n## ", start + 1);
+    return readme.mid(start + 1, end < 0 ? -1 : end - start - 1);
+}
+
+void MainWindow::showGuide() {
+    if (!m_guide) {
+        m_guide = new QDialog(this);
+        m_guide->setObjectName("studioGuide");
+        m_guide->setWindowTitle("Burnish Studio Guide");
+        auto* text = new QTextBrowser(m_guide);
+        text->setMarkdown(studioGuideMarkdown());
+        text->setOpenExternalLinks(true);
+        auto* layout = new QVBoxLayout(m_guide);
+        layout->addWidget(text);
+        m_guide->resize(640, 480);
+    }
+    m_guide->show();
+    m_guide->raise();
 }
 
 bool MainWindow::isModified() const {
@@ -238,7 +293,8 @@ void MainWindow::updateStatus() {
     const MaterialSettings& s = m_doc->settings();
     m_statusPreset->setText("preset " + s.preset);
     m_statusMethod->setText("method " + qs(methodName(s.method)));
-    m_statusGloss->setText(QString("gloss %1").arg(s.gloss, 0, 'f', 3));
+    m_statusGloss->setText(
+        QString("%1 %2").arg(glossQuantity(m_doc->preset().encoding, false)).arg(s.gloss, 0, 'f', 3));
     m_statusPower->setText(QString("power %1").arg(m_doc->power(), 0, 'g', 5));
 }
 

@@ -12,6 +12,7 @@
 
 #include <functional>
 
+class QDialog;
 class QDockWidget;
 class QLabel;
 class QMenu;
@@ -24,6 +25,9 @@ class BakeDialog;
 class MaterialPanel;
 class PaintTool;
 class TexturePane;
+
+/// The README's "Studio" section (Markdown), which Help ▸ Studio Guide shows.
+QString studioGuideMarkdown();
 
 /// `window` moved and shrunk as little as it takes to lie inside `available` (a screen's free area).
 QRect fitInside(const QRect& window, const QRect& available);
@@ -90,6 +94,7 @@ private:
     /// The first-run proportions of the docks, for the window's actual size: the Material panel
     /// gets most of the right column, the charts under the views enough height for their labels.
     void applyDefaultDockSizes();
+    void showGuide();
     void fitToScreen();
 
     MaterialDocument* m_doc;
@@ -100,7 +105,8 @@ private:
     QDockWidget* m_historyDock;
     QDockWidget* m_chartsDock;
     bool m_defaultLayoutPending = false; // no saved layout: size the docks once shown
-    bool m_fitPending = false;           // a restored geometry: clamp it to the screen once shown
+    bool m_fitPending = false;
+    QDialog* m_guide = nullptr; // a restored geometry: clamp it to the screen once shown
     PaintTool* m_paintTool;
     QDockWidget* m_paintDock;
     BakeDialog* m_bakeDialog = nullptr;

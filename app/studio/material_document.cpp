@@ -106,6 +106,12 @@ const char* mapSlotName(MapSlot slot) {
     return "normal";
 }
 
+QString glossQuantity(const GlossEncoding& encoding, bool capitalised) {
+    QString name = QString::fromUtf8(encoding.quantity().data(), qsizetype(encoding.quantity().size()));
+    if (capitalised && !name.isEmpty()) name[0] = name[0].toUpper();
+    return name;
+}
+
 std::shared_ptr<const NormalMap> sampleNormalMap() {
     static const auto sample =
         std::make_shared<const NormalMap>(makeSampleNormalMap(SampleMapKind::Hammered, kSampleSize));
@@ -283,7 +289,8 @@ void MaterialDocument::setAlbedo(const LinearRgb& albedo) {
 void MaterialDocument::setGloss(double gloss, bool merge) {
     MaterialSettings s = m_settings;
     s.gloss = saturate(gloss);
-    push(s, m_maps, QString("Gloss %1").arg(s.gloss, 0, 'f', 3), merge ? kGlossField : kNoMerge);
+    push(s, m_maps, QString("%1 %2").arg(glossQuantity(preset().encoding)).arg(s.gloss, 0, 'f', 3),
+         merge ? kGlossField : kNoMerge);
 }
 
 Status MaterialDocument::setMethod(Method method) {

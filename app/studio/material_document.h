@@ -205,6 +205,10 @@ private:
     std::shared_ptr<std::vector<float>> m_authored;
 };
 
+/// What the preset stores, in the studio's words: "Gloss", "Roughness", "Smoothness", "Alpha"
+/// (lower case with capitalised = false), so a roughness preset never says gloss.
+QString glossQuantity(const GlossEncoding& encoding, bool capitalised = true);
+
 /// The built-in sample normal map (shared; made once).
 std::shared_ptr<const NormalMap> sampleNormalMap();
 

@@ -67,13 +67,19 @@ QString colorText(const LinearRgb& c) {
         .arg(c.b, 0, 'f', 3);
 }
 
+void MapSlotWidget::setTitle(const QString& title) {
+    m_title->setText("<b>" + title.toHtmlEscaped() + "</b>");
+}
+
 MapSlotWidget::MapSlotWidget(MapSlot slot, const QString& title, QWidget* parent)
     : QFrame(parent)
     , m_slot(slot) {
     setAcceptDrops(true);
     setFrameShape(QFrame::StyledPanel);
     setObjectName("mapSlot");
-    auto* name = new QLabel("<b>" + title + "</b>", this);
+    auto* name = new QLabel(this);
+    m_title = name;
+    setTitle(title);
     m_file = new QLabel(this);
     m_file->setTextInteractionFlags(Qt::TextSelectableByMouse);
     m_diagnostics = new QLabel(this);
@@ -192,7 +198,8 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
     glossRow->addWidget(m_glossSlider, 1);
     glossRow->addWidget(m_glossSpin);
     glossRow->addWidget(m_power);
-    form->addRow("Gloss", glossRow);
+    m_glossLabel = new QLabel("Gloss", this); // the preset's word: refresh()
+    form->addRow(m_glossLabel, glossRow);
     form->addRow("", m_encoding);
 
     auto* mapsBox = new QGroupBox("Maps", this);
@@ -312,6 +319,10 @@ void MaterialPanel::refresh() {
     m_glossSpin->setValue(s.gloss);
     m_power->setText(QString("power %1").arg(m_doc->power(), 0, 'g', 5));
     const Preset& preset = m_doc->preset();
+    m_glossLabel->setText(glossQuantity(preset.encoding));
+    m_glossSpin->setToolTip(
+        QString("%1 in the preset's encoding, 0 to 1").arg(glossQuantity(preset.encoding)));
+    m_slots[1]->setTitle(glossQuantity(preset.encoding));
     m_encoding->setText(QString("encoding %1: %2")
                             .arg(QString::fromStdString(preset.encoding.name()),
                                  QString::fromStdString(preset.encoding.formula())));

@@ -25,6 +25,7 @@ public:
     MapSlotWidget(MapSlot slot, const QString& title, QWidget* parent = nullptr);
     MapSlot slot() const { return m_slot; }
     void setState(const QString& path, const QStringList& diagnostics, bool isSample);
+    void setTitle(const QString& title);
 
 signals:
     void loadRequested(MapSlot slot, const QString& path); // path empty: ask with a file dialog
@@ -37,6 +38,7 @@ protected:
 
 private:
     MapSlot m_slot;
+    QLabel* m_title;
     QLabel* m_file;
     QLabel* m_diagnostics;
     QPushButton* m_clear;
@@ -84,6 +86,7 @@ private:
     QSlider* m_glossSlider;
     QDoubleSpinBox* m_glossSpin;
     QLabel* m_power;
+    QLabel* m_glossLabel;
     QLabel* m_encoding;
     MapSlotWidget* m_slots[3];
     bool m_refreshing = false;

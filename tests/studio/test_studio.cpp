@@ -3,6 +3,7 @@
 // autosave and recovery, the Bake & Export dialog writes the bytes `burnish bake` writes, the window
 // draws something, and burnish-studio --help/--version work without a display.
 #include "bake_dialog.h"
+#include "charts/error_cost_chart.h"
 #include "main_window.h"
 #include "material_panel.h"
 #include "paint_tool.h"
@@ -18,20 +19,25 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <QAction>
 #include <QApplication>
 #include <QCheckBox>
 #include <QComboBox>
 #include <QDateTime>
+#include <QDockWidget>
 #include <QDoubleSpinBox>
 #include <QFile>
 #include <QImage>
 #include <QLabel>
 #include <QLineEdit>
+#include <QMenu>
+#include <QMenuBar>
 #include <QSet>
 #include <QSettings>
 #include <QSignalSpy>
 #include <QSlider>
 #include <QStandardPaths>
+#include <QStatusBar>
 #include <QTest>
 
 #include <cstdio>
@@ -663,6 +669,74 @@ TEST(StudioCommandLine, OnlyPrintingCommandLinesAreRecognisedBeforeTheApplicatio
     EXPECT_FALSE(onlyPrints({"project.burnish"}));
     EXPECT_FALSE(onlyPrints({"--screenshot", "shot.png"}));
     EXPECT_FALSE(onlyPrints({"--", "--help"})) << "after --, a project that happens to be named so";
+}
+
+// The View menu lists every panel (a panel closed by its title bar's button can always be brought
+// back), Save As has its shortcut, and Help holds the studio guide (the README's Studio section)
+// and About.
+TEST(MainWindow, MenusListEveryPanelSaveAsAndHelp) {
+    TestWindow w;
+    QMenu* view = nullptr;
+    QMenu* file = nullptr;
+    QMenu* help = nullptr;
+    for (QAction* a : w.window.menuBar()->actions()) {
+        if (a->text() == "&View") view = a->menu();
+        if (a->text() == "&File") file = a->menu();
+        if (a->text() == "&Help") help = a->menu();
+    }
+    ASSERT_TRUE(view && file && help);
+    const QList<QDockWidget*> docks = w.window.findChildren<QDockWidget*>();
+    EXPECT_GE(docks.size(), 5);
+    for (QDockWidget* dock : docks)
+        EXPECT_TRUE(view->actions().contains(dock->toggleViewAction())) << dock->windowTitle().toStdString();
+    bool saveAs = false;
+    for (QAction* a : file->actions())
+        if (a->text().startsWith("Save &As"))
+            saveAs = a->shortcut() == QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S);
+    EXPECT_TRUE(saveAs);
+    QStringList helpItems;
+    for (QAction* a : help->actions())
+        helpItems << a->text();
+    EXPECT_TRUE(helpItems.contains("Studio &Guide") && helpItems.contains("&About Burnish Studio"))
+        << helpItems.join(", ").toStdString();
+    const QString guide = studioGuideMarkdown();
+    EXPECT_TRUE(guide.startsWith("## Studio\n")) << guide.left(80).toStdString();
+    EXPECT_TRUE(guide.contains("Panels")) << "the section's text, not an empty page";
+    EXPECT_FALSE(guide.contains("\n## Architecture")) << "only the Studio section";
+}
+
+// Presets that store roughness or smoothness say so in the panel, the history and the status bar
+// (the Unreal preset's panel read "Gloss"); every method has its own colour in the charts (naive
+// and CLEAN were drawn alike).
+TEST(MainWindow, WordsFollowThePresetsQuantity) {
+    TestWindow w;
+    MaterialDocument* doc = w.window.document();
+    auto labelled = [&](const QString& text) {
+        for (QLabel* l : w.window.materialPanel()->findChildren<QLabel*>())
+            if (l->text() == text || l->text() == "<b>" + text + "</b>") return true;
+        return false;
+    };
+    EXPECT_TRUE(labelled("Gloss"));
+    for (const auto& [preset, word] : {std::pair{"unreal", "Roughness"}, std::pair{"unity", "Smoothness"},
+                                       std::pair{"blackops", "Gloss"}}) {
+        ASSERT_TRUE(doc->setPreset(preset));
+        EXPECT_TRUE(labelled(word)) << preset;
+        if (QString(word) != "Gloss") {
+            EXPECT_FALSE(labelled("Gloss")) << preset << " still says gloss";
+        }
+        doc->setGloss(0.45);
+        EXPECT_EQ(doc->undoStack()->text(doc->undoStack()->count() - 1), QString("%1 0.450").arg(word))
+            << preset;
+        QStringList status;
+        for (QLabel* l : w.window.statusBar()->findChildren<QLabel*>())
+            status << l->text();
+        EXPECT_TRUE(status.join(" ").contains(QString(word).toLower() + " 0.450"))
+            << status.join(" | ").toStdString();
+    }
+    QSet<QRgb> colours;
+    for (Method m : allMethods())
+        colours.insert(methodColour(m).rgb());
+    EXPECT_EQ(colours.size(), qsizetype(allMethods().size()));
 }
 
 TEST(MainWindow, ScreenshotIsNotBlank) {

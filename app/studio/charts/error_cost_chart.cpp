@@ -366,6 +366,21 @@ QString ErrorCostChart::statusText() const {
     return m_status->text();
 }
 
+QColor methodColour(Method method) {
+    // A qualitative palette (Tableau 10) in the method table's order: every method its own colour,
+    // the same in every chart (the chart theme's palette repeats after five series, so naive and
+    // CLEAN were drawn alike).
+    static const QColor kPalette[] = {QColor(0x4e, 0x79, 0xa7), QColor(0xf2, 0x8e, 0x2b),
+                                      QColor(0xe1, 0x57, 0x59), QColor(0x76, 0xb7, 0xb2),
+                                      QColor(0x59, 0xa1, 0x4f), QColor(0xed, 0xc9, 0x48),
+                                      QColor(0xb0, 0x7a, 0xa1), QColor(0xff, 0x9d, 0xa7),
+                                      QColor(0x9c, 0x75, 0x5f), QColor(0xba, 0xb0, 0xac)};
+    const auto methods = allMethods();
+    const auto at = std::find(methods.begin(), methods.end(), method);
+    const size_t index = at == methods.end() ? 0 : size_t(at - methods.begin());
+    return kPalette[index % std::size(kPalette)];
+}
+
 QScatterSeries* ErrorCostChart::methodSeries(Method method) const {
     if (!m_methodsView->chart()) return nullptr;
     for (QAbstractSeries* s : m_methodsView->chart()->series())
@@ -411,6 +426,8 @@ void ErrorCostChart::showMethods() {
             const bool current = e.method == m_doc->settings().method;
             s->setName(qs(methodName(e.method)) + (current ? " (current)" : ""));
             s->setMarkerSize(current ? 16.0 : 11.0);
+            s->setColor(methodColour(e.method));
+            s->setBorderColor(current ? QColor(Qt::white) : methodColour(e.method).darker(140));
             s->append(x, y);
             chart->addSeries(s);
             xLo = std::min(xLo, x);

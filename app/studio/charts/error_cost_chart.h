@@ -11,6 +11,7 @@
 #include <burnish/core/eval/approximations.h>
 #include <burnish/core/eval/evaluate_report.h>
 
+#include <QColor>
 #include <QList>
 #include <QPointer>
 #include <QTabWidget>
@@ -30,6 +31,10 @@ class QThread;
 class QTimer;
 
 namespace burnish::studio {
+
+/// Each method's colour in the charts: one of ten distinct colours, by the method's place in the
+/// method table.
+QColor methodColour(Method method);
 
 class ErrorCostChart : public QTabWidget {
     Q_OBJECT

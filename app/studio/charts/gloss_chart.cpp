@@ -1,6 +1,7 @@
 #include "charts/gloss_chart.h"
 
 #include <burnish/core/shading/color.h>
+#include <burnish/core/util/numeric.h>
 #include <burnish/render/context.h>
 #include <burnish/render/renderer.h>
 
@@ -28,6 +29,8 @@ constexpr int kLabelHeight = 34;
 const QColor kCurrentColour(255, 230, 120);
 
 QString powerText(double n) {
+    // A roughness of 0 is a mirror: its power is clamped to the largest a formula takes.
+    if (n >= kMaxPower) return QString("∞");
     return n >= 1e4 ? QString::number(n, 'e', 1) : QString::number(n, 'g', n < 10 ? 2 : 4);
 }
 
@@ -279,8 +282,9 @@ void GlossChart::paintEvent(QPaintEvent*) {
 
     p.setPen(text);
     p.drawText(QRect(kMargin, 0, width() - 2 * kMargin, kTitleHeight), Qt::AlignLeft | Qt::AlignVCenter,
-               QString("Gloss — preset %1: %2; n is the Blinn-Phong power. Click a sphere to pick its gloss.")
-                   .arg(QString::fromStdString(preset.name), QString::fromStdString(enc.formula())));
+               QString("%1 — preset %2: %3; n is the Blinn-Phong power. Click a sphere to pick its %4.")
+                   .arg(glossQuantity(enc), QString::fromStdString(preset.name),
+                        QString::fromStdString(enc.formula()), glossQuantity(enc, false)));
 
     const QFontMetrics fm(font());
     for (int i = 0; i < kSpheres; ++i) {
@@ -295,7 +299,10 @@ void GlossChart::paintEvent(QPaintEvent*) {
         p.drawRect(QRectF(r).adjusted(-1, -1, 1, 1));
         p.setPen(current ? kCurrentColour : text);
         p.drawText(QRect(r.left() - kGap / 2, r.bottom() + 3, r.width() + kGap, fm.height()),
-                   Qt::AlignHCenter, QString("g %1").arg(gi, 0, 'f', 1));
+                   Qt::AlignHCenter,
+                   QString("%1 %2")
+                       .arg(QString::fromUtf8(enc.symbol().data(), qsizetype(enc.symbol().size())))
+                       .arg(gi, 0, 'f', 1));
         p.setPen(dim);
         p.drawText(QRect(r.left() - kGap / 2, r.bottom() + 3 + fm.height(), r.width() + kGap, fm.height()),
                    Qt::AlignHCenter, "n " + powerText(enc.power(gi)));

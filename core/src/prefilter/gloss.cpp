@@ -106,6 +106,37 @@ Result<GlossEncoding> GlossEncoding::fromName(std::string_view name) {
     return Error{"unknown gloss encoding '" + std::string(name) + "' (known: " + known + ", log:NMIN:NMAX)"};
 }
 
+std::string_view GlossEncoding::quantity() const {
+    switch (m_kind) {
+    case GlossKind::LogPower:
+        return "gloss";
+    case GlossKind::GgxRoughness:
+    case GlossKind::BeckmannM:
+        return "roughness";
+    case GlossKind::GgxAlpha:
+        return "alpha";
+    case GlossKind::Smoothness:
+        return "smoothness";
+    }
+    return "gloss";
+}
+
+std::string_view GlossEncoding::symbol() const {
+    switch (m_kind) {
+    case GlossKind::LogPower:
+        return "g";
+    case GlossKind::GgxRoughness:
+        return "r";
+    case GlossKind::BeckmannM:
+        return "m";
+    case GlossKind::GgxAlpha:
+        return "\u03b1";
+    case GlossKind::Smoothness:
+        return "s";
+    }
+    return "g";
+}
+
 double GlossEncoding::power(double v) const {
     v = saturate(v);
     switch (m_kind) {

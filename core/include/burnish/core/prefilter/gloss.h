@@ -50,6 +50,11 @@ public:
     static std::vector<std::string> presetNames();
 
     GlossKind kind() const { return m_kind; }
+    /// What the stored value is called where an artist reads it: "gloss" (log-power encodings),
+    /// "roughness" (GGX perceptual roughness, Beckmann's m), "alpha", "smoothness".
+    std::string_view quantity() const;
+    /// Its one-letter symbol for tight labels: "g", "r", "α" (UTF-8), "m", "s".
+    std::string_view symbol() const;
     const std::string& name() const { return m_name; }
     /// A one-line formula for reports and --help, e.g. "n = 8192^g".
     const std::string& formula() const { return m_formula; }

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sys/stat.h>
 #include <thread>
 #include <unistd.h>
@@ -778,6 +779,81 @@ TEST(Export, ShapePlansTheFilesOfTheRealBake) {
               (std::vector<std::pair<int, int>>{{40, 24}, {20, 12}, {10, 6}, {5, 3}, {2, 1}, {1, 1}}));
     EXPECT_EQ(mipChainSizes(40, 24, 2).size(), 2u);
     EXPECT_TRUE(mipChainSizes(0, 4).empty());
+}
+
+std::map<std::string, std::string> filesIn(const fs::path& folder) {
+    std::map<std::string, std::string> files;
+    for (const auto& e : fs::directory_iterator(folder))
+        if (e.is_regular_file()) files[e.path().filename().string()] = readFile(e.path()).value();
+    return files;
+}
+
+// A bake made only to be exported keeps the textures its files store as 8- or 16-bit codes as
+// those codes (a quarter or half of the floats' memory): the codes are the export's own (unorm8 of
+// the float bake, bit for bit) and the files are byte-identical. Flipped channels (DirectX green)
+// and DDS files keep floats.
+TEST(Export, CompactStorageKeepsTheExportsCodesAndWritesTheSameBytes) {
+    const NormalMap map = smoothMap();
+    struct Case {
+        const char* preset;
+        std::optional<ExportFormat> format;
+        std::map<TextureRole, TexelStorage> expected;
+    };
+    const std::vector<Case> cases{
+        {"godot",
+         {},
+         {{TextureRole::Normal, TexelStorage::Unorm8}, {TextureRole::Gloss, TexelStorage::Unorm8}}},
+        {"clean", {}, {{TextureRole::Clean, TexelStorage::Unorm16}}},
+        {"gltf",
+         ExportFormat::Tiff16,
+         {{TextureRole::Normal, TexelStorage::Unorm16}, {TextureRole::Gloss, TexelStorage::Unorm16}}},
+        {"unreal", {}, {{TextureRole::Gloss, TexelStorage::Unorm8}}}, // the normal's green is flipped
+        {"blackops", {}, {}},                                         // DDS
+        {"lean", {}, {}},                                             // EXR
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.preset);
+        const Preset p = preset(c.preset);
+        ExportOptions o;
+        o.format = c.format;
+        o.stem = "map";
+        if (p.findParameter("metallic")) o.parameters["metallic"] = 1.0;
+        BakeOptions options;
+        options.method = p.method;
+        options.encoding = p.encoding;
+        options.basePower = 256.0;
+        options.roles = presetRoles(p);
+        const auto shape = bakeShape(options, map.width, map.height);
+        ASSERT_TRUE(shape) << shape.error();
+        const auto storage = compactStorage(*shape, p, o);
+        EXPECT_EQ(storage, c.expected);
+
+        const BakeOutput floats = bake(map, options).value();
+        options.storage = storage;
+        const BakeOutput compact = bake(map, options).value();
+        for (const BakedTexture& t : compact.textures) {
+            const BakedTexture* f = floats.find(t.role);
+            ASSERT_TRUE(f);
+            for (size_t k = 0; k < t.mips.size(); ++k) {
+                const auto& fl = f->mips[k].texels;
+                if (t.storage == TexelStorage::Unorm8) {
+                    ASSERT_TRUE(t.mips[k].texels.empty()) << "no floats kept beside the codes";
+                    for (size_t i = 0; i < fl.size(); ++i)
+                        ASSERT_EQ(t.mips[k].unorm8[i], unorm8(fl[i])) << roleName(t.role) << " mip " << k;
+                } else if (t.storage == TexelStorage::Unorm16) {
+                    ASSERT_TRUE(t.mips[k].texels.empty());
+                    for (size_t i = 0; i < fl.size(); ++i)
+                        ASSERT_EQ(t.mips[k].unorm16[i], unorm16(fl[i])) << roleName(t.role) << " mip " << k;
+                } else {
+                    EXPECT_EQ(t.mips[k].texels, fl);
+                }
+            }
+        }
+        TempDir a, b;
+        ASSERT_TRUE(exportBake(floats, p, o, a.path()));
+        ASSERT_TRUE(exportBake(compact, p, o, b.path()));
+        EXPECT_EQ(filesIn(a.path()), filesIn(b.path())) << "the same bytes";
+    }
 }
 
 } // namespace

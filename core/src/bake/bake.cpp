@@ -107,6 +107,10 @@ std::vector<BakedTexture> planTextures(const BakeOptions& options, const Channel
         t.decode = textureDecode(m.role, scales);
         t.channels = int(t.decode.size());
         t.needsHighPrecision = spec.needsHighPrecision;
+        // The mixture writes its roles together (mixtureRows): they stay float.
+        if (const auto it = options.storage.find(m.role);
+            it != options.storage.end() && options.method != Method::Mixture)
+            t.storage = it->second;
         textures.push_back(std::move(t));
     }
     return textures;
@@ -421,7 +425,13 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
         auto& mip = tex.mips[size_t(k)];
         mip.width = level.width;
         mip.height = level.height;
-        mip.texels.resize(size_t(level.width) * size_t(level.height) * size_t(tex.channels));
+        const size_t values = size_t(level.width) * size_t(level.height) * size_t(tex.channels);
+        if (tex.storage == TexelStorage::Unorm8)
+            mip.unorm8.resize(values);
+        else if (tex.storage == TexelStorage::Unorm16)
+            mip.unorm16.resize(values);
+        else
+            mip.texels.resize(values);
     }
     std::vector<ClampCounts> rowCounts(size_t(level.height));
     pyramid.forEachMomentRow(k, [&](int y, const NormalMoments* row) {
@@ -440,8 +450,19 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
         }
         for (size_t r = 0; r < plan.roles.size(); ++r) {
             BakedTexture& tex = out.textures[r];
-            float* px = &tex.mips[size_t(k)].texels[first * size_t(tex.channels)];
+            TextureMip& mip = tex.mips[size_t(k)];
+            const size_t at = first * size_t(tex.channels), count = size_t(width) * size_t(tex.channels);
+            // Codes: the row's floats into a scratch row, then quantized as the export would.
+            thread_local std::vector<float> scratch;
+            if (tex.storage != TexelStorage::Float) scratch.resize(count);
+            float* px = tex.storage == TexelStorage::Float ? &mip.texels[at] : scratch.data();
             const ClampCounts c = writeRoleRow(plan, plan.roles[r], row, values, width, px);
+            if (tex.storage == TexelStorage::Unorm8)
+                for (size_t i = 0; i < count; ++i)
+                    mip.unorm8[at + i] = unorm8(px[i]);
+            else if (tex.storage == TexelStorage::Unorm16)
+                for (size_t i = 0; i < count; ++i)
+                    mip.unorm16[at + i] = unorm16(px[i]);
             rowCounts[size_t(y)].low += c.low;
             rowCounts[size_t(y)].high += c.high;
         }
@@ -464,7 +485,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     // Only the moments the method reads: the rest are most of the pyramid's work.
     PyramidOptions pyramidOptions = options.pyramid;
     pyramidOptions.moments = momentsNeeded(options.method);
-    const NormalPyramid pyramid = NormalPyramid::build(borrowed, pyramidOptions);
+    NormalPyramid pyramid = NormalPyramid::build(borrowed, pyramidOptions);
     std::optional<BaseVariancePyramid> base;
     if (options.authoredGloss) {
         base.emplace(pyramid);
@@ -495,8 +516,12 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     }
     RowPlan plan(options, base ? &*base : nullptr, mixture ? &*mixture : nullptr, out.textures, scales);
     plan.finestMap = &map;
-    for (int k = 0; k < levels; ++k)
+    for (int k = 0; k < levels; ++k) {
         bakeLevel(plan, pyramid, k, out);
+        // Level k's moments are read by nothing after its textures: the peak holds the textures
+        // written so far and the coarser levels' moments, not every level's.
+        pyramid.releaseBox(k);
+    }
     out.stats.methodSeconds = seconds(start);
     return out;
 }

@@ -2,6 +2,7 @@
 
 #include <burnish/core/eval/evaluate_report.h>
 #include <burnish/core/io/image.h>
+#include <burnish/core/prefilter/detail.h>
 #include <burnish/core/prefilter/sample_maps.h>
 #include <burnish/core/util/files.h>
 #include <burnish/core/util/hash.h>
@@ -264,6 +265,21 @@ Result<std::string> writeBakeReport(const BakeJob& job, const NormalMap& map, co
 
 } // namespace
 
+Result<BakeOutput> bakeJobShape(const BakeJob& job, int width, int height, BakeRecord& record) {
+    auto shape = bakeShape(job.bake, width, height);
+    if (!shape) return Error{shape.error()};
+    if (job.spec.detail) {
+        const auto detailImage = readImageHeader(*job.spec.detail);
+        if (!detailImage) return Error{"--detail: " + detailImage.error()};
+        auto detail = detailShape(detailImage->width, detailImage->height, job.detail);
+        if (!detail) return Error{"--detail: " + detail.error()};
+        shape.value().textures.push_back(std::move(detail.value()));
+        // The constant variance is not known before the bake; the plan names files only.
+        record.detail = DetailRecord{*job.spec.detail, 0.0, job.detail.fadeStartMip, job.detail.fadeEndMip};
+    }
+    return shape;
+}
+
 double bakeBytesPerTexel(Method method, int mixtureLobes) {
     constexpr double kMargin = 1.25;
     if (method == Method::Mixture) return kMargin * (40.0 + 60.0 * std::clamp(mixtureLobes, 1, 4));
@@ -330,6 +346,13 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
     const double readSeconds = std::chrono::duration<double>(Clock::now() - start).count();
 
     BakeOptions options = job.bake;
+    // A bake made to be exported keeps the textures its files store as 8- or 16-bit codes as
+    // those codes (a quarter or half of the floats' memory; the same bytes written).
+    {
+        BakeRecord planned;
+        if (auto shape = bakeJobShape(job, map->width, map->height, planned))
+            options.storage = compactStorage(*shape, job.preset, job.exportOptions, planned);
+    }
     if (job.spec.authoredGloss) {
         // The in-memory gloss overrides the file: spec.gloss is only recorded, not read.
         auto gloss = checkedAuthoredGloss(*job.spec.authoredGloss, map->width, map->height);

@@ -107,21 +107,12 @@ bool inside(const fs::path& path, const fs::path& root) {
 Result<std::vector<std::string>> plannedBakeOutputs(const BakeJob& job) {
     const auto extent = inputExtent(job.spec.input);
     if (!extent) return Error{extent.error()};
-    auto shape = bakeShape(job.bake, extent->first, extent->second);
-    if (!shape) return Error{shape.error()};
-    BakeRecord record;
     if (job.spec.gloss)
         if (const auto gloss = readImageHeader(*job.spec.gloss); !gloss)
             return Error{"--gloss: " + gloss.error()};
-    if (job.spec.detail) {
-        const auto detailImage = readImageHeader(*job.spec.detail);
-        if (!detailImage) return Error{"--detail: " + detailImage.error()};
-        auto detail = detailShape(detailImage->width, detailImage->height, job.detail);
-        if (!detail) return Error{"--detail: " + detail.error()};
-        shape.value().textures.push_back(std::move(detail.value()));
-        // The constant variance is not known before the bake; the plan names files only.
-        record.detail = DetailRecord{*job.spec.detail, 0.0, job.detail.fadeStartMip, job.detail.fadeEndMip};
-    }
+    BakeRecord record;
+    auto shape = bakeJobShape(job, extent->first, extent->second, record);
+    if (!shape) return Error{shape.error()};
     const auto plan = planExport(*shape, job.preset, job.exportOptions, record);
     if (!plan) return Error{plan.error()};
     std::vector<std::string> outputs;

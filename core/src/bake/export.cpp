@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 namespace burnish {
 
@@ -24,14 +25,32 @@ struct Source {
     bool flip = false;
     float value = 0.0f;
 
-    /// The stored value of texel t of level k, in [0, 1].
+    /// The stored value of texel t of level k, in [0, 1] (a texture kept as codes gives its
+    /// code's value: compactStorage keeps codes only for files that store those codes).
     float at(size_t k, size_t t) const {
         if (!texture) return value;
-        const float v =
-            std::clamp(texture->mips[k].texels[t * size_t(texture->channels) + size_t(index)], 0.0f, 1.0f);
+        const size_t i = t * size_t(texture->channels) + size_t(index);
+        const TextureMip& mip = texture->mips[k];
+        const float v = texture->storage == TexelStorage::Unorm8    ? float(mip.unorm8[i]) / 255.0f
+                        : texture->storage == TexelStorage::Unorm16 ? float(mip.unorm16[i]) / 65535.0f
+                                                                    : std::clamp(mip.texels[i], 0.0f, 1.0f);
         return flip ? 1.0f - v : v;
     }
 };
+
+/// How many values level k of a texture holds, in whichever array its storage uses.
+size_t storedValueCount(const BakedTexture& texture, size_t k) {
+    const TextureMip& mip = texture.mips[k];
+    switch (texture.storage) {
+    case TexelStorage::Unorm8:
+        return mip.unorm8.size();
+    case TexelStorage::Unorm16:
+        return mip.unorm16.size();
+    case TexelStorage::Float:
+        break;
+    }
+    return mip.texels.size();
+}
 
 /// One file of the plan: its channels' sources (before any format padding), read straight from
 /// the bake when each level is encoded, so no packed copy of the bake is ever held.
@@ -334,7 +353,7 @@ Result<PlannedFile> planFile(const BakeOutput& bake, const Preset& preset, const
         for (size_t k = 0; k < levels; ++k) {
             const size_t n = size_t(pf.info.mipSizes[k].first) * size_t(pf.info.mipSizes[k].second);
             for (const Source& src : sources)
-                if (src.texture && src.texture->mips[k].texels.size() != n * size_t(src.texture->channels))
+                if (src.texture && storedValueCount(*src.texture, k) != n * size_t(src.texture->channels))
                     return Error{"the bake's '" + std::string(roleName(src.texture->role)) +
                                  "' texture has no values at mip " + std::to_string(k)};
         }
@@ -447,14 +466,9 @@ Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const Export
     return plan;
 }
 
-// Round to nearest integer code of an unsigned normalized format: x + 0.5 truncated is
-// lround(x) for x >= 0 (x = v·maxCode is exact in double), without lround's call.
-// The clamp is written as selects (NaN gives 0) so that conversion loops vectorise.
-template <class T> T quantize(float v, double maxCode) {
-    v = v > 0.0f ? v : 0.0f;
-    v = v < 1.0f ? v : 1.0f;
-    return static_cast<T>(static_cast<std::int32_t>(double(v) * maxCode + 0.5));
-}
+// Codes are bake.h's unormCode: x + 0.5 truncated is lround(x) for x >= 0 (x = v·maxCode is
+// exact in double), and the clamp is written as selects (NaN gives 0), so conversion loops
+// vectorise. A texture the bake kept as codes (compactStorage) was quantized by the same function.
 
 // The level's values in the type the format stores (OpenImageIO converts half itself).
 // Uninitialised on resize: pixelsOf writes every value from parallel blocks.
@@ -477,15 +491,32 @@ template <class T, class Code>
 void convertTexels(const PlannedFile& file, size_t k, int stored, size_t begin, size_t end, T* out,
                    const Code& code) {
     const size_t channels = file.sources.size();
+    // The codes a compact texture holds, for this file's type: copied as they are.
+    auto codesOf = [k](const BakedTexture& tex) -> const T* {
+        if constexpr (std::is_same_v<T, std::uint8_t>) {
+            if (tex.storage == TexelStorage::Unorm8) return tex.mips[k].unorm8.data();
+        } else if constexpr (std::is_same_v<T, std::uint16_t>) {
+            if (tex.storage == TexelStorage::Unorm16) return tex.mips[k].unorm16.data();
+        }
+        return nullptr;
+    };
     // Does the file store one baked texture's channels unchanged and in order?
     bool contiguous = channels == size_t(stored) && channels > 0 && file.sources[0].texture &&
                       file.sources[0].texture->channels == stored;
     for (size_t c = 0; contiguous && c < channels; ++c)
         contiguous = file.sources[c].texture == file.sources[0].texture && file.sources[c].index == int(c) &&
                      !file.sources[c].flip;
+    // A compact texture in a file of another depth is read through Source::at (compactStorage
+    // never plans one; this keeps a hand-made BakeOutput correct).
+    contiguous = contiguous && (file.sources[0].texture->storage == TexelStorage::Float ||
+                                codesOf(*file.sources[0].texture) != nullptr);
     if (contiguous) { // one texture's channels in order: a flat loop the compiler vectorises
-        const float* in = file.sources[0].texture->mips[k].texels.data() + begin * size_t(stored);
         const size_t count = (end - begin) * size_t(stored);
+        if (const T* codes = codesOf(*file.sources[0].texture)) {
+            std::copy(codes + begin * size_t(stored), codes + begin * size_t(stored) + count, out);
+            return;
+        }
+        const float* in = file.sources[0].texture->mips[k].texels.data() + begin * size_t(stored);
         for (size_t i = 0; i < count; ++i)
             out[i] = code(in[i]); // code clamps
         return;
@@ -502,6 +533,17 @@ void convertTexels(const PlannedFile& file, size_t k, int stored, size_t begin, 
         // Source::at with its texture and stride hoisted out of the loop (same values; code
         // clamps, and a flipped value is clamped before 1 − v as at() does).
         const size_t stride = size_t(source->texture->channels);
+        if (const T* codes = codesOf(*source->texture); codes && !source->flip) {
+            codes += size_t(source->index);
+            for (size_t t = begin; t < end; ++t)
+                o[(t - begin) * size_t(stored)] = codes[t * stride];
+            continue;
+        }
+        if (source->texture->storage != TexelStorage::Float) {
+            for (size_t t = begin; t < end; ++t)
+                o[(t - begin) * size_t(stored)] = code(source->at(k, t));
+            continue;
+        }
         const float* in = source->texture->mips[k].texels.data() + size_t(source->index);
         if (source->flip)
             for (size_t t = begin; t < end; ++t)
@@ -513,8 +555,8 @@ void convertTexels(const PlannedFile& file, size_t k, int stored, size_t begin, 
 }
 
 // The codes as function objects, so the conversion loops inline (and vectorise) them.
-constexpr auto code8 = [](float v) { return quantize<std::uint8_t>(v, 255.0); };
-constexpr auto code16 = [](float v) { return quantize<std::uint16_t>(v, 65535.0); };
+constexpr auto code8 = [](float v) { return unorm8(v); };
+constexpr auto code16 = [](float v) { return unorm16(v); };
 
 // Level k of the file converted in parallel blocks of texels (convertTexels).
 PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat format) {
@@ -796,6 +838,31 @@ Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, co
     for (const auto& t : targets)
         plan.result.written.push_back(t.path);
     return std::move(plan.result);
+}
+
+std::map<TextureRole, TexelStorage> compactStorage(const BakeOutput& shape, const Preset& preset,
+                                                   const ExportOptions& options, const BakeRecord& record) {
+    std::map<TextureRole, TexelStorage> storage;
+    const auto plan = makePlan(shape, preset, options, record, false);
+    if (!plan) return storage;                               // the export will say why; the bake stays float
+    std::map<TextureRole, std::optional<TexelStorage>> uses; // nullopt: some use needs floats
+    for (const PlannedFile& f : plan->files)
+        for (const Source& s : f.sources) {
+            if (!s.texture) continue;
+            const ExportFormat format = f.info.format;
+            // Codes only where this file would store exactly those codes: an unflipped channel
+            // of an 8- or 16-bit file that is not a DDS (nvtt and the DDS writer take floats).
+            std::optional<TexelStorage> want;
+            if (!s.flip && (format == ExportFormat::Png8 || format == ExportFormat::Tga))
+                want = TexelStorage::Unorm8;
+            if (!s.flip && (format == ExportFormat::Png16 || format == ExportFormat::Tiff16))
+                want = TexelStorage::Unorm16;
+            const auto [it, first] = uses.emplace(s.texture->role, want);
+            if (!first && it->second != want) it->second.reset();
+        }
+    for (const auto& [role, use] : uses)
+        if (use && role != TextureRole::Detail) storage[role] = *use;
+    return storage;
 }
 
 } // namespace burnish

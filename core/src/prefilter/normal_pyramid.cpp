@@ -480,6 +480,10 @@ NormalPyramid NormalPyramid::build(std::shared_ptr<const NormalMap> map, const P
     return pyramid;
 }
 
+void NormalPyramid::releaseBox(int k) {
+    if (k >= 0 && k < levelCount()) TexelVector().swap(m_levels[size_t(k)].box);
+}
+
 int NormalPyramid::footprintCount(int k, int x, int y) const {
     const PyramidLevel& l = level(k);
     return (l.xStart[size_t(x) + 1] - l.xStart[size_t(x)]) * (l.yStart[size_t(y) + 1] - l.yStart[size_t(y)]);

@@ -12,16 +12,39 @@
 #include <burnish/core/util/result.h>
 #include <burnish/core/util/texel_vector.h>
 
+#include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace burnish {
 
+/// How a baked texture holds its values. Float is what the renderer and the studio read; an export
+/// whose files store a texture only as 8- or 16-bit codes has the bake keep just those codes (a
+/// quarter or half of the memory), quantized as the export would (unormCode).
+enum class TexelStorage { Float, Unorm8, Unorm16 };
+
+/// The stored code of a value v in [0, 1] (clamped; NaN gives 0) in an unsigned normalized format
+/// of `maxCode` (255, 65535): round to nearest, v·maxCode + 0.5 truncated.
+template <class T> inline T unormCode(float v, double maxCode) {
+    v = v > 0.0f ? v : 0.0f;
+    v = v < 1.0f ? v : 1.0f;
+    return static_cast<T>(static_cast<std::int32_t>(double(v) * maxCode + 0.5));
+}
+inline std::uint8_t unorm8(float v) {
+    return unormCode<std::uint8_t>(v, 255.0);
+}
+inline std::uint16_t unorm16(float v) {
+    return unormCode<std::uint16_t>(v, 65535.0);
+}
+
 struct TextureMip {
     int width = 0;
     int height = 0;
-    TexelVector texels; // row-major, `channels` per texel, each in [0, 1]
+    TexelVector texels; // row-major, `channels` per texel, each in [0, 1] (TexelStorage::Float)
+    std::vector<std::uint8_t, TexelAllocator<std::uint8_t>> unorm8 = {};    // TexelStorage::Unorm8 codes
+    std::vector<std::uint16_t, TexelAllocator<std::uint16_t>> unorm16 = {}; // TexelStorage::Unorm16's codes
 };
 
 /// How a stored channel decodes to its physical value: value = stored·scale + bias.
@@ -41,6 +64,8 @@ struct BakedTexture {
     std::vector<ChannelDecode> decode;
     /// Needs 16-bit or float storage to keep the method's accuracy (LEAN's second moments).
     bool needsHighPrecision = false;
+    /// Which of the mips' arrays holds the values.
+    TexelStorage storage = TexelStorage::Float;
     std::vector<TextureMip> mips;
 };
 
@@ -59,6 +84,9 @@ struct BakeOptions {
     /// Only the textures of these roles are produced (the ones an export's files read); all of
     /// the method's when unset. Each texture produced is the same whatever the others are.
     std::optional<std::vector<TextureRole>> roles;
+    /// Roles to keep as 8- or 16-bit codes instead of floats (compactStorage of export.h names the
+    /// ones an export allows); every other role, and every role of the mixture, is float.
+    std::map<TextureRole, TexelStorage> storage;
 };
 
 struct BakeStats {

@@ -104,6 +104,10 @@ struct BakeJob {
 /// spells it ("--method: ...", "--compression bc4 applies to --format dds only ...").
 Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec);
 
+/// The shape of a job's bake for a `width` × `height` input (bakeShape, plus the detail texture's
+/// when the job has one, its record put in `record`): what export's planning reads.
+Result<BakeOutput> bakeJobShape(const BakeJob& job, int width, int height, BakeRecord& record);
+
 /// Reads a manifest, {"version": 1, "jobs": [{"input": ..., "out": ..., <any option by its long
 /// command-line name>}]}, into one spec per job: each starts from `defaults` (the options given on the
 /// command line) and takes the job's fields; relative paths (input, out, gloss, detail, a preset

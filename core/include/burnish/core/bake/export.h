@@ -106,6 +106,14 @@ struct ExportResult {
 Result<ExportResult> planExport(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const BakeRecord& record = {});
 
+/// The roles an export stores only as 8- or 16-bit codes (every file that reads the role is a PNG,
+/// TGA or 16-bit TIFF of one depth, none flips it, none is a DDS): BakeOptions::storage for a bake
+/// made only to be exported, which then holds a quarter (8-bit) or half (16-bit) of the float
+/// textures' memory and exports the same bytes. `shape` is bakeShape's. Empty when the plan fails.
+std::map<TextureRole, TexelStorage> compactStorage(const BakeOutput& shape, const Preset& preset,
+                                                   const ExportOptions& options,
+                                                   const BakeRecord& record = {});
+
 /// Writes the files of planExport and `bake.json` into `outDir` (which must exist) as one set
 /// (files.h's commitSet): staged in a private folder, bake.json removed first and written last, so a
 /// folder with a bake.json holds a complete set; with Overwrite::Allow the files the previous

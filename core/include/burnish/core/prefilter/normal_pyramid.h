@@ -156,6 +156,10 @@ public:
     void forEachMomentRow(int k, const std::function<void(int y, const NormalMoments* row)>& fn) const;
     /// Number of finest texels in the footprint of texel (x, y) of level k.
     int footprintCount(int k, int x, int y) const;
+    /// Frees level k's box moments once nothing reads them again (a bake that has written level k:
+    /// every coarser level was built when the pyramid was). Its geometry stays; reading its
+    /// moments afterwards is an error the caller must not make.
+    void releaseBox(int k);
 
 private:
     std::shared_ptr<const NormalMap> m_map;

@@ -18,6 +18,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -366,6 +367,85 @@ std::set<std::string> namesIn(const fs::path& folder) {
     for (const auto& e : fs::directory_iterator(folder))
         names.insert(e.path().filename().string());
     return names;
+}
+
+// evaluate's report folder is one set with evaluate.json as its index and its error maps a set of
+// their own: killed after any step of either commit, a folder that holds an evaluate.json holds
+// exactly the report it belongs to (the old one or the new one, error maps included), and the next
+// run leaves exactly the new report.
+TEST(CliHostile, AKilledReportCommitNeverLeavesAMixedReport) {
+    TempDir dir;
+    auto tree = [](const fs::path& folder) {
+        std::map<std::string, std::string> files; // path -> bytes, Burnish's staging folders left out
+        for (auto it = fs::recursive_directory_iterator(folder); it != fs::recursive_directory_iterator();
+             ++it) {
+            const std::string name = it->path().filename().string();
+            if (name.rfind(".burnish-staging-", 0) == 0) {
+                it.disable_recursion_pending();
+                continue;
+            }
+            if (!it->is_regular_file()) continue;
+            std::ifstream in(it->path(), std::ios::binary);
+            files[fs::relative(it->path(), folder).string()] =
+                std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        }
+        return files;
+    };
+    std::vector<float> px;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+            const float nx = 0.4f * std::sin(float(x)), ny = 0.3f * std::cos(float(2 * y + x));
+            const float nz = std::sqrt(1.0f - nx * nx - ny * ny);
+            px.insert(px.end(), {0.5f * nx + 0.5f, 0.5f * ny + 0.5f, 0.5f * nz + 0.5f});
+        }
+    ASSERT_TRUE(
+        burnish::writeImageAtomic(dir / "bumpy.png", 32, 32, 3, px, {burnish::StoredType::UInt8, {}, {}}));
+    const std::string map = shellQuote((dir / "bumpy.png").string());
+    const std::string common = " --bake-runs 1 --methods naive,lean --first-mip 1 --last-mip 2 --error-maps";
+    const fs::path oldSet = dir / "old", newSet = dir / "new";
+    ASSERT_EQ(
+        runBurnish("evaluate " + map + common + " --power 64 --out " + shellQuote(oldSet.string())).exitCode,
+        0);
+    const std::string newArgs = "evaluate " + map + common + " --power 256 --force --out ";
+    ASSERT_EQ(runBurnish(newArgs + shellQuote(newSet.string())).exitCode, 0);
+    const auto before = tree(oldSet), after = tree(newSet);
+    ASSERT_TRUE(before.count("errors/lean-s64-mip2.exr") && after.count("errors/lean-s256-mip2.exr"));
+    // A report as `ref` has it: the same files, the same error maps bit for bit, the same powers in
+    // evaluate.json (its timings, and the plots and text that show them, differ from run to run).
+    auto sameReport = [](const std::map<std::string, std::string>& found,
+                         const std::map<std::string, std::string>& ref) {
+        if (found.size() != ref.size()) return false;
+        for (const auto& [name, bytes] : ref) {
+            const auto it = found.find(name);
+            if (it == found.end()) return false;
+            if (name.rfind("errors/", 0) == 0 && it->second != bytes) return false;
+        }
+        const auto powers = [](const std::string& json) {
+            return nlohmann::json::parse(json)["base_powers"];
+        };
+        return powers(found.at("evaluate.json")) == powers(ref.at("evaluate.json"));
+    };
+    int kills = 0;
+    for (int step = 1; step < 100; ++step) {
+        SCOPED_TRACE("killed after step " + std::to_string(step));
+        const fs::path out = dir / ("run" + std::to_string(step));
+        fs::copy(oldSet, out, fs::copy_options::recursive);
+        ::setenv("BURNISH_FAULT_KILL_AT_COMMIT_STEP", std::to_string(step).c_str(), 1);
+        const CliResult r = runBurnish(newArgs + shellQuote(out.string()));
+        ::unsetenv("BURNISH_FAULT_KILL_AT_COMMIT_STEP");
+        if (r.exitCode == 0) break;
+        ++kills;
+        const auto found = tree(out);
+        if (found.count("evaluate.json")) {
+            EXPECT_TRUE(sameReport(found, before) || sameReport(found, after)) << "a mixed report";
+        }
+        ASSERT_EQ(runBurnish(newArgs + shellQuote(out.string())).exitCode, 0);
+        EXPECT_TRUE(sameReport(tree(out), after)) << "the next run leaves exactly the new report";
+        fs::remove_all(out);
+    }
+    // The maps' journal, 4 renames and 4 removals; the report's journal, the old index, 3 renames
+    // and the new index.
+    EXPECT_GE(kills, 14);
 }
 
 // One rule for every command that writes: an existing output is replaced only with --force, and

@@ -347,41 +347,63 @@ PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& r) {
     return spec;
 }
 
-Status writeFloatExr(const fs::path& path, int width, int height, const std::vector<float>& values) {
-    return writeImageAtomic(path, width, height, 1, values, {StoredType::Float, {"Y"}, {}});
-}
-
 Status writeEvaluationReport(const EvaluationReport& r, const fs::path& dir) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) return Error{"cannot create folder '" + dir.string() + "': " + ec.message()};
-    if (auto st = writeFileAtomic(dir / "evaluate.md", evaluationMarkdown(r)); !st) return st;
-    if (auto st = writeFileAtomic(dir / "evaluate.json", evaluationJson(r).dump(2) + "\n"); !st) return st;
-    if (auto st = savePlotPng(evaluationErrorPerMipPlot(r), dir / "evaluate-error-per-mip.png"); !st)
-        return st;
-    if (auto st = savePlotPng(evaluationErrorVsCostPlot(r), dir / "evaluate-error-vs-cost.png"); !st)
-        return st;
+    // The report is one set with evaluate.json as its index, the error maps a set of their own in
+    // errors/: both staged in full first; then the old index goes, the maps are switched, and the
+    // new index comes last. A folder holding evaluate.json holds the whole report it describes; a
+    // killed commit is finished by the next run (FileSet::begin).
+    auto begun = FileSet::begin(dir);
+    if (!begun) return Error{begun.error()};
+    FileSet& report = begun.value();
+    if (auto st = report.addBytes("evaluate.md", evaluationMarkdown(r)); !st) return st;
+    if (auto st = report.addBytes("evaluate.json", evaluationJson(r).dump(2) + "\n"); !st) return st;
+    for (const auto& [name, plot] : {std::pair{"evaluate-error-per-mip.png", evaluationErrorPerMipPlot(r)},
+                                     std::pair{"evaluate-error-vs-cost.png", evaluationErrorVsCostPlot(r)}}) {
+        const auto png = encodePlotPng(plot);
+        if (!png) return Error{png.error()};
+        if (auto st = report.addBytes(name, *png); !st) return st;
+    }
+    const fs::path errorsDir = dir / "errors";
+    std::optional<FileSet> errors;
     std::vector<std::string> written;
-    if (!r.result.maps.empty()) {
-        fs::create_directories(dir / "errors", ec);
-        if (ec) return Error{"cannot create folder '" + (dir / "errors").string() + "': " + ec.message()};
+    if (!r.result.maps.empty() || fs::is_directory(errorsDir, ec)) {
+        fs::create_directories(errorsDir, ec);
+        if (ec) return Error{"cannot create folder '" + errorsDir.string() + "': " + ec.message()};
+        auto set = FileSet::begin(errorsDir);
+        if (!set) return Error{set.error()};
+        errors.emplace(std::move(set).value());
         for (const auto& m : r.result.maps) {
             const std::string kernel =
                 m.kernel == FilterKernel::Box ? "" : "-" + std::string(kernelName(m.kernel));
             const std::string name = variantLabel({m.method, FilterKernel::Box, m.lobes}) + kernel + "-s" +
                                      powerLabel(m.basePower) + "-mip" + std::to_string(m.mip) + ".exr";
-            if (auto st = writeFloatExr(dir / "errors" / name, m.width, m.height, m.relativeError); !st)
-                return st;
+            const Status st = errors->add(name, [&](const fs::path& staged) {
+                return writeImageFile(staged, m.width, m.height, 1, m.relativeError,
+                                      {StoredType::Float, {"Y"}, {}}, errorsDir / name);
+            });
+            if (!st) return st;
             written.push_back(name);
         }
     }
-    // The error maps of an earlier report in this folder that this one did not write (other powers,
-    // methods or mips) go: the folder holds exactly this report.
-    std::vector<std::string> previous;
-    for (fs::directory_iterator it(dir / "errors", ec), end; !ec && it != end; it.increment(ec))
-        if (it->path().extension() == ".exr") previous.push_back(it->path().filename().string());
-    removeStaleFiles(dir / "errors", previous, written);
-    return {};
+    // The error maps of an earlier report that this one does not write (other powers, methods or
+    // mips) go: the folder holds exactly this report.
+    std::vector<std::string> obsolete;
+    for (fs::directory_iterator it(errorsDir, ec), end; !ec && it != end; it.increment(ec))
+        if (it->path().extension() == ".exr" &&
+            std::find(written.begin(), written.end(), it->path().filename().string()) == written.end())
+            obsolete.push_back(it->path().filename().string());
+    if (errors) {
+        // Without the old index first, a kill while the maps are switched cannot leave an old
+        // evaluate.json beside new maps.
+        if (fs::exists(fs::symlink_status(dir / "evaluate.json", ec)) &&
+            !fs::remove(dir / "evaluate.json", ec))
+            return Error{"cannot remove '" + (dir / "evaluate.json").string() + "': " + ec.message()};
+        if (auto st = errors->commit({}, obsolete, Overwrite::Allow); !st) return st;
+    }
+    return report.commit("evaluate.json", {}, Overwrite::Allow);
 }
 
 } // namespace burnish

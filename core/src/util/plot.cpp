@@ -330,6 +330,12 @@ Result<ImageBuf> renderPlot(const PlotSpec& spec) {
 }
 
 Status savePng(const ImageBuf& image, const std::filesystem::path& path) {
+    const auto bytes = encodePng(image, path.filename().string());
+    if (!bytes) return Error{bytes.error()};
+    return writeFileAtomic(path, *bytes);
+}
+
+Result<std::string> encodePng(const ImageBuf& image, const std::string& name) {
     std::vector<unsigned char> bytes;
     OIIO::Filesystem::IOVecOutput memory(bytes);
     auto out = OIIO::ImageOutput::create("png");
@@ -337,14 +343,19 @@ Status savePng(const ImageBuf& image, const std::filesystem::path& path) {
     if (!out->set_ioproxy(&memory)) return Error{"plot: the PNG writer cannot write to memory"};
     OIIO::ImageSpec spec(image.spec().width, image.spec().height, image.spec().nchannels,
                          OIIO::TypeDesc::UINT8);
-    const std::string name = path.filename().string();
     if (!out->open(name, spec)) return Error{"plot: cannot encode PNG: " + out->geterror()};
     if (!image.write(out.get())) {
         out->close();
         return Error{"plot: cannot encode PNG: " + image.geterror()};
     }
     if (!out->close()) return Error{"plot: cannot encode PNG: " + out->geterror()};
-    return writeFileAtomic(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    return std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+}
+
+Result<std::string> encodePlotPng(const PlotSpec& spec) {
+    auto image = renderPlot(spec);
+    if (!image) return Error{image.error()};
+    return encodePng(*image, "plot.png");
 }
 
 Status savePlotPng(const PlotSpec& spec, const std::filesystem::path& path) {

@@ -57,12 +57,10 @@ PlotSpec evaluationErrorVsCostPlot(const EvaluationReport& report);
 
 /// Writes evaluate.md, evaluate.json, evaluate-error-per-mip.png, evaluate-error-vs-cost.png and,
 /// when the result holds error maps, errors/<method>-s<power>-mip<k>.exr (one float channel),
-/// every file atomically. Creates `dir` and `dir/errors` when missing; error maps an earlier report
-/// left in `dir/errors` that this one does not write are removed, so the folder holds one report.
+/// as one set: everything staged first, then the old evaluate.json removed, the error maps switched
+/// (those of an earlier report this one does not write removed), the other files renamed and
+/// evaluate.json renamed last, so a folder holding evaluate.json holds the whole report; a killed
+/// commit is finished by the next write into the folder. Creates `dir` and `dir/errors` when missing.
 Status writeEvaluationReport(const EvaluationReport& report, const std::filesystem::path& dir);
-
-/// Writes a one-channel float EXR atomically.
-Status writeFloatExr(const std::filesystem::path& path, int width, int height,
-                     const std::vector<float>& values);
 
 } // namespace burnish

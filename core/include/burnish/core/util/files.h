@@ -128,8 +128,9 @@ public:
     const std::vector<std::string>& names() const { return m_names; }
     /// The folder the set is committed into.
     const std::filesystem::path& folder() const { return m_staging.parent(); }
-    /// Commits every staged file; `index` (one of the names) is renamed last and a previous one
-    /// removed first; `obsolete` names of the previous set that this one does not hold are removed.
+    /// Commits every staged file; `index` (one of the names, or empty for a set without one) is
+    /// renamed last and a previous one removed first; `obsolete` names of the previous set that this one does
+    /// not hold are removed.
     Status commit(const std::string& index, const std::vector<std::string>& obsolete, Overwrite overwrite);
     /// recoverStaging's notes from begin().
     const std::vector<std::string>& recoveryNotes() const { return m_notes; }
@@ -169,8 +170,9 @@ int removeStaleFiles(const std::filesystem::path& folder, const std::vector<std:
 /// or unreadable (then nothing is removed).
 std::vector<std::string> indexedFiles(const std::filesystem::path& index);
 
-/// For tests: called after every step of a commit with the number of steps done so far (journal
-/// written = 1, then one per removal or rename), so a test can kill the process at any point.
+/// For tests: called after every step of a commit with the number of commit steps the process has
+/// done so far, over every commit (each commit: its journal written, then one per removal or
+/// rename), so a test can kill the process at any point.
 /// Null (the default) does nothing.
 void setCommitStepHookForTesting(std::function<void(int step)> hook);
 

@@ -63,6 +63,10 @@ Result<OIIO::ImageBuf> renderPlot(const PlotSpec& spec);
 
 /// Encodes an image as 8-bit PNG in memory and writes it with writeFileAtomic.
 Status savePng(const OIIO::ImageBuf& image, const std::filesystem::path& path);
+/// The PNG file's bytes of an image (`name` only labels errors).
+Result<std::string> encodePng(const OIIO::ImageBuf& image, const std::string& name);
+/// renderPlot, encoded as a PNG file's bytes (for a file set that stages them).
+Result<std::string> encodePlotPng(const PlotSpec& spec);
 
 /// renderPlot then savePng.
 Status savePlotPng(const PlotSpec& spec, const std::filesystem::path& path);

@@ -272,6 +272,39 @@ TEST(ImageIo, TruncatedFileIsAnError) {
 
 // OpenImageIO hands back zeros (DDS) or grey (JPEG) for the missing part of a file cut short and
 // reports success: that is an error naming the file as truncated, never texels.
+// An OpenEXR header whose attribute claims more bytes than the file holds is refused before
+// OpenEXR reads it: OpenEXR allocates and clears whatever an attribute claims, and fuzzing found a
+// 300-byte file that took 2 GB and 20 s that way. Valid EXRs (tiled, mip-mapped) still read.
+TEST(ImageIo, ExrHeadersThatClaimMoreThanTheFileAreCorrupt) {
+    test::TempDir dir;
+    std::string exr("\x76\x2f\x31\x01\x02\x00\x00\x00", 8);
+    exr += std::string("comments\0string\0", 16);
+    exr += std::string("\xff\xff\xff\x7f", 4); // 2^31 - 1 bytes of comment
+    exr += "short";
+    std::ofstream(dir / "huge.exr", std::ios::binary) << exr;
+    const auto huge = readImage(dir / "huge.exr");
+    ASSERT_FALSE(huge.ok());
+    EXPECT_NE(
+        huge.error().find("corrupt (the EXR attribute 'comments' claims 2147483647 bytes and 5 remain)"),
+        std::string::npos)
+        << huge.error();
+    EXPECT_FALSE(readImageHeader(dir / "huge.exr").ok());
+
+    std::vector<float> px(16 * 8 * 3, 0.5f);
+    for (const char* name : {"scan.exr", "tiled.exr"}) {
+        const auto path = dir / name;
+        auto out = OIIO::ImageOutput::create(path.string());
+        OIIO::ImageSpec spec(16, 8, 3, OIIO::TypeDesc::HALF);
+        spec.attribute("Software", "a comment long enough to matter");
+        if (std::string(name) == "tiled.exr") spec.tile_width = spec.tile_height = 16;
+        ASSERT_TRUE(out && out->open(path.string(), spec) &&
+                    out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close());
+        const auto read = readImage(path);
+        ASSERT_TRUE(read.ok()) << read.error();
+        EXPECT_EQ(read->width, 16);
+    }
+}
+
 TEST(ImageIo, FilesCutShortAreTruncatedNotTexels) {
     test::TempDir dir;
     std::vector<float> px(64 * 64 * 3);

@@ -349,6 +349,37 @@ bool waitForProgress(ErrorCostChart& chart) {
     return chart.progressBar()->value() > 0;
 }
 
+// The chart evaluates a small map by itself when shown; a map larger than 1024² only when asked
+// (an 8192² map started by itself, ran for minutes and took 17 GB), and it says so.
+TEST(ErrorCostChart, BigMapsAreEvaluatedOnlyWhenAsked) {
+    test::TempDir dir;
+    MaterialDocument doc;
+    loadHammered(doc, dir, kSmallMap);
+    {
+        ErrorCostChart chart(&doc);
+        QSignalSpy updated(&chart, &ErrorCostChart::methodsUpdated);
+        chart.show();
+        EXPECT_TRUE(chart.evaluatesByItself());
+        ASSERT_TRUE(updated.wait(kWorkerTimeoutMs)) << "a small map is evaluated when the chart shows";
+    }
+    QImage big(1040, 1024, QImage::Format_RGB888); // just above 1024²
+    big.fill(QColor(128, 128, 255));
+    const QString path = QString::fromStdString((dir / "big.png").string());
+    ASSERT_TRUE(big.save(path));
+    ASSERT_TRUE(doc.loadMap(MapSlot::Normal, path));
+    ErrorCostChart chart(&doc);
+    EXPECT_FALSE(chart.evaluatesByItself());
+    chart.show();
+    QTest::qWait(1000); // well past the debounce
+    EXPECT_FALSE(chart.evaluating());
+    EXPECT_EQ(chart.report(), nullptr);
+    EXPECT_TRUE(chart.statusText().contains("1040×1024")) << chart.statusText().toStdString();
+    EXPECT_TRUE(chart.statusText().contains("Evaluate now")) << chart.statusText().toStdString();
+    chart.evaluateNow();
+    EXPECT_TRUE(chart.evaluating()) << "pressing Evaluate now runs it";
+    chart.cancelEvaluation();
+}
+
 TEST(ErrorCostChart, ProgressBarShowsWhileRunningAndReaches100) {
     test::TempDir dir;
     MaterialDocument doc;

@@ -146,7 +146,19 @@ ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
     m_debounce->setSingleShot(true);
     m_debounce->setInterval(kDebounceMs);
     connect(m_debounce, &QTimer::timeout, this, [this] {
-        if (isVisible() && evaluationKey() != m_evaluatedKey) evaluateNow();
+        if (!isVisible() || evaluationKey() == m_evaluatedKey) return;
+        if (evaluatesByItself()) {
+            evaluateNow();
+            return;
+        }
+        // A big map is evaluated only when asked: its ground truth visits every finest texel for
+        // every direction (an 8192² map took minutes and 17 GB when it started by itself).
+        const NormalMap& map = *m_doc->maps().normal;
+        if (!m_evaluating)
+            m_status->setText(QString("The %1×%2 map is evaluated only when asked (it visits every texel for "
+                                      "each of 49 directions, at every mip): press Evaluate now.")
+                                  .arg(map.width)
+                                  .arg(map.height));
     });
     connect(m_doc, &MaterialDocument::changed, this, &ErrorCostChart::onDocumentChanged);
     connect(m_doc, &MaterialDocument::mapChanged, this, &ErrorCostChart::onDocumentChanged);
@@ -182,6 +194,10 @@ void ErrorCostChart::cancelAndJoinWorkers() {
     for (const Worker& w : m_workers)
         if (w.thread) w.thread->wait();
     m_workers.clear();
+}
+
+bool ErrorCostChart::evaluatesByItself() const {
+    return m_doc->maps().normal->texelCount() <= kAutoEvaluateTexels;
 }
 
 QString ErrorCostChart::evaluationKey() const {

@@ -39,6 +39,10 @@ QColor methodColour(Method method);
 class ErrorCostChart : public QTabWidget {
     Q_OBJECT
 public:
+    /// Maps up to this many texels (1024²) are evaluated by themselves when the chart is shown or
+    /// the map or power changes; larger ones only when Evaluate now is pressed.
+    static constexpr size_t kAutoEvaluateTexels = size_t(1) << 20;
+    bool evaluatesByItself() const;
     enum class CostAxis { NsPerLobe, BytesPerTexel };
 
     explicit ErrorCostChart(MaterialDocument* doc, QWidget* parent = nullptr);

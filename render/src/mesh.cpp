@@ -241,6 +241,11 @@ Result<MeshData> loadObj(const std::filesystem::path& path) {
     for (const float x : attrib.vertices) {
         if (!std::isfinite(x)) return Error{"'" + path.string() + "': a vertex position is not finite"};
     }
+    // A texture coordinate too large for a float (fuzzing found "vt 2000…0" with 100 digits) would
+    // reach the shader as Inf.
+    for (const float x : attrib.texcoords) {
+        if (!std::isfinite(x)) return Error{"'" + path.string() + "': a texture coordinate is not finite"};
+    }
 
     // Every corner's (position, normal, uv) indices; normals are generated when any corner lacks one.
     bool allNormals = true;

@@ -239,6 +239,15 @@ TEST(Mesh, ObjErrors) {
     auto emptyMesh = loadObj(empty);
     ASSERT_FALSE(emptyMesh);
     EXPECT_NE(emptyMesh.error().find("no triangles"), std::string::npos) << emptyMesh.error();
+
+    // A texture coordinate beyond float's range (a fuzzing find) is refused, never Inf in a vertex.
+    const auto huge = dir / "huge_uv.obj";
+    ASSERT_TRUE(writeFileAtomic(huge, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 2" +
+                                          std::string(100, '0') + " 1\nf 1/1 2/2 3/3\n"));
+    auto hugeMesh = loadObj(huge);
+    ASSERT_FALSE(hugeMesh);
+    EXPECT_NE(hugeMesh.error().find("texture coordinate is not finite"), std::string::npos)
+        << hugeMesh.error();
 }
 
 TEST(Mesh, GpuMeshUploadsAndDraws) {

@@ -37,6 +37,8 @@ int main(int argc, char** argv) {
 
     burnish::studio::MainWindow window;
     const bool shooting = parser.isSet(burnish::studio::kScreenshotOption);
+    // A big map decodes off the GUI thread; a screenshot waits for its map instead.
+    window.setBackgroundLoads(!shooting);
     if (!parser.positionalArguments().isEmpty()) {
         if (shooting) {
             window.showMessage = [](const QString&, const QString& text) {

@@ -152,6 +152,22 @@ MainWindow::MainWindow(QWidget* parent)
     connect(m_doc, &MaterialDocument::changed, this, &MainWindow::updateStatus);
     connect(m_doc, &MaterialDocument::notice, this,
             [this](const QString& text) { statusBar()->showMessage(text, 10000); });
+    // Background loads: the window stays live while a big map decodes, and says so.
+    connect(m_doc, &MaterialDocument::mapLoadStarted, this, [this](MapSlot slot, const QString& path) {
+        statusBar()->showMessage(
+            QString("Loading the %1 map %2…").arg(mapSlotName(slot), QFileInfo(path).fileName()));
+    });
+    connect(m_doc, &MaterialDocument::mapLoadFinished, this,
+            [this](MapSlot slot, const QString& path, bool ok, const QString& error) {
+                if (ok) {
+                    statusBar()->showMessage(
+                        QString("Loaded the %1 map %2").arg(mapSlotName(slot), QFileInfo(path).fileName()),
+                        4000);
+                    return;
+                }
+                statusBar()->clearMessage();
+                showMessage(QString("Cannot load the %1 map").arg(mapSlotName(slot)), error);
+            });
     connect(m_doc->undoStack(), &QUndoStack::cleanChanged, this, &MainWindow::updateTitle);
     connect(m_panel, &MaterialPanel::errorOccurred, this,
             [this](const QString& title, const QString& text) { showMessage(title, text); });
@@ -377,6 +393,10 @@ bool MainWindow::openProject(const QString& path) {
     // A newer autosave of this project (a crash after the last save) is offered right away.
     offerRecovery();
     return true;
+}
+
+void MainWindow::setBackgroundLoads(bool on) {
+    m_panel->setBackgroundLoads(on);
 }
 
 bool MainWindow::openFile(const QString& path) {

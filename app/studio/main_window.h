@@ -53,6 +53,9 @@ public:
     /// A .burnish project is opened; any other file is loaded as the normal map of the current
     /// document (what dropping it on the window does). False, with the message shown, on an error.
     bool openFile(const QString& path);
+    /// Images dropped or loaded are decoded off the GUI thread (the studio does this; tests that
+    /// read the document right after openFile leave it off).
+    void setBackgroundLoads(bool on);
     bool saveProjectAs(const QString& path);
     /// New document (the built-in sample), after asking about unsaved changes.
     bool newDocument();

@@ -4,6 +4,9 @@
 #include <burnish/core/env/sampling.h>
 #include <burnish/core/prefilter/sample_maps.h>
 
+#include <QCoreApplication>
+#include <QPointer>
+#include <QThread>
 #include <QUndoCommand>
 
 #include <algorithm>
@@ -317,31 +320,97 @@ Status MaterialDocument::setPreset(const QString& name) {
     return {};
 }
 
-Status MaterialDocument::loadMap(MapSlot slot, const QString& path) {
-    MaterialSettings s = m_settings;
-    switch (slot) {
-    case MapSlot::Normal:
-        s.normalMapPath = path;
-        break;
-    case MapSlot::Gloss:
-        s.glossMapPath = path;
-        break;
-    case MapSlot::Detail:
-        s.detailMapPath = path;
-        break;
+Result<DecodedMap> MaterialDocument::decodeMap(MapSlot slot, const QString& path) {
+    DecodedMap d;
+    d.slot = slot;
+    d.path = path;
+    if (slot == MapSlot::Gloss) {
+        auto image = readImage(path.toStdString());
+        if (!image) return Error{"gloss map: " + image.error()};
+        d.gloss = std::make_shared<const Image>(std::move(image.value()));
+        return d;
     }
-    auto maps = loadMaps(s);
-    if (!maps) return Error{maps.error()};
+    auto map = loadNormalMap(path.toStdString());
+    if (!map)
+        return Error{std::string(slot == MapSlot::Normal ? "normal" : "detail") + " map: " + map.error()};
+    (slot == MapSlot::Normal ? d.normal : d.detail) =
+        std::make_shared<const NormalMap>(std::move(map.value()));
+    return d;
+}
+
+Status MaterialDocument::applyDecodedMap(const DecodedMap& d) {
+    MaterialSettings s = m_settings;
     // Keep the maps of the other slots shared (no reload, same undo data).
     LoadedMaps next = m_maps;
-    if (slot == MapSlot::Normal) next.normal = maps->normal;
-    if (slot == MapSlot::Gloss) next.gloss = maps->gloss;
-    if (slot == MapSlot::Detail) next.detail = maps->detail;
+    switch (d.slot) {
+    case MapSlot::Normal:
+        if (!d.normal) return Error{"normal map: nothing was decoded"};
+        s.normalMapPath = d.path;
+        next.normal = d.normal;
+        break;
+    case MapSlot::Gloss:
+        if (!d.gloss) return Error{"gloss map: nothing was decoded"};
+        s.glossMapPath = d.path;
+        next.gloss = d.gloss;
+        break;
+    case MapSlot::Detail:
+        if (!d.detail) return Error{"detail map: nothing was decoded"};
+        s.detailMapPath = d.path;
+        next.detail = d.detail;
+        break;
+    }
+    // The bake reads the gloss per normal-map texel: checked as the bake will.
+    if (next.gloss)
+        if (auto gloss = glossFromImage(*next.gloss, next.normal->width, next.normal->height); !gloss)
+            return Error{"gloss map '" + s.glossMapPath.toStdString() + "': " + gloss.error()};
     QString what;
     auto layers = carriedLayers(next.normal->width, next.normal->height, preset().encoding, &what);
-    push(s, next, QString("Load %1 map").arg(mapSlotName(slot)), kNoMerge, layers);
+    push(s, next, QString("Load %1 map").arg(mapSlotName(d.slot)), kNoMerge, layers);
     if (layers) emit notice(what);
     return {};
+}
+
+Status MaterialDocument::loadMap(MapSlot slot, const QString& path) {
+    auto decoded = decodeMap(slot, path);
+    if (!decoded) return Error{decoded.error()};
+    return applyDecodedMap(*decoded);
+}
+
+void MaterialDocument::loadMapInBackground(MapSlot slot, const QString& path) {
+    // A newer request for the slot supersedes an older one: its result is dropped on arrival.
+    const quint64 generation = ++m_loadGeneration[int(slot)];
+    emit mapLoadStarted(slot, path);
+    QPointer<MaterialDocument> self(this);
+    QThread* worker = QThread::create([self, slot, path, generation] {
+        auto decoded = std::make_shared<Result<DecodedMap>>(decodeMap(slot, path));
+        QMetaObject::invokeMethod(
+            QCoreApplication::instance(),
+            [self, slot, path, generation, decoded] {
+                if (!self || self->m_loadGeneration[int(slot)] != generation) return; // superseded
+                self->m_loadDone[int(slot)] = generation;
+                const Status st =
+                    *decoded ? self->applyDecodedMap(**decoded) : Status(Error{decoded->error()});
+                emit self->mapLoadFinished(slot, path, st.ok(),
+                                           st.ok() ? QString() : QString::fromStdString(st.error()));
+            },
+            Qt::QueuedConnection);
+    });
+    m_loaders.push_back(worker);
+    connect(worker, &QThread::finished, this, [this, worker] {
+        m_loaders.erase(std::remove(m_loaders.begin(), m_loaders.end(), worker), m_loaders.end());
+        worker->deleteLater();
+    });
+    worker->start();
+}
+
+bool MaterialDocument::loading(MapSlot slot) const {
+    return m_loadGeneration[int(slot)] != m_loadDone[int(slot)];
+}
+
+MaterialDocument::~MaterialDocument() {
+    // A decode in flight finishes (it touches nothing of the document) before the document goes.
+    for (QThread* worker : m_loaders)
+        worker->wait();
 }
 
 void MaterialDocument::clearMap(MapSlot slot) {

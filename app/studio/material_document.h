@@ -18,8 +18,11 @@
 #include <QString>
 #include <QUndoStack>
 
+#include <array>
 #include <memory>
 #include <vector>
+
+class QThread;
 
 namespace burnish::studio {
 
@@ -88,6 +91,15 @@ struct PaintLayers {
     PaintLayer offset;
 };
 
+/// One map decoded from its file, not yet in a document (MaterialDocument::decodeMap).
+struct DecodedMap {
+    MapSlot slot = MapSlot::Normal;
+    QString path;
+    std::shared_ptr<const NormalMap> normal; // MapSlot::Normal
+    std::shared_ptr<const Image> gloss;      // MapSlot::Gloss
+    std::shared_ptr<const NormalMap> detail; // MapSlot::Detail
+};
+
 /// A painted layer saved as a file (a project's "layers" entry; path absolute).
 struct LayerFile {
     PaintLayerKind kind = PaintLayerKind::Gloss;
@@ -105,6 +117,7 @@ class MaterialDocument : public QObject {
     Q_OBJECT
 public:
     explicit MaterialDocument(QObject* parent = nullptr);
+    ~MaterialDocument() override;
 
     const MaterialSettings& settings() const { return m_settings; }
     const LoadedMaps& maps() const { return m_maps; }
@@ -137,6 +150,17 @@ public:
     Status setPreset(const QString& name);
     /// Loads a map through core (loadNormalMap / readImage); on error nothing changes.
     Status loadMap(MapSlot slot, const QString& path);
+    /// loadMap with the decoding on a worker thread, so the window never waits on a big file:
+    /// mapLoadStarted now, mapLoadFinished when the map is in (one undo step) or refused. A newer
+    /// request for the slot supersedes an older one, whose result is dropped.
+    void loadMapInBackground(MapSlot slot, const QString& path);
+    /// Whether a background load of the slot is in flight.
+    bool loading(MapSlot slot) const;
+    /// The expensive half of loadMap: reads and decodes the file (any thread; no document state).
+    static Result<DecodedMap> decodeMap(MapSlot slot, const QString& path);
+    /// The other half, on the document's thread: checks the map against the document (a gloss map
+    /// has the normal map's size), carries the painted layers over, pushes one undo step.
+    Status applyDecodedMap(const DecodedMap& decoded);
     /// Removes a map (the normal slot returns to the built-in sample).
     void clearMap(MapSlot slot);
     void setExportSettings(const ExportSettings& exportSettings);
@@ -179,6 +203,9 @@ signals:
     void changed();
     /// A slot's map changed (loaded, cleared, undone or reset).
     void mapChanged(MapSlot slot);
+    /// A background load began / ended (ok, or the error message), loadMapInBackground.
+    void mapLoadStarted(MapSlot slot, const QString& path);
+    void mapLoadFinished(MapSlot slot, const QString& path, bool ok, const QString& error);
     /// Something the artist should know happened to their work (painted layers resampled to a new
     /// map's size, re-encoded for a new preset): one line for the status bar.
     void notice(const QString& text);
@@ -203,6 +230,10 @@ private:
     PaintLayer m_glossLayer;
     PaintLayer m_offsetLayer;
     std::shared_ptr<std::vector<float>> m_authored;
+    // Background loads per slot: the newest request's number and the last one that arrived.
+    std::array<quint64, 3> m_loadGeneration{};
+    std::array<quint64, 3> m_loadDone{};
+    std::vector<QThread*> m_loaders; // in flight, waited for by the destructor
 };
 
 /// What the preset stores, in the studio's words: "Gloss", "Roughness", "Smoothness", "Alpha"

@@ -274,6 +274,10 @@ bool MaterialPanel::loadMap(MapSlot slot, const QString& requested) {
         if (path.isEmpty()) return false;
         settings.setValue("folders/maps", QFileInfo(path).absolutePath());
     }
+    if (m_backgroundLoads) {
+        m_doc->loadMapInBackground(slot, QFileInfo(path).absoluteFilePath());
+        return true;
+    }
     if (const Status st = m_doc->loadMap(slot, QFileInfo(path).absoluteFilePath()); !st) {
         emit errorOccurred(QString("Cannot load the %1 map").arg(mapSlotName(slot)),
                            QString::fromStdString(st.error()));

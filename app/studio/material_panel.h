@@ -61,6 +61,10 @@ public:
     /// Loads a map into a slot (a file dialog when path is empty). False when it is not loaded: an
     /// error (sent to errorOccurred, nothing changes) or a cancelled dialog.
     bool loadMap(MapSlot slot, const QString& path);
+    /// Decode maps on a worker thread (the studio's own window: a big file never freezes it); the
+    /// load then reports through the document's mapLoadFinished. Off by default (tests read the
+    /// document right after loadMap).
+    void setBackgroundLoads(bool on) { m_backgroundLoads = on; }
 
     /// Slider steps across the gloss range [0, 1].
     static constexpr int kGlossSteps = 1000;
@@ -90,6 +94,7 @@ private:
     QLabel* m_encoding;
     MapSlotWidget* m_slots[3];
     bool m_refreshing = false;
+    bool m_backgroundLoads = false;
 };
 
 /// "#rrggbb" of a linear colour's sRGB encoding.

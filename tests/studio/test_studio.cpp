@@ -407,6 +407,53 @@ TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
     }
 }
 
+// Loading a map decodes it off the GUI thread (an 8192² PNG froze the window for minutes): the call
+// returns at once with the old map still shown, the new one arrives as one undo step, a newer
+// request supersedes an older one, and a bad file is refused with nothing changed.
+TEST(MaterialDocument, BackgroundLoadsKeepTheWindowLiveAndTheNewestWins) {
+    test::TempDir dir;
+    MaterialDocument doc;
+    const auto before = doc.maps().normal;
+    QSignalSpy started(&doc, &MaterialDocument::mapLoadStarted);
+    QSignalSpy finished(&doc, &MaterialDocument::mapLoadFinished);
+    const int steps = doc.undoStack()->count();
+    doc.loadMapInBackground(MapSlot::Normal, kNormalMap);
+    EXPECT_EQ(started.count(), 1);
+    EXPECT_TRUE(doc.loading(MapSlot::Normal));
+    EXPECT_EQ(doc.maps().normal, before) << "the old map stays until the new one is decoded";
+    ASSERT_TRUE(finished.wait(kWorkerTimeoutMs));
+    EXPECT_TRUE(finished.at(0).at(2).toBool()) << finished.at(0).at(3).toString().toStdString();
+    EXPECT_FALSE(doc.loading(MapSlot::Normal));
+    EXPECT_EQ(doc.settings().normalMapPath, kNormalMap);
+    EXPECT_EQ(doc.undoStack()->count(), steps + 1);
+    doc.undoStack()->undo();
+    EXPECT_EQ(doc.maps().normal, before);
+
+    // Two requests in a row: only the second is applied.
+    QImage flat(64, 32, QImage::Format_RGB888);
+    flat.fill(QColor(128, 128, 255));
+    const QString second = q(dir / "flat.png");
+    ASSERT_TRUE(flat.save(second));
+    finished.clear();
+    doc.loadMapInBackground(MapSlot::Normal, kNormalMap);
+    doc.loadMapInBackground(MapSlot::Normal, second);
+    ASSERT_TRUE(finished.wait(kWorkerTimeoutMs));
+    QTest::qWait(200); // the first request's result, if it came later, would be dropped too
+    ASSERT_EQ(finished.count(), 1) << "the superseded request reports nothing";
+    EXPECT_EQ(doc.settings().normalMapPath, second);
+    EXPECT_EQ(doc.maps().normal->width, 64);
+
+    // A file that is not an image: refused, the document unchanged.
+    std::ofstream(dir / "bad.png") << "not a png";
+    finished.clear();
+    doc.loadMapInBackground(MapSlot::Normal, q(dir / "bad.png"));
+    ASSERT_TRUE(finished.wait(kWorkerTimeoutMs));
+    EXPECT_FALSE(finished.at(0).at(2).toBool());
+    EXPECT_TRUE(finished.at(0).at(3).toString().contains("bad.png"))
+        << finished.at(0).at(3).toString().toStdString();
+    EXPECT_EQ(doc.settings().normalMapPath, second);
+}
+
 TEST(MainWindow, OpenFileTakesAProjectOrAnImageAsTheNormalMap) {
     // What `burnish-studio FILE` and a drop on the window do: an image becomes the normal map of
     // the current document, a .burnish file replaces the document, and a bad file changes nothing.

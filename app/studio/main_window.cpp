@@ -7,6 +7,7 @@
 #include "paint_tool.h"
 #include "project.h"
 #include "texture_pane.h"
+#include "viewport.h"
 #include "viewport_panel.h"
 
 #include <QAction>
@@ -397,6 +398,7 @@ bool MainWindow::openProject(const QString& path) {
 
 void MainWindow::setBackgroundLoads(bool on) {
     m_panel->setBackgroundLoads(on);
+    if (auto* panel = findChild<ViewportPanel*>("viewportPanel")) panel->viewport()->setBackgroundBakes(on);
 }
 
 bool MainWindow::openFile(const QString& path) {

@@ -53,8 +53,8 @@ public:
     /// A .burnish project is opened; any other file is loaded as the normal map of the current
     /// document (what dropping it on the window does). False, with the message shown, on an error.
     bool openFile(const QString& path);
-    /// Images dropped or loaded are decoded off the GUI thread (the studio does this; tests that
-    /// read the document right after openFile leave it off).
+    /// Images dropped or loaded are decoded, and the viewport's bakes run, off the GUI thread (the
+    /// studio does this; tests that read the document or the frame right after a change leave it off).
     void setBackgroundLoads(bool on);
     bool saveProjectAs(const QString& path);
     /// New document (the built-in sample), after asking about unsaved changes.

@@ -11,11 +11,13 @@
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
 
+#include <QCoreApplication>
 #include <QLabel>
 #include <QMouseEvent>
 #include <QOpenGLContext>
 #include <QOpenGLWidget>
 #include <QPainter>
+#include <QPointer>
 #include <QSurfaceFormat>
 #include <QTimer>
 #include <QWheelEvent>
@@ -362,7 +364,33 @@ void Viewport::initializeRenderers(bool hostContext) {
             return;
         }
         *r = std::move(created).value();
+        // The view shows an object in a few hundred pixels: chains from their 2048² level up (a
+        // bigger map's finer levels cost gigabytes of upload and are never sampled at that size).
+        (*r)->setMaxTextureSize(kMaxViewTextureSize);
     }
+    applyBackgroundBakes();
+}
+
+void Viewport::setBackgroundBakes(bool on) {
+    m_backgroundBakes = on;
+    applyBackgroundBakes();
+}
+
+void Viewport::applyBackgroundBakes() {
+    Engine& e = *m_engine;
+    // The renderers' bakes run on a worker; when one finishes, a frame is asked for on the GUI
+    // thread, and that frame takes the bake in.
+    QPointer<Viewport> self(this);
+    auto ready = [self] {
+        QMetaObject::invokeMethod(
+            QCoreApplication::instance(),
+            [self] {
+                if (self) self->requestUpdate();
+            },
+            Qt::QueuedConnection);
+    };
+    for (auto* r : {&e.a, &e.b})
+        if (*r) (*r)->setBackgroundBakes(m_backgroundBakes, ready);
 }
 
 void Viewport::releaseRenderers() {

@@ -68,6 +68,8 @@ struct ShimmerReading {
 class Viewport : public QWidget {
     Q_OBJECT
 public:
+    /// The largest baked level the view uploads (render::Renderer::setMaxTextureSize).
+    static constexpr int kMaxViewTextureSize = 2048;
     /// Camera distance range of the distance control: close enough to fill the view with the sphere,
     /// far enough that a 512² map is far below a pixel.
     static constexpr float kMinDistance = 1.5f;
@@ -113,6 +115,11 @@ public:
 
     /// Paint mode: left-button presses and drags on the object emit paintAt() instead of orbiting.
     void setPaintMode(bool on);
+    /// Bakes for the view run on a worker (render::Renderer::setBackgroundBakes): a method, gloss or
+    /// map change never blocks the GUI thread on a big map; the last bake stays drawn until the
+    /// new one is in. The studio turns it on; tests that read the frame right after a change leave
+    /// it off.
+    void setBackgroundBakes(bool on);
     bool paintMode() const { return m_paintMode; }
 
     /// Whether the picture comes from a QOpenGLWidget (else the headless context's images).
@@ -167,6 +174,7 @@ private:
     QWidget* surface() const;
     void changed(bool camera);
     void requestUpdate();
+    void applyBackgroundBakes();
     void setError(const QString& message);
     void layoutOverlays();
     void updateLabels();
@@ -190,6 +198,7 @@ private:
     QString m_error;
     double m_frameMs = 0.0;
     bool m_paintMode = false;
+    bool m_backgroundBakes = false;
     bool m_painting = false;
     bool m_meterPending = false;
     std::optional<ShimmerReading> m_shimmer;

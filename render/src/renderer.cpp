@@ -14,11 +14,14 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <optional>
+#include <thread>
 
 namespace burnish::render {
 
@@ -64,12 +67,21 @@ struct GpuBaked {
     glm::vec4 bias{0.0f};
 };
 
-Result<GpuBaked> uploadBaked(const BakedTexture& baked) {
+// `maxSize` > 0: the chain from its first level no larger than that on a side (a display needs no
+// more; an 8192² chain took most of 23 s to upload on llvmpipe), so the texture is that level's size
+// and sampling picks its levels as for a smaller map.
+Result<GpuBaked> uploadBaked(const BakedTexture& baked, int maxSize = 0) {
     std::vector<TextureLevel> levels;
     levels.reserve(baked.mips.size());
-    for (const auto& mip : baked.mips)
+    size_t first = 0;
+    while (maxSize > 0 && first + 1 < baked.mips.size() &&
+           std::max(baked.mips[first].width, baked.mips[first].height) > maxSize)
+        ++first;
+    for (size_t k = first; k < baked.mips.size(); ++k) {
+        const auto& mip = baked.mips[k];
         levels.push_back(
             TextureLevel{mip.width, mip.height, std::vector<float>(mip.texels.begin(), mip.texels.end())});
+    }
     // Hardware trilinear filtering over the baked chain is what the methods were baked for.
     auto texture = Texture2D::create(levels, baked.channels, TextureFilter::LinearMipLinear, true);
     if (!texture)
@@ -97,6 +109,50 @@ struct BakeKey {
                toksvigMapPower == o.toksvigMapPower && basePower == o.basePower && encoding == o.encoding &&
                mixtureLobes == o.mixtureLobes;
     }
+};
+
+BakeKey bakeKeyOf(const MaterialSettings& m) {
+    return BakeKey{m.normalMap,
+                   m.glossMap,
+                   m.method,
+                   m.methodParams.toksvigMapPower,
+                   m.basePower,
+                   m.glossEncoding.name(),
+                   m.method == Method::Mixture ? m.methodParams.mixtureLobes : 0};
+}
+
+// The CPU half of a material's bake (any thread): core's bake, and the mixture's covariance floor.
+struct CpuBake {
+    Result<BakeOutput> out = Error{"not baked"};
+    double mixtureMinVariance = 1.0 / 1024.0;
+};
+
+CpuBake cpuBake(const MaterialSettings& m) {
+    BakeOptions options;
+    options.method = m.method;
+    options.encoding = m.glossEncoding;
+    options.basePower = m.basePower;
+    options.params = m.methodParams;
+    if (m.glossMap) options.authoredGloss = *m.glossMap;
+    CpuBake b;
+    b.out = bake(*m.normalMap, options);
+    double maxPower = m.basePower;
+    if (m.glossMap) {
+        maxPower = 0.0;
+        for (float g : *m.glossMap)
+            maxPower = std::max(maxPower, m.glossEncoding.power(g));
+    }
+    b.mixtureMinVariance = slopeInverseBasePower(maxPower);
+    return b;
+}
+
+// A bake running on a worker thread for the studio (Renderer::setBackgroundBakes).
+struct BackgroundBake {
+    BakeKey key;
+    MaterialSettings material;
+    std::shared_ptr<CpuBake> result = std::make_shared<CpuBake>();
+    std::shared_ptr<std::atomic<bool>> done = std::make_shared<std::atomic<bool>>(false);
+    std::thread worker;
 };
 
 int glossKindIndex(const GlossEncoding& encoding) {
@@ -178,6 +234,20 @@ struct Renderer::Impl {
 
     // Method bake.
     std::optional<BakeKey> bakeKey;
+    // Background bakes: the material last baked (drawn while a newer one bakes), the bake in
+    // flight, and superseded ones still running (joined at destruction).
+    bool backgroundBakes = false;
+    int maxTextureSize = 0; // 0: every level uploaded
+    Status prepareFinest();
+    std::function<void()> onBakeReady;
+    std::optional<MaterialSettings> bakedMaterial;
+    std::unique_ptr<BackgroundBake> pending;
+    std::vector<std::unique_ptr<BackgroundBake>> superseded;
+    ~Impl() {
+        if (pending && pending->worker.joinable()) pending->worker.join();
+        for (auto& b : superseded)
+            if (b->worker.joinable()) b->worker.join();
+    }
     std::map<TextureRole, GpuBaked> baked;
     int bakes = 0;
     // The mixture's covariance floor: 1/s of the narrowest authored lobe (MixturePyramid's).
@@ -212,6 +282,10 @@ struct Renderer::Impl {
 
     Status prepareMesh();
     Status prepareBake();
+    Status uploadBake(const BakeKey& key, const CpuBake& cpu);
+    /// Background bakes: whether the bake of `m` is in (taken from a finished worker now), else
+    /// starts one (superseding an older) and returns false.
+    Result<bool> backgroundBake(const MaterialSettings& m);
     Status prepareMaps();
     Status prepareEnvironment(EnvironmentKind kind);
     void setEnvironmentUniforms(const Program& p, const FeatureSet& f);
@@ -255,6 +329,55 @@ Status Renderer::Impl::prepareMesh() {
     return {};
 }
 
+Status Renderer::Impl::uploadBake(const BakeKey& key, const CpuBake& cpu) {
+    if (!cpu.out) return Error{"bake: " + cpu.out.error()};
+    mixtureMinVariance = cpu.mixtureMinVariance;
+    ++bakes;
+    baked.clear();
+    bakeKey.reset();
+    for (const BakedTexture& t : cpu.out->textures) {
+        // Textures the shader does not sample (the compact LEAN gloss is for export) stay on the CPU.
+        if (textureSpec(t.role).sampler.empty()) continue;
+        auto gpu = uploadBaked(t, maxTextureSize);
+        if (!gpu) return Error{gpu.error()};
+        baked.emplace(t.role, std::move(gpu).value());
+    }
+    bakeKey = key;
+    return {};
+}
+
+Result<bool> Renderer::Impl::backgroundBake(const MaterialSettings& m) {
+    const BakeKey key = bakeKeyOf(m);
+    if (bakeKey && *bakeKey == key) return true;
+    if (pending && pending->key == key) {
+        if (!pending->done->load()) return false;
+        pending->worker.join();
+        const std::unique_ptr<BackgroundBake> finished = std::move(pending);
+        if (const Status s = uploadBake(finished->key, *finished->result); !s) return Error{s.error()};
+        bakedMaterial = finished->material;
+        return true;
+    }
+    // A newer material: the older bake runs on (core's bake cannot be stopped) and is dropped.
+    if (pending) superseded.push_back(std::move(pending));
+    for (auto it = superseded.begin(); it != superseded.end();)
+        if ((*it)->done->load()) {
+            (*it)->worker.join();
+            it = superseded.erase(it);
+        } else {
+            ++it;
+        }
+    pending = std::make_unique<BackgroundBake>();
+    pending->key = key;
+    pending->material = m;
+    pending->worker =
+        std::thread([material = m, result = pending->result, done = pending->done, ready = onBakeReady] {
+            *result = cpuBake(material);
+            done->store(true);
+            if (ready) ready();
+        });
+    return false;
+}
+
 Status Renderer::Impl::prepareBake() {
     const MaterialSettings& m = scene.material;
     if (!m.normalMap || m.normalMap->texelCount() == 0) {
@@ -262,42 +385,22 @@ Status Renderer::Impl::prepareBake() {
         bakeKey.reset();
         return {};
     }
-    BakeKey key{m.normalMap,
-                m.glossMap,
-                m.method,
-                m.methodParams.toksvigMapPower,
-                m.basePower,
-                m.glossEncoding.name(),
-                m.method == Method::Mixture ? m.methodParams.mixtureLobes : 0};
+    const BakeKey key = bakeKeyOf(m);
     if (!(bakeKey && *bakeKey == key)) {
-        BakeOptions options;
-        options.method = m.method;
-        options.encoding = m.glossEncoding;
-        options.basePower = m.basePower;
-        options.params = m.methodParams;
-        if (m.glossMap) options.authoredGloss = *m.glossMap;
-        auto out = bake(*m.normalMap, options);
-        if (!out) return Error{"bake: " + out.error()};
-        double maxPower = m.basePower;
-        if (m.glossMap) {
-            maxPower = 0.0;
-            for (float g : *m.glossMap)
-                maxPower = std::max(maxPower, m.glossEncoding.power(g));
-        }
-        mixtureMinVariance = slopeInverseBasePower(maxPower);
-        ++bakes;
-        baked.clear();
-        bakeKey.reset();
-        for (const BakedTexture& t : out->textures) {
-            // Textures the shader does not sample (the compact LEAN gloss is for export) stay on the CPU.
-            if (textureSpec(t.role).sampler.empty()) continue;
-            auto gpu = uploadBaked(t);
-            if (!gpu) return Error{gpu.error()};
-            baked.emplace(t.role, std::move(gpu).value());
-        }
-        bakeKey = key;
+        if (const Status s = uploadBake(key, cpuBake(m)); !s) return s;
+        bakedMaterial = m;
     }
-    // The reference's finest level: the normals and authored gloss as given, unfiltered.
+    if (m.glossMap && m.glossMap->size() != m.normalMap->texelCount())
+        return Error{"the gloss map has " + std::to_string(m.glossMap->size()) + " texels, the normal map " +
+                     std::to_string(m.normalMap->texelCount())};
+    return {};
+}
+
+Status Renderer::Impl::prepareFinest() {
+    // The reference's finest level: the normals and authored gloss as given, unfiltered. Uploaded
+    // when a reference is first drawn (a big map's finest level is most of a frame's upload).
+    const MaterialSettings& m = scene.material;
+    if (!m.normalMap || m.normalMap->texelCount() == 0) return {};
     if (finestFor != m.normalMap) {
         TextureLevel level{m.normalMap->width, m.normalMap->height, {}};
         level.texels.reserve(m.normalMap->texelCount() * 3);
@@ -311,9 +414,7 @@ Status Renderer::Impl::prepareBake() {
     if (finestGlossFor != m.glossMap) {
         finestGloss.reset();
         if (m.glossMap) {
-            if (m.glossMap->size() != m.normalMap->texelCount())
-                return Error{"the gloss map has " + std::to_string(m.glossMap->size()) +
-                             " texels, the normal map " + std::to_string(m.normalMap->texelCount())};
+            // Its size was checked by prepareBake.
             auto tex = Texture2D::create({TextureLevel{m.normalMap->width, m.normalMap->height, *m.glossMap}},
                                          1, TextureFilter::Linear, true);
             if (!tex) return Error{"uploading the gloss map: " + tex.error()};
@@ -569,6 +670,7 @@ Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int w
 }
 
 Status Renderer::Impl::accumulateReference(int width, int height, int samples) {
+    if (auto s = prepareFinest(); !s) return s;
     FeatureSet f = features;
     f.referenceMode = true;
     f.debugView = DebugView::None;
@@ -664,8 +766,26 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
     return r;
 }
 
-Status Renderer::setScene(const Scene& scene) {
+Status Renderer::setScene(const Scene& requested) {
     Impl& impl = *m_impl;
+    Scene scene = requested;
+    const MaterialSettings& want = requested.material;
+    if (impl.backgroundBakes && impl.bakedMaterial && want.normalMap && want.normalMap->texelCount() > 0) {
+        // Never bake on the caller's thread once something is baked: until the new bake is in,
+        // the material's baked inputs (maps, method, power, encoding) stay the last baked ones,
+        // the rest (colours, view, light) follow the request.
+        auto ready = impl.backgroundBake(want);
+        if (!ready) return Error{ready.error()};
+        if (!*ready) {
+            const MaterialSettings& b = *impl.bakedMaterial;
+            scene.material.normalMap = b.normalMap;
+            scene.material.glossMap = b.glossMap;
+            scene.material.method = b.method;
+            scene.material.methodParams = b.methodParams;
+            scene.material.basePower = b.basePower;
+            scene.material.glossEncoding = b.glossEncoding;
+        }
+    }
     // On failure the previous scene stays the one drawn.
     Scene previous = std::move(impl.scene);
     impl.scene = scene;
@@ -685,6 +805,19 @@ Status Renderer::setScene(const Scene& scene) {
     impl.program = *program;
     impl.hasScene = true;
     return {};
+}
+
+void Renderer::setBackgroundBakes(bool on, std::function<void()> onReady) {
+    m_impl->backgroundBakes = on;
+    m_impl->onBakeReady = std::move(onReady);
+}
+
+void Renderer::setMaxTextureSize(int size) {
+    m_impl->maxTextureSize = std::max(size, 0);
+}
+
+bool Renderer::bakePending() const {
+    return m_impl->pending != nullptr;
 }
 
 void Renderer::setUseUbershader(bool on) {

@@ -10,10 +10,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <thread>
 
 namespace {
 
@@ -136,6 +139,79 @@ TEST_F(RendererTest, OnlyWhatChangedIsBaked) {
     scene.material.method = Method::Lean;
     ASSERT_TRUE(renderer().setScene(scene).ok());
     EXPECT_EQ(renderer().bakeCount(), bakes + 1);
+}
+
+// With background bakes (the studio's viewport) setScene never bakes on the caller's thread once a
+// material is baked: a new method is drawn with the last baked material until its bake is in, the
+// worker calls back when it is, the next setScene takes it, and the frame is then exactly a
+// synchronous renderer's. A newer material supersedes a bake in flight.
+TEST_F(RendererTest, BackgroundBakesKeepTheLastBakeDrawnUntilTheNewOneIsIn) {
+    std::atomic<int> readies{0}; // outlives the renderer, whose workers call back into it
+    auto created = Renderer::create();
+    ASSERT_TRUE(created) << created.error();
+    Renderer& r = *created.value();
+    r.setBackgroundBakes(true, [&] { ++readies; });
+    Scene scene = sampleScene(SampleMapKind::Hammered, 128);
+    scene.material.method = Method::VarianceToGloss;
+    ASSERT_TRUE(r.setScene(scene).ok());
+    EXPECT_EQ(r.bakeCount(), 1) << "the first bake is made at once: there is nothing else to draw";
+    EXPECT_FALSE(r.bakePending());
+
+    auto waitReady = [&](int count) {
+        for (int i = 0; i < 6000 && readies.load() < count; ++i)
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        return readies.load() >= count;
+    };
+    scene.material.method = Method::Lean;
+    scene.light.intensity = 2.0f;
+    ASSERT_TRUE(r.setScene(scene).ok());
+    EXPECT_TRUE(r.bakePending());
+    EXPECT_EQ(r.scene().material.method, Method::VarianceToGloss) << "the last bake is drawn meanwhile";
+    EXPECT_EQ(r.scene().light.intensity, 2.0f) << "what needs no bake follows at once";
+    ASSERT_TRUE(waitReady(1));
+    ASSERT_TRUE(r.setScene(scene).ok());
+    EXPECT_FALSE(r.bakePending());
+    EXPECT_EQ(r.scene().material.method, Method::Lean);
+    EXPECT_EQ(r.bakeCount(), 2);
+    auto background = r.renderToImage(kSize, kSize, ImageKind::Hdr);
+    ASSERT_TRUE(background);
+    EXPECT_EQ(*background, hdr(scene)) << "the same frame as a synchronous bake";
+
+    // Two changes in a row: only the newest is taken in.
+    scene.material.method = Method::Clean;
+    ASSERT_TRUE(r.setScene(scene).ok());
+    scene.material.method = Method::Vmf;
+    ASSERT_TRUE(r.setScene(scene).ok());
+    ASSERT_TRUE(waitReady(3));
+    ASSERT_TRUE(r.setScene(scene).ok());
+    EXPECT_EQ(r.scene().material.method, Method::Vmf);
+    EXPECT_FALSE(r.bakePending());
+}
+
+// The studio's view uploads chains from their 2048² level: a far object samples the same levels
+// either way, so the frame hardly changes, and stays finite.
+TEST_F(RendererTest, AMaximumTextureSizeDrawsFarObjectsAsTheFullChain) {
+    Scene scene = sampleScene(SampleMapKind::Bumpy, 256);
+    scene.camera.distance = 12.0f; // the sphere ~1/12 of the view: each pixel spans several texels
+    const std::vector<float> full = hdr(scene);
+    auto created = Renderer::create();
+    ASSERT_TRUE(created) << created.error();
+    Renderer& capped = *created.value();
+    capped.setMaxTextureSize(64);
+    ASSERT_TRUE(capped.setScene(scene).ok());
+    auto image = capped.renderToImage(kSize, kSize, ImageKind::Hdr);
+    ASSERT_TRUE(image) << image.error();
+    EXPECT_EQ(nonFiniteCount(*image), 0u);
+    EXPECT_GT(litFraction(*image), 0.0);
+    EXPECT_LT(meanAbsLuminanceError(*image, full), 0.01 * std::max(1e-6,
+                                                                   [&] {
+                                                                       double sum = 0.0;
+                                                                       for (size_t p = 0; p < full.size() / 4;
+                                                                            ++p)
+                                                                           sum += luminance(full, p);
+                                                                       return sum / double(full.size() / 4);
+                                                                   }()) +
+                                                       1e-4);
 }
 
 // Every method at each extreme the design names: no NaN or Inf in the HDR read-back.

@@ -8,6 +8,7 @@
 #include <burnish/render/program.h>
 #include <burnish/render/scene.h>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -67,6 +68,19 @@ public:
 
     /// Compiles the material as the ubershader (every feature in, switched by uniforms) instead of
     /// the scene's specialized program: only to measure against. Takes effect at the next setScene.
+    /// With background bakes on, setScene never runs core's bake on the caller's thread once a
+    /// material has been baked: a scene whose bake is not in yet is drawn with the last baked
+    /// material's maps, method and power (its colours, view and light as requested) while the bake
+    /// runs on a worker; `onReady` is called from that worker when it finishes, and the next
+    /// setScene takes it. A newer material supersedes a bake in flight. Off by default (the
+    /// command line and the tests draw exactly the scene they set).
+    void setBackgroundBakes(bool on, std::function<void()> onReady = {});
+    /// Uploads each baked chain from its first level no larger than `size` on a side (0: every
+    /// level, the default): a display shows no more, and an 8192² chain is gigabytes to upload.
+    /// Applies to the bakes uploaded after the call.
+    void setMaxTextureSize(int size);
+    /// Whether a background bake of the last requested scene is still running.
+    bool bakePending() const;
     void setUseUbershader(bool on);
 
     /// Wall time of the last render()/renderToImage() draw, GPU work included (glFinish), in ms.

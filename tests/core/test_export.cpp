@@ -8,6 +8,7 @@
 
 #include "temp_dir.h"
 
+#include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -809,7 +810,12 @@ TEST(Export, CompactStorageKeepsTheExportsCodesAndWritesTheSameBytes) {
          {{TextureRole::Normal, TexelStorage::Unorm16}, {TextureRole::Gloss, TexelStorage::Unorm16}}},
         {"unreal", {}, {{TextureRole::Gloss, TexelStorage::Unorm8}}}, // the normal's green is flipped
         {"blackops", {}, {}},                                         // DDS
-        {"lean", {}, {}},                                             // EXR
+        {"lean",
+         {},
+         {{TextureRole::LeanB, TexelStorage::Half},
+          {TextureRole::LeanM, TexelStorage::Half},
+          {TextureRole::LeanGloss, TexelStorage::Half}}},
+        {"gltf", ExportFormat::ExrFloat, {}}, // float files keep floats
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.preset);
@@ -844,6 +850,11 @@ TEST(Export, CompactStorageKeepsTheExportsCodesAndWritesTheSameBytes) {
                     ASSERT_TRUE(t.mips[k].texels.empty());
                     for (size_t i = 0; i < fl.size(); ++i)
                         ASSERT_EQ(t.mips[k].unorm16[i], unorm16(fl[i])) << roleName(t.role) << " mip " << k;
+                } else if (t.storage == TexelStorage::Half) {
+                    ASSERT_TRUE(t.mips[k].texels.empty());
+                    for (size_t i = 0; i < fl.size(); ++i)
+                        ASSERT_EQ(t.mips[k].halfBits[i], Imath::half(std::clamp(fl[i], 0.0f, 1.0f)).bits())
+                            << roleName(t.role) << " mip " << k;
                 } else {
                     EXPECT_EQ(t.mips[k].texels, fl);
                 }

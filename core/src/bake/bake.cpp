@@ -3,6 +3,7 @@
 #include <burnish/core/bake/base_variance.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 
+#include <Imath/half.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -430,6 +431,8 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
             mip.unorm8.resize(values);
         else if (tex.storage == TexelStorage::Unorm16)
             mip.unorm16.resize(values);
+        else if (tex.storage == TexelStorage::Half)
+            mip.halfBits.resize(values);
         else
             mip.texels.resize(values);
     }
@@ -463,6 +466,9 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
             else if (tex.storage == TexelStorage::Unorm16)
                 for (size_t i = 0; i < count; ++i)
                     mip.unorm16[at + i] = unorm16(px[i]);
+            else if (tex.storage == TexelStorage::Half)
+                for (size_t i = 0; i < count; ++i)
+                    mip.halfBits[at + i] = Imath::half(std::clamp(px[i], 0.0f, 1.0f)).bits();
             rowCounts[size_t(y)].low += c.low;
             rowCounts[size_t(y)].high += c.high;
         }

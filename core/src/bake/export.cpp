@@ -2,6 +2,7 @@
 
 #include "io/png_encode.h"
 
+#include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
 #include <tbb/parallel_for.h>
 
@@ -31,9 +32,24 @@ struct Source {
         if (!texture) return value;
         const size_t i = t * size_t(texture->channels) + size_t(index);
         const TextureMip& mip = texture->mips[k];
-        const float v = texture->storage == TexelStorage::Unorm8    ? float(mip.unorm8[i]) / 255.0f
-                        : texture->storage == TexelStorage::Unorm16 ? float(mip.unorm16[i]) / 65535.0f
-                                                                    : std::clamp(mip.texels[i], 0.0f, 1.0f);
+        float v = 0.0f;
+        switch (texture->storage) {
+        case TexelStorage::Unorm8:
+            v = float(mip.unorm8[i]) / 255.0f;
+            break;
+        case TexelStorage::Unorm16:
+            v = float(mip.unorm16[i]) / 65535.0f;
+            break;
+        case TexelStorage::Half: {
+            Imath::half h;
+            h.setBits(mip.halfBits[i]);
+            v = float(h);
+            break;
+        }
+        case TexelStorage::Float:
+            v = std::clamp(mip.texels[i], 0.0f, 1.0f);
+            break;
+        }
         return flip ? 1.0f - v : v;
     }
 };
@@ -46,6 +62,8 @@ size_t storedValueCount(const BakedTexture& texture, size_t k) {
         return mip.unorm8.size();
     case TexelStorage::Unorm16:
         return mip.unorm16.size();
+    case TexelStorage::Half:
+        return mip.halfBits.size();
     case TexelStorage::Float:
         break;
     }
@@ -470,16 +488,18 @@ Result<Plan> makePlan(const BakeOutput& bake, const Preset& preset, const Export
 // exact in double), and the clamp is written as selects (NaN gives 0), so conversion loops
 // vectorise. A texture the bake kept as codes (compactStorage) was quantized by the same function.
 
-// The level's values in the type the format stores (OpenImageIO converts half itself).
+// The level's values in the type the format stores.
 // Uninitialised on resize: pixelsOf writes every value from parallel blocks.
 struct PixelData {
     OIIO::TypeDesc type;
     std::vector<std::uint8_t, TexelAllocator<std::uint8_t>> u8;
     std::vector<std::uint16_t, TexelAllocator<std::uint16_t>> u16;
+    std::vector<Imath::half, TexelAllocator<Imath::half>> f16;
     TexelVector f32;
     const void* data() const {
         return type == OIIO::TypeDesc::UINT8    ? static_cast<const void*>(u8.data())
                : type == OIIO::TypeDesc::UINT16 ? static_cast<const void*>(u16.data())
+               : type == OIIO::TypeDesc::HALF   ? static_cast<const void*>(f16.data())
                                                 : static_cast<const void*>(f32.data());
     }
 };
@@ -497,6 +517,10 @@ void convertTexels(const PlannedFile& file, size_t k, int stored, size_t begin, 
             if (tex.storage == TexelStorage::Unorm8) return tex.mips[k].unorm8.data();
         } else if constexpr (std::is_same_v<T, std::uint16_t>) {
             if (tex.storage == TexelStorage::Unorm16) return tex.mips[k].unorm16.data();
+        } else if constexpr (std::is_same_v<T, Imath::half>) {
+            static_assert(sizeof(Imath::half) == sizeof(std::uint16_t));
+            if (tex.storage == TexelStorage::Half)
+                return reinterpret_cast<const Imath::half*>(tex.mips[k].halfBits.data());
         }
         return nullptr;
     };
@@ -577,6 +601,12 @@ PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat f
         p.type = OIIO::TypeDesc::UINT16;
         p.u16.resize(n * size_t(stored));
         convert(p.u16.data(), code16);
+    } else if (format == ExportFormat::ExrHalf) {
+        // Half as OpenImageIO would convert the floats (Imath, round to nearest even): the same
+        // bits, and a texture the bake kept as half is copied as it is.
+        p.type = OIIO::TypeDesc::HALF;
+        p.f16.resize(n * size_t(stored));
+        convert(p.f16.data(), [](float v) { return Imath::half(std::clamp(v, 0.0f, 1.0f)); });
     } else {
         p.type = OIIO::TypeDesc::FLOAT;
         p.f32.resize(n * size_t(stored));
@@ -857,6 +887,7 @@ std::map<TextureRole, TexelStorage> compactStorage(const BakeOutput& shape, cons
                 want = TexelStorage::Unorm8;
             if (!s.flip && (format == ExportFormat::Png16 || format == ExportFormat::Tiff16))
                 want = TexelStorage::Unorm16;
+            if (!s.flip && format == ExportFormat::ExrHalf) want = TexelStorage::Half;
             const auto [it, first] = uses.emplace(s.texture->role, want);
             if (!first && it->second != want) it->second.reset();
         }

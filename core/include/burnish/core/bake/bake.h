@@ -21,9 +21,10 @@
 namespace burnish {
 
 /// How a baked texture holds its values. Float is what the renderer and the studio read; an export
-/// whose files store a texture only as 8- or 16-bit codes has the bake keep just those codes (a
-/// quarter or half of the memory), quantized as the export would (unormCode).
-enum class TexelStorage { Float, Unorm8, Unorm16 };
+/// whose files store a texture only as 8- or 16-bit codes or as half floats has the bake keep just
+/// those (a quarter or half of the memory), converted as the export would (unormCode; Imath's
+/// round-to-nearest-even half of the value clamped to [0, 1], what OpenImageIO writes).
+enum class TexelStorage { Float, Unorm8, Unorm16, Half };
 
 /// The stored code of a value v in [0, 1] (clamped; NaN gives 0) in an unsigned normalized format
 /// of `maxCode` (255, 65535): round to nearest, v·maxCode + 0.5 truncated.
@@ -43,8 +44,9 @@ struct TextureMip {
     int width = 0;
     int height = 0;
     TexelVector texels; // row-major, `channels` per texel, each in [0, 1] (TexelStorage::Float)
-    std::vector<std::uint8_t, TexelAllocator<std::uint8_t>> unorm8 = {};    // TexelStorage::Unorm8 codes
-    std::vector<std::uint16_t, TexelAllocator<std::uint16_t>> unorm16 = {}; // TexelStorage::Unorm16's codes
+    std::vector<std::uint8_t, TexelAllocator<std::uint8_t>> unorm8 = {};     // TexelStorage::Unorm8 codes
+    std::vector<std::uint16_t, TexelAllocator<std::uint16_t>> unorm16 = {};  // TexelStorage::Unorm16's codes
+    std::vector<std::uint16_t, TexelAllocator<std::uint16_t>> halfBits = {}; // TexelStorage::Half's bits
 };
 
 /// How a stored channel decodes to its physical value: value = stored·scale + bias.

@@ -106,10 +106,11 @@ struct ExportResult {
 Result<ExportResult> planExport(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const BakeRecord& record = {});
 
-/// The roles an export stores only as 8- or 16-bit codes (every file that reads the role is a PNG,
-/// TGA or 16-bit TIFF of one depth, none flips it, none is a DDS): BakeOptions::storage for a bake
-/// made only to be exported, which then holds a quarter (8-bit) or half (16-bit) of the float
-/// textures' memory and exports the same bytes. `shape` is bakeShape's. Empty when the plan fails.
+/// The roles an export stores only as 8- or 16-bit codes or half floats (every file that reads the
+/// role is a PNG, TGA, 16-bit TIFF or half EXR of one kind, none flips it, none is a DDS):
+/// BakeOptions::storage for a bake made only to be exported, which then holds a quarter (8-bit) or
+/// half (16-bit, half) of the float textures' memory and exports the same bytes. `shape` is bakeShape's.
+/// Empty when the plan fails.
 std::map<TextureRole, TexelStorage> compactStorage(const BakeOutput& shape, const Preset& preset,
                                                    const ExportOptions& options,
                                                    const BakeRecord& record = {});

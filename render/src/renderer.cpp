@@ -234,19 +234,16 @@ struct Renderer::Impl {
 
     // Method bake.
     std::optional<BakeKey> bakeKey;
-    // Background bakes: the material last baked (drawn while a newer one bakes), the bake in
-    // flight, and superseded ones still running (joined at destruction).
+    // Background bakes: the material last baked (drawn while a newer one bakes) and the bake in
+    // flight (joined at destruction).
     bool backgroundBakes = false;
     int maxTextureSize = 0; // 0: every level uploaded
     Status prepareFinest();
     std::function<void()> onBakeReady;
     std::optional<MaterialSettings> bakedMaterial;
     std::unique_ptr<BackgroundBake> pending;
-    std::vector<std::unique_ptr<BackgroundBake>> superseded;
     ~Impl() {
         if (pending && pending->worker.joinable()) pending->worker.join();
-        for (auto& b : superseded)
-            if (b->worker.joinable()) b->worker.join();
     }
     std::map<TextureRole, GpuBaked> baked;
     int bakes = 0;
@@ -283,8 +280,8 @@ struct Renderer::Impl {
     Status prepareMesh();
     Status prepareBake();
     Status uploadBake(const BakeKey& key, const CpuBake& cpu);
-    /// Background bakes: whether the bake of `m` is in (taken from a finished worker now), else
-    /// starts one (superseding an older) and returns false.
+    /// Background bakes: whether the bake of `m` is in (a finished worker's bake is taken in now),
+    /// else starts it unless another runs, and returns false.
     Result<bool> backgroundBake(const MaterialSettings& m);
     Status prepareMaps();
     Status prepareEnvironment(EnvironmentKind kind);
@@ -349,23 +346,18 @@ Status Renderer::Impl::uploadBake(const BakeKey& key, const CpuBake& cpu) {
 Result<bool> Renderer::Impl::backgroundBake(const MaterialSettings& m) {
     const BakeKey key = bakeKeyOf(m);
     if (bakeKey && *bakeKey == key) return true;
-    if (pending && pending->key == key) {
-        if (!pending->done->load()) return false;
+    if (pending && pending->done->load()) {
+        // A finished bake is newer than what is drawn: taken in, even if the request moved on.
         pending->worker.join();
         const std::unique_ptr<BackgroundBake> finished = std::move(pending);
         if (const Status s = uploadBake(finished->key, *finished->result); !s) return Error{s.error()};
         bakedMaterial = finished->material;
-        return true;
+        if (*bakeKey == key) return true;
     }
-    // A newer material: the older bake runs on (core's bake cannot be stopped) and is dropped.
-    if (pending) superseded.push_back(std::move(pending));
-    for (auto it = superseded.begin(); it != superseded.end();)
-        if ((*it)->done->load()) {
-            (*it)->worker.join();
-            it = superseded.erase(it);
-        } else {
-            ++it;
-        }
+    // One bake at a time (core's bake uses every core and cannot be stopped): a request made while
+    // one runs is started by the first setScene after it finishes (its callback asks for one), so
+    // a stroke of changes never piles bakes up, and the newest request is always baked last.
+    if (pending) return false;
     pending = std::make_unique<BackgroundBake>();
     pending->key = key;
     pending->material = m;

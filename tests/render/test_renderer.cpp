@@ -177,15 +177,22 @@ TEST_F(RendererTest, BackgroundBakesKeepTheLastBakeDrawnUntilTheNewOneIsIn) {
     ASSERT_TRUE(background);
     EXPECT_EQ(*background, hdr(scene)) << "the same frame as a synchronous bake";
 
-    // Two changes in a row: only the newest is taken in.
+    // Two changes in a row: one bake at a time, the newest baked last. Clean, requested first, is
+    // drawn when it is in; then Vmf's bake starts, and Vmf is drawn when that is in.
     scene.material.method = Method::Clean;
     ASSERT_TRUE(r.setScene(scene).ok());
     scene.material.method = Method::Vmf;
     ASSERT_TRUE(r.setScene(scene).ok());
+    EXPECT_EQ(r.scene().material.method, Method::Lean) << "nothing new is in yet";
+    ASSERT_TRUE(waitReady(2));
+    ASSERT_TRUE(r.setScene(scene).ok());
+    EXPECT_EQ(r.scene().material.method, Method::Clean);
+    EXPECT_TRUE(r.bakePending()) << "the newest request bakes next";
     ASSERT_TRUE(waitReady(3));
     ASSERT_TRUE(r.setScene(scene).ok());
     EXPECT_EQ(r.scene().material.method, Method::Vmf);
     EXPECT_FALSE(r.bakePending());
+    EXPECT_EQ(r.bakeCount(), 4);
 }
 
 // The studio's view uploads chains from their 2048² level: a far object samples the same levels

@@ -72,8 +72,9 @@ public:
     /// material has been baked: a scene whose bake is not in yet is drawn with the last baked
     /// material's maps, method and power (its colours, view and light as requested) while the bake
     /// runs on a worker; `onReady` is called from that worker when it finishes, and the next
-    /// setScene takes it. A newer material supersedes a bake in flight. Off by default (the
-    /// command line and the tests draw exactly the scene they set).
+    /// setScene takes it in. One bake runs at a time: a material requested meanwhile is baked
+    /// next (the finished bake is drawn until then), so the newest request is always baked last.
+    /// Off by default (the command line and the tests draw exactly the scene they set).
     void setBackgroundBakes(bool on, std::function<void()> onReady = {});
     /// Uploads each baked chain from its first level no larger than `size` on a side (0: every
     /// level, the default): a display shows no more, and an 8192² chain is gigabytes to upload.

@@ -290,6 +290,18 @@ TEST(ImageIo, ExrHeadersThatClaimMoreThanTheFileAreCorrupt) {
         << huge.error();
     EXPECT_FALSE(readImageHeader(dir / "huge.exr").ok());
 
+    // A data window beyond what Burnish accepts is refused before OpenEXR sizes its tables by it.
+    std::string wide("\x76\x2f\x31\x01\x02\x00\x00\x00", 8);
+    wide += std::string("dataWindow\0box2i\0\x10\0\0\0", 21);
+    wide += std::string("\0\0\0\0\0\0\0\0\xff\xff\x01\0\x09\0\0\0", 16); // 0..131071 × 0..9
+    wide += std::string(64, '\0');
+    std::ofstream(dir / "wide.exr", std::ios::binary) << wide;
+    const auto wideRead = readImageHeader(dir / "wide.exr");
+    ASSERT_FALSE(wideRead.ok());
+    EXPECT_NE(wideRead.error().find("EXR dataWindow is 131072x10, larger than Burnish accepts"),
+              std::string::npos)
+        << wideRead.error();
+
     std::vector<float> px(16 * 8 * 3, 0.5f);
     for (const char* name : {"scan.exr", "tiled.exr"}) {
         const auto path = dir / name;

@@ -124,7 +124,27 @@ Status checkExrHeaders(const fs::path& path) {
             if (size < 0 || at + std::uint64_t(size) > fileSize)
                 return corrupt("the EXR attribute '" + name + "' claims " + std::to_string(size) +
                                " bytes and " + std::to_string(fileSize - std::min(at, fileSize)) + " remain");
-            in.seekg(std::streamoff(size), std::ios::cur);
+            // The data window sizes OpenEXR's tables (a line offset per chunk): one beyond what
+            // Burnish accepts is refused here, before OpenEXR allocates for it (a 430-byte file
+            // claiming 2^30 lines had it allocate and clear half a gigabyte; found by fuzzing).
+            if ((name == "dataWindow" || name == "displayWindow") && type == "box2i" && size == 16) {
+                unsigned char box[16];
+                if (!in.read(reinterpret_cast<char*>(box), 16))
+                    return Error{"the file is truncated (in the EXR attribute '" + name + "')"};
+                auto at32 = [&](int i) {
+                    return std::int64_t(std::int32_t(
+                        std::uint32_t(box[4 * i]) | std::uint32_t(box[4 * i + 1]) << 8 |
+                        std::uint32_t(box[4 * i + 2]) << 16 | std::uint32_t(box[4 * i + 3]) << 24));
+                };
+                const std::int64_t w = at32(2) - at32(0) + 1, h = at32(3) - at32(1) + 1;
+                if (name == "dataWindow" && (w < 1 || h < 1))
+                    return corrupt("the EXR data window is " + std::to_string(w) + "x" + std::to_string(h));
+                if (w > kMaxImageSide || h > kMaxImageSide || w * h > std::int64_t(kMaxImageTexels))
+                    return Error{"its EXR " + name + " is " + std::to_string(w) + "x" + std::to_string(h) +
+                                 ", larger than Burnish accepts (65536 on a side, 2^30 texels)"};
+            } else {
+                in.seekg(std::streamoff(size), std::ios::cur);
+            }
             if (++attributes > kMaxAttributes) return corrupt("more than 65536 EXR header attributes");
         }
         if (emptyHeader && !firstHeader) return {};

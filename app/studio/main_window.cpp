@@ -478,9 +478,10 @@ void MainWindow::offerRecovery() {
         m_projectPath.isEmpty() ? "an unsaved material" : QFileInfo(m_projectPath).fileName();
     const auto answer =
         ask("Recover autosave",
-            QString("An autosave of %1 from %2 is newer than the saved project. Recover it? (No keeps the "
-                    "autosave for later; Discard deletes it.)")
-                .arg(what, QFileInfo(*copy).lastModified().toString(Qt::TextDate)),
+            QString("An autosave of %1 from %2 %3. Recover it? (No keeps the autosave for later; Discard "
+                    "deletes it.)")
+                .arg(what, QFileInfo(*copy).lastModified().toString(Qt::TextDate),
+                     m_projectPath.isEmpty() ? "was found" : "is newer than the saved project"),
             QMessageBox::Yes | QMessageBox::No | QMessageBox::Discard);
     // Only an explicit Discard deletes the artist's unsaved work; anything else keeps the copy.
     if (answer == QMessageBox::Discard) {

@@ -26,12 +26,15 @@
 #include <QDateTime>
 #include <QDockWidget>
 #include <QDoubleSpinBox>
+#include <QDragEnterEvent>
+#include <QDropEvent>
 #include <QFile>
 #include <QImage>
 #include <QLabel>
 #include <QLineEdit>
 #include <QMenu>
 #include <QMenuBar>
+#include <QMimeData>
 #include <QSet>
 #include <QSettings>
 #include <QSignalSpy>
@@ -39,6 +42,7 @@
 #include <QStandardPaths>
 #include <QStatusBar>
 #include <QTest>
+#include <QUrl>
 
 #include <cstdio>
 #include <filesystem>
@@ -452,6 +456,50 @@ TEST(MaterialDocument, BackgroundLoadsKeepTheWindowLiveAndTheNewestWins) {
     EXPECT_TRUE(finished.at(0).at(3).toString().contains("bad.png"))
         << finished.at(0).at(3).toString().toStdString();
     EXPECT_EQ(doc.settings().normalMapPath, second);
+}
+
+// Drag and drop as a user does it: an image dropped on a map slot loads into that slot; one
+// dropped anywhere else on the window becomes the normal map; what is not a local file is ignored.
+TEST(MainWindow, DroppedImagesLoadIntoTheSlotTheyAreDroppedOn) {
+    test::TempDir dir;
+    TestWindow w;
+    MaterialDocument* doc = w.window.document();
+    auto drop = [](QWidget* target, const QList<QUrl>& urls) {
+        QMimeData data;
+        data.setUrls(urls);
+        const QPoint at(target->width() / 2, target->height() / 2);
+        QDragEnterEvent enter(at, Qt::CopyAction, &data, Qt::LeftButton, Qt::NoModifier);
+        QApplication::sendEvent(target, &enter);
+        QDropEvent dropEvent(QPointF(at), Qt::CopyAction, &data, Qt::LeftButton, Qt::NoModifier);
+        QApplication::sendEvent(target, &dropEvent);
+        return enter.isAccepted();
+    };
+    // A gloss map of the normal map's (the sample's) size, dropped on the Gloss slot.
+    const QString gloss = writeGlossMap(dir / "gloss.png", kSampleSize, 180);
+    MapSlotWidget* glossSlot = w.window.materialPanel()->slotWidget(MapSlot::Gloss);
+    ASSERT_NE(glossSlot, nullptr);
+    EXPECT_TRUE(drop(glossSlot, {QUrl::fromLocalFile(gloss)}));
+    EXPECT_EQ(doc->settings().glossMapPath, gloss);
+    EXPECT_TRUE(doc->settings().normalMapPath.isEmpty()) << "the normal slot is untouched";
+
+    // A normal map dropped on the window (not on a slot) goes to the normal slot. The gloss map
+    // does not fit a map of another size, so that one is refused with the reason, nothing changed.
+    QImage small(64, 32, QImage::Format_RGB888);
+    small.fill(QColor(128, 128, 255));
+    const QString smallMap = q(dir / "small.png");
+    ASSERT_TRUE(small.save(smallMap));
+    EXPECT_TRUE(drop(&w.window, {QUrl::fromLocalFile(smallMap)}));
+    EXPECT_TRUE(doc->settings().normalMapPath.isEmpty());
+    ASSERT_FALSE(w.messages.isEmpty());
+    EXPECT_TRUE(w.messages.last().contains("gloss")) << w.messages.last().toStdString();
+    doc->clearMap(MapSlot::Gloss);
+    EXPECT_TRUE(drop(&w.window, {QUrl::fromLocalFile(kNormalMap)}));
+    EXPECT_EQ(doc->settings().normalMapPath, kNormalMap);
+
+    // A web address is not a file: the drop is not even accepted.
+    const int steps = doc->undoStack()->count();
+    EXPECT_FALSE(drop(glossSlot, {QUrl("https://example.com/normal.png")}));
+    EXPECT_EQ(doc->undoStack()->count(), steps);
 }
 
 TEST(MainWindow, OpenFileTakesAProjectOrAnImageAsTheNormalMap) {

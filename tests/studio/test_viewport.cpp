@@ -8,6 +8,8 @@
 #include "viewport.h"
 #include "viewport_panel.h"
 
+#include "temp_dir.h"
+#include <fstream>
 #include <gtest/gtest.h>
 
 #include <QApplication>
@@ -95,6 +97,27 @@ TEST(Viewport, RendersTheSampleNonBlank) {
     const QRgb corner = frame.pixel(1, 1);
     EXPECT_EQ(qRed(corner) + qGreen(corner) + qBlue(corner), 0) << "the cleared background is black";
     EXPECT_GT(t.view.frameMs(), 0.0);
+}
+
+// An OBJ mesh as a user loads one: a valid mesh is drawn (its own silhouette, not the sphere's); a
+// file that is not a mesh is refused with the reason and leaves the mesh as it was.
+TEST(Viewport, ObjMeshesDrawAndBadOnesAreRefused) {
+    TestViewport t;
+    const QImage sphere = t.grab();
+    const QString quad = QString(BURNISH_SOURCE_DIR) + "/tests/fuzz/corpus/obj/quad.obj";
+    ASSERT_TRUE(t.view.setMesh(render::MeshKind::Obj, quad)) << quad.toStdString();
+    EXPECT_EQ(t.view.viewSettings().mesh, render::MeshKind::Obj);
+    const QImage mesh = t.grab();
+    EXPECT_GT(lumaStats(mesh, 0, kWidth).stddev, 1.0) << "the quad is lit";
+    EXPECT_GT(meanAbsDiff(sphere, mesh, 0, kWidth), 1.0) << "another silhouette than the sphere's";
+
+    test::TempDir dir;
+    std::ofstream(dir / "junk.obj") << "this is not a mesh\n";
+    const Status bad =
+        t.view.setMesh(render::MeshKind::Obj, QString::fromStdString((dir / "junk.obj").string()));
+    ASSERT_FALSE(bad);
+    EXPECT_NE(bad.error().find("junk.obj"), std::string::npos) << bad.error();
+    EXPECT_EQ(t.view.viewSettings().objPath, quad) << "the mesh drawn before stays";
 }
 
 TEST(Viewport, ChangingTheDocumentsMethodChangesTheImage) {

@@ -40,6 +40,9 @@ mkdir -p "$work/corpus"
 # stops the run (libFuzzer's exit code is non-zero) and leaves its input as crash-*, leak-*,
 # timeout-* or oom-* in $work.
 export ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=1:allocator_may_return_null=1"
+# The repository's suppressions (tests/lsan.supp) as CTest passes them, also when run by hand: without
+# them OpenImageIO's per-reader error strings are reported as a leak after a failed read.
+export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$here/../lsan.supp:print_suppressions=0}"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 set +e
 "$target" "$work/corpus" "$corpus" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=3072 \

@@ -95,6 +95,13 @@ Result<const Preset*> builtinPreset(const QString& name) {
                  ")"};
 }
 
+/// A gloss map is read per normal-map texel: checked as the bake will read it.
+Status glossFits(const Image& gloss, const NormalMap& normal, const QString& path) {
+    if (auto values = glossFromImage(gloss, normal.width, normal.height); !values)
+        return Error{"gloss map '" + path.toStdString() + "': " + values.error()};
+    return {};
+}
+
 } // namespace
 
 const char* mapSlotName(MapSlot slot) {
@@ -224,22 +231,23 @@ void MaterialDocument::push(const MaterialSettings& after, const LoadedMaps& map
                                 std::move(layersBefore), std::move(layersAfter)));
 }
 
-std::shared_ptr<const PaintLayers>
+Result<std::shared_ptr<const PaintLayers>>
 MaterialDocument::carriedLayers(int width, int height, const GlossEncoding& encoding, QString* what) const {
     const bool glossPainted = m_glossLayer.painted(), offsetPainted = m_offsetLayer.painted();
-    if (!glossPainted && !offsetPainted) return nullptr;
+    if (!glossPainted && !offsetPainted) return std::shared_ptr<const PaintLayers>();
     const bool resize = width != m_glossLayer.width || height != m_glossLayer.height;
     const GlossEncoding& current = preset().encoding;
     const bool reencode = glossPainted && encoding.name() != current.name();
-    if (!resize && !reencode) return nullptr;
+    if (!resize && !reencode) return std::shared_ptr<const PaintLayers>();
     auto layers = std::make_shared<PaintLayers>(PaintLayers{m_glossLayer, m_offsetLayer});
     QStringList done;
     if (resize) {
-        // Both are checked layers of a real map's size, and the new size is a loaded map's: the
-        // resampling cannot fail; if it ever did, keeping the old layers would lose nothing.
+        // A loaded map's size is always a possible layer size; should resampling fail anyway, the
+        // edit is refused (nothing changes) rather than done without the paint.
         auto gloss = resamplePaintLayer(m_glossLayer, width, height);
+        if (!gloss) return Error{"the painted layers cannot follow the map: " + gloss.error()};
         auto offset = resamplePaintLayer(m_offsetLayer, width, height);
-        if (!gloss || !offset) return nullptr;
+        if (!offset) return Error{"the painted layers cannot follow the map: " + offset.error()};
         layers->gloss = std::move(gloss).value();
         layers->offset = std::move(offset).value();
         done << QString("resampled from %1×%2 to %3×%4")
@@ -256,7 +264,17 @@ MaterialDocument::carriedLayers(int width, int height, const GlossEncoding& enco
         done << "re-encoded for the new gloss encoding";
     }
     if (what) *what = "Painted layers " + done.join(" and ") + " (undo restores them as they were)";
-    return layers;
+    return std::shared_ptr<const PaintLayers>(std::move(layers));
+}
+
+Status MaterialDocument::pushCarryingLayers(const MaterialSettings& after, const LoadedMaps& maps,
+                                            const QString& text, const GlossEncoding& encoding) {
+    QString what;
+    auto layers = carriedLayers(maps.normal->width, maps.normal->height, encoding, &what);
+    if (!layers) return Error{layers.error()};
+    push(after, maps, text, kNoMerge, *layers);
+    if (*layers) emit notice(what);
+    return {};
 }
 
 void MaterialDocument::setMaterialClass(MaterialClass c) {
@@ -313,11 +331,7 @@ Status MaterialDocument::setPreset(const QString& name) {
     s.gloss = (*p)->encoding.value(power());
     s.preset = name;
     if (!checkPresetMethod(**p, s.method)) s.method = (*p)->method;
-    QString what;
-    auto layers = carriedLayers(m_glossLayer.width, m_glossLayer.height, (*p)->encoding, &what);
-    push(s, m_maps, "Preset: " + name, kNoMerge, layers);
-    if (layers) emit notice(what);
-    return {};
+    return pushCarryingLayers(s, m_maps, "Preset: " + name, (*p)->encoding);
 }
 
 Result<DecodedMap> MaterialDocument::decodeMap(MapSlot slot, const QString& path) {
@@ -359,15 +373,9 @@ Status MaterialDocument::applyDecodedMap(const DecodedMap& d) {
         next.detail = d.detail;
         break;
     }
-    // The bake reads the gloss per normal-map texel: checked as the bake will.
     if (next.gloss)
-        if (auto gloss = glossFromImage(*next.gloss, next.normal->width, next.normal->height); !gloss)
-            return Error{"gloss map '" + s.glossMapPath.toStdString() + "': " + gloss.error()};
-    QString what;
-    auto layers = carriedLayers(next.normal->width, next.normal->height, preset().encoding, &what);
-    push(s, next, QString("Load %1 map").arg(mapSlotName(d.slot)), kNoMerge, layers);
-    if (layers) emit notice(what);
-    return {};
+        if (const Status fits = glossFits(*next.gloss, *next.normal, s.glossMapPath); !fits) return fits;
+    return pushCarryingLayers(s, next, QString("Load %1 map").arg(mapSlotName(d.slot)), preset().encoding);
 }
 
 Status MaterialDocument::loadMap(MapSlot slot, const QString& path) {
@@ -395,6 +403,7 @@ void MaterialDocument::loadMapInBackground(MapSlot slot, const QString& path) {
             },
             Qt::QueuedConnection);
     });
+    worker->setParent(this); // deleted with the document if it goes before the thread's finished()
     m_loaders.push_back(worker);
     connect(worker, &QThread::finished, this, [this, worker] {
         m_loaders.erase(std::remove(m_loaders.begin(), m_loaders.end(), worker), m_loaders.end());
@@ -436,10 +445,8 @@ void MaterialDocument::clearMap(MapSlot slot) {
         s.glossMapPath.clear();
         next.gloss.reset();
     }
-    QString what;
-    auto layers = carriedLayers(next.normal->width, next.normal->height, preset().encoding, &what);
-    push(s, next, QString("Clear %1 map").arg(mapSlotName(slot)), kNoMerge, layers);
-    if (layers) emit notice(what);
+    // Clearing to the sample cannot fail to carry the layers (its size is a possible one).
+    (void)pushCarryingLayers(s, next, QString("Clear %1 map").arg(mapSlotName(slot)), preset().encoding);
 }
 
 void MaterialDocument::setExportSettings(const ExportSettings& exportSettings) {
@@ -501,9 +508,8 @@ Result<LoadedMaps> MaterialDocument::loadMaps(const MaterialSettings& s) {
     if (!s.glossMapPath.isEmpty()) {
         auto image = readImage(s.glossMapPath.toStdString());
         if (!image) return Error{"gloss map: " + image.error()};
-        // The bake reads the gloss per normal-map texel: check it as the bake will.
-        if (auto gloss = glossFromImage(*image, maps.normal->width, maps.normal->height); !gloss)
-            return Error{"gloss map '" + s.glossMapPath.toStdString() + "': " + gloss.error()};
+        if (const Status fits = glossFits(*image, *maps.normal, s.glossMapPath); !fits)
+            return Error{fits.error()};
         maps.gloss = std::make_shared<const Image>(std::move(image.value()));
     }
     if (!s.detailMapPath.isEmpty()) {

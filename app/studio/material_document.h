@@ -218,8 +218,13 @@ private:
     /// The painted layers carried over to a normal map of `width` × `height` (resampled) and to
     /// `encoding` (painted gloss re-encoded to keep its power); null when nothing is painted or
     /// nothing changes for them. `what` says what happened, for notice().
-    std::shared_ptr<const PaintLayers> carriedLayers(int width, int height, const GlossEncoding& encoding,
-                                                     QString* what) const;
+    Result<std::shared_ptr<const PaintLayers>>
+    carriedLayers(int width, int height, const GlossEncoding& encoding, QString* what) const;
+    /// push() of an edit to `maps` under `encoding` with the painted layers carried over (one undo
+    /// step that restores them exactly) and a notice when they were; refused, with nothing changed,
+    /// if they cannot be carried.
+    Status pushCarryingLayers(const MaterialSettings& after, const LoadedMaps& maps, const QString& text,
+                              const GlossEncoding& encoding);
     /// Recomputes the authored gloss inside `rect` (all of it when the inputs changed).
     void recomposite(const TexelRect& rect, bool full);
 

@@ -238,7 +238,6 @@ struct Renderer::Impl {
     // flight (joined at destruction).
     bool backgroundBakes = false;
     int maxTextureSize = 0; // 0: every level uploaded
-    Status prepareFinest();
     std::function<void()> onBakeReady;
     std::optional<MaterialSettings> bakedMaterial;
     std::unique_ptr<BackgroundBake> pending;
@@ -279,6 +278,7 @@ struct Renderer::Impl {
 
     Status prepareMesh();
     Status prepareBake();
+    Status prepareFinest();
     Status uploadBake(const BakeKey& key, const CpuBake& cpu);
     /// Background bakes: whether the bake of `m` is in (a finished worker's bake is taken in now),
     /// else starts it unless another runs, and returns false.
@@ -382,9 +382,6 @@ Status Renderer::Impl::prepareBake() {
         if (const Status s = uploadBake(key, cpuBake(m)); !s) return s;
         bakedMaterial = m;
     }
-    if (m.glossMap && m.glossMap->size() != m.normalMap->texelCount())
-        return Error{"the gloss map has " + std::to_string(m.glossMap->size()) + " texels, the normal map " +
-                     std::to_string(m.normalMap->texelCount())};
     return {};
 }
 
@@ -406,7 +403,7 @@ Status Renderer::Impl::prepareFinest() {
     if (finestGlossFor != m.glossMap) {
         finestGloss.reset();
         if (m.glossMap) {
-            // Its size was checked by prepareBake.
+            // Its size is the normal map's: core's bake refuses any other, and this material is baked.
             auto tex = Texture2D::create({TextureLevel{m.normalMap->width, m.normalMap->height, *m.glossMap}},
                                          1, TextureFilter::Linear, true);
             if (!tex) return Error{"uploading the gloss map: " + tex.error()};

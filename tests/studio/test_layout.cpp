@@ -21,10 +21,12 @@
 #include <QLabel>
 #include <QLayout>
 #include <QProcess>
+#include <QPushButton>
 #include <QScreen>
 #include <QSet>
 #include <QSettings>
 #include <QTest>
+#include <QVBoxLayout>
 
 #include <string>
 
@@ -47,6 +49,15 @@ bool outOfViewByDesign(const QWidget* w, const QMainWindow& window) {
             return true;
     }
     return false;
+}
+
+/// The visible widgets a layout places, through its nested layouts.
+void collectPlaced(QLayout* layout, QList<QWidget*>& placed) {
+    for (int i = 0; i < layout->count(); ++i) {
+        QLayoutItem* item = layout->itemAt(i);
+        if (QWidget* c = item->widget(); c && c->isVisible()) placed << c;
+        if (QLayout* nested = item->layout()) collectPlaced(nested, placed);
+    }
 }
 
 /// What is wrong with the window's layout, one line each (empty when it fits).
@@ -92,11 +103,11 @@ QStringList layoutProblems(QMainWindow& window, const QRect& screen) {
                                 .arg(least.width())
                                 .arg(least.height());
         }
-        // Siblings one layout places must not overlap (the viewport over its control rows did).
+        // Siblings one layout places, its nested layouts included, must not overlap (the viewport
+        // over its control rows, which a nested flow layout places, did).
         if (QLayout* layout = w->layout()) {
             QList<QWidget*> placed;
-            for (int i = 0; i < layout->count(); ++i)
-                if (QWidget* c = layout->itemAt(i)->widget(); c && c->isVisible()) placed << c;
+            collectPlaced(layout, placed);
             for (int i = 0; i < placed.size(); ++i)
                 for (int j = i + 1; j < placed.size(); ++j)
                     if (placed[i]->geometry().intersects(placed[j]->geometry()))
@@ -200,6 +211,27 @@ TEST(Layout, FitsEveryScreenFrom1280x720Up) {
         EXPECT_TRUE(output.contains("[  PASSED  ] 1 test")) << output.toStdString();
         EXPECT_TRUE(QImage(shot).size().isValid()) << "no screenshot at " << shot.toStdString();
     }
+}
+
+// The layout check catches what it was written for: a flow layout's rows squeezed into less
+// height than they need, under the widget laid out after them.
+TEST(Layout, TheCheckFindsControlRowsUnderTheView) {
+    QMainWindow window;
+    auto* central = new QWidget;
+    auto* column = new QVBoxLayout(central);
+    auto* flow = new FlowLayout;
+    for (int i = 0; i < 8; ++i)
+        flow->addWidget(new QPushButton(QString("control %1").arg(i)));
+    column->addLayout(flow);
+    auto* view = new QWidget;
+    view->setMinimumSize(40, 40);
+    column->addWidget(view, 1);
+    window.setCentralWidget(central);
+    window.show();
+    window.resize(140, 140); // eight rows of buttons need more than this
+    QApplication::processEvents();
+    const QStringList problems = layoutProblems(window, QRect(-10000, -10000, 20000, 20000));
+    EXPECT_TRUE(problems.join("\n").contains("overlap")) << problems.join("\n").toStdString();
 }
 
 TEST(Layout, FitInsideMovesAndShrinksAsLittleAsItTakes) {

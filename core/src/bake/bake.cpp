@@ -3,7 +3,6 @@
 #include <burnish/core/bake/base_variance.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 
-#include <Imath/half.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -468,7 +467,7 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
                     mip.unorm16[at + i] = unorm16(px[i]);
             else if (tex.storage == TexelStorage::Half)
                 for (size_t i = 0; i < count; ++i)
-                    mip.halfBits[at + i] = Imath::half(std::clamp(px[i], 0.0f, 1.0f)).bits();
+                    mip.halfBits[at + i] = halfCode(px[i]).bits();
             rowCounts[size_t(y)].low += c.low;
             rowCounts[size_t(y)].high += c.high;
         }

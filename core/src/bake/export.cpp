@@ -602,11 +602,11 @@ PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat f
         p.u16.resize(n * size_t(stored));
         convert(p.u16.data(), code16);
     } else if (format == ExportFormat::ExrHalf) {
-        // Half as OpenImageIO would convert the floats (Imath, round to nearest even): the same
-        // bits, and a texture the bake kept as half is copied as it is.
+        // Half as OpenImageIO would convert the floats (halfCode): the same bits, and a texture the
+        // bake kept as half is copied as it is.
         p.type = OIIO::TypeDesc::HALF;
         p.f16.resize(n * size_t(stored));
-        convert(p.f16.data(), [](float v) { return Imath::half(std::clamp(v, 0.0f, 1.0f)); });
+        convert(p.f16.data(), [](float v) { return halfCode(v); });
     } else {
         p.type = OIIO::TypeDesc::FLOAT;
         p.f32.resize(n * size_t(stored));

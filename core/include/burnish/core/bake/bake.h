@@ -12,6 +12,9 @@
 #include <burnish/core/util/result.h>
 #include <burnish/core/util/texel_vector.h>
 
+#include <Imath/half.h>
+
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -38,6 +41,11 @@ inline std::uint8_t unorm8(float v) {
 }
 inline std::uint16_t unorm16(float v) {
     return unormCode<std::uint16_t>(v, 65535.0);
+}
+/// The half-float a value in [0, 1] is stored as (clamped; Imath rounds to nearest even, as
+/// OpenImageIO does when it writes floats as half).
+inline Imath::half halfCode(float v) {
+    return Imath::half(std::clamp(v, 0.0f, 1.0f));
 }
 
 struct TextureMip {

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <random>
 
 using namespace burnish;
 
@@ -92,4 +93,25 @@ TEST(Util, Float4LanesMatchScalarArithmetic) {
     EXPECT_EQ(m[3], 9.0f);
     EXPECT_EQ(simd::horizontalSum(simd::splat4(0.25f)), 1.0f);
     EXPECT_EQ(simd::horizontalSum(simd::Float4{1e8f, 1.0f, -1e8f, 1.0f}), (1e8f + 1.0f) + (-1e8f + 1.0f));
+}
+
+TEST(Util, ExpNonPositiveIsLibmsExpWithoutSubnormals) {
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(kExpFlushBelow, 0.0);
+    double worst = 0.0;
+    for (int i = 0; i < 200000; ++i) {
+        const double x = i < 1000 ? -i * 1e-3 : u(rng);
+        worst = std::max(worst, std::abs(expNonPositive(x) - std::exp(x)) / std::exp(x));
+    }
+    EXPECT_LT(worst, 1e-15);
+    EXPECT_EQ(expNonPositive(0.0), 1.0);
+    EXPECT_EQ(expNonPositive(-0.0), 1.0);
+    EXPECT_EQ(expNonPositive(3.0), 1.0); // positive arguments are taken as 0
+    EXPECT_NEAR(expNonPositive(kExpFlushBelow), std::exp(kExpFlushBelow), 1e-15 * std::exp(kExpFlushBelow));
+    // Below the flush point 0, never a subnormal (libm gives subnormals down to −745).
+    for (double x = kExpFlushBelow - 1e-9; x > -800.0; x -= 0.37)
+        EXPECT_EQ(expNonPositive(x), 0.0) << x;
+    EXPECT_EQ(expNonPositive(-std::numeric_limits<double>::infinity()), 0.0);
+    EXPECT_EQ(expNonPositive(std::numeric_limits<double>::quiet_NaN()), 0.0);
+    EXPECT_EQ(std::fpclassify(expNonPositive(-707.9)), FP_ZERO);
 }

@@ -1,5 +1,7 @@
 #include <burnish/core/eval/evaluate.h>
 
+#include "lobe_values.h"
+
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/shading/ndf.h>
@@ -10,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <optional>
 
@@ -237,33 +240,6 @@ std::vector<TexelLobe> levelLobes(const NormalPyramid& pyramid, const NormalPyra
     return out;
 }
 
-// The ground truth for one direction pair, summed hierarchically: level 0 holds each finest
-// normal's D_s(n·h)·max(0, n·l), level k the sum of its children at level k−1 (sums has one vector
-// per level up to the last evaluated one).
-void truthSums(const NormalMap& map, const NormalPyramid& pyramid, const std::vector<double>* texelPowers,
-               double s, const DirectionPair& d, std::vector<std::vector<double>>& sums) {
-    const PyramidLevel& l0 = pyramid.level(0);
-    tbb::parallel_for(0, l0.height, [&](int y) {
-        for (int x = 0; x < l0.width; ++x)
-            sums[0][size_t(y) * size_t(l0.width) + size_t(x)] =
-                truthOfNormal(glm::dvec3(map.at(x, y)),
-                              texelPowers ? (*texelPowers)[size_t(y) * size_t(l0.width) + size_t(x)] : s, d);
-    });
-    for (int k = 1; k < int(sums.size()); ++k) {
-        const PyramidLevel& level = pyramid.level(k);
-        const PyramidLevel& child = pyramid.level(k - 1);
-        tbb::parallel_for(0, level.height, [&](int y) {
-            for (int x = 0; x < level.width; ++x) {
-                double sum = 0.0;
-                for (int j = level.yChild[size_t(y)]; j < level.yChild[size_t(y) + 1]; ++j)
-                    for (int i = level.xChild[size_t(x)]; i < level.xChild[size_t(x) + 1]; ++i)
-                        sum += sums[size_t(k - 1)][size_t(j) * size_t(child.width) + size_t(i)];
-                sums[size_t(k)][size_t(y) * size_t(level.width) + size_t(x)] = sum;
-            }
-        });
-    }
-}
-
 // One method's figures at one mip from its accumulated sums. Σ GT > 0 whenever a direction has its
 // light above the horizon and a normal faces it; a truth of exactly 0 (all normals facing away)
 // reports zero error and energy 1.
@@ -295,64 +271,17 @@ ErrorMap errorMapOf(const std::vector<double>& absSum, const std::vector<double>
     return em;
 }
 
-// One base power's pass: every variant's lobes per evaluated mip, their accumulated sums, and the
-// per-texel sums of the error maps ([method][mip] |M − GT|, [mip] GT) when they are asked for.
+// One base power's pass: every variant's lobe tables per evaluated mip (at texels and, with
+// betweenTexels, at corner points), and the per-texel sums of the error maps ([method][mip]
+// |M − GT|, [mip] GT) when they are asked for.
 struct Pass {
-    std::vector<std::vector<std::vector<TexelLobe>>> lobes;
-    // Between texels (options.betweenTexels): per variant and mip the lobe at each texel's corner
-    // point, a decoded mixture for the mixture's variants (K >= 2), and the sums.
-    std::vector<std::vector<std::vector<TexelLobe>>> betweenLobes;
-    std::vector<std::vector<std::vector<DecodedMixture>>> betweenMixtures;
-    std::vector<std::vector<Accumulator>> betweenAcc;
-    // Per variant: the mixture's lobes (K >= 2), or none (its TexelLobes above).
-    std::vector<const MixturePyramid*> mixtures;
-    std::vector<std::vector<Accumulator>> acc;
+    std::vector<std::vector<LobeTable>> tables;
+    std::vector<std::vector<LobeTable>> betweenTables;
     std::vector<std::vector<std::vector<double>>> texelAbs;
     std::vector<std::vector<double>> texelTruth;
     bool errorMaps = false;
+    bool betweenTexels = false;
 };
-
-// Adds per-row partial sums (rows[y·M + m], M variants) to acc[m][mi] in row order: deterministic.
-void addRows(const std::vector<Accumulator>& rows, int height, size_t mi,
-             std::vector<std::vector<Accumulator>>& acc) {
-    const size_t methodCount = acc.size();
-    for (int y = 0; y < height; ++y)
-        for (size_t m = 0; m < methodCount; ++m) {
-            const Accumulator& r = rows[size_t(y) * methodCount + m];
-            acc[m][mi].absError += r.absError;
-            acc[m][mi].method += r.method;
-            acc[m][mi].truth += r.truth;
-        }
-}
-
-// Adds one direction pair's error at level k (evaluated mip mi) to the pass: per texel the truth
-// (the mean of its footprint's sum) against every variant's value. Per-row partial sums, added in
-// row order afterwards: deterministic results.
-void accumulateLevel(const NormalPyramid& pyramid, int k, size_t mi, const std::vector<double>& levelSums,
-                     const DirectionPair& d, Pass& pass) {
-    const PyramidLevel& level = pyramid.level(k);
-    const size_t methodCount = pass.lobes.size();
-    std::vector<Accumulator> rows(size_t(level.height) * methodCount);
-    tbb::parallel_for(0, level.height, [&](int y) {
-        for (int x = 0; x < level.width; ++x) {
-            const size_t t = size_t(y) * size_t(level.width) + size_t(x);
-            const double truth = levelSums[t] / pyramid.footprintCount(k, x, y);
-            if (pass.errorMaps) pass.texelTruth[mi][t] += truth;
-            for (size_t m = 0; m < methodCount; ++m) {
-                const MixturePyramid* mix = pass.mixtures[m];
-                const double value = mix && k > 0
-                                         ? mixtureValue(mix->at(k, x, y), d.l, d.h, mix->minVariance())
-                                         : methodValue(pass.lobes[m][mi][t], d);
-                Accumulator& a = rows[size_t(y) * methodCount + m];
-                a.absError += std::abs(value - truth);
-                a.method += value;
-                a.truth += truth;
-                if (pass.errorMaps) pass.texelAbs[m][mi][t] += std::abs(value - truth);
-            }
-        }
-    });
-    addRows(rows, level.height, mi, pass.acc);
-}
 
 // The four texels whose shared corner is the point of texel (x, y): (x, y), (x+1, y), (x, y+1),
 // (x+1, y+1) through the border mode.
@@ -363,18 +292,18 @@ std::array<size_t, 4> cornerTexels(const PyramidLevel& level, int x, int y, Bord
             size_t(y1) * w + size_t(x1)};
 }
 
-// Every variant's lobe at every corner point of level k (mip index mi) into the pass.
+// Every variant's lobe at every corner point of level k (mip index mi) into the pass's tables.
 void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, size_t mi,
-                  const std::vector<EvaluatedVariant>& variants, const AuthoredPowers* authored,
+                  const std::vector<EvaluatedVariant>& variants,
+                  const std::vector<const MixturePyramid*>& mixtures, const AuthoredPowers* authored,
                   const std::vector<double>* texelPowers, double s, const MethodParams& params, Pass& pass) {
     const PyramidLevel& level = pyramid.level(k);
     const BorderMode border = pyramid.options().border;
     const size_t n = size_t(level.width) * size_t(level.height);
     for (size_t m = 0; m < variants.size(); ++m) {
-        const MixturePyramid* mix = pass.mixtures[m];
+        const MixturePyramid* mix = mixtures[m];
         if (mix) {
-            auto& out = pass.betweenMixtures[m][mi];
-            out.assign(n, {});
+            std::vector<DecodedMixture> out(n);
             tbb::parallel_for(0, level.height, [&](int y) {
                 for (int x = 0; x < level.width; ++x) {
                     // Bilinear filtering at the corner: ¼ of each texel's stored lobes, by slot.
@@ -400,10 +329,10 @@ void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, siz
                         decodeMixture(filtered, mix->minVariance());
                 }
             });
+            pass.betweenTables[m][mi] = LobeTable::of(out);
             continue;
         }
-        auto& out = pass.betweenLobes[m][mi];
-        out.assign(n, {});
+        std::vector<TexelLobe> out(n);
         tbb::parallel_for(0, level.height, [&](int y) {
             for (int x = 0; x < level.width; ++x) {
                 const auto t = cornerTexels(level, x, y, border);
@@ -418,37 +347,179 @@ void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, siz
                     methodLobeBetween(variants[m].method, moments, powers, params);
             }
         });
+        pass.betweenTables[m][mi] = LobeTable::of(out);
     }
 }
 
-// One direction pair's error at the corner points of level k: the truth is ¼ of each of the four
-// footprints' means (the bilinear-weighted union), against every variant's filtered lobe.
-void accumulateBetween(const NormalPyramid& pyramid, int k, size_t mi, const std::vector<double>& levelSums,
-                       const DirectionPair& d, Pass& pass) {
-    const PyramidLevel& level = pyramid.level(k);
-    const BorderMode border = pyramid.options().border;
-    const size_t methodCount = pass.lobes.size();
-    std::vector<Accumulator> rows(size_t(level.height) * methodCount);
+// The decoded mixture of every texel of level k (k >= 1).
+std::vector<DecodedMixture> decodedLevel(const MixturePyramid& mix, const PyramidLevel& level, int k) {
+    std::vector<DecodedMixture> out(size_t(level.width) * size_t(level.height));
     tbb::parallel_for(0, level.height, [&](int y) {
-        for (int x = 0; x < level.width; ++x) {
-            const auto t = cornerTexels(level, x, y, border);
-            double truth = 0.0;
-            for (size_t c = 0; c < 4; ++c) {
-                const int xi = int(t[c] % size_t(level.width)), yi = int(t[c] / size_t(level.width));
-                truth += 0.25 * levelSums[t[c]] / pyramid.footprintCount(k, xi, yi);
-            }
-            const size_t p = size_t(y) * size_t(level.width) + size_t(x);
-            for (size_t m = 0; m < methodCount; ++m) {
-                const double value = pass.mixtures[m] ? mixtureValue(pass.betweenMixtures[m][mi][p], d.l, d.h)
-                                                      : methodValue(pass.betweenLobes[m][mi][p], d);
-                Accumulator& a = rows[size_t(y) * methodCount + m];
-                a.absError += std::abs(value - truth);
-                a.method += value;
-                a.truth += truth;
+        for (int x = 0; x < level.width; ++x)
+            out[size_t(y) * size_t(level.width) + size_t(x)] =
+                decodeMixture(mix.at(k, x, y), mix.minVariance());
+    });
+    return out;
+}
+
+// A band: the texels under one row of the coarsest evaluated level, at every level down to the
+// finest. The pyramid nests (each row's children are rows of the level below), so a band's truth
+// sums need nothing outside it, and its rows are contiguous at every level.
+struct Band {
+    std::vector<int> rowBegin, rowEnd; // per level 0..last: the band's rows there
+};
+
+Band bandOf(const NormalPyramid& pyramid, int last, int y) {
+    Band b;
+    b.rowBegin.resize(size_t(last) + 1);
+    b.rowEnd.resize(size_t(last) + 1);
+    b.rowBegin[size_t(last)] = y, b.rowEnd[size_t(last)] = y + 1;
+    for (int k = last; k > 0; --k) {
+        const PyramidLevel& level = pyramid.level(k);
+        b.rowBegin[size_t(k - 1)] = level.yChild[size_t(b.rowBegin[size_t(k)])];
+        b.rowEnd[size_t(k - 1)] = level.yChild[size_t(b.rowEnd[size_t(k)])];
+    }
+    return b;
+}
+
+// A band's finest normals as three float arrays (what the truth loop reads for every direction),
+// and per level the truth of each of its texels for the current direction pair.
+struct BandTruth {
+    Band band;
+    std::vector<double> nx, ny, nz;
+    std::vector<std::vector<double>> sums;  // per level: Σ over each texel's footprint
+    std::vector<std::vector<double>> truth; // per evaluated level: the footprint's mean
+
+    BandTruth(const NormalMap& map, const NormalPyramid& pyramid, int last, int y)
+        : band(bandOf(pyramid, last, y)) {
+        const size_t begin = size_t(band.rowBegin[0]) * size_t(map.width);
+        const size_t end = size_t(band.rowEnd[0]) * size_t(map.width);
+        nx.resize(end - begin), ny.resize(end - begin), nz.resize(end - begin);
+        for (size_t i = begin; i < end; ++i)
+            nx[i - begin] = map.normals[i].x, ny[i - begin] = map.normals[i].y,
+                   nz[i - begin] = map.normals[i].z;
+        sums.resize(size_t(last) + 1);
+        truth.resize(size_t(last) + 1);
+        for (int k = 0; k <= last; ++k) {
+            const size_t n = size_t(rows(k)) * size_t(pyramid.level(k).width);
+            sums[size_t(k)].resize(n);
+            truth[size_t(k)].resize(n);
+        }
+    }
+    int rows(int k) const { return band.rowEnd[size_t(k)] - band.rowBegin[size_t(k)]; }
+
+    // The truth for pair d: the finest normals' values, summed up the levels (each a sum of its
+    // children), and divided by the footprint's texel count from level `first` on.
+    void compute(const NormalMap& map, const NormalPyramid& pyramid, const std::vector<double>* texelPowers,
+                 double s, int first, const DirectionPair& d) {
+        const size_t begin = size_t(band.rowBegin[0]) * size_t(map.width);
+        truthValues(nx.data(), ny.data(), nz.data(), texelPowers ? texelPowers->data() + begin : nullptr, s,
+                    nx.size(), d, sums[0].data());
+        for (int k = 1; k < int(sums.size()); ++k) {
+            const PyramidLevel& level = pyramid.level(k);
+            const PyramidLevel& child = pyramid.level(k - 1);
+            const int childRow0 = band.rowBegin[size_t(k - 1)];
+            for (int y = band.rowBegin[size_t(k)]; y < band.rowEnd[size_t(k)]; ++y)
+                for (int x = 0; x < level.width; ++x) {
+                    double sum = 0.0;
+                    for (int j = level.yChild[size_t(y)]; j < level.yChild[size_t(y) + 1]; ++j)
+                        for (int i = level.xChild[size_t(x)]; i < level.xChild[size_t(x) + 1]; ++i)
+                            sum +=
+                                sums[size_t(k - 1)][size_t(j - childRow0) * size_t(child.width) + size_t(i)];
+                    sums[size_t(k)][size_t(y - band.rowBegin[size_t(k)]) * size_t(level.width) + size_t(x)] =
+                        sum;
+                }
+        }
+        for (int k = first; k < int(sums.size()); ++k) {
+            const PyramidLevel& level = pyramid.level(k);
+            for (int y = band.rowBegin[size_t(k)]; y < band.rowEnd[size_t(k)]; ++y) {
+                const size_t row = size_t(y - band.rowBegin[size_t(k)]) * size_t(level.width);
+                for (int x = 0; x < level.width; ++x)
+                    truth[size_t(k)][row + size_t(x)] =
+                        sums[size_t(k)][row + size_t(x)] / pyramid.footprintCount(k, x, y);
             }
         }
-    });
-    addRows(rows, level.height, mi, pass.betweenAcc);
+    }
+    // The truth of texel (x, y) of level k, which lies in this band.
+    double at(const NormalPyramid& pyramid, int k, int x, int y) const {
+        return truth[size_t(k)]
+                    [size_t(y - band.rowBegin[size_t(k)]) * size_t(pyramid.level(k).width) + size_t(x)];
+    }
+};
+
+// What evaluating one band adds up: per variant and evaluated mip [m·mips + mi].
+struct BandSums {
+    std::vector<Accumulator> acc, between;
+};
+
+// Adds |v − truth|, v and truth of n texels to a, and |v − truth| to the error map row when given.
+void accumulate(const double* v, const double* truth, size_t n, Accumulator& a, double* absMap) {
+    double absError = 0.0, method = 0.0, sumTruth = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        absError += std::abs(v[i] - truth[i]);
+        method += v[i];
+        sumTruth += truth[i];
+    }
+    a.absError += absError, a.method += method, a.truth += sumTruth;
+    if (absMap)
+        for (size_t i = 0; i < n; ++i)
+            absMap[i] += std::abs(v[i] - truth[i]);
+}
+
+// Every direction pair's error over one band (row y of the last evaluated level), for every variant
+// and evaluated mip. The corner points of the band's last row at each level need the truth of the
+// next band's first row, so with betweenTexels the next band's truth is computed too.
+BandSums evaluateBand(const NormalMap& map, const NormalPyramid& pyramid,
+                      const std::vector<double>* texelPowers, double s, int first, int last, int y,
+                      const std::vector<DirectionPair>& directions, Pass& pass) {
+    const size_t variants = pass.tables.size();
+    const size_t mips = size_t(last - first + 1);
+    const BorderMode border = pyramid.options().border;
+    BandSums out;
+    out.acc.assign(variants * mips, {});
+    if (pass.betweenTexels) out.between.assign(variants * mips, {});
+    BandTruth band(map, pyramid, last, y);
+    std::optional<BandTruth> next;
+    const int nextY = borderIndex(y + 1, pyramid.level(last).height, border);
+    if (pass.betweenTexels && nextY != y) next.emplace(map, pyramid, last, nextY);
+    std::vector<double> values(band.truth[size_t(first)].size()), corner(values.size());
+    for (const DirectionPair& d : directions) {
+        band.compute(map, pyramid, texelPowers, s, first, d);
+        if (next) next->compute(map, pyramid, texelPowers, s, first, d);
+        for (int k = first; k <= last; ++k) {
+            const size_t mi = size_t(k - first);
+            const PyramidLevel& level = pyramid.level(k);
+            const size_t begin = size_t(band.band.rowBegin[size_t(k)]) * size_t(level.width);
+            const size_t n = size_t(band.rows(k)) * size_t(level.width);
+            const double* truth = band.truth[size_t(k)].data();
+            if (pass.errorMaps)
+                for (size_t i = 0; i < n; ++i)
+                    pass.texelTruth[mi][begin + i] += truth[i];
+            for (size_t m = 0; m < variants; ++m) {
+                lobeValues(pass.tables[m][mi], begin, begin + n, d, values.data());
+                accumulate(values.data(), truth, n, out.acc[m * mips + mi],
+                           pass.errorMaps ? pass.texelAbs[m][mi].data() + begin : nullptr);
+            }
+            if (!pass.betweenTexels) continue;
+            // The truth at each corner point: ¼ of each of the four footprints' means.
+            for (int yy = band.band.rowBegin[size_t(k)]; yy < band.band.rowEnd[size_t(k)]; ++yy) {
+                const int y1 = borderIndex(yy + 1, level.height, border);
+                const BandTruth& below =
+                    y1 < band.band.rowEnd[size_t(k)] && y1 >= band.band.rowBegin[size_t(k)] ? band : *next;
+                for (int x = 0; x < level.width; ++x) {
+                    const int x1 = borderIndex(x + 1, level.width, border);
+                    corner[size_t(yy - band.band.rowBegin[size_t(k)]) * size_t(level.width) + size_t(x)] =
+                        0.25 * band.at(pyramid, k, x, yy) + 0.25 * band.at(pyramid, k, x1, yy) +
+                        0.25 * below.at(pyramid, k, x, y1) + 0.25 * below.at(pyramid, k, x1, y1);
+                }
+            }
+            for (size_t m = 0; m < variants; ++m) {
+                lobeValues(pass.betweenTables[m][mi], begin, begin + n, d, values.data());
+                accumulate(values.data(), corner.data(), n, out.between[m * mips + mi], nullptr);
+            }
+        }
+    }
+    return out;
 }
 
 } // namespace
@@ -506,91 +577,96 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
     std::optional<AuthoredPowers> authored;
     if (texelPowers) authored.emplace(pyramid, *texelPowers, lastMip);
 
-    // Hierarchical sums of the per-texel truth: level k = Σ of its children at level k−1.
-    std::vector<std::vector<double>> sums(size_t(lastMip) + 1);
-    for (int k = 0; k <= lastMip; ++k)
-        sums[size_t(k)].resize(size_t(pyramid.level(k).width) * size_t(pyramid.level(k).height));
-
-    const double totalSteps = double(basePowers.size() * directions.size());
+    // Work is done a band at a time (evaluateBand), in batches so that progress and the cancel flag
+    // are seen on this thread between them.
+    const int bands = pyramid.level(lastMip).height;
+    const int batches = std::min(bands, 32);
+    const double totalSteps = double(basePowers.size()) * double(bands);
     double stepsDone = 0.0;
     for (double s : basePowers) {
         Pass pass;
         pass.errorMaps = options.errorMaps;
-        // Lobes of every method at every evaluated mip.
-        auto& lobes = pass.lobes;
-        lobes.assign(methodCount, std::vector<std::vector<TexelLobe>>(size_t(mipCount)));
+        pass.betweenTexels = options.betweenTexels;
         // The mixtures, one per K >= 2 (K = 1 is LEAN's lobe, from the moments).
-        std::vector<std::optional<MixturePyramid>> mixtures(kMaxMixtureLobes + 1);
-        pass.mixtures.assign(methodCount, nullptr);
+        std::vector<std::optional<MixturePyramid>> mixturePyramids(kMaxMixtureLobes + 1);
+        std::vector<const MixturePyramid*> mixtures(methodCount, nullptr);
         for (size_t m = 0; m < methodCount; ++m) {
             const EvaluatedVariant& v = variants[m];
             if (v.method != Method::Mixture || v.lobes < 2) continue;
             if (cancelled()) return Error{std::string(kCancelledMessage)};
-            auto& mix = mixtures[size_t(v.lobes)];
+            auto& mix = mixturePyramids[size_t(v.lobes)];
             if (!mix) mix.emplace(MixturePyramid::build(pyramid, s, v.lobes, lastMip, texelPowers));
-            pass.mixtures[m] = &*mix;
+            mixtures[m] = &*mix;
         }
+        // Lobes of every variant at every evaluated mip.
+        pass.tables.assign(methodCount, std::vector<LobeTable>(size_t(mipCount)));
         for (size_t m = 0; m < methodCount; ++m)
             for (int k = firstMip; k <= lastMip; ++k) {
                 if (cancelled()) return Error{std::string(kCancelledMessage)};
                 const EvaluatedVariant& v = variants[m];
+                auto& table = pass.tables[m][size_t(k - firstMip)];
                 // A mixture's level 0 is each normal's own lobe: LEAN's of the one-texel footprint.
-                if (pass.mixtures[m] && k > 0) continue;
+                if (mixtures[m] && k > 0) {
+                    table = LobeTable::of(decodedLevel(*mixtures[m], pyramid.level(k), k));
+                    continue;
+                }
                 const auto& kernelPyramid = filtered[kernelIndex(v.kernel)];
-                lobes[m][size_t(k - firstMip)] =
-                    levelLobes(pyramid, kernelPyramid ? &*kernelPyramid : nullptr, k, v.method, v.kernel,
-                               authored ? &*authored : nullptr, s, options.params);
+                table =
+                    LobeTable::of(levelLobes(pyramid, kernelPyramid ? &*kernelPyramid : nullptr, k, v.method,
+                                             v.kernel, authored ? &*authored : nullptr, s, options.params));
             }
-
-        pass.acc.assign(methodCount, std::vector<Accumulator>(size_t(mipCount)));
         if (options.betweenTexels) {
-            pass.betweenLobes.assign(methodCount, std::vector<std::vector<TexelLobe>>(size_t(mipCount)));
-            pass.betweenMixtures.assign(methodCount,
-                                        std::vector<std::vector<DecodedMixture>>(size_t(mipCount)));
-            pass.betweenAcc.assign(methodCount, std::vector<Accumulator>(size_t(mipCount)));
+            pass.betweenTables.assign(methodCount, std::vector<LobeTable>(size_t(mipCount)));
             for (int k = firstMip; k <= lastMip; ++k) {
                 if (cancelled()) return Error{std::string(kCancelledMessage)};
-                betweenLevel(map, pyramid, k, size_t(k - firstMip), variants, authored ? &*authored : nullptr,
-                             texelPowers, s, options.params, pass);
+                betweenLevel(map, pyramid, k, size_t(k - firstMip), variants, mixtures,
+                             authored ? &*authored : nullptr, texelPowers, s, options.params, pass);
             }
         }
-        auto& texelAbs = pass.texelAbs;
-        auto& texelTruth = pass.texelTruth;
         if (options.errorMaps) {
-            texelAbs.assign(methodCount, std::vector<std::vector<double>>(size_t(mipCount)));
-            texelTruth.resize(size_t(mipCount));
+            pass.texelAbs.assign(methodCount, std::vector<std::vector<double>>(size_t(mipCount)));
+            pass.texelTruth.resize(size_t(mipCount));
             for (int k = firstMip; k <= lastMip; ++k) {
-                const size_t n = sums[size_t(k)].size();
-                texelTruth[size_t(k - firstMip)].assign(n, 0.0);
+                const size_t n = size_t(pyramid.level(k).width) * size_t(pyramid.level(k).height);
+                pass.texelTruth[size_t(k - firstMip)].assign(n, 0.0);
                 for (size_t m = 0; m < methodCount; ++m)
-                    texelAbs[m][size_t(k - firstMip)].assign(n, 0.0);
+                    pass.texelAbs[m][size_t(k - firstMip)].assign(n, 0.0);
             }
         }
 
-        for (const DirectionPair& d : directions) {
+        std::vector<BandSums> sums(static_cast<size_t>(bands));
+        for (int b = 0; b < batches; ++b) {
             if (cancelled()) return Error{std::string(kCancelledMessage)};
-            truthSums(map, pyramid, texelPowers, s, d, sums);
-            for (int k = firstMip; k <= lastMip; ++k) {
-                if (cancelled()) return Error{std::string(kCancelledMessage)};
-                accumulateLevel(pyramid, k, size_t(k - firstMip), sums[size_t(k)], d, pass);
-                if (options.betweenTexels)
-                    accumulateBetween(pyramid, k, size_t(k - firstMip), sums[size_t(k)], d, pass);
-            }
-            stepsDone += 1.0;
+            const int from = int(int64_t(bands) * b / batches), to = int(int64_t(bands) * (b + 1) / batches);
+            tbb::parallel_for(from, to, [&](int y) {
+                sums[size_t(y)] =
+                    evaluateBand(map, pyramid, texelPowers, s, firstMip, lastMip, y, directions, pass);
+            });
+            stepsDone += double(to - from);
             if (progress) progress(stepsDone / totalSteps);
         }
 
+        // Added in band order: the same figures on any number of threads.
+        std::vector<Accumulator> acc(methodCount * size_t(mipCount)), between(acc.size());
+        for (const BandSums& band : sums)
+            for (size_t i = 0; i < acc.size(); ++i) {
+                acc[i].absError += band.acc[i].absError, acc[i].method += band.acc[i].method,
+                    acc[i].truth += band.acc[i].truth;
+                if (!options.betweenTexels) continue;
+                between[i].absError += band.between[i].absError, between[i].method += band.between[i].method,
+                    between[i].truth += band.between[i].truth;
+            }
         for (size_t m = 0; m < methodCount; ++m)
             for (int k = firstMip; k <= lastMip; ++k) {
                 const size_t mi = size_t(k - firstMip);
-                result.errors.push_back(errorOf(pass.acc[m][mi], variants[m], s, k));
+                result.errors.push_back(errorOf(acc[m * size_t(mipCount) + mi], variants[m], s, k));
                 if (options.betweenTexels) {
-                    result.errors.push_back(errorOf(pass.betweenAcc[m][mi], variants[m], s, k));
+                    result.errors.push_back(errorOf(between[m * size_t(mipCount) + mi], variants[m], s, k));
                     result.errors.back().betweenTexels = true;
                 }
                 if (options.errorMaps)
-                    result.maps.push_back(
-                        errorMapOf(texelAbs[m][mi], texelTruth[mi], variants[m], s, k, pyramid.level(k)));
+                    result.maps.push_back(errorMapOf(pass.texelAbs[m][mi], pass.texelTruth[mi], variants[m],
+                                                     s, k, pyramid.level(k)));
             }
     }
     // A flag raised during the last pass still wins: the caller asked for no result.

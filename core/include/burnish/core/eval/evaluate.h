@@ -163,8 +163,9 @@ TexelLobe methodLobeBetween(Method method, const std::array<NormalMoments, 4>& m
 /// empty power list, non-positive power, mip range outside the map, texelPowers of the wrong size
 /// or with a power outside (0, 1e9]). `progress` (if set) is called with the fraction done,
 /// non-decreasing, ending at exactly 1 on success. `cancel` (if set) may be raised from another
-/// thread: it is read before the work starts and between direction pairs and mips, and a raised
-/// flag returns the Error kCancelledMessage and no partial result.
+/// thread: it is read before the work starts, between the lobe tables and between batches of bands
+/// (rows of the last evaluated mip, evaluated for every direction pair at once), and a raised flag
+/// returns the Error kCancelledMessage and no partial result. Both are called on the calling thread.
 Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOptions& options,
                                          const std::function<void(double)>& progress = {},
                                          const std::atomic<bool>* cancel = nullptr);

@@ -1,0 +1,180 @@
+#include "lobe_values.h"
+
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/util/numeric.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace burnish {
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+// The value loops get 512- and 256-bit copies, picked when the program loads on CPUs that have
+// them. The 512-bit copy fuses multiply-adds, so its last bits may differ from the others' (about
+// 1e-16 relative, far below any figure's precision); on one machine every run and thread count
+// gives the same bits.
+#define BURNISH_VALUE_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define BURNISH_VALUE_CLONES
+#endif
+
+namespace {
+
+constexpr double kSmallestNormal = std::numeric_limits<double>::min();
+
+// max(c, 0)^p as powCos computes it (p clamped, p = 0 gives 1, c >= 1 gives 1), branch-free.
+inline double powCosFast(double c, double p) {
+    const double lg = kLn2<double> * log2Positive(std::max(c, kSmallestNormal));
+    const double v = expNonPositive(p * lg);
+    return (c > 0.0 || p == 0.0) ? v : 0.0;
+}
+
+BURNISH_VALUE_CLONES void blinnPhongValues(const LobeTable& t, size_t begin, size_t count,
+                                           const DirectionPair& d, double* out) {
+    const double *nx = t.nx.data() + begin, *ny = t.ny.data() + begin, *nz = t.nz.data() + begin;
+    const double *power = t.power.data() + begin, *norm = t.norm.data() + begin;
+    const double hx = d.h.x, hy = d.h.y, hz = d.h.z, lx = d.l.x, ly = d.l.y, lz = d.l.z;
+    for (size_t i = 0; i < count; ++i) {
+        const double c = nx[i] * hx + ny[i] * hy + nz[i] * hz;
+        const double nl = std::max(0.0, nx[i] * lx + ny[i] * ly + nz[i] * lz);
+        out[i] = norm[i] * powCosFast(c, power[i]) * nl;
+    }
+}
+
+// Σ over the slots of share·D(h)·max(0, n·l), D the slope-space Gaussian of slopeGaussianNdf.
+BURNISH_VALUE_CLONES void gaussianValues(const LobeTable& t, size_t begin, size_t count,
+                                         const DirectionPair& d, double* out) {
+    std::fill(out, out + count, 0.0);
+    // Directions below the horizon have no slope (slopeGaussianNdf's h_z <= 0 case).
+    if (!(d.h.z > 0.0)) return;
+    const double tx = d.h.x / d.h.z, ty = d.h.y / d.h.z;
+    const double hz2 = d.h.z * d.h.z, invHz4 = 1.0 / (hz2 * hz2);
+    const double lx = d.l.x, ly = d.l.y, lz = d.l.z;
+    for (int s = 0; s < t.slots; ++s) {
+        const size_t o = size_t(s) * t.count + begin;
+        const double *coef = t.coef.data() + o, *mx = t.mx.data() + o, *my = t.my.data() + o;
+        const double *ixx = t.ixx.data() + o, *iyy = t.iyy.data() + o, *ixy = t.ixy.data() + o;
+        const double *nx = t.nx.data() + o, *ny = t.ny.data() + o, *nz = t.nz.data() + o;
+        for (size_t i = 0; i < count; ++i) {
+            const double dx = tx - mx[i], dy = ty - my[i];
+            const double e = dx * dx * ixx[i] + dy * dy * iyy[i] + 2.0 * dx * dy * ixy[i];
+            const double nl = std::max(0.0, nx[i] * lx + ny[i] * ly + nz[i] * lz);
+            out[i] += coef[i] * expNonPositive(-0.5 * e) * invHz4 * nl;
+        }
+    }
+}
+
+// The ground truth of finest normals with one power s (powers null) or each its own.
+template <bool kOwnPowers>
+[[gnu::always_inline]] inline void truthLoop(const double* nx, const double* ny, const double* nz,
+                                             const double* powers, double s, size_t count,
+                                             const DirectionPair& d, double* out) {
+    const double hx = d.h.x, hy = d.h.y, hz = d.h.z, lx = d.l.x, ly = d.l.y, lz = d.l.z;
+    const double sc = clampPower(s), normS = blinnPhongNdfNorm(s);
+    for (size_t i = 0; i < count; ++i) {
+        const double p = kOwnPowers ? clampPower(powers[i]) : sc;
+        const double norm = kOwnPowers ? (p + 2.0) / (2.0 * kPi<double>) : normS;
+        const double c = nx[i] * hx + ny[i] * hy + nz[i] * hz;
+        const double nl = std::max(0.0, nx[i] * lx + ny[i] * ly + nz[i] * lz);
+        out[i] = norm * powCosFast(c, p) * nl;
+    }
+}
+
+BURNISH_VALUE_CLONES void truthOnePower(const double* nx, const double* ny, const double* nz, double s,
+                                        size_t count, const DirectionPair& d, double* out) {
+    truthLoop<false>(nx, ny, nz, nullptr, s, count, d, out);
+}
+
+BURNISH_VALUE_CLONES void truthOwnPowers(const double* nx, const double* ny, const double* nz,
+                                         const double* powers, size_t count, const DirectionPair& d,
+                                         double* out) {
+    truthLoop<true>(nx, ny, nz, powers, 0.0, count, d, out);
+}
+
+// One Gaussian slot from its share, mean, covariance (xx, yy, xy) and normal.
+void putGaussian(LobeTable& t, size_t i, double share, const glm::dvec2& mean,
+                 const std::array<double, 3>& cov, const glm::dvec3& normal) {
+    const double det = cov[0] * cov[1] - cov[2] * cov[2];
+    // Σ = C + I/s with C positive semi-definite, so det >= 1/s² > 0; a rounding that breaks it gives
+    // no lobe, as slopeGaussianNdf.
+    const bool ok = det > 0.0 && share > 0.0;
+    t.coef[i] = ok ? share / (2.0 * kPi<double> * std::sqrt(det)) : 0.0;
+    t.mx[i] = mean.x, t.my[i] = mean.y;
+    t.ixx[i] = ok ? cov[1] / det : 0.0;
+    t.iyy[i] = ok ? cov[0] / det : 0.0;
+    t.ixy[i] = ok ? -cov[2] / det : 0.0;
+    t.nx[i] = normal.x, t.ny[i] = normal.y, t.nz[i] = normal.z;
+}
+
+void resizeGaussian(LobeTable& t, size_t n) {
+    for (auto* v : {&t.coef, &t.mx, &t.my, &t.ixx, &t.iyy, &t.ixy, &t.nx, &t.ny, &t.nz})
+        v->assign(n, 0.0);
+}
+
+} // namespace
+
+LobeTable LobeTable::of(const std::vector<TexelLobe>& lobes) {
+    LobeTable t;
+    t.count = lobes.size();
+    const bool gaussian = !lobes.empty() && lobes.front().slopeGaussian;
+    for (const TexelLobe& l : lobes)
+        if (l.slopeGaussian != gaussian)
+            throw std::logic_error("a level mixes Gaussian and Blinn-Phong lobes");
+    if (gaussian) {
+        t.kind = Kind::Gaussian;
+        resizeGaussian(t, t.count);
+        for (size_t i = 0; i < t.count; ++i)
+            putGaussian(t, i, 1.0, lobes[i].slopeMean, lobes[i].slopeCov, glm::dvec3(lobes[i].normal));
+        return t;
+    }
+    for (auto* v : {&t.nx, &t.ny, &t.nz, &t.power, &t.norm})
+        v->resize(t.count);
+    for (size_t i = 0; i < t.count; ++i) {
+        const glm::dvec3 n(lobes[i].normal);
+        t.nx[i] = n.x, t.ny[i] = n.y, t.nz[i] = n.z;
+        t.power[i] = clampPower(lobes[i].power);
+        t.norm[i] = blinnPhongNdfNorm(lobes[i].power);
+    }
+    return t;
+}
+
+LobeTable LobeTable::of(const std::vector<DecodedMixture>& mixtures) {
+    LobeTable t;
+    t.kind = Kind::Gaussian;
+    t.count = mixtures.size();
+    t.slots = 1;
+    for (const DecodedMixture& m : mixtures)
+        t.slots = std::max(t.slots, m.count);
+    resizeGaussian(t, size_t(t.slots) * t.count);
+    for (size_t i = 0; i < t.count; ++i)
+        for (int s = 0; s < mixtures[i].count; ++s) {
+            const DecodedMixture::Lobe& l = mixtures[i].lobes[size_t(s)];
+            putGaussian(t, size_t(s) * t.count + i, l.share, l.mean, l.cov, l.normal);
+        }
+    return t;
+}
+
+size_t LobeTable::bytes() const {
+    size_t n = 0;
+    for (const auto* v : {&nx, &ny, &nz, &power, &norm, &coef, &mx, &my, &ixx, &iyy, &ixy})
+        n += v->capacity() * sizeof(double);
+    return n;
+}
+
+void lobeValues(const LobeTable& table, size_t begin, size_t end, const DirectionPair& d, double* out) {
+    if (table.kind == LobeTable::Kind::BlinnPhong)
+        blinnPhongValues(table, begin, end - begin, d, out);
+    else
+        gaussianValues(table, begin, end - begin, d, out);
+}
+
+void truthValues(const double* nx, const double* ny, const double* nz, const double* powers, double s,
+                 size_t count, const DirectionPair& d, double* out) {
+    if (powers)
+        truthOwnPowers(nx, ny, nz, powers, count, d, out);
+    else
+        truthOnePower(nx, ny, nz, s, count, d, out);
+}
+
+} // namespace burnish

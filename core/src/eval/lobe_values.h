@@ -1,0 +1,47 @@
+// Evaluate's inner loop: the value of many lobes, or of many finest normals' ground truth, for one
+// direction pair, as structure-of-arrays with branch-free arithmetic that the compiler vectorises
+// (exp by expNonPositive, log by log2Positive: no libm calls, no subnormal results). Each value is
+// the scalar reference's (methodValue, mixtureValue, groundTruthTexel) within 1e-12 relative
+// (test_evaluate.cpp), and values below e^-707 of the lobe's scale are 0.
+#pragma once
+
+#include <burnish/core/eval/evaluate.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace burnish {
+
+/// The lobes of one variant at one level (or at its corner points), one entry per texel.
+struct LobeTable {
+    /// Blinn-Phong: D = (p+2)/(2π)·max(n·h, 0)^p (the isotropic methods). Gaussian: `slots` slope-space
+    /// Gaussians per texel, each weighted by its share (LEAN and CLEAN: one slot of share 1; the
+    /// mixture: K slots, empty ones of share 0).
+    enum class Kind { BlinnPhong, Gaussian };
+    Kind kind = Kind::BlinnPhong;
+    int slots = 1;
+    size_t count = 0;
+    // Per texel (Blinn-Phong) or per slot and texel, slot-major: [slot·count + t].
+    std::vector<double> nx, ny, nz;    // the normal of n·l (and of n·h for Blinn-Phong)
+    std::vector<double> power, norm;   // Blinn-Phong: clampPower(p) and (p+2)/(2π)
+    std::vector<double> coef;          // Gaussian: share/(2π√det Σ), 0 for an empty slot or det <= 0
+    std::vector<double> mx, my;        // Gaussian: mean slope
+    std::vector<double> ixx, iyy, ixy; // Gaussian: Σ⁻¹ (xx, yy, xy)
+
+    static LobeTable of(const std::vector<TexelLobe>& lobes);
+    static LobeTable of(const std::vector<DecodedMixture>& mixtures);
+
+    /// Bytes held (the report's memory figures and tests).
+    size_t bytes() const;
+};
+
+/// out[i] = the value of lobe begin + i for direction pair d, i < end − begin.
+void lobeValues(const LobeTable& table, size_t begin, size_t end, const DirectionPair& d, double* out);
+
+/// The ground truth of `count` finest normals (x, y, z in three arrays) for d: D_s(n·h)·max(0, n·l)
+/// with each normal's power powers[i], or s for all when powers is null.
+void truthValues(const double* nx, const double* ny, const double* nz, const double* powers, double s,
+                 size_t count, const DirectionPair& d, double* out);
+
+} // namespace burnish

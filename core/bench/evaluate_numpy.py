@@ -1,0 +1,305 @@
+#!/usr/bin/python3
+# evaluate_numpy.py: an independent NumPy implementation of the ground-truth metric that
+# `burnish evaluate` computes (core/src/eval/evaluate.cpp), for the naive, toksvig, lean, clean and
+# vmf methods with box footprints. Two uses: the speed baseline `burnish evaluate` is measured
+# against (a plain vectorised NumPy version: texels vectorised, directions, mips and methods looped
+# in Python, float64 throughout, one process), and an independent check of the C++ figures.
+#
+# The metric (evaluate.h): for mip k a texel's footprint is its aligned 2^k x 2^k block of finest
+# normals n_i, GT = mean_i D_s(n_i.h) max(0, n_i.l) with D_s the normalised Blinn-Phong NDF
+# (s+2)/(2pi) (n.h)^s; a method's value is its own NDF times max(0, nbar.l). Over every texel of
+# the mip and every direction pair: relative L1 = sum|M - GT| / sum GT, energy = sum M / sum GT.
+# Like the C++, the finest normals and the pyramid's stored moments are float32 (the pyramid is
+# built level from level in double and rounded to float at each level), lobe normals are float32,
+# and everything else is float64.
+#
+# Run (/usr/bin/python3 has numpy and PIL):
+#   /usr/bin/python3 core/bench/evaluate_numpy.py MAP.png [--power 512 ...] [--first-mip 1]
+#       [--last-mip 4] [--methods naive,toksvig,lean,clean,vmf] [--compare DIR/evaluate.json]
+# --compare takes the evaluate.json of
+#   build/bin/burnish evaluate MAP --power S --methods naive,toksvig,lean,clean,vmf --out DIR
+# and prints the largest relative difference of each figure from the C++ one.
+# Limits: 8-bit PNG/TGA/... as PIL reads them (L+A, RGB, RGBA), OpenGL green, wrap border, sizes
+# divisible by 2^last-mip (the power-of-two footprints); no --gloss, kernels or mixtures.
+
+import argparse
+import json
+import math
+import sys
+import time
+
+import numpy as np
+from PIL import Image
+
+VIEW_ANGLE_DEG = 30.0
+HALF_ANGLES_DEG = [0.0, 2.5, 5.0, 10.0, 15.0, 20.0, 30.0]
+AZIMUTHS = 8
+HORIZON_DEG = 3.0
+MAX_POWER = 1e9          # numeric.h kMaxPower
+MIN_BASE_POWER = 1e-6    # methods.h kMinBasePower
+MIN_SLOPE_Z = float(np.float32(0.01))  # normal_pyramid.h kMinSlopeZ (a float)
+F32 = np.float32
+
+
+def load_normals(path):
+    """normal_map.cpp decodeTexels for an 8-bit image: unit float32 normals (H, W, 3)."""
+    im = Image.open(path)
+    if im.mode == "P":
+        im = im.convert("RGBA" if "transparency" in im.info else "RGB")
+    if im.mode not in ("LA", "RGB", "RGBA"):
+        sys.exit(f"unsupported image mode {im.mode} (8-bit LA, RGB or RGBA only)")
+    codes = np.asarray(im)
+    # OpenImageIO's uint8 -> float conversion: code * (1/255) in float.
+    vals = codes.astype(F32) * F32(1.0 / 255.0)
+    v = 2.0 * vals.astype(np.float64) - 1.0   # unsigned encoding, in double
+    rg = codes.shape[2] == 2
+    if not rg:   # auto layout: a constant blue beside varying red/green is an RG map
+        const = lambda c: bool(np.all(codes[..., c] == codes.flat[c]))
+        rg = const(2) and not (const(0) and const(1))
+    x, y = v[..., 0], v[..., 1]
+    if rg:
+        r2 = x * x + y * y
+        scale = np.where(r2 > 1.0, 1.0 / np.sqrt(r2), 1.0)
+        x, y = np.where(r2 > 1.0, x * scale, x), np.where(r2 > 1.0, y * scale, y)
+        z = np.sqrt(np.maximum(0.0, 1.0 - x * x - y * y))
+    else:
+        z = v[..., 2]   # alpha (channel 3) is ignored
+    length = np.sqrt(x * x + y * y + z * z)
+    ok = length >= 1e-4  # shorter vectors become a flat normal
+    inv = 1.0 / np.where(ok, length, 1.0)
+    n = np.stack([np.where(ok, x * inv, 0.0), np.where(ok, y * inv, 0.0), np.where(ok, z * inv, 1.0)], -1)
+    return n.astype(F32)
+
+
+def directions():
+    """evaluate.cpp evaluationDirections: (l, h) pairs, in its order."""
+    tv = math.radians(VIEW_ANGLE_DEG)
+    v = (math.sin(tv), 0.0, math.cos(tv))
+    min_lz = math.sin(math.radians(HORIZON_DEG))
+    pairs = []
+    for deg in HALF_ANGLES_DEG:
+        th = math.radians(deg)
+        count = 1 if deg == 0.0 else max(AZIMUTHS, 1)
+        for j in range(count):
+            phi = 2.0 * math.pi * j / count
+            h = (math.sin(th) * math.cos(phi), math.sin(th) * math.sin(phi), math.cos(th))
+            vh = v[0] * h[0] + v[1] * h[1] + v[2] * h[2]
+            l = tuple(2.0 * vh * h[i] - v[i] for i in range(3))
+            if l[2] < min_lz:
+                continue
+            inv = 1.0 / math.sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2])
+            pairs.append((tuple(c * inv for c in l), h))
+    return pairs
+
+
+def block_sum(a):
+    """Sum of each aligned 2x2 block, in the C++ order (row by row, left to right)."""
+    return ((a[0::2, 0::2] + a[0::2, 1::2]) + a[1::2, 0::2]) + a[1::2, 1::2]
+
+
+def pyramid(n, last_mip):
+    """normal_pyramid.cpp box moments per level: mean Na, slope B and slope covariance, float32.
+    Level 1 sums the finest normals in double, level k > 1 its children's float moments weighted
+    by their footprint counts (4^(k-1), which cancel: every child weighs the same)."""
+    nx, ny, nz = (n[..., i].astype(np.float64) for i in range(3))
+    zs = np.maximum(nz, MIN_SLOPE_Z)
+    bx, by = nx / zs, ny / zs
+    levels = [None]
+    # Level 1: raw sums of x, b and b b^T.
+    raw = [nx, ny, nz, bx, by, bx * bx, by * by, bx * by]
+    for k in range(1, last_mip + 1):
+        w = 4.0 ** (k - 1)
+        if k > 1:  # children's float moments back to raw second moments (w * (C + b b^T))
+            m = levels[k - 1]
+            mx, my, mz, sx, sy = (m[c].astype(np.float64) for c in ("mx", "my", "mz", "bx", "by"))
+            c0, c1, c2 = (m[c].astype(np.float64) for c in ("c0", "c1", "c2"))
+            raw = [w * mx, w * my, w * mz, w * sx, w * sy, w * (c0 + sx * sx), w * (c1 + sy * sy),
+                   w * (c2 + sx * sy)]
+        inv = 1.0 / (4.0 * w)
+        s = [block_sum(r) * inv for r in raw]
+        mbx, mby = s[3], s[4]
+        levels.append({"mx": s[0].astype(F32), "my": s[1].astype(F32), "mz": s[2].astype(F32),
+                       "bx": mbx.astype(F32), "by": mby.astype(F32),
+                       "c0": np.maximum(0.0, s[5] - mbx * mbx).astype(F32),
+                       "c1": np.maximum(0.0, s[6] - mby * mby).astype(F32),
+                       "c2": (s[7] - mbx * mby).astype(F32)})
+    return levels
+
+
+def level0_moments(n):
+    """NormalMoments::ofNormal for mip 0: the normal, its float slope, no spread."""
+    nx, ny, nz = n[..., 0], n[..., 1], n[..., 2]
+    z = np.maximum(nz, F32(0.01))
+    zero = np.zeros_like(nx)
+    return {"mx": nx, "my": ny, "mz": nz, "bx": nx / z, "by": ny / z, "c0": zero, "c1": zero, "c2": zero}
+
+
+def method_lobe(method, m, s):
+    """methods.cpp methodLobe for box moments m (float32 arrays) and base power s."""
+    s = max(min(s, MAX_POWER), MIN_BASE_POWER)   # max(clampPower(s), kMinBasePower)
+    if method in ("lean", "clean"):
+        bx, by = m["bx"].astype(np.float64), m["by"].astype(np.float64)
+        inv = 1.0 / np.sqrt(bx * bx + by * by + 1.0)  # glm::normalize(b.x, b.y, 1), then float
+        normal = [(bx * inv).astype(F32), (by * inv).astype(F32), inv.astype(F32)]
+        c0, c1, c2 = (m[c].astype(np.float64) for c in ("c0", "c1", "c2"))
+        if method == "lean":
+            cov = (c0 + 1.0 / s, c1 + 1.0 / s, c2)
+        else:
+            sigma2 = 0.5 * (c0 + c1) + 1.0 / s
+            cov = (sigma2, sigma2, np.zeros_like(sigma2))
+        det = cov[0] * cov[1] - cov[2] * cov[2]
+        good = det > 0.0
+        return {"normal": [c.astype(np.float64) for c in normal], "bx": bx, "by": by, "cov": cov,
+                "det": np.where(good, det, 1.0), "good": good,
+                "norm": (2.0 * math.pi) * np.sqrt(np.where(good, det, 1.0))}
+    # Isotropic lobes: the float mean direction Na/|Na| and a power.
+    mx, my, mz = m["mx"], m["my"], m["mz"]
+    length = np.sqrt(mx * mx + my * my + mz * mz)   # float32, glm::length
+    ok = (length > 0) & np.isfinite(length)
+    safe = np.where(ok, length, F32(1))
+    normal = [np.where(ok, mx / safe, F32(0)), np.where(ok, my / safe, F32(0)), np.where(ok, mz / safe, F32(1))]
+    r = np.minimum(length, F32(1)).astype(np.float64)   # lengthNa()
+    r = np.where(r > 0.0, r, 0.0)
+    if method == "naive":
+        power = s
+    elif method == "toksvig":   # gloss.cpp toksvigPower
+        denom = r + s * (1.0 - r)
+        ft = np.where(denom > 0.0, r / np.where(denom > 0.0, denom, 1.0), 1.0)
+        power = np.clip(ft * s, 0.0, s)
+    elif method == "vmf":       # methods.cpp vmfKappa, methodPower
+        one_minus_r2 = (1.0 - r) * (1.0 + r)
+        pos = one_minus_r2 > 0.0
+        kappa = np.where(pos, np.clip(r * (3.0 - r * r) / np.where(pos, one_minus_r2, 1.0), 0.0, MAX_POWER),
+                         MAX_POWER)
+        kpos = kappa > 0.0
+        p = 1.0 / (1.0 / s + 1.0 / np.where(kpos, kappa, 1.0))
+        power = np.where(kpos, np.clip(p, 0.0, MAX_POWER), 0.0)
+    else:
+        sys.exit(f"unknown method {method}")
+    return {"normal": [c.astype(np.float64) for c in normal], "power": power}
+
+
+def blinn_phong(nx, ny, nz, power, h):
+    """ndf.h blinnPhongNdf(n.h, power) with numeric.h powCos."""
+    c = nx * h[0] + ny * h[1] + nz * h[2]
+    p = np.clip(power, 0.0, MAX_POWER)
+    pos = c > 0.0
+    pc = np.exp(p * np.log(np.where(pos, np.minimum(c, 1.0), 1.0)))
+    pc = np.where(pos, pc, 0.0)
+    if np.ndim(p) or p == 0.0:
+        pc = np.where(p == 0.0, 1.0, pc)
+    return (p + 2.0) / (2.0 * math.pi) * pc
+
+
+def method_value(lobe, l, h):
+    """evaluate.cpp methodValue: the lobe's NDF times max(0, nbar.l)."""
+    nx, ny, nz = lobe["normal"]
+    if "power" in lobe:
+        d = blinn_phong(nx, ny, nz, lobe["power"], h)
+    elif h[2] > 0.0:   # methods.cpp slopeGaussianNdf
+        c0, c1, c2 = lobe["cov"]
+        dx = h[0] / h[2] - lobe["bx"]
+        dy = h[1] / h[2] - lobe["by"]
+        e = (dx * dx * c1 + dy * dy * c0 - 2.0 * dx * dy * c2) / lobe["det"]
+        hz2 = h[2] * h[2]
+        d = np.where(lobe["good"], np.exp(-0.5 * e) / (lobe["norm"] * hz2 * hz2), 0.0)
+    else:
+        d = 0.0
+    return d * np.maximum(0.0, nx * l[0] + ny * l[1] + nz * l[2])
+
+
+def evaluate(n, powers, first_mip, last_mip, methods):
+    """Returns {(method, power, mip): (relative L1, energy)} and the direction count."""
+    height, width = n.shape[:2]
+    last_level = int(math.log2(max(width, height)))
+    last_mip = min(last_mip, last_level)
+    if first_mip < 0 or first_mip > last_mip or width % (1 << last_mip) or height % (1 << last_mip):
+        sys.exit(f"mips {first_mip}..{last_mip}: need sizes divisible by 2^last (box footprints only)")
+    pairs = directions()
+    levels = pyramid(n, last_mip)
+    levels[0] = level0_moments(n)
+    fx, fy, fz = (n[..., i].astype(np.float64) for i in range(3))
+    mips = range(first_mip, last_mip + 1)
+    out = {}
+    for s in powers:
+        lobes = {(m, k): method_lobe(m, levels[k], s) for m in methods for k in mips}
+        acc = {key: [0.0, 0.0, 0.0] for key in lobes}   # sum |M - GT|, sum M, sum GT
+        for l, h in pairs:
+            # Ground truth per finest texel, then summed over 2x2 blocks level by level.
+            sums = blinn_phong(fx, fy, fz, s, h) * np.maximum(0.0, fx * l[0] + fy * l[1] + fz * l[2])
+            truth = {}
+            for k in range(0, last_mip + 1):
+                if k > 0:
+                    sums = block_sum(sums)
+                if k >= first_mip:
+                    truth[k] = sums / float(4 ** k)
+            for (m, k), lobe in lobes.items():
+                value = method_value(lobe, l, h)
+                a = acc[(m, k)]
+                a[0] += float(np.sum(np.abs(value - truth[k])))
+                a[1] += float(np.sum(value))
+                a[2] += float(np.sum(truth[k]))
+        for (m, k), (err, msum, tsum) in acc.items():
+            out[(m, s, k)] = (err / tsum, msum / tsum) if tsum > 0.0 else (0.0, 1.0)
+    return out, len(pairs), last_mip
+
+
+def compare(results, path):
+    with open(path) as f:
+        report = json.load(f)
+    ref = {}
+    for e in report["errors"]:
+        if e.get("kernel", "box") == "box" and not e.get("between_texels") and not e.get("lobes"):
+            ref[(e["method"], float(e["base_power"]), int(e["mip"]))] = (e["relative_l1"], e["energy_ratio"])
+    print(f"\nAgainst {path} (C++ evaluation_seconds {report.get('evaluation_seconds', float('nan')):.3f}, "
+          f"{report.get('directions')} directions):")
+    print(f"{'method':<10}{'max rel diff relL1':>20}{'max rel diff energy':>21}  figures")
+    worst = {}
+    for (m, s, k), (rl1, en) in results.items():
+        if (m, s, k) not in ref:
+            print(f"  {m} power {s:g} mip {k}: not in the C++ report")
+            continue
+        cr, ce = ref[(m, s, k)]
+        dr = abs(rl1 - cr) / abs(cr) if cr else abs(rl1)
+        de = abs(en - ce) / abs(ce) if ce else abs(en)
+        w = worst.setdefault(m, [0.0, 0.0, 0])
+        w[0], w[1], w[2] = max(w[0], dr), max(w[1], de), w[2] + 1
+    for m, (dr, de, count) in worst.items():
+        print(f"{m:<10}{dr:>20.3e}{de:>21.3e}  {count}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("map")
+    ap.add_argument("--power", type=float, nargs="+", default=[512.0])
+    ap.add_argument("--first-mip", type=int, default=1)
+    ap.add_argument("--last-mip", type=int, default=4)
+    ap.add_argument("--methods", default="naive,toksvig,lean,clean,vmf")
+    ap.add_argument("--compare", metavar="EVALUATE_JSON")
+    args = ap.parse_args()
+    methods = [m for m in args.methods.split(",") if m]
+    for s in args.power:
+        if not (0.0 < s <= MAX_POWER):
+            sys.exit(f"base power {s} is outside (0, 1e9]")
+
+    t0 = time.perf_counter()
+    n = load_normals(args.map)
+    t1 = time.perf_counter()
+    results, ndirs, last_mip = evaluate(n, args.power, args.first_mip, args.last_mip, methods)
+    t2 = time.perf_counter()
+
+    print(f"{args.map}: {n.shape[1]}x{n.shape[0]}, {ndirs} direction pairs, mips {args.first_mip}..{last_mip}")
+    mips = range(args.first_mip, last_mip + 1)
+    for s in args.power:
+        print(f"\nbase power {s:g}: relative L1 / energy per mip")
+        print(f"{'method':<10}" + "".join(f"{'mip ' + str(k):>22}" for k in mips))
+        for m in methods:
+            cells = "".join(f"{results[(m, s, k)][0]:>11.6f}{results[(m, s, k)][1]:>11.6f}" for k in mips)
+            print(f"{m:<10}{cells}")
+    print(f"\nload: {t1 - t0:.3f} s; evaluation (pyramid, lobes, truth, errors): {t2 - t1:.3f} s")
+    if args.compare:
+        compare(results, args.compare)
+
+
+if __name__ == "__main__":
+    main()

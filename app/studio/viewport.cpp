@@ -449,6 +449,9 @@ void Viewport::drawInto(unsigned framebuffer, int width, int height) {
     const render::Scene& scene = *current;
 
     render::RenderTarget left{framebuffer, width, height};
+    // While the camera moves, half-size frames (a quarter of the fragments); the rest timer's frame is
+    // the full one.
+    left.interactive = e.moving;
     render::RenderTarget right = left;
     if (m_view.split) {
         // The divider's column in pixels: the left side gets [0, splitX), the right [splitX, width).

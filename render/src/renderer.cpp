@@ -51,10 +51,11 @@ constexpr int kMaxReferenceSamples = 4096;
 
 // An RGBA32F off-screen target of the given size (with depth for the material pass), kept between
 // frames and recreated only when the size changes; its colour texture feeds the next pass.
-Status ensureTarget(std::optional<Framebuffer>& target, int width, int height, bool depth) {
+Status ensureTarget(std::optional<Framebuffer>& target, int width, int height, bool depth,
+                    ColorFormat format = ColorFormat::Rgba32f) {
     if (target && target->width() == width && target->height() == height) return {};
     target.reset();
-    auto created = Framebuffer::create(width, height, ColorFormat::Rgba32f, depth);
+    auto created = Framebuffer::create(width, height, format, depth);
     if (!created) return Error{created.error()};
     target.emplace(std::move(created).value());
     return {};
@@ -271,6 +272,10 @@ struct Renderer::Impl {
     double lastEnvironmentMs = 0.0;
 
     std::optional<Framebuffer> hdr;
+    // The frame's display values with their depth (drawFused), copied into the caller's target; at
+    // half size for an interactive frame.
+    std::optional<Framebuffer> display;
+    std::optional<Framebuffer> displayInteractive;
     std::optional<Framebuffer> accumulation;
     std::optional<Framebuffer> heatmapReference;
     bool heatmapReferenceValid = false;
@@ -286,7 +291,8 @@ struct Renderer::Impl {
     Status prepareMaps();
     Status prepareEnvironment(EnvironmentKind kind);
     void setEnvironmentUniforms(const Program& p, const FeatureSet& f);
-    Result<const Program*> materialProgram(const FeatureSet& f);
+    /// The material program of f; with `display` its DISPLAY_OUTPUT variant (tonemap fused).
+    Result<const Program*> materialProgram(const FeatureSet& f, bool display = false);
     void setMaterialUniforms(const Program& p, const FeatureSet& f, int width, int height,
                              glm::vec2 jitterNdc, bool reference);
     Status drawMaterial(const FeatureSet& f, const Program& p, int width, int height, glm::vec2 jitterNdc,
@@ -294,7 +300,22 @@ struct Renderer::Impl {
     Status accumulateReference(int width, int height, int samples);
     Status displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView);
     Status drawHdr(int width, int height);
+    Status drawFused(const RenderTarget& target);
+    void setFaceCulling() const;
 };
+
+// The built-in sphere and torus are closed, wound counter-clockwise seen from outside, and the camera
+// never enters them: their back faces are always hidden, so they are culled rather than shaded and then
+// covered. Both faces of the plane are seen, and an OBJ's winding is not trusted.
+void Renderer::Impl::setFaceCulling() const {
+    if (meshKind == MeshKind::Sphere || meshKind == MeshKind::Torus) {
+        glEnable(GL_CULL_FACE);
+        glCullFace(GL_BACK);
+        glFrontFace(GL_CCW);
+    } else {
+        glDisable(GL_CULL_FACE);
+    }
+}
 
 Status Renderer::Impl::prepareMesh() {
     if (mesh && meshKind == scene.mesh && (scene.mesh != MeshKind::Obj || meshPath == scene.objPath))
@@ -532,11 +553,11 @@ void Renderer::Impl::setEnvironmentUniforms(const Program& p, const FeatureSet& 
     p.set("uEnvironmentSamples", std::clamp(e.fisSamples, 1, int(kMaxFisSamples)));
 }
 
-Result<const Program*> Renderer::Impl::materialProgram(const FeatureSet& f) {
+Result<const Program*> Renderer::Impl::materialProgram(const FeatureSet& f, bool display) {
     // The reference is always specialized: the ubershader has no reference mode.
-    if (useUbershader && !f.referenceMode)
-        return programs.get("material.vert", "material.frag", ubershaderDefines());
-    return programs.get("material.vert", "material.frag", defines(f));
+    ShaderDefines d = useUbershader && !f.referenceMode ? ubershaderDefines() : defines(f);
+    if (display) d.push_back({"DISPLAY_OUTPUT", "1"});
+    return programs.get("material.vert", "material.frag", d);
 }
 
 void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, int width, int height,
@@ -647,8 +668,7 @@ Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int w
     glDisable(GL_BLEND);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
-    // Both faces: the plane is seen from either side and OBJ winding is not trusted.
-    glDisable(GL_CULL_FACE);
+    setFaceCulling();
     glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     p.use();
@@ -691,12 +711,6 @@ Status Renderer::Impl::accumulateReference(int width, int height, int samples) {
     return {};
 }
 
-Status Renderer::Impl::drawHdr(int width, int height) {
-    if (!hasScene || !program) return Error{"no scene to render"};
-    if (auto s = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false); !s) return s;
-    return {};
-}
-
 namespace {
 
 // Binds the target for its final pass, with its scissor rectangle when it has one.
@@ -712,6 +726,45 @@ void bindTarget(const RenderTarget& target) {
 }
 
 } // namespace
+
+// The frame's view in one pass: the material program's DISPLAY_OUTPUT variant writes display values
+// (tonemap.frag's transform) into an 8-bit target with its own depth, copied into the caller's target
+// (its scissor kept). What the HDR target and the display pass gave, without writing and reading a
+// float target: the background stays black (the transform of 0).
+Status Renderer::Impl::drawFused(const RenderTarget& target) {
+    auto fused = materialProgram(features, true);
+    if (!fused) return Error{fused.error()};
+    const int width = target.interactive ? std::max(1, (target.width + 1) / 2) : target.width;
+    const int height = target.interactive ? std::max(1, (target.height + 1) / 2) : target.height;
+    std::optional<Framebuffer>& out = target.interactive ? displayInteractive : display;
+    if (auto s = ensureTarget(out, width, height, true, ColorFormat::Rgba8); !s) return s;
+    out->bind();
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    setFaceCulling();
+    glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    (*fused)->use();
+    setMaterialUniforms(**fused, features, width, height, glm::vec2(0.0f), false);
+    // tonemap.frag takes the linear scale 2^EV.
+    (*fused)->set("uExposure", std::exp2(scene.exposure));
+    mesh->draw();
+    glDisable(GL_DEPTH_TEST);
+    bindTarget(target); // binds it for reading too: read from the display target
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, out->id());
+    glBlitFramebuffer(0, 0, width, height, 0, 0, target.width, target.height, GL_COLOR_BUFFER_BIT,
+                      target.interactive ? GL_LINEAR : GL_NEAREST);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, target.framebuffer);
+    glDisable(GL_SCISSOR_TEST);
+    return {};
+}
+
+Status Renderer::Impl::drawHdr(int width, int height) {
+    if (!hasScene || !program) return Error{"no scene to render"};
+    if (auto s = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false); !s) return s;
+    return {};
+}
 
 Status Renderer::Impl::displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView) {
     bindTarget(target);
@@ -823,8 +876,14 @@ Status Renderer::render(const RenderTarget& target) {
     const auto start = Clock::now();
     // A host context (the studio's) may leave a scissor on: the off-screen passes draw everything.
     glDisable(GL_SCISSOR_TEST);
-    if (auto s = impl.drawHdr(target.width, target.height); !s) return s;
     const DebugView view = impl.features.debugView;
+    if (view == DebugView::None) {
+        if (auto s = impl.drawFused(target); !s) return s;
+        glFinish();
+        impl.lastMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+        return {};
+    }
+    if (auto s = impl.drawHdr(target.width, target.height); !s) return s;
     if (view == DebugView::ErrorHeatmap) {
         // The reference reuses the HDR target, so it is accumulated first (and cached until the
         // scene or the size changes), copied aside, and the method's image drawn again after it.

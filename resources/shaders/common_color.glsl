@@ -52,3 +52,9 @@ float tonemapFilmic(float x) {
 vec3 tonemapFilmic(vec3 x) {
     return vec3(tonemapFilmic(x.r), tonemapFilmic(x.g), tonemapFilmic(x.b));
 }
+
+// HDR → display, the one display transform (tonemap.frag's pass, and material.frag's fused output):
+// exposure (a linear scale, 2^EV computed on the CPU), the filmic curve, the sRGB encoding.
+vec3 displayFromHdr(vec3 hdr, float exposure) {
+    return linearToSrgb(tonemapFilmic(hdr * exposure));
+}

@@ -10,9 +10,17 @@
 #include "geometric_aa.glsl"
 #include "gloss.glsl"
 #include "methods.glsl"
+#include "common_color.glsl"
 
 #ifndef UBERSHADER
 #define UBERSHADER 0
+#endif
+// DISPLAY_OUTPUT 1: write the display value (displayFromHdr with uExposure) instead of HDR.
+#ifndef DISPLAY_OUTPUT
+#define DISPLAY_OUTPUT 0
+#endif
+#if DISPLAY_OUTPUT
+uniform float uExposure;
 #endif
 
 #if UBERSHADER
@@ -616,5 +624,11 @@ void main() {
         color = heatRamp(lod / 12.0);
     }
 #endif
+#if DISPLAY_OUTPUT
+    // The display pass fused into this one (the frame's view, no debug view): the same transform
+    // tonemap.frag applies to the HDR target, without the target.
+    fragColor = vec4(displayFromHdr(color, uExposure), 1.0);
+#else
     fragColor = vec4(color, 1.0);
+#endif
 }

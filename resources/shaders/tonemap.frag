@@ -14,11 +14,9 @@ uniform sampler2D uHdr;
 uniform float uExposure;
 
 void main() {
-    vec3 hdr = texture(uHdr, vUv).rgb * uExposure;
 #if TONEMAP_NONE
-    vec3 display = clamp01(hdr);
+    fragColor = vec4(linearToSrgb(clamp01(texture(uHdr, vUv).rgb * uExposure)), 1.0);
 #else
-    vec3 display = tonemapFilmic(hdr);
+    fragColor = vec4(displayFromHdr(texture(uHdr, vUv).rgb, uExposure), 1.0);
 #endif
-    fragColor = vec4(linearToSrgb(display), 1.0);
 }

@@ -1,6 +1,8 @@
 // The scene renderer, headless: every method draws, the extremes stay finite, the supersampled
 // reference converges, and at a distance the prefiltering methods are closer to it than naive.
 #include <burnish/core/prefilter/sample_maps.h>
+#include <burnish/core/shading/color.h>
+#include <burnish/core/shading/tonemap.h>
 #include <burnish/render/context.h>
 #include <burnish/render/gpu_resources.h>
 #include <burnish/render/renderer.h>
@@ -442,6 +444,77 @@ TEST_F(RendererTest, RendersIntoAGivenFramebuffer) {
     ASSERT_TRUE(renderer().render(RenderTarget{fb->id(), kSize, kSize}).ok());
     EXPECT_GT(litFraction(fb->readRgbaFloat()), kMinLitFraction);
     EXPECT_NE(renderer().explainProgram().find("sampler2D uNormalMap"), std::string::npos);
+}
+
+// The frame's view is drawn in one pass with the display transform fused into the material program;
+// it must be the HDR image put through tonemap.frag's transform (core's twins), to the 8-bit step,
+// for every kind of method, and an A/B split's two scissored halves must each be that side's frame.
+TEST_F(RendererTest, TheFusedDisplayPassIsTheHdrImageTonemapped) {
+    Scene scene = sampleScene();
+    scene.pointLights.push_back(PointLight{});
+    scene.exposure = 0.5f;
+    auto fb = Framebuffer::create(kSize, kSize, ColorFormat::Rgba8, false);
+    ASSERT_TRUE(fb.ok()) << fb.error();
+    std::map<Method, std::vector<float>> frames;
+    for (Method m : {Method::Naive, Method::Lean, Method::Mixture}) {
+        scene.material.method = m;
+        const std::vector<float> linear = hdr(scene);
+        ASSERT_TRUE(renderer().render(RenderTarget{fb->id(), kSize, kSize}).ok());
+        const std::vector<float> display = fb->readRgbaFloat();
+        ASSERT_EQ(display.size(), linear.size());
+        const double scale = std::exp2(double(scene.exposure));
+        double worst = 0.0;
+        for (size_t i = 0; i < linear.size(); ++i) {
+            if (i % 4 == 3) continue;
+            const double expected = linearToSrgb(tonemapFilmic(double(linear[i]) * scale));
+            worst = std::max(worst, std::abs(double(display[i]) - expected));
+        }
+        // Rounding to 8 bits, and float against double arithmetic in the curve.
+        EXPECT_LE(worst, 0.5 / 255.0 + 1e-4) << methodName(m);
+        EXPECT_GT(litFraction(display), kMinLitFraction) << methodName(m);
+        frames[m] = display;
+    }
+    // A/B: naive on the left 24 columns, LEAN on the rest, into one target.
+    auto split = Framebuffer::create(kSize, kSize, ColorFormat::Rgba8, false);
+    ASSERT_TRUE(split.ok()) << split.error();
+    RenderTarget left{split->id(), kSize, kSize}, right = left;
+    left.scissorWidth = 24, left.scissorHeight = kSize;
+    right.scissorX = 24, right.scissorWidth = kSize - 24, right.scissorHeight = kSize;
+    scene.material.method = Method::Naive;
+    ASSERT_TRUE(renderer().setScene(scene).ok());
+    ASSERT_TRUE(renderer().render(left).ok());
+    scene.material.method = Method::Lean;
+    ASSERT_TRUE(renderer().setScene(scene).ok());
+    ASSERT_TRUE(renderer().render(right).ok());
+    const std::vector<float> both = split->readRgbaFloat();
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x)
+            for (int c = 0; c < 4; ++c) {
+                const size_t i = (size_t(y) * kSize + size_t(x)) * 4 + size_t(c);
+                ASSERT_EQ(both[i], frames[x < 24 ? Method::Naive : Method::Lean][i]) << x << "," << y;
+            }
+}
+
+// An interactive frame (while the camera moves) is drawn at half size and scaled up: the same picture,
+// softer, never blank; and a full frame after it is the full frame again.
+TEST_F(RendererTest, AnInteractiveFrameIsTheViewAtHalfSizeScaledUp) {
+    Scene scene = sampleScene();
+    scene.material.method = Method::Lean;
+    ASSERT_TRUE(renderer().setScene(scene).ok());
+    auto fb = Framebuffer::create(kSize, kSize, ColorFormat::Rgba8, false);
+    ASSERT_TRUE(fb.ok()) << fb.error();
+    RenderTarget target{fb->id(), kSize, kSize};
+    ASSERT_TRUE(renderer().render(target).ok());
+    const std::vector<float> full = fb->readRgbaFloat();
+    target.interactive = true;
+    ASSERT_TRUE(renderer().render(target).ok());
+    const std::vector<float> moving = fb->readRgbaFloat();
+    EXPECT_GT(litFraction(moving), kMinLitFraction);
+    EXPECT_NE(moving, full) << "the interactive frame was drawn at full size";
+    EXPECT_LT(meanAbsLuminanceError(moving, full), 0.05);
+    target.interactive = false;
+    ASSERT_TRUE(renderer().render(target).ok());
+    EXPECT_EQ(fb->readRgbaFloat(), full);
 }
 
 TEST_F(RendererTest, BadInputsAreErrors) {

@@ -28,6 +28,11 @@ struct RenderTarget {
     int scissorWidth = 0;
     int scissorHeight = 0;
 
+    /// The frame while the camera moves (an orbit, a zoom): the view is drawn at half the target's
+    /// width and height and scaled up bilinearly, a quarter of the fragments; the caller draws the full
+    /// frame when the camera rests. Debug views and the reference ignore it.
+    bool interactive = false;
+
     bool hasScissor() const { return scissorWidth > 0 && scissorHeight > 0; }
 };
 

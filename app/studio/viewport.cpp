@@ -40,6 +40,9 @@ constexpr int kOrbitIntervalMs = 33;
 // cannot draw 16 passes per interactive frame).
 constexpr int kRestMs = 300;
 constexpr int kMovingReferenceSamples = 2;
+// While the camera moves, frames are drawn at half size (RenderTarget::interactive) when the last full
+// frame took longer than this: 60 frames a second.
+constexpr double kInteractiveAboveMs = 1000.0 / 60.0;
 // While a stroke paints, a dab redraw waits this long after the previous dab frame ended: each dab
 // hands the renderer a new authored gloss, and its full re-bake of the 512² sample costs ~90 ms on
 // llvmpipe here (a dab frame ~100 ms against ~12 ms for a plain redraw; test_viewport.cpp's dab
@@ -449,9 +452,9 @@ void Viewport::drawInto(unsigned framebuffer, int width, int height) {
     const render::Scene& scene = *current;
 
     render::RenderTarget left{framebuffer, width, height};
-    // While the camera moves, half-size frames (a quarter of the fragments); the rest timer's frame is
-    // the full one.
-    left.interactive = e.moving;
+    // While the camera moves and full frames are slower than 60 a second, half-size frames (a quarter
+    // of the fragments); the rest timer's frame is the full one.
+    left.interactive = e.moving && m_fullFrameMs > kInteractiveAboveMs;
     render::RenderTarget right = left;
     if (m_view.split) {
         // The divider's column in pixels: the left side gets [0, splitX), the right [splitX, width).
@@ -481,6 +484,7 @@ void Viewport::drawInto(unsigned framebuffer, int width, int height) {
         return;
     }
     m_frameMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    if (!left.interactive) m_fullFrameMs = m_frameMs;
     setError({});
     if (m_meterPending) {
         m_meterPending = false;

@@ -197,6 +197,7 @@ private:
     QString m_contextDescription;
     QString m_error;
     double m_frameMs = 0.0;
+    double m_fullFrameMs = 0.0; // the last frame drawn at full size
     bool m_paintMode = false;
     bool m_backgroundBakes = false;
     bool m_painting = false;

@@ -9,7 +9,7 @@ For every map, power and mip it reads LEAN's and each mixture-kK row's relative 
 and prints: per K the mean relative L1 over all (map, power, mip) cases next to LEAN's, the mean of
 the per-case ratio to LEAN, the worst ratio (a case where the mixture is worse than LEAN has a ratio
 above 1), the energy range, and the per-map worst ratio. `--dense` evaluates with 1° half-angle
-steps to 40° and 16 azimuths instead of the default 49 directions. Bake and shading costs come from
+steps to 40° and 16 azimuths instead of the default 48 light/view pairs. Bake and shading costs come from
 the first map's report. Figures only: nothing here passes or fails.
 """
 import argparse

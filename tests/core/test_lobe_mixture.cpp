@@ -241,7 +241,7 @@ TEST(LobeMixture, NdfKeepsItsEnergy) {
 }
 
 TEST(LobeMixture, ErrsLessThanLeanOnARealMap) {
-    // The evaluate metric (texture space, box footprints, the default 49 directions) at s = 256.
+    // The evaluate metric (texture space, box footprints, the default 48 light/view pairs) at s = 256.
     auto map = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png");
     ASSERT_TRUE(map) << map.error();
     auto b = build(std::move(map).value());

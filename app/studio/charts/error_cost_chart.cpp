@@ -156,7 +156,7 @@ ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
         const NormalMap& map = *m_doc->maps().normal;
         if (!m_evaluating)
             m_status->setText(QString("The %1×%2 map is evaluated only when asked (it visits every texel for "
-                                      "each of 49 directions, at every mip): press Evaluate now.")
+                                      "each of 48 light/view pairs, at every mip): press Evaluate now.")
                                   .arg(map.width)
                                   .arg(map.height));
     });

@@ -555,7 +555,11 @@ void Renderer::Impl::setEnvironmentUniforms(const Program& p, const FeatureSet& 
 
 Result<const Program*> Renderer::Impl::materialProgram(const FeatureSet& f, bool display) {
     // The reference is always specialized: the ubershader has no reference mode.
-    ShaderDefines d = useUbershader && !f.referenceMode ? ubershaderDefines() : defines(f);
+    const bool uber = useUbershader && !f.referenceMode;
+    ShaderDefines d = uber ? ubershaderDefines() : defines(f);
+    if (!uber && f.method == Method::Mixture && !f.referenceMode)
+        d.push_back({"MIXTURE_LOBES", std::to_string(std::clamp(scene.material.methodParams.mixtureLobes, 1,
+                                                                kMaxMixtureLobes))});
     if (display) d.push_back({"DISPLAY_OUTPUT", "1"});
     return programs.get("material.vert", "material.frag", d);
 }

@@ -153,6 +153,13 @@ uniform vec3 uCleanBias;
 // The mixture's textures (method table rows mixture-weights, mixture-lobe0..3, mixture-cross):
 // uMixtureLobes of the lobe samplers are bound.
 uniform int uMixtureLobes;
+// The specialised program is compiled for its K (MIXTURE_LOBES, set by the renderer), so its loops
+// over the lobes unroll to exactly K and the unused lobes' code and fetches are gone.
+#if !UBERSHADER && defined(MIXTURE_LOBES)
+#define MIXTURE_LOBE_COUNT MIXTURE_LOBES
+#else
+#define MIXTURE_LOBE_COUNT clamp(uMixtureLobes, 1, kMaxMixtureLobes)
+#endif
 uniform float uMixtureMinVariance; // 1/s of the narrowest authored lobe
 uniform sampler2D uMixtureWeights;
 uniform vec4 uMixtureWeightsScale;
@@ -333,7 +340,7 @@ Lobe materialLobe(vec2 uv) {
 #if UBERSHADER || METHOD == METHOD_MIXTURE
         if (IS_METHOD(METHOD_MIXTURE)) {
             // Premultiplied moments, filtered by the hardware: same-index lobes merge exactly.
-            lobe.mixtureLobes = clamp(uMixtureLobes, 1, kMaxMixtureLobes);
+            lobe.mixtureLobes = MIXTURE_LOBE_COUNT;
             lobe.mixtureMinVariance = max(uMixtureMinVariance, kMinVariance);
             lobe.mixtureWeights = sampleMap(uMixtureWeights, uv) * uMixtureWeightsScale + uMixtureWeightsBias;
             lobe.mixtureCross = sampleMap(uMixtureCross, uv) * uMixtureCrossScale + uMixtureCrossBias;

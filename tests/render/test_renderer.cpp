@@ -418,7 +418,10 @@ TEST_F(RendererTest, UbershaderMatchesSpecializedPrograms) {
     Scene scene = sampleScene();
     scene.environment = EnvironmentKind::ConstantAmbient;
     scene.pointLights.push_back(PointLight{});
-    for (Method m : {Method::Toksvig, Method::Lean, Method::VarianceToGloss}) {
+    // The mixture at K = 2: the specialised program is compiled for its K (MIXTURE_LOBES), the
+    // ubershader reads it from a uniform.
+    scene.material.methodParams.mixtureLobes = 2;
+    for (Method m : {Method::Toksvig, Method::Lean, Method::VarianceToGloss, Method::Mixture}) {
         scene.material.method = m;
         scene.material.ndf = m == Method::Toksvig ? NdfTerm::Ggx : NdfTerm::BlinnPhong;
         scene.material.visibility = VisibilityTerm::SchlickSmith;

@@ -243,7 +243,7 @@ float PaintTool::pickAt(QPointF texel) const {
     const size_t i = size_t(y) * size_t(map.width) + size_t(x);
     if (m_layer == PaintLayerKind::VarianceOffset) {
         const PaintLayer& l = m_doc->paintLayer(PaintLayerKind::VarianceOffset);
-        return l.coverage[i] > 0.0f ? l.value[i] : 0.0f;
+        return l.coverageAt(i) > 0.0f ? l.valueAt(i) : 0.0f;
     }
     if (const auto gloss = m_doc->authoredGloss()) return (*gloss)[i];
     return float(m_doc->settings().gloss);
@@ -286,6 +286,7 @@ void PaintTool::release() {
 
 void PaintTool::clearLayer() {
     const PaintLayer& l = m_doc->paintLayer(m_layer);
+    if (!l.allocated()) return; // nothing was ever painted: nothing to clear, no undo step
     PaintPatch before = copyPatch(l, TexelRect::full(l.width, l.height));
     PaintPatch after = before;
     std::fill(after.value.begin(), after.value.end(), 0.0f);

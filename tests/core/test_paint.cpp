@@ -180,7 +180,7 @@ TEST(Paint, DirtyRectangleBoundsExactlyTheChangedTexels) {
     for (int y = 0; y < 64; ++y)
         for (int x = 0; x < 64; ++x)
             if (!s.dirty().contains(x, y)) {
-                ASSERT_EQ(l.coverage[l.index(x, y)], before.coverage[l.index(x, y)]) << x << "," << y;
+                ASSERT_EQ(l.coverage[l.index(x, y)], before.coverageAt(l.index(x, y))) << x << "," << y;
             }
     ASSERT_TRUE(s.addPoint({40.5, 30.5}));
     EXPECT_EQ(s.dirty(), (TexelRect{18, 28, 43, 33}));
@@ -193,9 +193,53 @@ TEST(Paint, DirtyRectangleBoundsExactlyTheChangedTexels) {
     const PaintPatch undo = s.before(), redo = s.after();
     EXPECT_EQ(undo.rect, s.dirty());
     ASSERT_TRUE(applyPatch(l, undo));
-    EXPECT_TRUE(sameBits(l.value, before.value) && sameBits(l.coverage, before.coverage));
+    EXPECT_TRUE(samePaint(l, before));
     ASSERT_TRUE(applyPatch(l, redo));
-    EXPECT_TRUE(sameBits(l.value, painted.value) && sameBits(l.coverage, painted.coverage));
+    EXPECT_TRUE(samePaint(l, painted));
+}
+
+// A layer holds no arrays until something is painted or written: an unpainted layer of a huge map
+// costs nothing; a stroke's bookkeeping follows the tiles it reaches; an all-zero patch (an undo to
+// unpainted) leaves an unpainted layer unallocated; resampling and saving an unpainted layer work.
+TEST(Paint, LayersAllocateWhenFirstPaintedAndStrokesOnlyWhatTheyTouch) {
+    PaintLayer big = PaintLayer::create(PaintLayerKind::Gloss, 16384, 16384).value();
+    EXPECT_FALSE(big.allocated());
+    EXPECT_FALSE(big.painted());
+    EXPECT_EQ(big.texelCount(), size_t(16384) * 16384);
+    EXPECT_EQ(big.coverageAt(12345), 0.0f);
+    const PaintLayer resampled = resamplePaintLayer(big, 8192, 8192).value();
+    EXPECT_FALSE(resampled.allocated());
+    PaintLayer l = layer(300, 200);
+    ASSERT_TRUE(applyPatch(l, copyPatch(l, TexelRect{10, 10, 40, 40})));
+    EXPECT_FALSE(l.allocated()) << "a patch of zeros changes nothing";
+    PaintStroke s = stroke(l, brush(4.0, 1.0, 1.0, 0.5f), BorderMode::Wrap);
+    EXPECT_TRUE(l.allocated());
+    ASSERT_TRUE(s.addPoint({150.0, 100.0}));
+    ASSERT_TRUE(s.addPoint({190.0, 100.0})); // across a tile edge (64-texel tiles)
+    EXPECT_TRUE(l.painted());
+    const PaintPatch undo = s.before();
+    for (float c : undo.coverage)
+        EXPECT_EQ(c, 0.0f);
+    ASSERT_TRUE(applyPatch(l, undo));
+    EXPECT_FALSE(l.painted());
+    EXPECT_TRUE(samePaint(l, layer(300, 200)));
+    l.clear();
+    EXPECT_FALSE(l.allocated());
+    // A second stroke over paint composites over what the first left, tile by tile.
+    PaintLayer twice = layer(130, 70);
+    for (int pass = 0; pass < 2; ++pass) {
+        PaintStroke t = stroke(twice, brush(3.0, 1.0, 0.5, 1.0f), BorderMode::Wrap);
+        ASSERT_TRUE(t.addPoint({62.0, 33.0}));
+        ASSERT_TRUE(t.addPoint({68.0, 33.0}));
+    }
+    EXPECT_NEAR(twice.coverageAt(twice.index(64, 33)), 0.75f, kFloatTol); // 0.5, then 0.5 over 0.5
+    const auto dir = std::filesystem::temp_directory_path() / ("burnish-lazy-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    ASSERT_TRUE(writePaintLayerExr(layer(9, 7), dir / "empty.exr"));
+    auto back = readPaintLayerExr(dir / "empty.exr", PaintLayerKind::Gloss, 9, 7);
+    ASSERT_TRUE(back) << back.error();
+    EXPECT_TRUE(samePaint(*back, layer(9, 7)));
+    std::filesystem::remove_all(dir);
 }
 
 TEST(Paint, InvalidBrushesAreRefused) {
@@ -212,6 +256,8 @@ TEST(Paint, CompositeBlendsGlossAndAddsVarianceOnlyWherePainted) {
     const int w = 16, h = 8;
     PaintLayer gloss = layer(w, h);
     PaintLayer offset = layer(w, h, PaintLayerKind::VarianceOffset);
+    gloss.allocate();
+    offset.allocate();
     gloss.value[gloss.index(2, 2)] = 1.0f;
     gloss.coverage[gloss.index(2, 2)] = 0.25f;
     offset.value[offset.index(5, 5)] = 0.1f;
@@ -397,6 +443,7 @@ namespace {
 
 PaintLayer patterned(int width, int height) {
     PaintLayer layer = PaintLayer::create(PaintLayerKind::Gloss, width, height).value();
+    layer.allocate();
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
             const size_t i = layer.index(x, y);

@@ -140,12 +140,10 @@ TEST(StudioPaint, StrokeOnTheViewChangesTheLayerAndUndoRestoresIt) {
     EXPECT_TRUE(sameBits(tool->liveBake()->authoredGloss(), *doc->authoredGloss()));
 
     doc->undoStack()->undo();
-    EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::Gloss).value, before.value));
-    EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::Gloss).coverage, before.coverage));
+    EXPECT_TRUE(samePaint(doc->paintLayer(PaintLayerKind::Gloss), before));
     EXPECT_FALSE(doc->authoredGloss()); // nothing painted, no gloss map: the base power again
     doc->undoStack()->redo();
-    EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::Gloss).value, painted.value));
-    EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::Gloss).coverage, painted.coverage));
+    EXPECT_TRUE(samePaint(doc->paintLayer(PaintLayerKind::Gloss), painted));
 
     // The eyedropper reads the painted gloss under the stroke's middle.
     const QPointF middle = view->texelAt(QPointF(view->width() / 2.0, view->height() / 2.0));
@@ -190,10 +188,8 @@ TEST(StudioPaint, LayersSurviveASaveAndLoad) {
     other.showMessage = [](const QString&, const QString& text) { ADD_FAILURE() << text.toStdString(); };
     ASSERT_TRUE(other.openProject(file));
     const MaterialDocument* loaded = other.document();
-    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::Gloss).value, gloss.value));
-    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::Gloss).coverage, gloss.coverage));
-    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::VarianceOffset).value, offset.value));
-    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::VarianceOffset).coverage, offset.coverage));
+    EXPECT_TRUE(samePaint(loaded->paintLayer(PaintLayerKind::Gloss), gloss));
+    EXPECT_TRUE(samePaint(loaded->paintLayer(PaintLayerKind::VarianceOffset), offset));
     ASSERT_TRUE(loaded->authoredGloss());
     EXPECT_TRUE(sameBits(*loaded->authoredGloss(), authored));
 
@@ -246,11 +242,8 @@ TEST(StudioPaint, PaintSurvivesAMapOfAnotherSizeAndUndoRestoresItExactly) {
             EXPECT_EQ(carried.coverage[carried.index(401, 301)], gloss.coverage[gloss.index(200, 150)]);
         }
         doc->undoStack()->undo();
-        EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::Gloss).value, gloss.value)) << size;
-        EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::Gloss).coverage, gloss.coverage)) << size;
-        EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::VarianceOffset).value, offset.value)) << size;
-        EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::VarianceOffset).coverage, offset.coverage))
-            << size;
+        EXPECT_TRUE(samePaint(doc->paintLayer(PaintLayerKind::Gloss), gloss)) << size;
+        EXPECT_TRUE(samePaint(doc->paintLayer(PaintLayerKind::VarianceOffset), offset)) << size;
     }
     // Redo gives the carried layers again, and a stroke on them undoes on them.
     doc->undoStack()->redo();
@@ -265,10 +258,8 @@ TEST(StudioPaint, PaintSurvivesAMapOfAnotherSizeAndUndoRestoresItExactly) {
     reopened.showMessage = [](const QString&, const QString& text) { ADD_FAILURE() << text.toStdString(); };
     ASSERT_TRUE(reopened.openProject(file));
     const MaterialDocument* loaded = reopened.document();
-    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::Gloss).value, gloss.value));
-    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::Gloss).coverage, gloss.coverage));
-    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::VarianceOffset).value, offset.value));
-    EXPECT_TRUE(sameBits(loaded->paintLayer(PaintLayerKind::VarianceOffset).coverage, offset.coverage));
+    EXPECT_TRUE(samePaint(loaded->paintLayer(PaintLayerKind::Gloss), gloss));
+    EXPECT_TRUE(samePaint(loaded->paintLayer(PaintLayerKind::VarianceOffset), offset));
 }
 
 // A preset of another gloss encoding keeps the painted powers, as it keeps the base gloss's power;
@@ -291,7 +282,7 @@ TEST(StudioPaint, APresetChangeReencodesThePaintedGlossAndUndoRestoresIt) {
         << "the same power under the new encoding";
     EXPECT_EQ(reencoded.coverage[i], painted.coverage[i]);
     doc->undoStack()->undo();
-    EXPECT_TRUE(sameBits(doc->paintLayer(PaintLayerKind::Gloss).value, painted.value));
+    EXPECT_TRUE(samePaint(doc->paintLayer(PaintLayerKind::Gloss), painted));
 }
 
 // Saves write layer files named by their content and remove those no longer named; removing an

@@ -8,7 +8,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 namespace burnish {
@@ -27,7 +29,9 @@ bool finite2(const glm::dvec2& p) {
 
 Status checkLayer(const PaintLayer& layer, const char* what) {
     const size_t n = size_t(std::max(layer.width, 0)) * size_t(std::max(layer.height, 0));
-    if (layer.width <= 0 || layer.height <= 0 || layer.value.size() != n || layer.coverage.size() != n)
+    // Both arrays allocated at the layer's size, or both not yet (an unpainted layer).
+    const size_t held = layer.allocated() ? n : 0;
+    if (layer.width <= 0 || layer.height <= 0 || layer.value.size() != held || layer.coverage.size() != held)
         return Error{std::string(what) + " layer's arrays do not match its size"};
     return {};
 }
@@ -64,9 +68,13 @@ Result<PaintLayer> PaintLayer::create(PaintLayerKind kind, int width, int height
     layer.kind = kind;
     layer.width = width;
     layer.height = height;
-    layer.value.assign(size_t(width) * size_t(height), 0.0f);
-    layer.coverage.assign(size_t(width) * size_t(height), 0.0f);
     return layer;
+}
+
+void PaintLayer::allocate() {
+    if (allocated()) return;
+    value.assign(texelCount(), 0.0f);
+    coverage.assign(texelCount(), 0.0f);
 }
 
 bool PaintLayer::painted() const {
@@ -74,8 +82,17 @@ bool PaintLayer::painted() const {
 }
 
 void PaintLayer::clear() {
-    std::fill(value.begin(), value.end(), 0.0f);
-    std::fill(coverage.begin(), coverage.end(), 0.0f);
+    value = {};
+    coverage = {};
+}
+
+bool samePaint(const PaintLayer& a, const PaintLayer& b) {
+    if (a.kind != b.kind || a.width != b.width || a.height != b.height) return false;
+    for (size_t i = 0; i < a.texelCount(); ++i)
+        if (std::bit_cast<std::uint32_t>(a.valueAt(i)) != std::bit_cast<std::uint32_t>(b.valueAt(i)) ||
+            std::bit_cast<std::uint32_t>(a.coverageAt(i)) != std::bit_cast<std::uint32_t>(b.coverageAt(i)))
+            return false;
+    return true;
 }
 
 namespace {
@@ -113,6 +130,7 @@ Result<PaintLayer> resamplePaintLayer(const PaintLayer& layer, int width, int he
     if (const Status st = checkLayer(layer, "the resampled"); !st) return Error{st.error()};
     auto out = PaintLayer::create(layer.kind, width, height);
     if (!out) return Error{out.error()};
+    if (!layer.allocated()) return out; // nothing painted: nothing to carry
     const AxisTaps tx = axisTaps(layer.width, width), ty = axisTaps(layer.height, height);
     // Along x first (coverage and coverage·value in double), then along y.
     std::vector<double> rowsCover(size_t(width) * size_t(layer.height)), rowsPaint(rowsCover.size());
@@ -129,6 +147,7 @@ Result<PaintLayer> resamplePaintLayer(const PaintLayer& layer, int width, int he
         }
     });
     PaintLayer& o = out.value();
+    o.allocate();
     tbb::parallel_for(0, height, [&](int y) {
         for (int x = 0; x < width; ++x) {
             double cover = 0.0, paint = 0.0;
@@ -158,8 +177,8 @@ PaintPatch copyPatch(const PaintLayer& layer, const TexelRect& rect) {
     patch.coverage.reserve(patch.rect.texelCount());
     for (int y = patch.rect.y0; y < patch.rect.y1; ++y)
         for (int x = patch.rect.x0; x < patch.rect.x1; ++x) {
-            patch.value.push_back(layer.value[layer.index(x, y)]);
-            patch.coverage.push_back(layer.coverage[layer.index(x, y)]);
+            patch.value.push_back(layer.valueAt(layer.index(x, y)));
+            patch.coverage.push_back(layer.coverageAt(layer.index(x, y)));
         }
     return patch;
 }
@@ -171,6 +190,12 @@ Status applyPatch(PaintLayer& layer, const PaintPatch& patch) {
         return Error{"the paint patch lies outside the layer"};
     if (patch.value.size() != r.texelCount() || patch.coverage.size() != r.texelCount())
         return Error{"the paint patch's arrays do not match its rectangle"};
+    // A patch of zeros onto an unpainted layer changes nothing: it stays unallocated.
+    auto nonZero = [](float v) { return v != 0.0f || std::signbit(v); };
+    if (!layer.allocated() && std::none_of(patch.value.begin(), patch.value.end(), nonZero) &&
+        std::none_of(patch.coverage.begin(), patch.coverage.end(), nonZero))
+        return {};
+    layer.allocate();
     size_t i = 0;
     for (int y = r.y0; y < r.y1; ++y)
         for (int x = r.x0; x < r.x1; ++x, ++i) {
@@ -206,9 +231,31 @@ PaintStroke::PaintStroke(PaintLayer& layer, const Brush& brush, BorderMode borde
     : m_layer(&layer)
     , m_brush(brush)
     , m_border(border)
-    , m_beforeValue(layer.value)
-    , m_beforeCoverage(layer.coverage)
-    , m_strength(layer.texelCount(), 0.0f) {}
+    , m_tilesX((layer.width + kStrokeTile - 1) / kStrokeTile)
+    , m_tiles(size_t(m_tilesX) * size_t((layer.height + kStrokeTile - 1) / kStrokeTile)) {
+    layer.allocate();
+}
+
+PaintStroke::Tile& PaintStroke::tileAt(int x, int y) {
+    Tile& t = m_tiles[size_t(y / kStrokeTile) * size_t(m_tilesX) + size_t(x / kStrokeTile)];
+    if (t.strength.empty()) {
+        constexpr size_t n = size_t(kStrokeTile) * size_t(kStrokeTile);
+        t.value.assign(n, 0.0f), t.coverage.assign(n, 0.0f), t.strength.assign(n, 0.0f);
+        const int x0 = x / kStrokeTile * kStrokeTile, y0 = y / kStrokeTile * kStrokeTile;
+        for (int j = y0; j < std::min(y0 + kStrokeTile, m_layer->height); ++j)
+            for (int i = x0; i < std::min(x0 + kStrokeTile, m_layer->width); ++i) {
+                const size_t at = size_t(j - y0) * size_t(kStrokeTile) + size_t(i - x0);
+                t.value[at] = m_layer->value[m_layer->index(i, j)];
+                t.coverage[at] = m_layer->coverage[m_layer->index(i, j)];
+            }
+    }
+    return t;
+}
+
+const PaintStroke::Tile* PaintStroke::touchedTile(int x, int y) const {
+    const Tile& t = m_tiles[size_t(y / kStrokeTile) * size_t(m_tilesX) + size_t(x / kStrokeTile)];
+    return t.strength.empty() ? nullptr : &t;
+}
 
 Result<PaintStroke> PaintStroke::begin(PaintLayer& layer, const Brush& brush, BorderMode border) {
     if (const Status st = validateBrush(brush); !st) return Error{st.error()};
@@ -290,9 +337,11 @@ void PaintStroke::dab(const glm::dvec2& centre) {
             const size_t i = layer.index(x, y);
             // A stroke keeps the strongest dab per texel and composites it once over the layer as
             // it was before the stroke: overlapping dabs do not pile up beyond the opacity.
-            if (!(w > double(m_strength[i]))) continue;
-            m_strength[i] = float(w);
-            const double a = m_beforeCoverage[i], v = m_beforeValue[i];
+            Tile& tile = tileAt(x, y);
+            const size_t t = size_t(y % kStrokeTile) * size_t(kStrokeTile) + size_t(x % kStrokeTile);
+            if (!(w > double(tile.strength[t]))) continue;
+            tile.strength[t] = float(w);
+            const double a = tile.coverage[t], v = tile.value[t];
             if (m_brush.erase) {
                 layer.coverage[i] = unit(a * (1.0 - w));
                 layer.value[i] = float(v);
@@ -320,9 +369,12 @@ PaintPatch PaintStroke::before() const {
     patch.rect = m_dirty;
     for (int y = m_dirty.y0; y < m_dirty.y1; ++y)
         for (int x = m_dirty.x0; x < m_dirty.x1; ++x) {
+            // Texels of tiles no dab reached are as they were.
+            const Tile* tile = touchedTile(x, y);
+            const size_t t = size_t(y % kStrokeTile) * size_t(kStrokeTile) + size_t(x % kStrokeTile);
             const size_t i = m_layer->index(x, y);
-            patch.value.push_back(m_beforeValue[i]);
-            patch.coverage.push_back(m_beforeCoverage[i]);
+            patch.value.push_back(tile ? tile->value[t] : m_layer->value[i]);
+            patch.coverage.push_back(tile ? tile->coverage[t] : m_layer->coverage[i]);
         }
     return patch;
 }
@@ -348,12 +400,12 @@ Status compositeAuthoredGloss(const std::vector<float>* glossMap, double baseGlo
             const size_t i = size_t(y) * size_t(width) + size_t(x);
             // A NaN in a loaded map is refused by glossFromImage; here it would become 0 anyway.
             double g = glossMap ? double(unit(std::isfinite((*glossMap)[i]) ? (*glossMap)[i] : 0.0f)) : base;
-            if (gloss && gloss->coverage[i] > 0.0f) {
-                const double a = gloss->coverage[i];
-                g = g + a * (double(gloss->value[i]) - g);
+            if (gloss && gloss->coverageAt(i) > 0.0f) {
+                const double a = gloss->coverageAt(i);
+                g = g + a * (double(gloss->valueAt(i)) - g);
             }
-            if (varianceOffset && varianceOffset->coverage[i] > 0.0f) {
-                const double v = double(varianceOffset->coverage[i]) * double(varianceOffset->value[i]);
+            if (varianceOffset && varianceOffset->coverageAt(i) > 0.0f) {
+                const double v = double(varianceOffset->coverageAt(i)) * double(varianceOffset->valueAt(i));
                 // Lazarov 2011: v' = v + 1/(n+1), clamped, back to gloss. Applied only where painted,
                 // so an unpainted texel keeps its gloss bit for bit (no round trip through power).
                 if (v > 0.0) g = varianceToGloss(g, v, encoding);
@@ -541,7 +593,7 @@ Status overShine(const LiveGlossBake& bake, const std::vector<float>& authoredGl
             const double pv = methodLobe(Method::VarianceToGloss, momentsWithVariance(v), np).power;
             // (n+1)/(p+1) >= 1 as p <= n; both terms are >= 1, so the log is finite.
             const double stops = std::max(0.0, std::log2((np + 1.0) / (pv + 1.0)));
-            const bool painted = !paintedMask || paintedMask->coverage[i] > 0.0f;
+            const bool painted = !paintedMask || paintedMask->coverageAt(i) > 0.0f;
             const uint8_t flag = stops > thresholdStops && painted ? 1 : 0;
             if (flag && !inOut.flagged[i]) ++inOut.flaggedCount;
             if (!flag && inOut.flagged[i]) --inOut.flaggedCount;
@@ -555,8 +607,8 @@ Status writePaintLayerExr(const PaintLayer& layer, const fs::path& path) {
     if (const Status st = checkLayer(layer, "the saved"); !st) return st;
     std::vector<float> interleaved(layer.texelCount() * 2);
     for (size_t i = 0; i < layer.texelCount(); ++i) {
-        interleaved[2 * i] = layer.value[i];
-        interleaved[2 * i + 1] = layer.coverage[i];
+        interleaved[2 * i] = layer.valueAt(i);
+        interleaved[2 * i + 1] = layer.coverageAt(i);
     }
     return writeImageAtomic(path, layer.width, layer.height, 2, interleaved,
                             {StoredType::Float,
@@ -580,6 +632,7 @@ Result<PaintLayer> readPaintLayerExr(const fs::path& path, PaintLayerKind kind, 
         return Error{where + ": " + in->geterror()};
     auto layer = PaintLayer::create(kind, width, height);
     if (!layer) return Error{where + ": " + layer.error()};
+    layer.value().allocate();
     for (size_t i = 0; i < layer->texelCount(); ++i) {
         const float v = pixels[i * size_t(nch) + size_t(cv)], c = pixels[i * size_t(nch) + size_t(cc)];
         if (!(v >= 0.0f && v <= 1.0f) || !(c >= 0.0f && c <= 1.0f))

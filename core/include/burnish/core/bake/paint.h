@@ -41,22 +41,33 @@ std::string_view paintLayerName(PaintLayerKind kind);
 
 /// One painted layer: a value and a coverage per texel of the normal map, both in [0, 1]. Where
 /// coverage is 0 nothing was painted; in between, the value is blended over what lies below.
+/// The arrays are allocated when something is first painted or written (allocate()): until then
+/// both are empty and every texel reads 0 (valueAt, coverageAt), so an unpainted layer of an 8192²
+/// map costs nothing instead of 512 MB.
 struct PaintLayer {
     PaintLayerKind kind = PaintLayerKind::Gloss;
     int width = 0;
     int height = 0;
-    std::vector<float> value;
-    std::vector<float> coverage;
+    std::vector<float> value;    // texelCount() entries once allocated, else empty
+    std::vector<float> coverage; // likewise
 
-    /// An empty (unpainted) layer. Errors: a non-positive or too large size (kMaxImageSide).
+    /// An empty (unpainted, unallocated) layer. Errors: a non-positive or too large size (kMaxImageSide).
     static Result<PaintLayer> create(PaintLayerKind kind, int width, int height);
-    size_t texelCount() const { return value.size(); }
+    size_t texelCount() const { return size_t(width) * size_t(height); }
     size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
+    bool allocated() const { return !coverage.empty(); }
+    /// The arrays, zero-filled, if they are not there yet (before writing texels directly).
+    void allocate();
+    float valueAt(size_t i) const { return value.empty() ? 0.0f : value[i]; }
+    float coverageAt(size_t i) const { return coverage.empty() ? 0.0f : coverage[i]; }
     /// True when any texel has a coverage above 0.
     bool painted() const;
-    /// Back to unpainted (value and coverage 0).
+    /// Back to unpainted (value and coverage 0), the arrays freed.
     void clear();
 };
+
+/// Whether two layers hold the same kind, size and texels, bit for bit (an unallocated layer reads 0).
+bool samePaint(const PaintLayer& a, const PaintLayer& b);
 
 /// The layer at another size, over the same UV square (a normal map of another size was loaded):
 /// each new texel is the area-weighted mean of the old texels its square covers, coverage and
@@ -139,12 +150,21 @@ private:
     PaintStroke(PaintLayer& layer, const Brush& brush, BorderMode border);
     void dab(const glm::dvec2& centre);
 
+    // Per tile of kStrokeTile² texels, filled when a dab first reaches it: the tile's values and
+    // coverage before the stroke, and the strongest dab weight per texel so far. A stroke's memory
+    // follows what it touches, not the layer's size.
+    static constexpr int kStrokeTile = 64;
+    struct Tile {
+        std::vector<float> value, coverage, strength; // empty until reached
+    };
+    Tile& tileAt(int x, int y);
+    const Tile* touchedTile(int x, int y) const;
+
     PaintLayer* m_layer;
     Brush m_brush;
     BorderMode m_border;
-    std::vector<float> m_beforeValue;
-    std::vector<float> m_beforeCoverage;
-    std::vector<float> m_strength; // strongest dab weight per texel so far
+    int m_tilesX = 0;
+    std::vector<Tile> m_tiles;
     std::vector<glm::dvec2> m_dabs;
     std::optional<glm::dvec2> m_lastDab;
     TexelRect m_dirty;

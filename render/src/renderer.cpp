@@ -104,22 +104,24 @@ struct BakeKey {
     double basePower = 0.0;
     std::string encoding;
     int mixtureLobes = 0;
+    int largestLevel = 0; // the levels above it are not baked (BakeOptions::largestLevel)
 
     bool operator==(const BakeKey& o) const {
         return normalMap == o.normalMap && glossMap == o.glossMap && method == o.method &&
                toksvigMapPower == o.toksvigMapPower && basePower == o.basePower && encoding == o.encoding &&
-               mixtureLobes == o.mixtureLobes;
+               mixtureLobes == o.mixtureLobes && largestLevel == o.largestLevel;
     }
 };
 
-BakeKey bakeKeyOf(const MaterialSettings& m) {
+BakeKey bakeKeyOf(const MaterialSettings& m, int largestLevel) {
     return BakeKey{m.normalMap,
                    m.glossMap,
                    m.method,
                    m.methodParams.toksvigMapPower,
                    m.basePower,
                    m.glossEncoding.name(),
-                   m.method == Method::Mixture ? m.methodParams.mixtureLobes : 0};
+                   m.method == Method::Mixture ? m.methodParams.mixtureLobes : 0,
+                   largestLevel};
 }
 
 // The CPU half of a material's bake (any thread): core's bake, and the mixture's covariance floor.
@@ -128,8 +130,10 @@ struct CpuBake {
     double mixtureMinVariance = 1.0 / 1024.0;
 };
 
-CpuBake cpuBake(const MaterialSettings& m) {
+// Levels above largestLevel (the renderer's maximum texture size) are never uploaded, so not baked.
+CpuBake cpuBake(const MaterialSettings& m, int largestLevel) {
     BakeOptions options;
+    options.largestLevel = largestLevel;
     options.method = m.method;
     options.encoding = m.glossEncoding;
     options.basePower = m.basePower;
@@ -365,7 +369,7 @@ Status Renderer::Impl::uploadBake(const BakeKey& key, const CpuBake& cpu) {
 }
 
 Result<bool> Renderer::Impl::backgroundBake(const MaterialSettings& m) {
-    const BakeKey key = bakeKeyOf(m);
+    const BakeKey key = bakeKeyOf(m, maxTextureSize);
     if (bakeKey && *bakeKey == key) return true;
     if (pending && pending->done->load()) {
         // A finished bake is newer than what is drawn: taken in, even if the request moved on.
@@ -382,12 +386,12 @@ Result<bool> Renderer::Impl::backgroundBake(const MaterialSettings& m) {
     pending = std::make_unique<BackgroundBake>();
     pending->key = key;
     pending->material = m;
-    pending->worker =
-        std::thread([material = m, result = pending->result, done = pending->done, ready = onBakeReady] {
-            *result = cpuBake(material);
-            done->store(true);
-            if (ready) ready();
-        });
+    pending->worker = std::thread([material = m, largest = maxTextureSize, result = pending->result,
+                                   done = pending->done, ready = onBakeReady] {
+        *result = cpuBake(material, largest);
+        done->store(true);
+        if (ready) ready();
+    });
     return false;
 }
 
@@ -398,9 +402,9 @@ Status Renderer::Impl::prepareBake() {
         bakeKey.reset();
         return {};
     }
-    const BakeKey key = bakeKeyOf(m);
+    const BakeKey key = bakeKeyOf(m, maxTextureSize);
     if (!(bakeKey && *bakeKey == key)) {
-        if (const Status s = uploadBake(key, cpuBake(m)); !s) return s;
+        if (const Status s = uploadBake(key, cpuBake(m, maxTextureSize)); !s) return s;
         bakedMaterial = m;
     }
     return {};

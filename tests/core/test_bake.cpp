@@ -244,3 +244,47 @@ TEST(Bake, RoleSubsetsProduceTheSameTexturesAsAFullBake) {
         EXPECT_TRUE(none->textures.empty());
     }
 }
+
+// A viewer that draws from the first level no larger than N has the larger levels skipped: they
+// keep their size and no texels, and every level baked is the full bake's, bit for bit, for every
+// method, the mixture and an authored gloss map included.
+TEST(Bake, LevelsLargerThanTheLargestAreSkippedAndTheRestAreTheFullBakes) {
+    const NormalMap map = gaussianField(64, 0.3, 0.15, 9);
+    std::vector<float> gloss(map.texelCount());
+    for (size_t i = 0; i < gloss.size(); ++i)
+        gloss[i] = float(i % 7) / 7.0f;
+    for (const Method m : allMethods())
+        for (const bool authored : {false, true}) {
+            BakeOptions options;
+            options.method = m;
+            if (authored) options.authoredGloss = gloss;
+            const auto full = bake(map, options);
+            ASSERT_TRUE(full) << full.error();
+            options.largestLevel = 16;
+            const auto capped = bake(map, options);
+            ASSERT_TRUE(capped) << capped.error();
+            ASSERT_EQ(capped->textures.size(), full->textures.size());
+            for (size_t t = 0; t < full->textures.size(); ++t) {
+                const BakedTexture& a = full->textures[t];
+                const BakedTexture& b = capped->textures[t];
+                ASSERT_EQ(a.mips.size(), b.mips.size());
+                for (size_t k = 0; k < a.mips.size(); ++k) {
+                    EXPECT_EQ(b.mips[k].width, a.mips[k].width);
+                    EXPECT_EQ(b.mips[k].height, a.mips[k].height);
+                    if (k < 2) { // 64 and 32 are larger than 16
+                        EXPECT_TRUE(b.mips[k].texels.empty()) << methodName(m) << " level " << k;
+                        continue;
+                    }
+                    EXPECT_EQ(b.mips[k].texels, a.mips[k].texels) << methodName(m) << " level " << k;
+                }
+            }
+        }
+    // Never the last level, whatever the limit.
+    BakeOptions tiny;
+    tiny.largestLevel = 1;
+    tiny.mipCount = 3;
+    const auto three = bake(map, tiny);
+    ASSERT_TRUE(three) << three.error();
+    EXPECT_FALSE(three->textures.front().mips.back().texels.empty());
+    EXPECT_TRUE(three->textures.front().mips.front().texels.empty());
+}

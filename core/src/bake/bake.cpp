@@ -522,7 +522,14 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     RowPlan plan(options, base ? &*base : nullptr, mixture ? &*mixture : nullptr, out.textures, scales);
     plan.finestMap = &map;
     for (int k = 0; k < levels; ++k) {
-        bakeLevel(plan, pyramid, k, out);
+        const PyramidLevel& level = pyramid.level(k);
+        if (options.largestLevel > 0 && k + 1 < levels &&
+            std::max(level.width, level.height) > options.largestLevel) {
+            for (auto& tex : out.textures)
+                tex.mips[size_t(k)].width = level.width, tex.mips[size_t(k)].height = level.height;
+        } else {
+            bakeLevel(plan, pyramid, k, out);
+        }
         // Level k's moments are read by nothing after its textures: the peak holds the textures
         // written so far and the coarser levels' moments, not every level's.
         pyramid.releaseBox(k);

@@ -91,6 +91,11 @@ struct BakeOptions {
     MethodParams params;
     /// Number of mip levels to produce (0 = all, down to 1×1).
     int mipCount = 0;
+    /// Levels wider or taller than this (never the last one) are not computed: each keeps its size
+    /// and no texels. For a viewer that draws from the first level no larger (the studio's viewport,
+    /// render::Renderer::setMaxTextureSize): an 8192² map's method or gloss change then computes a
+    /// sixteenth of the texels. Every level computed is the same as in a full bake. 0: every level.
+    int largestLevel = 0;
     /// Only the textures of these roles are produced (the ones an export's files read); all of
     /// the method's when unset. Each texture produced is the same whatever the others are.
     std::optional<std::vector<TextureRole>> roles;

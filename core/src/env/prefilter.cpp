@@ -247,11 +247,17 @@ struct CutCone {
 };
 
 /// Calls visit(face, y, x0, x1) for the runs of texels of a `size`² level whose centres lie within the
-/// cone about R (to rounding: a centre on the cone's surface may fall either side). For cosCut ≤ 0
-/// the cone is not convex and every row of every face is one run.
+/// cone about R (to rounding: a centre on the cone's surface may fall either side), and maybe more.
+/// For cosCut ≤ kMinConeCosine every row of every face is one run: at or below 0 the cone is not
+/// convex, and just above 0 (half-angles within 0.006° of 90°) the row quadratics below are too
+/// close to (A + Ru·sc)² to tell their two roots apart in double: the disc c²(...) is far below the
+/// rounding of its terms, and a row came out whole or empty (the Phong lobe of power 0.5 cut at 1e-5,
+/// cosCut = 1e-10, missed up to 7% of its hemisphere).
 template <class Visit>
 void forEachConeRun(const dvec3& R, const CutCone& cone, int size, const Visit& visit) {
-    if (!(cone.cosCut > 0.0)) {
+    // c² = 1e-8 keeps the disc eight digits above the rounding of its O(1) terms.
+    constexpr double kMinConeCosine = 1e-4;
+    if (!(cone.cosCut > kMinConeCosine)) {
         for (int f = 0; f < kCubeFaces; ++f)
             for (int y = 0; y < size; ++y)
                 visit(f, y, 0, size - 1);
@@ -365,8 +371,7 @@ Result<PrefilteredEnvironment> prefilterRadiance(const CubeMap& source, const Pr
         // The Gaussian width estimate fails for powers near 0 (the lobe covers the sphere): never read
         // a level coarser than 64² faces. Measured on the courtyard probe at 256² against brute
         // force (`burnish env --report`): reading 16² faces left mips 3-8 0.14-0.5% off, 64² faces
-        // 0.7e-4 to 5e-4, for about 70 ms more over the whole chain. (Mip 6, power 0.5, stays at
-        // about 1.5% either way: a separate error of powers below 1, not of the source resolution.)
+        // 0.7e-4 to 5e-4, for about 70 ms more over the whole chain.
         constexpr int kMinSourceSize = 64;
         while (sourceLevel + 1 < chain.mipCount() &&
                chain.levels[size_t(sourceLevel + 1)].size >= kMinSourceSize &&

@@ -94,6 +94,17 @@ TEST(CubeMapping, TexelSolidAnglesAreExactAndSumToTheSphere) {
     EXPECT_LT(texelSolidAngle(16, 0, 0), texelSolidAngle(16, 7, 7));
 }
 
+TEST(CubeMapping, TheSolidAngleTableIsTexelSolidAngleBitForBit) {
+    for (const int size : {1, 2, 16, 33, 256}) {
+        const std::vector<double> table = texelSolidAngles(size);
+        ASSERT_EQ(table.size(), size_t(size) * size_t(size));
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x)
+                ASSERT_EQ(table[size_t(y) * size_t(size) + size_t(x)], texelSolidAngle(size, x, y))
+                    << size << ": " << x << ", " << y;
+    }
+}
+
 TEST(EquirectToCube, MatchesTheProceduralStudioInBothForms) {
     // The same radiance function rasterized directly and through a 256×128 equirect: the conventions
     // agree when the cube texels match to the equirect's resolution (a bilinear image of soft lights;

@@ -102,13 +102,8 @@ SourceLevel flatten(const CubeLevel& level) {
     SourceLevel flat;
     const int n = level.size;
     flat.size = n;
-    // A texel's solid angle depends on (x, y) only, not on the face: the area element at the (n + 1)²
-    // corners once, then texelSolidAngle's four-corner difference (the same expression, the same bits).
-    std::vector<double> corner(size_t(n + 1) * size_t(n + 1));
-    for (int j = 0; j <= n; ++j)
-        for (int i = 0; i <= n; ++i)
-            corner[size_t(j) * size_t(n + 1) + size_t(i)] = areaElement(2.0 * i / n - 1.0, 2.0 * j / n - 1.0);
-    auto at = [&](int i, int j) { return corner[size_t(j) * size_t(n + 1) + size_t(i)]; };
+    // A texel's solid angle depends on (x, y) only, not on the face.
+    const std::vector<double> omega = texelSolidAngles(n);
     tbb::parallel_for(0, kCubeFaces, [&](int f) {
         SourceFace& out = flat.faces[size_t(f)];
         const size_t count = size_t(n) * size_t(n);
@@ -122,7 +117,7 @@ SourceLevel flatten(const CubeLevel& level) {
                 out.x[i] = float(d.x);
                 out.y[i] = float(d.y);
                 out.z[i] = float(d.z);
-                out.omega[i] = float(at(x, y) - at(x, y + 1) - at(x + 1, y) + at(x + 1, y + 1));
+                out.omega[i] = float(omega[i]);
                 out.r[i] = L[0];
                 out.g[i] = L[1];
                 out.b[i] = L[2];

@@ -166,8 +166,9 @@ public:
 
     Mode mode() const { return m_mode; }
 
-    /// The weights at eight q = |R − L|² = 2u ≥ 0 (finite) in mode M (mode(), or Exact or Table).
-    template <Mode M> Float8 at(Float8 q) const {
+    /// The weights at eight q = |R − L|² = 2u ≥ 0 (finite) in mode M (mode(), or Exact or Table); the
+    /// exact mode leaves the lanes from `lanes` on at 0 (they repeat others).
+    template <Mode M> [[gnu::always_inline]] Float8 at(Float8 q, int lanes) const {
         if constexpr (M == Mode::Series4 || M == Mode::Series6) {
             // ℓ = q·(c1 + c2·q + ... + c6·q⁵) by Estrin's scheme (see exp2NonPositive)
             const Float8 q2 = q * q;
@@ -187,8 +188,8 @@ public:
             }
             return value + f * slope;
         } else {
-            Float8 w;
-            for (int lane = 0; lane < 8; ++lane)
+            Float8 w{};
+            for (int lane = 0; lane < lanes; ++lane)
                 w[lane] = exact(0.5f * q[lane]);
             return w;
         }
@@ -410,10 +411,12 @@ struct Tile {
         , width(std::min(kTileWidth, size - x0In))
         , height(std::min(kTileHeight, size - y0In)) {}
 
-    /// Lane k's texel, clamped to the tile (lanes past a small face repeat its last texel).
-    int x(int k) const { return x0 + std::min(k % kTileWidth, width - 1); }
-    int y(int k) const { return y0 + std::min(k / kTileWidth, height - 1); }
-    bool holds(int k) const { return k % kTileWidth < width && k / kTileWidth < height; }
+    /// The tile's texel count: lanes 0..texels() − 1 hold them row by row, the rest repeat them (a face
+    /// smaller than the tile).
+    int texels() const { return width * height; }
+    int x(int k) const { return x0 + k % texels() % width; }
+    int y(int k) const { return y0 + k % texels() / width; }
+    bool holds(int k) const { return k < texels(); }
 };
 
 /// The runs of a `srcSize`² level within the lobe's cut cone (1 − cos = uCut) of any texel of the tile
@@ -439,13 +442,13 @@ struct TileSums {
     std::array<std::array<double, 4>, 8> lane{};
 };
 
-/// Σ w(1 − R·d) Ω(d) L(d) and Σ w Ω over the runs for the eight directions R in the lanes. The lobe's
-/// mode is a template argument: a branch (and calls) in the inner loop would keep its sums out of
-/// registers.
+/// Σ w(1 − R·d) Ω(d) L(d) and Σ w Ω over the runs for the eight directions R in the lanes, of which the
+/// first `lanes` are distinct (Tile). The lobe's mode is a template argument: a branch (and calls) in
+/// the inner loop would keep its sums out of registers.
 template <LobeWeights::Mode M>
 [[gnu::always_inline]] inline TileSums sumTile(const SourceLevel& src, const std::vector<Run>& runs,
                                                const LobeWeights& lobe, const Float8& rx, const Float8& ry,
-                                               const Float8& rz) {
+                                               const Float8& rz, int lanes) {
     // Float partial sums over at most kBlock texels (relative rounding below 64·2^-24 = 4e-6), then
     // double.
     constexpr int kBlock = 64;
@@ -469,7 +472,7 @@ template <LobeWeights::Mode M>
             // 1 − R·L = |R − L|²/2 for unit vectors: no cancellation near the peak, where 1 − c in float
             // would keep only a few digits at high powers.
             const Float8 dx = sf.x[i] - rx, dy = sf.y[i] - ry, dz = sf.z[i] - rz;
-            const Float8 wo = lobe.at<M>(dx * dx + dy * dy + dz * dz) * sf.omega[i];
+            const Float8 wo = lobe.at<M>(dx * dx + dy * dy + dz * dz, lanes) * sf.omega[i];
             sw += wo;
             sr += wo * sf.r[i];
             sg += wo * sf.g[i];
@@ -484,18 +487,18 @@ template <LobeWeights::Mode M>
 /// sumTile in the lobe's mode, with an AVX2 copy.
 BURNISH_AVX2_CLONES TileSums sumTileClones(const SourceLevel& src, const std::vector<Run>& runs,
                                            const LobeWeights& lobe, const Float8& rx, const Float8& ry,
-                                           const Float8& rz) {
+                                           const Float8& rz, int lanes) {
     switch (lobe.mode()) {
     case LobeWeights::Mode::Series4:
-        return sumTile<LobeWeights::Mode::Series4>(src, runs, lobe, rx, ry, rz);
+        return sumTile<LobeWeights::Mode::Series4>(src, runs, lobe, rx, ry, rz, lanes);
     case LobeWeights::Mode::Series6:
-        return sumTile<LobeWeights::Mode::Series6>(src, runs, lobe, rx, ry, rz);
+        return sumTile<LobeWeights::Mode::Series6>(src, runs, lobe, rx, ry, rz, lanes);
     case LobeWeights::Mode::Table:
-        return sumTile<LobeWeights::Mode::Table>(src, runs, lobe, rx, ry, rz);
+        return sumTile<LobeWeights::Mode::Table>(src, runs, lobe, rx, ry, rz, lanes);
     case LobeWeights::Mode::Exact:
         break;
     }
-    return sumTile<LobeWeights::Mode::Exact>(src, runs, lobe, rx, ry, rz);
+    return sumTile<LobeWeights::Mode::Exact>(src, runs, lobe, rx, ry, rz, lanes);
 }
 
 /// Filters one tile of `dst` from `src`: the lobe-weighted mean per texel, or where no source texel
@@ -512,7 +515,7 @@ void filterTile(const Tile& tile, CubeLevel& dst, const SourceLevel& src, const 
         ry[k] = float(R[size_t(k)].y);
         rz[k] = float(R[size_t(k)].z);
     }
-    const TileSums sums = sumTileClones(src, runs, lobe, rx, ry, rz);
+    const TileSums sums = sumTileClones(src, runs, lobe, rx, ry, rz, tile.texels());
     for (int k = 0; k < 8; ++k) {
         if (!tile.holds(k)) continue;
         const auto& s = sums.lane[size_t(k)];

@@ -396,8 +396,9 @@ struct Run {
 
 /// Output texels are filtered eight at a time, one per lane: a kTileWidth × kTileHeight tile of a face,
 /// which shares one list of runs (the source texels within the cut of any of them). Per texel, the
-/// tile's runs hold about a fifth more texels than its own cone at the top mip, against a row search
-/// per texel and a partly used last vector per run when the lanes hold source texels instead.
+/// tile's runs hold about a quarter more texels than its own cone at the top mip (a cone of about 14
+/// texels' radius widened by the tile's half-diagonal, 1.6), against a row search per texel and a
+/// partly used last vector per run (a third more, measured) when the lanes hold source texels instead.
 constexpr int kTileWidth = 4, kTileHeight = 2;
 
 /// The texels of a tile: those of (x0.., y0..) inside the `size`² face.

@@ -225,6 +225,37 @@ TEST_F(AtomicFile, CommitSetReplacesTheWholeSet) {
     EXPECT_EQ(slurp(m_dir / "old-only.txt"), "old only");
 }
 
+TEST_F(AtomicFile, FileSetStagesFilesInParallelInTheGivenOrder) {
+    auto begun = FileSet::begin(m_dir);
+    ASSERT_TRUE(begun) << begun.error();
+    FileSet& set = begun.value();
+    ASSERT_TRUE(set.addBytes("first.txt", "first").ok());
+    std::vector<std::string> names;
+    for (int i = 0; i < 16; ++i)
+        names.push_back("f" + std::to_string(i) + ".txt");
+    const Status s = set.addParallel(names, [&](size_t i, const fs::path& staged) {
+        return writeNewFile(staged, names[i] + " bytes", m_dir / names[i]);
+    });
+    ASSERT_TRUE(s.ok()) << s.error();
+    std::vector<std::string> expected{"first.txt"};
+    expected.insert(expected.end(), names.begin(), names.end());
+    EXPECT_EQ(set.names(), expected);
+    // A failed writer: its error (the first in order), and none of the batch is listed.
+    const Status failed =
+        set.addParallel({"g0.txt", "g1.txt", "g2.txt"}, [&](size_t i, const fs::path& staged) {
+            return i == 0 ? writeNewFile(staged, "g0", m_dir / "g0.txt")
+                          : Status(Error{"writer " + std::to_string(i)});
+        });
+    ASSERT_FALSE(failed.ok());
+    EXPECT_EQ(failed.error(), "writer 1");
+    EXPECT_EQ(set.names(), expected);
+    EXPECT_FALSE(set.addParallel({"../escape.txt"}, [](size_t, const fs::path&) { return Status{}; }).ok());
+    ASSERT_TRUE(set.commit("", {}, Overwrite::Allow).ok());
+    for (const auto& name : names)
+        EXPECT_EQ(slurp(m_dir / name), name + " bytes");
+    EXPECT_FALSE(fs::exists(m_dir / "g0.txt")); // staged by the failed batch, never listed
+}
+
 TEST_F(AtomicFile, RecoveryRemovesStaleTemporariesOfDeadProcessesOnly) {
     // A process that is gone: a child that has exited and been reaped.
     const pid_t child = ::fork();

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -114,4 +115,24 @@ TEST(Util, ExpNonPositiveIsLibmsExpWithoutSubnormals) {
     EXPECT_EQ(expNonPositive(-std::numeric_limits<double>::infinity()), 0.0);
     EXPECT_EQ(expNonPositive(std::numeric_limits<double>::quiet_NaN()), 0.0);
     EXPECT_EQ(std::fpclassify(expNonPositive(-707.9)), FP_ZERO);
+}
+
+TEST(Util, Exp2OfNonPositiveFloat8IsWithinItsBound) {
+    // Cephes exp2f's polynomial errs by 1.7e-8; float rounding of its evaluation adds about 1e-7.
+    constexpr double kExp2Relative = 1.4e-7;
+    double worst = 0.0;
+    for (int i = 0; i <= 125 * 4096; i += 8) {
+        simd::Float8 x;
+        for (int k = 0; k < 8; ++k)
+            x[k] = -float(std::min(i + k, 125 * 4096)) / 4096.0f;
+        const simd::Float8 y = simd::exp2NonPositive(x);
+        for (int k = 0; k < 8; ++k)
+            worst = std::max(worst, std::abs(double(y[k]) / std::exp2(double(x[k])) - 1.0));
+    }
+    EXPECT_LT(worst, kExp2Relative);
+    const simd::Float8 exact = simd::exp2NonPositive(simd::Float8{0.0f, -1.0f, -3.0f, -125.0f});
+    EXPECT_EQ(exact[0], 1.0f); // exact at integers
+    EXPECT_EQ(exact[1], 0.5f);
+    EXPECT_EQ(exact[2], 0.125f);
+    EXPECT_EQ(exact[3], std::ldexp(1.0f, -125));
 }

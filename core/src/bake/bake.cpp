@@ -2,6 +2,7 @@
 
 #include <burnish/core/bake/base_variance.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
+#include <burnish/core/util/simd.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -27,20 +28,13 @@ float unit(double v) {
     return float(saturate(v));
 }
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-// The slope roles' row loops get a 256-bit AVX2 copy, picked when the program loads on CPUs that
-// have it. FMA is not enabled (it is not part of "avx2"), so no multiply-add is fused: both copies
-// do the same IEEE operations lane by lane and give the same bits.
-#define BURNISH_ROW_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define BURNISH_ROW_CLONES
-#endif
+// The slope roles' row loops below get a 256-bit AVX2 copy with the same bits (BURNISH_AVX2_CLONES).
 
 // The compact LEAN gloss of a row from the slope covariance (xx, yy, xy) and 1/s: the lobe's
 // Σ = slope covariance + I/s, as leanSlopeCovariance builds it; then the logarithms, square roots
 // and divisions without calls or branches, which the compiler vectorises.
-BURNISH_ROW_CLONES void leanGlossRow(const double* cxx, const double* cyy, const double* cxy,
-                                     const double* invBase, int width, float* px) {
+BURNISH_AVX2_CLONES void leanGlossRow(const double* cxx, const double* cyy, const double* cxy,
+                                      const double* invBase, int width, float* px) {
     for (int x = 0; x < width; ++x) {
         const double sx = cxx[x] + invBase[x];
         const double sy = cyy[x] + invBase[x];
@@ -56,8 +50,8 @@ BURNISH_ROW_CLONES void leanGlossRow(const double* cxx, const double* cyy, const
 
 // LEAN's second moments M with 1/s on the diagonal, scaled into [0, 1] (invM = 1/sM, invM2 =
 // 1/(2 sM)).
-BURNISH_ROW_CLONES void leanMRow(const double* mxx, const double* myy, const double* mxy,
-                                 const double* invBase, double invM, double invM2, int width, float* px) {
+BURNISH_AVX2_CLONES void leanMRow(const double* mxx, const double* myy, const double* mxy,
+                                  const double* invBase, double invM, double invM2, int width, float* px) {
     for (int x = 0; x < width; ++x) {
         const double invS = invBase[x];
         px[3 * x] = unit((mxx[x] + invS) * invM);
@@ -67,8 +61,8 @@ BURNISH_ROW_CLONES void leanMRow(const double* mxx, const double* myy, const dou
 }
 
 // The slope mean B (LEAN, CLEAN) scaled into [0, 1] (invB2 = 1/(2 sB)), `stride` floats a texel.
-BURNISH_ROW_CLONES void slopeMeanRow(const double* bx, const double* by, double invB2, int width, int stride,
-                                     float* px) {
+BURNISH_AVX2_CLONES void slopeMeanRow(const double* bx, const double* by, double invB2, int width, int stride,
+                                      float* px) {
     for (int x = 0; x < width; ++x) {
         px[stride * x] = unit(bx[x] * invB2 + 0.5);
         px[stride * x + 1] = unit(by[x] * invB2 + 0.5);

@@ -87,7 +87,23 @@ CubeCoord cubeCoord(const glm::dvec3& d) {
 double texelSolidAngle(int size, int x, int y) {
     const double x0 = 2.0 * x / size - 1.0, x1 = 2.0 * (x + 1) / size - 1.0;
     const double y0 = 2.0 * y / size - 1.0, y1 = 2.0 * (y + 1) / size - 1.0;
-    return areaElement(x0, y0) - areaElement(x0, y1) - areaElement(x1, y0) + areaElement(x1, y1);
+    return solidAngleFromCorners(areaElement(x0, y0), areaElement(x0, y1), areaElement(x1, y0),
+                                 areaElement(x1, y1));
+}
+
+std::vector<double> texelSolidAngles(int size) {
+    const size_t n = size_t(std::max(size, 0));
+    // The area element at the corners, with texelSolidAngle's coordinates 2i/size − 1.
+    std::vector<double> corner((n + 1) * (n + 1));
+    for (size_t j = 0; j <= n; ++j)
+        for (size_t i = 0; i <= n; ++i)
+            corner[j * (n + 1) + i] = areaElement(2.0 * int(i) / size - 1.0, 2.0 * int(j) / size - 1.0);
+    auto at = [&](size_t i, size_t j) { return corner[j * (n + 1) + i]; };
+    std::vector<double> omega(n * n);
+    for (size_t y = 0; y < n; ++y)
+        for (size_t x = 0; x < n; ++x)
+            omega[y * n + x] = solidAngleFromCorners(at(x, y), at(x, y + 1), at(x + 1, y), at(x + 1, y + 1));
+    return omega;
 }
 
 glm::dvec3 sampleCube(const CubeMap& cube, const glm::dvec3& dir, int levelIndex) {
@@ -120,6 +136,7 @@ void buildBoxMips(CubeMap& cube) {
         const CubeLevel& fine = cube.levels[size_t(k - 1)];
         CubeLevel coarse;
         coarse.size = fine.size / 2;
+        const std::vector<double> fineOmega = texelSolidAngles(fine.size);
         for (int face = 0; face < kCubeFaces; ++face) {
             coarse.faces[size_t(face)].assign(size_t(coarse.size) * size_t(coarse.size) * 3, 0.0f);
             for (int y = 0; y < coarse.size; ++y)
@@ -129,7 +146,8 @@ void buildBoxMips(CubeMap& cube) {
                     double omega = 0.0;
                     for (int j = 0; j < 2; ++j)
                         for (int i = 0; i < 2; ++i) {
-                            const double w = texelSolidAngle(fine.size, 2 * x + i, 2 * y + j);
+                            const double w =
+                                fineOmega[size_t(2 * y + j) * size_t(fine.size) + size_t(2 * x + i)];
                             sum += w * fetch(fine, face, 2 * x + i, 2 * y + j);
                             omega += w;
                         }

@@ -48,6 +48,11 @@ inline double areaElement(double x, double y) {
     return std::atan2(x * y, std::sqrt(x * x + y * y + 1.0));
 }
 
+/// A texel's solid angle from the area element at its corners (x0, y0), (x0, y1), (x1, y0), (x1, y1).
+inline double solidAngleFromCorners(double a00, double a01, double a10, double a11) {
+    return a00 - a01 - a10 + a11;
+}
+
 inline glm::dvec3 fetch(const CubeLevel& level, int face, int x, int y) {
     const float* p = level.texel(face, x, y);
     return {p[0], p[1], p[2]};

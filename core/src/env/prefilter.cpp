@@ -52,15 +52,25 @@ double lobeWeight(LobeModel lobe, double power, double c) {
 
 namespace {
 
+/// The lobe as (1 − a·u)^k in u = 1 − R·L: Phong c^n is k = n, a = 1; Blinn ((1 + c)/2)^(n/2) is
+/// k = n/2, a = 1/2. The cut, the table, the series and the exact evaluation below all start from it.
+struct LobeForm {
+    double k = 0.0;
+    double a = 1.0;
+};
+
+LobeForm lobeForm(LobeModel lobe, double power) {
+    const double n = clampPower(power);
+    return lobe == LobeModel::Phong ? LobeForm{n, 1.0} : LobeForm{0.5 * n, 0.5};
+}
+
 /// 1 − cos of the angle beyond which the lobe's weight is below `cutoff` (2: the whole sphere). Computed
 /// with expm1 so that it keeps its digits for the highest powers (1e9: 1.2e-8).
 double lobeCutOneMinusCosine(LobeModel lobe, double power, double cutoff) {
-    power = clampPower(power);
-    if (power <= 0.0) return 2.0;
-    // cos^n θ = cutoff
-    if (lobe == LobeModel::Phong) return -std::expm1(std::log(cutoff) / power);
-    // ((1 + c)/2)^(n/2) = cutoff: 1 − c = 2(1 − cutoff^(2/n))
-    return std::min(2.0, -2.0 * std::expm1(2.0 * std::log(cutoff) / power));
+    const LobeForm form = lobeForm(lobe, power);
+    if (form.k <= 0.0) return 2.0;
+    // (1 − a·u)^k = cutoff
+    return std::min(2.0, -std::expm1(std::log(cutoff) / form.k) / form.a);
 }
 
 /// The lobe's angular standard deviation (radians): cos^n θ ≈ exp(−nθ²/2) for Phong, and the Blinn
@@ -68,6 +78,11 @@ double lobeCutOneMinusCosine(LobeModel lobe, double power, double cutoff) {
 double lobeSigma(LobeModel lobe, double power) {
     const double sigma = 1.0 / std::sqrt(std::max(clampPower(power), 1e-6));
     return lobe == LobeModel::Phong ? sigma : 2.0 * sigma;
+}
+
+/// The angle between two unit vectors a chord of length `chord` apart: 2 asin(chord/2), exact near 0.
+double chordAngle(double chord) {
+    return 2.0 * std::asin(std::min(1.0, 0.5 * chord));
 }
 
 using namespace simd;
@@ -87,13 +102,8 @@ SourceLevel flatten(const CubeLevel& level) {
     SourceLevel flat;
     const int n = level.size;
     flat.size = n;
-    // A texel's solid angle depends on (x, y) only, not on the face: the area element at the (n + 1)²
-    // corners once, then texelSolidAngle's four-corner difference (the same expression, the same bits).
-    std::vector<double> corner(size_t(n + 1) * size_t(n + 1));
-    for (int j = 0; j <= n; ++j)
-        for (int i = 0; i <= n; ++i)
-            corner[size_t(j) * size_t(n + 1) + size_t(i)] = areaElement(2.0 * i / n - 1.0, 2.0 * j / n - 1.0);
-    auto at = [&](int i, int j) { return corner[size_t(j) * size_t(n + 1) + size_t(i)]; };
+    // A texel's solid angle depends on (x, y) only, not on the face.
+    const std::vector<double> omega = texelSolidAngles(n);
     tbb::parallel_for(0, kCubeFaces, [&](int f) {
         SourceFace& out = flat.faces[size_t(f)];
         const size_t count = size_t(n) * size_t(n);
@@ -107,7 +117,7 @@ SourceLevel flatten(const CubeLevel& level) {
                 out.x[i] = float(d.x);
                 out.y[i] = float(d.y);
                 out.z[i] = float(d.z);
-                out.omega[i] = float(at(x, y) - at(x, y + 1) - at(x + 1, y) + at(x + 1, y + 1));
+                out.omega[i] = float(omega[i]);
                 out.r[i] = L[0];
                 out.g[i] = L[1];
                 out.b[i] = L[2];
@@ -116,30 +126,113 @@ SourceLevel flatten(const CubeLevel& level) {
     return flat;
 }
 
-/// The lobe as a function of u = 1 − R·L on [0, uCut], and 0 from uCut on. Sampled at kEntries + 1
-/// points for linear interpolation: with the lobe cut at a fraction ε of its peak it falls by about
-/// ln(1/ε) e-folds over the table (11.5 at ε = 1e-5), so interpolation errs by (ln(1/ε)/kEntries)²/8
-/// ≈ 1e-6 of the weight, below the float rounding of the sums. Exponents below 2 (Phong n, Blinn n/2)
-/// have an unbounded second derivative where the lobe reaches 0 (c = 0, or c = −1 for Blinn); those
-/// wide lobes are evaluated exactly instead.
-class LobeTable {
+/// The lobe as a function of u = 1 − R·L on [0, uCut], and 0 from uCut on, evaluated one of three ways
+/// chosen once per mip (see mode()):
+/// - Series: narrow lobes, k·log2(1 − a·u) by the first 4 or 6 terms of its Taylor series in u (the
+///   fewer that are within kSeriesTolerance of it on [0, uCut]), then 2^x by exp2NonPositive: no memory
+///   reads, so it vectorises; the weight errs by about 2e-7 (relative).
+/// - Table: sampled at kEntries + 1 points for linear interpolation: with the lobe cut at a fraction ε of
+///   its peak it falls by about ln(1/ε) e-folds over the table (11.5 at ε = 1e-5), so interpolation errs
+///   by (ln(1/ε)/kEntries)²/8 ≈ 1e-6 of the weight, below the float rounding of the sums.
+/// - Exact: exponents k below 2 have an unbounded second derivative where the lobe reaches 0 (c = 0, or
+///   c = −1 for Blinn), where the table's lerp error grows without bound; those wide lobes are evaluated
+///   with log1p and exp.
+class LobeWeights {
 public:
+    enum class Mode { Series4, Series6, Table, Exact };
     static constexpr int kEntries = 4096;
+    static constexpr int kSeriesTerms = 6;
+    /// Largest truncation error of the series in ℓ = log2(weight): 2^1e-7 − 1 = 7e-8 of the weight.
+    static constexpr double kSeriesTolerance = 1e-7;
+    /// The least ℓ at the cut for the series: exp2NonPositive's range ends at −125 (cutoffs below 1e-36).
+    static constexpr double kMinSeriesLog2 = -120.0;
 
-    LobeTable(LobeModel lobe, double power, double uCut)
-        : m_lobe(lobe)
-        , m_power(float(clampPower(power))) {
+    LobeWeights(LobeModel lobe, double power, double uCut)
+        : m_form(lobeForm(lobe, power)) {
         // 2 is the whole sphere (u = 1 − cos); a zero-width cut would divide by 0 below.
         uCut = std::clamp(uCut, std::numeric_limits<double>::min(), 2.0);
         m_uCut = float(uCut);
-        m_scale = float(kEntries / uCut);
-        const double exponent = lobe == LobeModel::Phong ? clampPower(power) : 0.5 * clampPower(power);
+        m_qCut = 2.0f * m_uCut;
+        m_k = float(m_form.k);
+        m_a = float(m_form.a);
         // Below 2 the lerp error near the lobe's zero grows without bound (x^p with p < 2 at x → 0).
         constexpr double kMinTableExponent = 2.0;
-        m_exact = exponent > 0.0 && exponent < kMinTableExponent;
-        std::array<double, kEntries + 1> w;
+        m_mode = m_form.k > 0.0 && m_form.k < kMinTableExponent ? Mode::Exact
+                 : fitSeries(uCut, 4)                           ? Mode::Series4
+                 : fitSeries(uCut, 6)                           ? Mode::Series6
+                                                                : Mode::Table;
+        if (m_mode == Mode::Table) fillTable(uCut);
+    }
+
+    Mode mode() const { return m_mode; }
+
+    /// The weights at eight q = |R − L|² = 2u ≥ 0 (finite) in mode M (mode(), or Exact or Table); the
+    /// exact mode leaves the lanes from `lanes` on at 0 (they repeat others).
+    template <Mode M> [[gnu::always_inline]] Float8 at(Float8 q, int lanes) const {
+        if constexpr (M == Mode::Series4 || M == Mode::Series6) {
+            // ℓ = q·(c1 + c2·q + ... + c6·q⁵) by Estrin's scheme (see exp2NonPositive)
+            const Float8 q2 = q * q;
+            Float8 l = (m_series[0] + m_series[1] * q) + q2 * (m_series[2] + m_series[3] * q);
+            if constexpr (M == Mode::Series6) l += (q2 * q2) * (m_series[4] + m_series[5] * q);
+            // Past the cut ℓ may leave exp2NonPositive's range: those lanes are dropped.
+            return q < m_qCut ? exp2NonPositive(l * q) : Float8{};
+        } else if constexpr (M == Mode::Table) {
+            Float8 x = q * m_scale;
+            x = x < float(kEntries) ? x : float(kEntries);
+            const Int8 i = __builtin_convertvector(x, Int8);
+            const Float8 f = x - __builtin_convertvector(i, Float8);
+            Float8 value, slope;
+            for (int lane = 0; lane < 8; ++lane) {
+                value[lane] = m_value[size_t(i[lane])];
+                slope[lane] = m_slope[size_t(i[lane])];
+            }
+            return value + f * slope;
+        } else {
+            Float8 w{};
+            for (int lane = 0; lane < lanes; ++lane)
+                w[lane] = exact(0.5f * q[lane]);
+            return w;
+        }
+    }
+
+private:
+    /// lobeForm's (1 − a·u)^k with log1p so that u near 0 keeps its digits; 0 from a·u = 1 on.
+    static double weight(const LobeForm& form, double u) {
+        if (form.k == 0.0) return 1.0; // powCos(c, 0) = 1 everywhere, as lobeWeight
+        return form.a * u < 1.0 ? std::exp(form.k * std::log1p(-form.a * u)) : 0.0;
+    }
+
+    /// The same in float for the exact mode (k > 0 there: log1p(−1) = −inf gives exp(−inf) = 0 at the
+    /// lobe's zero).
+    float exact(float u) const {
+        if (!(u < m_uCut)) return 0.0f;
+        return std::exp(m_k * std::log1p(-m_a * u));
+    }
+
+    /// The series coefficients of ℓ(u)/u when `terms` terms are within kSeriesTolerance on [0, uCut] and
+    /// ℓ stays within exp2NonPositive's range there; false when they are not (wide lobes).
+    // k·log2(1 − a·u) = −(k/ln 2) Σ_{j≥1} (a·u)^j / j; the tail after J terms is at most
+    // (k/ln 2)(a·u)^(J+1)/((J + 1)(1 − a·u))
+    bool fitSeries(double uCut, int terms) {
+        const double au = m_form.a * uCut, scale = m_form.k / std::log(2.0);
+        if (!(au < 1.0) || !(m_form.k * std::log2(1.0 - au) > kMinSeriesLog2)) return false;
+        const double tail = scale * std::pow(au, terms + 1) / ((terms + 1) * (1.0 - au));
+        if (!(tail <= kSeriesTolerance)) return false;
+        m_series.fill(0.0f);
+        // In q = 2u: the j-th coefficient over 2^j.
+        for (int j = 1; j <= terms; ++j)
+            m_series[size_t(j - 1)] = float(-scale * std::pow(0.5 * m_form.a, j) / j);
+        return true;
+    }
+
+    void fillTable(double uCut) {
+        // u·(kEntries/uCut) as q·(kEntries/(2 uCut)): the halving is exact, so the same bits.
+        m_scale = 0.5f * float(kEntries / uCut);
+        std::vector<double> w(kEntries + 1);
         for (int k = 0; k <= kEntries; ++k)
-            w[size_t(k)] = weight(lobe, clampPower(power), uCut * k / kEntries);
+            w[size_t(k)] = weight(m_form, uCut * k / kEntries);
+        m_value.resize(kEntries + 1);
+        m_slope.resize(kEntries + 1);
         for (int k = 0; k < kEntries; ++k) {
             m_value[size_t(k)] = float(w[size_t(k)]);
             m_slope[size_t(k)] = float(w[size_t(k + 1)] - w[size_t(k)]);
@@ -149,48 +242,11 @@ public:
         m_slope[kEntries] = 0.0f;
     }
 
-    /// The weights at four u ≥ 0 (finite).
-    Float4 operator()(Float4 u) const {
-        if (m_exact) return Float4{(*this)(u[0]), (*this)(u[1]), (*this)(u[2]), (*this)(u[3])};
-        Float4 x = u * m_scale;
-        x = x < float(kEntries) ? x : float(kEntries);
-        const Int4 i = __builtin_convertvector(x, Int4);
-        const Float4 f = x - __builtin_convertvector(i, Float4);
-        const Float4 value{m_value[size_t(i[0])], m_value[size_t(i[1])], m_value[size_t(i[2])],
-                           m_value[size_t(i[3])]};
-        const Float4 slope{m_slope[size_t(i[0])], m_slope[size_t(i[1])], m_slope[size_t(i[2])],
-                           m_slope[size_t(i[3])]};
-        return value + f * slope;
-    }
-
-    /// The weight at u ≥ 0 (finite).
-    float operator()(float u) const {
-        if (m_exact) {
-            if (!(u < m_uCut)) return 0.0f;
-            // n > 0 here: log1p(−1) = −inf gives exp(−inf) = 0 at the lobe's zero.
-            return m_lobe == LobeModel::Phong ? std::exp(m_power * std::log1p(-u))
-                                              : std::exp(0.5f * m_power * std::log1p(-0.5f * u));
-        }
-        const float x = std::min(u * m_scale, float(kEntries));
-        const int i = int(x);
-        return m_value[size_t(i)] + (x - float(i)) * m_slope[size_t(i)];
-    }
-
-private:
-    /// lobeWeight in terms of u = 1 − c, with log1p so that u near 0 keeps its digits.
-    static double weight(LobeModel lobe, double n, double u) {
-        if (n == 0.0) return 1.0; // powCos(c, 0) = 1 everywhere, as lobeWeight
-        if (lobe == LobeModel::Phong) return u < 1.0 ? std::exp(n * std::log1p(-u)) : 0.0;
-        // ((1 + c)/2)^(n/2) = (1 − u/2)^(n/2)
-        return u < 2.0 ? std::exp(0.5 * n * std::log1p(-0.5 * u)) : 0.0;
-    }
-
-    LobeModel m_lobe;
-    float m_power = 0.0f;
-    float m_uCut = 0.0f;
-    bool m_exact = false;
-    float m_scale = 0.0f;
-    std::array<float, kEntries + 1> m_value{}, m_slope{};
+    LobeForm m_form;
+    Mode m_mode = Mode::Table;
+    float m_k = 0.0f, m_a = 1.0f, m_uCut = 0.0f, m_qCut = 0.0f, m_scale = 0.0f;
+    std::array<float, kSeriesTerms> m_series{};
+    std::vector<float> m_value, m_slope;
 };
 
 /// The part [lo, hi] of [−1, 1] on the line base + t·along (base ⊥ along, |along| = 1) inside the cone
@@ -247,11 +303,17 @@ struct CutCone {
 };
 
 /// Calls visit(face, y, x0, x1) for the runs of texels of a `size`² level whose centres lie within the
-/// cone about R (to rounding: a centre on the cone's surface may fall either side). For cosCut ≤ 0
-/// the cone is not convex and every row of every face is one run.
+/// cone about R (to rounding: a centre on the cone's surface may fall either side), and maybe more.
+/// For cosCut ≤ kMinConeCosine every row of every face is one run: at or below 0 the cone is not
+/// convex, and just above 0 (half-angles within 0.006° of 90°) the row quadratics below are too
+/// close to (A + Ru·sc)² to tell their two roots apart in double: the disc c²(...) is far below the
+/// rounding of its terms, and a row came out whole or empty (the Phong lobe of power 0.5 cut at 1e-5,
+/// cosCut = 1e-10, missed up to 7% of its hemisphere).
 template <class Visit>
 void forEachConeRun(const dvec3& R, const CutCone& cone, int size, const Visit& visit) {
-    if (!(cone.cosCut > 0.0)) {
+    // c² = 1e-8 keeps the disc eight digits above the rounding of its O(1) terms.
+    constexpr double kMinConeCosine = 1e-4;
+    if (!(cone.cosCut > kMinConeCosine)) {
         for (int f = 0; f < kCubeFaces; ++f)
             for (int y = 0; y < size; ++y)
                 visit(f, y, 0, size - 1);
@@ -327,6 +389,151 @@ void forEachConeRun(const dvec3& R, const CutCone& cone, int size, const Visit& 
     }
 }
 
+/// Source texels (face, row y, columns x0..x1) an output tile's sums read.
+struct Run {
+    int face, y, x0, x1;
+};
+
+/// Output texels are filtered eight at a time, one per lane: a kTileWidth × kTileHeight tile of a face,
+/// which shares one list of runs (the source texels within the cut of any of them). Per texel, the
+/// tile's runs hold about a quarter more texels than its own cone at the top mip (a cone of about 14
+/// texels' radius widened by the tile's half-diagonal, 1.6), against a row search per texel and a
+/// partly used last vector per run (a third more, measured) when the lanes hold source texels instead.
+constexpr int kTileWidth = 4, kTileHeight = 2;
+
+/// The texels of a tile: those of (x0.., y0..) inside the `size`² face.
+struct Tile {
+    int face = 0, x0 = 0, y0 = 0, width = 0, height = 0;
+
+    Tile(int faceIn, int size, int x0In, int y0In)
+        : face(faceIn)
+        , x0(x0In)
+        , y0(y0In)
+        , width(std::min(kTileWidth, size - x0In))
+        , height(std::min(kTileHeight, size - y0In)) {}
+
+    /// The tile's texel count: lanes 0..texels() − 1 hold them row by row, the rest repeat them (a face
+    /// smaller than the tile).
+    int texels() const { return width * height; }
+    int x(int k) const { return x0 + k % texels() % width; }
+    int y(int k) const { return y0 + k % texels() / width; }
+    bool holds(int k) const { return k < texels(); }
+};
+
+/// The runs of a `srcSize`² level within the lobe's cut cone (1 − cos = uCut) of any texel of the tile
+/// (of a `size`² face): the cone about the tile's middle direction, widened by the largest angle from it
+/// to a texel.
+void tileRuns(const Tile& tile, int size, double uCut, int srcSize, std::vector<Run>& runs) {
+    const dvec3 middle =
+        cubeDirection(tile.face, (tile.x0 + 0.5 * tile.width) / size, (tile.y0 + 0.5 * tile.height) / size);
+    double spread = 0.0;
+    for (int k = 0; k < 8; ++k)
+        spread = std::max(
+            spread, chordAngle(glm::length(texelDirection(tile.face, size, tile.x(k), tile.y(k)) - middle)));
+    // The angle of 1 − cos = uCut without cancellation: θ = 2 asin(sqrt(uCut/2)); 1e-9 for rounding.
+    const double theta = std::min(kPi<double>, chordAngle(std::sqrt(2.0 * uCut)) + spread + 1e-9);
+    runs.clear();
+    forEachConeRun(middle, CutCone(std::cos(theta)), srcSize, [&](int f, int ty, int x0, int x1) {
+        runs.push_back({f, ty, x0, x1});
+    });
+}
+
+/// Per lane: Σ w Ω L (r, g, b) and Σ w Ω.
+struct TileSums {
+    std::array<std::array<double, 4>, 8> lane{};
+};
+
+/// Σ w(1 − R·d) Ω(d) L(d) and Σ w Ω over the runs for the eight directions R in the lanes, of which the
+/// first `lanes` are distinct (Tile). The lobe's mode is a template argument: a branch (and calls) in
+/// the inner loop would keep its sums out of registers.
+template <LobeWeights::Mode M>
+[[gnu::always_inline]] inline TileSums sumTile(const SourceLevel& src, const std::vector<Run>& runs,
+                                               const LobeWeights& lobe, const Float8& rx, const Float8& ry,
+                                               const Float8& rz, int lanes) {
+    // Float partial sums over at most kBlock texels (relative rounding below 64·2^-24 = 4e-6), then
+    // double.
+    constexpr int kBlock = 64;
+    TileSums sums;
+    Float8 sw{}, sr{}, sg{}, sb{};
+    int count = 0;
+    auto flush = [&] {
+        for (int k = 0; k < 8; ++k) {
+            sums.lane[size_t(k)][0] += sr[k];
+            sums.lane[size_t(k)][1] += sg[k];
+            sums.lane[size_t(k)][2] += sb[k];
+            sums.lane[size_t(k)][3] += sw[k];
+        }
+        sw = sr = sg = sb = Float8{};
+        count = 0;
+    };
+    for (const Run& run : runs) {
+        const SourceFace& sf = src.faces[size_t(run.face)];
+        const size_t start = size_t(run.y) * size_t(src.size);
+        for (size_t i = start + size_t(run.x0); i <= start + size_t(run.x1); ++i) {
+            // 1 − R·L = |R − L|²/2 for unit vectors: no cancellation near the peak, where 1 − c in float
+            // would keep only a few digits at high powers.
+            const Float8 dx = sf.x[i] - rx, dy = sf.y[i] - ry, dz = sf.z[i] - rz;
+            const Float8 wo = lobe.at<M>(dx * dx + dy * dy + dz * dz, lanes) * sf.omega[i];
+            sw += wo;
+            sr += wo * sf.r[i];
+            sg += wo * sf.g[i];
+            sb += wo * sf.b[i];
+            if (++count == kBlock) flush();
+        }
+    }
+    flush();
+    return sums;
+}
+
+/// sumTile in the lobe's mode, with an AVX2 copy.
+BURNISH_AVX2_CLONES TileSums sumTileClones(const SourceLevel& src, const std::vector<Run>& runs,
+                                           const LobeWeights& lobe, const Float8& rx, const Float8& ry,
+                                           const Float8& rz, int lanes) {
+    switch (lobe.mode()) {
+    case LobeWeights::Mode::Series4:
+        return sumTile<LobeWeights::Mode::Series4>(src, runs, lobe, rx, ry, rz, lanes);
+    case LobeWeights::Mode::Series6:
+        return sumTile<LobeWeights::Mode::Series6>(src, runs, lobe, rx, ry, rz, lanes);
+    case LobeWeights::Mode::Table:
+        return sumTile<LobeWeights::Mode::Table>(src, runs, lobe, rx, ry, rz, lanes);
+    case LobeWeights::Mode::Exact:
+        break;
+    }
+    return sumTile<LobeWeights::Mode::Exact>(src, runs, lobe, rx, ry, rz, lanes);
+}
+
+/// Filters one tile of `dst` from `src`: the lobe-weighted mean per texel, or where no source texel
+/// centre fell inside a texel's lobe (one narrower than the source texels around R), the source's
+/// bilinear value at R from level `sourceLevel` of `chain`.
+void filterTile(const Tile& tile, CubeLevel& dst, const SourceLevel& src, const LobeWeights& lobe,
+                double uCut, const CubeMap& chain, int sourceLevel, std::vector<Run>& runs) {
+    tileRuns(tile, dst.size, uCut, src.size, runs);
+    std::array<dvec3, 8> R;
+    Float8 rx, ry, rz;
+    for (int k = 0; k < 8; ++k) {
+        R[size_t(k)] = texelDirection(tile.face, dst.size, tile.x(k), tile.y(k));
+        rx[k] = float(R[size_t(k)].x);
+        ry[k] = float(R[size_t(k)].y);
+        rz[k] = float(R[size_t(k)].z);
+    }
+    const TileSums sums = sumTileClones(src, runs, lobe, rx, ry, rz, tile.texels());
+    for (int k = 0; k < 8; ++k) {
+        if (!tile.holds(k)) continue;
+        const auto& s = sums.lane[size_t(k)];
+        float* out = dst.texel(tile.face, tile.x(k), tile.y(k));
+        if (s[3] > 0.0) {
+            // A weighted mean of finite radiances, but float products of radiances near FLT_MAX can
+            // overflow: keep the stored value finite.
+            for (int c = 0; c < 3; ++c)
+                out[c] = float(std::min(s[size_t(c)] / s[3], double(std::numeric_limits<float>::max())));
+        } else {
+            const dvec3 L = sampleCube(chain, R[size_t(k)], sourceLevel);
+            for (int c = 0; c < 3; ++c)
+                out[c] = float(L[c]);
+        }
+    }
+}
+
 } // namespace
 
 Result<PrefilteredEnvironment> prefilterRadiance(const CubeMap& source, const PrefilterOptions& o) {
@@ -365,8 +572,7 @@ Result<PrefilteredEnvironment> prefilterRadiance(const CubeMap& source, const Pr
         // The Gaussian width estimate fails for powers near 0 (the lobe covers the sphere): never read
         // a level coarser than 64² faces. Measured on the courtyard probe at 256² against brute
         // force (`burnish env --report`): reading 16² faces left mips 3-8 0.14-0.5% off, 64² faces
-        // 0.7e-4 to 5e-4, for about 70 ms more over the whole chain. (Mip 6, power 0.5, stays at
-        // about 1.5% either way: a separate error of powers below 1, not of the source resolution.)
+        // 0.7e-4 to 5e-4, for about 70 ms more over the whole chain.
         constexpr int kMinSourceSize = 64;
         while (sourceLevel + 1 < chain.mipCount() &&
                chain.levels[size_t(sourceLevel + 1)].size >= kMinSourceSize &&
@@ -379,74 +585,18 @@ Result<PrefilteredEnvironment> prefilterRadiance(const CubeMap& source, const Pr
         // The cut leaves out the lobe's tail below lobeCutoff of its peak: for a near-Gaussian lobe that
         // is the same fraction of its energy (1e-5 by default), and the sums are renormalized by Σ w Ω.
         const double uCut = lobeCutOneMinusCosine(o.lobe, n, o.lobeCutoff);
-        const CutCone cone(1.0 - uCut);
-        const LobeTable lobe(o.lobe, n, uCut);
+        const LobeWeights lobe(o.lobe, n, uCut);
         CubeLevel& dst = out.radiance.levels[size_t(m)];
 
-        tbb::parallel_for(0, kCubeFaces * dst.size, [&](int row) {
-            const int face = row / dst.size, y = row % dst.size;
-            for (int x = 0; x < dst.size; ++x) {
-                const dvec3 R = texelDirection(face, dst.size, x, y);
-                const float rx = float(R.x), ry = float(R.y), rz = float(R.z);
-                double sum[3] = {0, 0, 0}, wsum = 0.0;
-                forEachConeRun(R, cone, src.size, [&](int f, int ty, int x0, int x1) {
-                    const SourceFace& sf = src.faces[size_t(f)];
-                    const size_t rowStart = size_t(ty) * size_t(src.size);
-                    const float *px = sf.x.data() + rowStart, *py = sf.y.data() + rowStart,
-                                *pz = sf.z.data() + rowStart, *pw = sf.omega.data() + rowStart,
-                                *pr = sf.r.data() + rowStart, *pg = sf.g.data() + rowStart,
-                                *pb = sf.b.data() + rowStart;
-                    // 1 − R·L = |R − L|²/2 for unit vectors: no cancellation near the peak, where 1 − c in
-                    // float would keep only a few digits at high powers.
-                    auto weight = [&](int tx) {
-                        const float dx = px[tx] - rx, dy = py[tx] - ry, dz = pz[tx] - rz;
-                        return lobe(0.5f * (dx * dx + dy * dy + dz * dz)) * pw[tx];
-                    };
-                    // Float partial sums over at most kBlock texels (relative rounding below 64·2^-24 =
-                    // 4e-6), then double.
-                    constexpr int kBlock = 64;
-                    for (int xs = x0; xs <= x1; xs += kBlock) {
-                        const int xe = std::min(x1, xs + kBlock - 1);
-                        Float4 sw4{}, sr4{}, sg4{}, sb4{};
-                        int tx = xs;
-                        for (; tx + 3 <= xe; tx += 4) {
-                            const Float4 dx = load4(px + tx) - rx, dy = load4(py + tx) - ry,
-                                         dz = load4(pz + tx) - rz;
-                            const Float4 wo = lobe(0.5f * (dx * dx + dy * dy + dz * dz)) * load4(pw + tx);
-                            sw4 += wo;
-                            sr4 += wo * load4(pr + tx);
-                            sg4 += wo * load4(pg + tx);
-                            sb4 += wo * load4(pb + tx);
-                        }
-                        float sw = horizontalSum(sw4), sr = horizontalSum(sr4), sg = horizontalSum(sg4),
-                              sb = horizontalSum(sb4);
-                        for (; tx <= xe; ++tx) {
-                            const float wo = weight(tx);
-                            sw += wo;
-                            sr += wo * pr[tx];
-                            sg += wo * pg[tx];
-                            sb += wo * pb[tx];
-                        }
-                        wsum += sw;
-                        sum[0] += sr;
-                        sum[1] += sg;
-                        sum[2] += sb;
-                    }
-                });
-                float* out3 = dst.texel(face, x, y);
-                if (wsum > 0.0) {
-                    // A weighted mean of finite radiances, but float products of radiances near FLT_MAX
-                    // can overflow: keep the stored value finite.
-                    for (int k = 0; k < 3; ++k)
-                        out3[k] = float(std::min(sum[k] / wsum, double(std::numeric_limits<float>::max())));
-                } else {
-                    // A lobe narrower than the source texels around R: no centre fell inside it, so
-                    // the lobe sees the source's bilinear value at R.
-                    const dvec3 L = sampleCube(chain, R, sourceLevel);
-                    for (int k = 0; k < 3; ++k)
-                        out3[k] = float(L[k]);
-                }
-            }
+        // Tasks of one row of tiles each.
+        const int tilesAcross = (dst.size + kTileWidth - 1) / kTileWidth;
+        const int tilesDown = (dst.size + kTileHeight - 1) / kTileHeight;
+        tbb::parallel_for(0, kCubeFaces * tilesDown, [&](int task) {
+            const int face = task / tilesDown, y0 = task % tilesDown * kTileHeight;
+            std::vector<Run> runs;
+            for (int t = 0; t < tilesAcross; ++t)
+                filterTile(Tile(face, dst.size, t * kTileWidth, y0), dst, src, lobe, uCut, chain, sourceLevel,
+                           runs);
         });
         out.seconds.push_back(
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());

@@ -213,11 +213,12 @@ struct TexelTable {
 TexelTable texelTable(const CubeMap& cube) {
     TexelTable t;
     const CubeLevel& level = cube.levels[0];
+    const std::vector<double> omegas = texelSolidAngles(level.size);
     for (int f = 0; f < kCubeFaces; ++f)
         for (int y = 0; y < level.size; ++y)
             for (int x = 0; x < level.size; ++x) {
                 t.dir.push_back(texelDirection(f, level.size, x, y));
-                t.omega.push_back(texelSolidAngle(level.size, x, y));
+                t.omega.push_back(omegas[size_t(y) * size_t(level.size) + size_t(x)]);
                 const float* L = level.texel(f, x, y);
                 t.radiance.emplace_back(L[0], L[1], L[2]);
             }

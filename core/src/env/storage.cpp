@@ -24,17 +24,23 @@ std::vector<float> storedCubeFace(const CubeMap& cube, int mip, int face) {
 }
 
 Status stageCubeExrFaces(const CubeMap& cube, const std::string& stem, FileSet& set) {
+    struct Face {
+        int mip, face;
+    };
+    std::vector<Face> faces;
+    std::vector<std::string> names;
     for (int m = 0; m < cube.mipCount(); ++m)
         for (int f = 0; f < kCubeFaces; ++f) {
-            const std::string name = cubeExrFaceName(cube, stem, m, f);
-            const int size = cube.levels[size_t(m)].size;
-            const Status s = set.add(name, [&](const fs::path& staged) {
-                return writeImageFile(staged, size, size, 3, storedCubeFace(cube, m, f),
-                                      {StoredType::Half, {}, {}}, set.folder() / name);
-            });
-            if (!s) return s;
+            faces.push_back({m, f});
+            names.push_back(cubeExrFaceName(cube, stem, m, f));
         }
-    return {};
+    // Each file's encoding (OpenEXR's zip, and a few milliseconds of set-up per file) is independent.
+    return set.addParallel(names, [&](size_t i, const fs::path& staged) {
+        const Face& k = faces[i];
+        const int size = cube.levels[size_t(k.mip)].size;
+        return writeImageFile(staged, size, size, 3, storedCubeFace(cube, k.mip, k.face),
+                              {StoredType::Half, {}, {}}, set.folder() / names[i]);
+    });
 }
 
 void scaleCube(CubeMap& cube, const glm::dvec3& scale) {

@@ -2,22 +2,13 @@
 
 #include <burnish/core/shading/ndf.h>
 #include <burnish/core/util/numeric.h>
+#include <burnish/core/util/simd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 namespace burnish {
-
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-// The value loops get 512- and 256-bit copies, picked when the program loads on CPUs that have
-// them. The 512-bit copy fuses multiply-adds, so its last bits may differ from the others' (about
-// 1e-16 relative, far below any figure's precision); on one machine every run and thread count
-// gives the same bits.
-#define BURNISH_VALUE_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define BURNISH_VALUE_CLONES
-#endif
 
 namespace {
 
@@ -30,8 +21,8 @@ inline double powCosFast(double c, double p) {
     return (c > 0.0 || p == 0.0) ? v : 0.0;
 }
 
-BURNISH_VALUE_CLONES void blinnPhongValues(const LobeTable& t, size_t begin, size_t count,
-                                           const DirectionPair& d, double* out) {
+BURNISH_AVX512_CLONES void blinnPhongValues(const LobeTable& t, size_t begin, size_t count,
+                                            const DirectionPair& d, double* out) {
     const double *nx = t.nx.data() + begin, *ny = t.ny.data() + begin, *nz = t.nz.data() + begin;
     const double *power = t.power.data() + begin, *norm = t.norm.data() + begin;
     const double hx = d.h.x, hy = d.h.y, hz = d.h.z, lx = d.l.x, ly = d.l.y, lz = d.l.z;
@@ -43,8 +34,8 @@ BURNISH_VALUE_CLONES void blinnPhongValues(const LobeTable& t, size_t begin, siz
 }
 
 // Σ over the slots of share·D(h)·max(0, n·l), D the slope-space Gaussian of slopeGaussianNdf.
-BURNISH_VALUE_CLONES void gaussianValues(const LobeTable& t, size_t begin, size_t count,
-                                         const DirectionPair& d, double* out) {
+BURNISH_AVX512_CLONES void gaussianValues(const LobeTable& t, size_t begin, size_t count,
+                                          const DirectionPair& d, double* out) {
     std::fill(out, out + count, 0.0);
     // Directions below the horizon have no slope (slopeGaussianNdf's h_z <= 0 case).
     if (!(d.h.z > 0.0)) return;
@@ -81,14 +72,14 @@ template <bool kOwnPowers>
     }
 }
 
-BURNISH_VALUE_CLONES void truthOnePower(const double* nx, const double* ny, const double* nz, double s,
-                                        size_t count, const DirectionPair& d, double* out) {
+BURNISH_AVX512_CLONES void truthOnePower(const double* nx, const double* ny, const double* nz, double s,
+                                         size_t count, const DirectionPair& d, double* out) {
     truthLoop<false>(nx, ny, nz, nullptr, s, count, d, out);
 }
 
-BURNISH_VALUE_CLONES void truthOwnPowers(const double* nx, const double* ny, const double* nz,
-                                         const double* powers, size_t count, const DirectionPair& d,
-                                         double* out) {
+BURNISH_AVX512_CLONES void truthOwnPowers(const double* nx, const double* ny, const double* nz,
+                                          const double* powers, size_t count, const DirectionPair& d,
+                                          double* out) {
     truthLoop<true>(nx, ny, nz, powers, 0.0, count, d, out);
 }
 

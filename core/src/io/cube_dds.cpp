@@ -37,6 +37,13 @@ std::uint16_t toHalfBits(float v) {
 std::string encodeCubeDds(const CubeMap& cube) {
     const std::uint32_t size = std::uint32_t(cube.faceSize());
     std::string s = rgba16fHeader(size, size, std::uint32_t(cube.mipCount()), true);
+    size_t bytes = s.size();
+    for (const CubeLevel& level : cube.levels)
+        for (const auto& face : level.faces)
+            bytes += face.size() / 3 * 8;
+    // Sized once, then filled in place: 8 bytes a texel (4 MB for a 256² chain).
+    size_t at = s.size();
+    s.resize(bytes);
     const std::uint16_t one = Imath::half(1.0f).bits();
     for (int f = 0; f < kCubeFaces; ++f)
         for (const CubeLevel& level : cube.levels) {
@@ -44,8 +51,8 @@ std::string encodeCubeDds(const CubeMap& cube) {
             for (size_t i = 0; i < face.size() / 3; ++i) {
                 for (int c = 0; c < 4; ++c) {
                     const std::uint16_t h = c < 3 ? toHalfBits(face[3 * i + size_t(c)]) : one;
-                    s.push_back(char(h & 0xFF));
-                    s.push_back(char(h >> 8));
+                    s[at++] = char(h & 0xFF);
+                    s[at++] = char(h >> 8);
                 }
             }
         }

@@ -35,10 +35,11 @@ Sh9 projectSh9(const CubeMap& cube) {
     Sh9 sh;
     if (cube.levels.empty()) return sh;
     const CubeLevel& level = cube.levels[0];
+    const std::vector<double> omegas = texelSolidAngles(level.size);
     for (int f = 0; f < kCubeFaces; ++f)
         for (int y = 0; y < level.size; ++y)
             for (int x = 0; x < level.size; ++x) {
-                const double omega = texelSolidAngle(level.size, x, y);
+                const double omega = omegas[size_t(y) * size_t(level.size) + size_t(x)];
                 const auto Y = shBasis(texelDirection(f, level.size, x, y));
                 const float* L = level.texel(f, x, y);
                 for (size_t k = 0; k < 9; ++k)

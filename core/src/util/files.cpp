@@ -1,6 +1,7 @@
 #include <burnish/core/util/files.h>
 
 #include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
@@ -412,6 +413,26 @@ Status FileSet::add(const std::string& name, const std::function<Status(const fs
     if (const Status s = syncFile(staged, target); !s) return s;
     m_names.push_back(name);
     m_files.push_back({staged, target});
+    return {};
+}
+
+Status FileSet::addParallel(const std::vector<std::string>& names,
+                            const std::function<Status(size_t, const fs::path&)>& write) {
+    std::vector<StagedFile> files;
+    for (const auto& name : names) {
+        if (!plainName(name)) return Error{"'" + name + "' is not a file name inside the folder"};
+        const fs::path target = m_staging.parent() / name;
+        files.push_back({m_staging.fileFor(target), target}); // named in order, before any is written
+    }
+    std::vector<Status> written(files.size());
+    tbb::parallel_for(size_t(0), files.size(), [&](size_t i) {
+        written[i] = write(i, files[i].staged);
+        if (written[i]) written[i] = syncFile(files[i].staged, files[i].target);
+    });
+    for (const Status& s : written)
+        if (!s) return s;
+    m_names.insert(m_names.end(), names.begin(), names.end());
+    m_files.insert(m_files.end(), files.begin(), files.end());
     return {};
 }
 

@@ -74,6 +74,9 @@ CubeCoord cubeCoord(const glm::dvec3& dir);
 /// Exact solid angle (sr) of texel (x, y) of a `size`² face; the 6·size² texels sum to 4π.
 // Area element of the cube face z = 1: dω = dx dy / (1 + x² + y²)^(3/2), integral atan(xy/sqrt(x²+y²+1))
 double texelSolidAngle(int size, int x, int y);
+/// The solid angles of all texels of a `size`² face (every face has the same), row by row: equal to
+/// texelSolidAngle bit for bit, from (size + 1)² area-element evaluations instead of 4·size².
+std::vector<double> texelSolidAngles(int size);
 
 /// Seamless bilinear lookup of one level: taps beyond a face edge are read from the neighbouring face
 /// (the behaviour of GL_TEXTURE_CUBE_MAP_SEAMLESS). `level` is clamped to the chain.

@@ -124,6 +124,11 @@ public:
                const std::function<Status(const std::filesystem::path& staged)>& write);
     /// Stages the file `name` with these bytes.
     Status addBytes(const std::string& name, std::string_view bytes);
+    /// Stages the files `names`, listed in this order, that `write(i, staged)` writes in full, several
+    /// at a time (the writers must be safe to run together). Returns the first error in order; then
+    /// none of them is listed.
+    Status addParallel(const std::vector<std::string>& names,
+                       const std::function<Status(size_t i, const std::filesystem::path& staged)>& write);
     /// The names staged so far, in order.
     const std::vector<std::string>& names() const { return m_names; }
     /// The folder the set is committed into.

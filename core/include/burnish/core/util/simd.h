@@ -1,14 +1,39 @@
 // Four floats in one SSE/NEON register (GCC and Clang vector extensions) for core's inner loops
-// (the environment prefilter, the pyramid's row filters). Arithmetic is element-wise IEEE, so a
-// lane's result equals the scalar one bit for bit.
+// (the environment prefilter, the pyramid's row filters), and eight in one AVX register or two SSE
+// ones. Arithmetic is element-wise IEEE, so a lane's result equals the scalar one bit for bit, and a
+// function compiled twice (target_clones, see BURNISH_AVX2_CLONES) gives the same bits in both copies.
 #pragma once
 
 #include <cstring>
+
+// GCC notes that a 32-byte vector passed by value has another ABI with AVX than without. Float8 values
+// pass only between inline functions and target_clones copies inside one translation unit, never
+// across a library's interface, so the note does not apply to any file that uses them.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
 
 namespace burnish::simd {
 
 using Float4 = float __attribute__((vector_size(16)));
 using Int4 = int __attribute__((vector_size(16)));
+using Float8 = float __attribute__((vector_size(32)));
+using Int8 = int __attribute__((vector_size(32)));
+using UInt8 = unsigned __attribute__((vector_size(32)));
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+// An AVX2 copy of a function beside the default (SSE2) one, picked when the program loads on CPUs that
+// have it. FMA is not enabled (it is not part of "avx2"), so no multiply-add is fused: both copies do
+// the same IEEE operations lane by lane and give the same bits.
+#define BURNISH_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+// An AVX-512 copy too, for loops of doubles (evaluate's lobe values). The 512-bit copy fuses
+// multiply-adds, so its last bits may differ from the others' (about 1e-16 relative); on one machine
+// every run and thread count gives the same bits.
+#define BURNISH_AVX512_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define BURNISH_AVX2_CLONES
+#define BURNISH_AVX512_CLONES
+#endif
 
 /// Four floats from `p`, unaligned (runs may start at any texel).
 inline Float4 load4(const float* p) {
@@ -30,6 +55,29 @@ inline Float4 max04(Float4 v) {
 /// (v0 + v1) + (v2 + v3): the order every caller relies on for its bits.
 inline float horizontalSum(Float4 v) {
     return (v[0] + v[1]) + (v[2] + v[3]);
+}
+
+/// 2^x lane by lane for x in [−125, 0], within 1.4e-7 (relative) of the exact value. Other x give
+/// unspecified values (callers drop those lanes). No calls, no branches.
+// Cephes exp2f (Moshier): 2^x = 2^k (1 + f P(f)), k = round(x), |f| <= 1/2; P by Estrin's scheme
+// (a shorter chain of dependent operations than Horner's)
+inline Float8 exp2NonPositive(Float8 x) {
+    // Adding 1.5·2^23 rounds x to the nearest integer k, which lands in the sum's low mantissa bits.
+    constexpr float kRound = 12582912.0f;
+    constexpr unsigned kRoundBits = 0x4B400000u; // the bits of 1.5·2^23
+    const Float8 t = x + kRound;
+    const Float8 f = x - (t - kRound);
+    UInt8 bits;
+    std::memcpy(&bits, &t, sizeof t);
+    // 2^k as a float: the biased exponent k + 127 in bits 23..30 (unsigned: no overflow out of range).
+    bits = (bits - (kRoundBits - 127u)) << 23;
+    Float8 scale;
+    std::memcpy(&scale, &bits, sizeof scale);
+    const Float8 f2 = f * f;
+    const Float8 p = ((6.931472028550421e-1f + 2.402264791363012e-1f * f) +
+                      f2 * (5.550332471162809e-2f + 9.618437357674640e-3f * f)) +
+                     (f2 * f2) * (1.339887440266574e-3f + 1.535336188319500e-4f * f);
+    return (1.0f + f * p) * scale;
 }
 
 } // namespace burnish::simd

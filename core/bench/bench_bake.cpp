@@ -150,8 +150,8 @@ void BM_ViewportBake(benchmark::State& state) {
         benchmark::DoNotOptimize(out);
     }
     state.SetLabel(std::string(methodName(options.method)) + ", levels up to " +
-                   (options.largestLevel ? std::to_string(options.largestLevel) : std::string("8192")) + ", " +
-                   label);
+                   (options.largestLevel ? std::to_string(options.largestLevel) : std::string("8192")) +
+                   ", " + label);
 }
 BENCHMARK(BM_ViewportBake)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
 

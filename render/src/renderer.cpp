@@ -306,7 +306,20 @@ struct Renderer::Impl {
     Status drawHdr(int width, int height);
     Status drawFused(const RenderTarget& target);
     void setFaceCulling() const;
+    void beginMaterialPass(const Framebuffer& target) const;
 };
+
+// The material pass's state: the target bound and cleared to black with its depth, depth-tested, no
+// blending, the closed meshes' back faces culled.
+void Renderer::Impl::beginMaterialPass(const Framebuffer& target) const {
+    target.bind();
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    setFaceCulling();
+    glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+}
 
 // The built-in sphere and torus are closed, wound counter-clockwise seen from outside, and the camera
 // never enters them: their back faces are always hidden, so they are culled rather than shaded and then
@@ -672,13 +685,7 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
 Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int width, int height,
                                     glm::vec2 jitterNdc, bool reference) {
     if (auto s = ensureTarget(hdr, width, height, true); !s) return s;
-    hdr->bind();
-    glDisable(GL_BLEND);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    setFaceCulling();
-    glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    beginMaterialPass(*hdr);
     p.use();
     setMaterialUniforms(p, f, width, height, jitterNdc, reference);
     mesh->draw();
@@ -746,13 +753,7 @@ Status Renderer::Impl::drawFused(const RenderTarget& target) {
     const int height = target.interactive ? std::max(1, (target.height + 1) / 2) : target.height;
     std::optional<Framebuffer>& out = target.interactive ? displayInteractive : display;
     if (auto s = ensureTarget(out, width, height, true, ColorFormat::Rgba8); !s) return s;
-    out->bind();
-    glDisable(GL_BLEND);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    setFaceCulling();
-    glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    beginMaterialPass(*out);
     (*fused)->use();
     setMaterialUniforms(**fused, features, width, height, glm::vec2(0.0f), false);
     // tonemap.frag takes the linear scale 2^EV.

@@ -286,8 +286,10 @@ void PaintTool::release() {
 
 void PaintTool::clearLayer() {
     const PaintLayer& l = m_doc->paintLayer(m_layer);
-    if (!l.allocated()) return; // nothing was ever painted: nothing to clear, no undo step
-    PaintPatch before = copyPatch(l, TexelRect::full(l.width, l.height));
+    // Only the painted rectangle goes into the undo step (a whole 8192² layer would be 512 MB twice).
+    const TexelRect painted = paintedBounds(l);
+    if (painted.empty()) return; // nothing to clear, no undo step
+    PaintPatch before = copyPatch(l, painted);
     PaintPatch after = before;
     std::fill(after.value.begin(), after.value.end(), 0.0f);
     std::fill(after.coverage.begin(), after.coverage.end(), 0.0f);

@@ -242,6 +242,24 @@ TEST(Paint, LayersAllocateWhenFirstPaintedAndStrokesOnlyWhatTheyTouch) {
     std::filesystem::remove_all(dir);
 }
 
+// Clearing a layer changes only its painted rectangle: zeros over paintedBounds give an unpainted
+// layer, and an unpainted one has no bounds.
+TEST(Paint, PaintedBoundsHoldEveryPaintedTexel) {
+    PaintLayer l = layer(200, 120);
+    EXPECT_TRUE(paintedBounds(l).empty());
+    PaintStroke s = stroke(l, brush(5.0, 1.0, 1.0, 0.6f), BorderMode::Clamp);
+    ASSERT_TRUE(s.addPoint({40.0, 30.0}));
+    ASSERT_TRUE(s.addPoint({90.0, 70.0}));
+    const TexelRect bounds = paintedBounds(l);
+    EXPECT_EQ(bounds, s.dirty());
+    PaintPatch zeros = copyPatch(l, bounds);
+    std::fill(zeros.value.begin(), zeros.value.end(), 0.0f);
+    std::fill(zeros.coverage.begin(), zeros.coverage.end(), 0.0f);
+    ASSERT_TRUE(applyPatch(l, zeros));
+    EXPECT_TRUE(samePaint(l, layer(200, 120)));
+    EXPECT_TRUE(paintedBounds(l).empty());
+}
+
 TEST(Paint, InvalidBrushesAreRefused) {
     PaintLayer l = layer(8, 8);
     EXPECT_FALSE(PaintStroke::begin(l, brush(0.1, 0.5, 1.0, 1.0f), BorderMode::Wrap));

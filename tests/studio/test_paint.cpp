@@ -152,6 +152,16 @@ TEST(StudioPaint, StrokeOnTheViewChangesTheLayerAndUndoRestoresIt) {
     EXPECT_FALSE(tool->eyedropper()); // one pick, then back to the brush
     EXPECT_NEAR(tool->brush().value, 0.95f, kGlossTol);
     EXPECT_NEAR(tool->pickAt(middle), 0.95f, kGlossTol);
+
+    // Clear layer: one undo step over the painted rectangle only, and undo brings the paint back.
+    const int beforeClear = doc->undoStack()->count();
+    tool->clearLayer();
+    EXPECT_EQ(doc->undoStack()->count(), beforeClear + 1);
+    EXPECT_FALSE(doc->paintLayer(PaintLayerKind::Gloss).painted());
+    tool->clearLayer(); // nothing left to clear: no step
+    EXPECT_EQ(doc->undoStack()->count(), beforeClear + 1);
+    doc->undoStack()->undo();
+    EXPECT_TRUE(samePaint(doc->paintLayer(PaintLayerKind::Gloss), painted));
     tool->setPaintMode(false);
 }
 

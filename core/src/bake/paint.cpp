@@ -86,6 +86,20 @@ void PaintLayer::clear() {
     coverage = {};
 }
 
+TexelRect paintedBounds(const PaintLayer& layer) {
+    TexelRect bounds;
+    if (!layer.allocated()) return bounds;
+    for (int y = 0; y < layer.height; ++y)
+        for (int x = 0; x < layer.width; ++x) {
+            const size_t i = layer.index(x, y);
+            // Bits, not values: a −0 is not what an unpainted texel holds either.
+            if (std::bit_cast<std::uint32_t>(layer.value[i]) |
+                std::bit_cast<std::uint32_t>(layer.coverage[i]))
+                bounds.unite({x, y, x + 1, y + 1});
+        }
+    return bounds;
+}
+
 bool samePaint(const PaintLayer& a, const PaintLayer& b) {
     if (a.kind != b.kind || a.width != b.width || a.height != b.height) return false;
     for (size_t i = 0; i < a.texelCount(); ++i)

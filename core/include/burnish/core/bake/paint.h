@@ -69,6 +69,10 @@ struct PaintLayer {
 /// Whether two layers hold the same kind, size and texels, bit for bit (an unallocated layer reads 0).
 bool samePaint(const PaintLayer& a, const PaintLayer& b);
 
+/// The bounding rectangle of the texels whose value or coverage is not +0 (empty for an unpainted
+/// layer): what clearing the layer changes, so its undo step stores that rectangle, not the layer.
+TexelRect paintedBounds(const PaintLayer& layer);
+
 /// The layer at another size, over the same UV square (a normal map of another size was loaded):
 /// each new texel is the area-weighted mean of the old texels its square covers, coverage and
 /// coverage·value averaged separately (so unpainted texels do not darken the paint beside them).

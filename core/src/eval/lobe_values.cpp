@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace burnish {
 
@@ -144,13 +145,6 @@ LobeTable LobeTable::of(const std::vector<DecodedMixture>& mixtures) {
             putGaussian(t, size_t(s) * t.count + i, l.share, l.mean, l.cov, l.normal);
         }
     return t;
-}
-
-size_t LobeTable::bytes() const {
-    size_t n = 0;
-    for (const auto* v : {&nx, &ny, &nz, &power, &norm, &coef, &mx, &my, &ixx, &iyy, &ixy})
-        n += v->capacity() * sizeof(double);
-    return n;
 }
 
 void lobeValues(const LobeTable& table, size_t begin, size_t end, const DirectionPair& d, double* out) {

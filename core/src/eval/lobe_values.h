@@ -31,9 +31,6 @@ struct LobeTable {
 
     static LobeTable of(const std::vector<TexelLobe>& lobes);
     static LobeTable of(const std::vector<DecodedMixture>& mixtures);
-
-    /// Bytes held (the report's memory figures and tests).
-    size_t bytes() const;
 };
 
 /// out[i] = the value of lobe begin + i for direction pair d, i < end − begin.

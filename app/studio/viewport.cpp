@@ -280,13 +280,15 @@ Viewport::Viewport(MaterialDocument* doc, QWidget* parent)
     m_labelA = new QLabel(this);
     m_labelB = new QLabel(this);
     m_errorLabel = new QLabel(this);
-    for (QLabel* l : {m_labelA, m_labelB, m_errorLabel}) {
+    m_bakingLabel = new QLabel(this);
+    for (QLabel* l : {m_labelA, m_labelB, m_errorLabel, m_bakingLabel}) {
         l->setStyleSheet("QLabel { background: rgba(20, 20, 22, 170); color: #e0e0e0; padding: 2px 6px; }");
         l->setAttribute(Qt::WA_TransparentForMouseEvents);
     }
     m_errorLabel->setWordWrap(true);
     m_errorLabel->setStyleSheet("QLabel { background: rgba(90, 20, 20, 220); color: white; padding: 6px; }");
     m_errorLabel->hide();
+    m_bakingLabel->hide();
 
     m_orbitTimer = new QTimer(this);
     m_orbitTimer->setInterval(kOrbitIntervalMs);
@@ -483,6 +485,7 @@ void Viewport::drawInto(unsigned framebuffer, int width, int height) {
         setError(QString::fromStdString(status.error()));
         return;
     }
+    showBaking(e.a->bakePending() || (m_view.split && e.b->bakePending()));
     m_frameMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     if (!left.interactive) m_fullFrameMs = m_frameMs;
     setError({});
@@ -714,6 +717,26 @@ void Viewport::setError(const QString& message) {
     emit errorChanged(message);
 }
 
+// While a bake for the view runs on its worker, the view draws the last baked material: say so, with
+// what is being baked, until the frame that takes the bake in.
+void Viewport::showBaking(bool pending) {
+    if (pending) {
+        const NormalMap& map = *m_doc->maps().normal;
+        m_bakingLabel->setText(QString("baking %1 for %2×%3…")
+                                   .arg(qs(methodName(m_doc->settings().method)))
+                                   .arg(map.width)
+                                   .arg(map.height));
+        m_bakingLabel->adjustSize();
+    }
+    if (pending == m_bakingLabel->isVisible()) return;
+    m_bakingLabel->setVisible(pending);
+    layoutOverlays();
+}
+
+bool Viewport::bakingShown() const {
+    return m_bakingLabel->isVisible();
+}
+
 void Viewport::updateLabels() {
     const QString a = qs(methodName(m_doc->settings().method));
     const QString b = m_view.right.reference ? QString("reference (%1 spp)").arg(m_view.referenceSamples)
@@ -735,8 +758,10 @@ void Viewport::layoutOverlays() {
     m_labelA->move(std::max(kMargin, splitX - m_labelA->width() - kMargin), kMargin);
     m_labelB->move(std::min(splitX + kMargin, width() - m_labelB->width() - kMargin), kMargin);
     m_errorLabel->setGeometry(kMargin, height() - 80, width() - 2 * kMargin, 80 - kMargin);
-    for (QWidget* w : {static_cast<QWidget*>(m_handle), static_cast<QWidget*>(m_labelA),
-                       static_cast<QWidget*>(m_labelB), static_cast<QWidget*>(m_errorLabel)})
+    m_bakingLabel->move(kMargin, height() - m_bakingLabel->height() - kMargin);
+    for (QWidget* w :
+         {static_cast<QWidget*>(m_handle), static_cast<QWidget*>(m_labelA), static_cast<QWidget*>(m_labelB),
+          static_cast<QWidget*>(m_errorLabel), static_cast<QWidget*>(m_bakingLabel)})
         w->raise();
 }
 

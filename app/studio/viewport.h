@@ -120,6 +120,8 @@ public:
     /// new one is in. The studio turns it on; tests that read the frame right after a change leave
     /// it off.
     void setBackgroundBakes(bool on);
+    /// Whether the view says a bake is running (the last baked material is drawn meanwhile).
+    bool bakingShown() const;
     bool paintMode() const { return m_paintMode; }
 
     /// Whether the picture comes from a QOpenGLWidget (else the headless context's images).
@@ -178,6 +180,7 @@ private:
     void setError(const QString& message);
     void layoutOverlays();
     void updateLabels();
+    void showBaking(bool pending);
     void meter();
 
     MaterialDocument* m_doc;
@@ -189,6 +192,7 @@ private:
     QLabel* m_labelA = nullptr;
     QLabel* m_labelB = nullptr;
     QLabel* m_errorLabel = nullptr;
+    QLabel* m_bakingLabel = nullptr; // "baking …" while a background bake for the view runs
     QTimer* m_orbitTimer = nullptr;
     QTimer* m_restTimer = nullptr;
     QTimer* m_dabTimer = nullptr;     // throttles redraws during a stroke (kDabRedrawIntervalMs)

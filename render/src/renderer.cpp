@@ -246,6 +246,8 @@ struct Renderer::Impl {
     std::function<void()> onBakeReady;
     std::optional<MaterialSettings> bakedMaterial;
     std::unique_ptr<BackgroundBake> pending;
+    // The last setScene draws the last baked material while the requested one bakes (bakePending).
+    bool drawingStale = false;
     ~Impl() {
         if (pending && pending->worker.joinable()) pending->worker.join();
     }
@@ -383,7 +385,15 @@ Status Renderer::Impl::uploadBake(const BakeKey& key, const CpuBake& cpu) {
 
 Result<bool> Renderer::Impl::backgroundBake(const MaterialSettings& m) {
     const BakeKey key = bakeKeyOf(m, maxTextureSize);
-    if (bakeKey && *bakeKey == key) return true;
+    if (bakeKey && *bakeKey == key) {
+        // The request came back to what is drawn: a bake started for a request since withdrawn is
+        // dropped once it finishes (taking it in would draw the withdrawn material).
+        if (pending && pending->done->load()) {
+            pending->worker.join();
+            pending.reset();
+        }
+        return true;
+    }
     if (pending && pending->done->load()) {
         // A finished bake is newer than what is drawn: taken in, even if the request moved on.
         pending->worker.join();
@@ -821,12 +831,14 @@ Status Renderer::setScene(const Scene& requested) {
     Impl& impl = *m_impl;
     Scene scene = requested;
     const MaterialSettings& want = requested.material;
+    impl.drawingStale = false;
     if (impl.backgroundBakes && impl.bakedMaterial && want.normalMap && want.normalMap->texelCount() > 0) {
         // Never bake on the caller's thread once something is baked: until the new bake is in,
         // the material's baked inputs (maps, method, power, encoding) stay the last baked ones,
         // the rest (colours, view, light) follow the request.
         auto ready = impl.backgroundBake(want);
         if (!ready) return Error{ready.error()};
+        impl.drawingStale = !*ready;
         if (!*ready) {
             const MaterialSettings& b = *impl.bakedMaterial;
             scene.material.normalMap = b.normalMap;
@@ -868,7 +880,7 @@ void Renderer::setMaxTextureSize(int size) {
 }
 
 bool Renderer::bakePending() const {
-    return m_impl->pending != nullptr;
+    return m_impl->drawingStale;
 }
 
 void Renderer::setUseUbershader(bool on) {

@@ -15,6 +15,7 @@
 #include <QApplication>
 #include <QImage>
 #include <QSignalSpy>
+#include <QTest>
 
 #include <cmath>
 #include <cstdio>
@@ -136,6 +137,39 @@ TEST(Viewport, ChangingTheDocumentsMethodChangesTheImage) {
     const QImage undone = t.grab();
     constexpr double kSameImage = 1e-9; // the same scene draws the same bytes
     EXPECT_LT(meanAbsDiff(naive, undone, 0, kWidth), kSameImage);
+}
+
+// With background bakes a change of method draws the last baked material meanwhile and says it is
+// baking; the frame that takes the bake in draws the new method and the note goes.
+TEST(Viewport, ABackgroundBakeIsShownUntilItLands) {
+    TestViewport t;
+    t.view.setBackgroundBakes(true);
+    t.view.setDistance(kFarDistance);
+    const QImage first = t.grab(); // the first bake is taken in at once
+    EXPECT_FALSE(t.view.bakingShown());
+    ASSERT_TRUE(t.doc.setMethod(Method::Naive));
+    const QImage meanwhile = t.grab();
+    EXPECT_TRUE(t.view.bakingShown());
+    EXPECT_LT(meanAbsDiff(first, meanwhile, 0, kWidth), 1e-9) << "the last baked material is drawn";
+    QImage landed;
+    for (int i = 0; i < 400 && t.view.bakingShown(); ++i) {
+        QTest::qWait(10);
+        landed = t.grab();
+    }
+    EXPECT_FALSE(t.view.bakingShown());
+    EXPECT_GT(meanAbsDiff(first, landed, 0, kWidth), 0.2) << "naive drawn once baked";
+    // A request that comes back to what is drawn draws it at once, and the bake started for the
+    // withdrawn one is never taken in.
+    ASSERT_TRUE(t.doc.setMethod(Method::Vmf));
+    t.grab();
+    EXPECT_TRUE(t.view.bakingShown());
+    t.doc.undoStack()->undo(); // back to naive, which is drawn
+    const QImage back = t.grab();
+    EXPECT_FALSE(t.view.bakingShown());
+    EXPECT_LT(meanAbsDiff(landed, back, 0, kWidth), 1e-9);
+    QTest::qWait(500); // the vMF bake finishes meanwhile
+    EXPECT_LT(meanAbsDiff(landed, t.grab(), 0, kWidth), 1e-9);
+    EXPECT_FALSE(t.view.bakingShown());
 }
 
 /// Paints one gloss stroke through the paint tool (one undo step): a brush as wide as the sample,

@@ -85,7 +85,8 @@ public:
     /// level, the default): a display shows no more, and an 8192² chain is gigabytes to upload.
     /// Applies to the bakes uploaded after the call.
     void setMaxTextureSize(int size);
-    /// Whether a background bake of the last requested scene is still running.
+    /// Whether the last setScene draws the last baked material because the requested one is still
+    /// baking in the background.
     bool bakePending() const;
     void setUseUbershader(bool on);
 

@@ -680,9 +680,11 @@ const CommandRegistration registration{
                         "highlights keep their energy) or display (tonemapped sRGB, what a screen shows).")
             ->check(CLI::IsMember({"display", "hdr"}));
         sub->add_flag("--json", o->json, "Print the result as JSON.");
-        sub->add_flag("--bench", o->bench,
-                      "Frame-time figures: the median per method on the scene, and the specialised program "
-                      "against the ubershader on a simple scene; peak memory. Never pass/fail.");
+        sub->add_flag(
+            "--bench", o->bench,
+            "Frame-time figures: the median per method on the scene, full size and the interactive "
+            "frame (half size, scaled up: the studio's while the camera moves), and the specialised "
+            "program against the ubershader on a simple scene; peak memory. Never pass/fail.");
         sub->add_option("--bench-frames", o->benchFrames, "Timed frames per figure of --bench (default 9).")
             ->check(CLI::Range(1, 1000));
         sub->add_option("--gl", o->gl, "OpenGL context: auto (EGL, then OSMesa; default), egl or osmesa.")

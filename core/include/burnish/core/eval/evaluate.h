@@ -150,7 +150,8 @@ double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, dou
 double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,
                         const std::vector<double>& texelPowers, const DirectionPair& d);
 
-/// A method's value for one texel and direction.
+/// A method's value for one texel and direction: the scalar reference that evaluateMethods'
+/// vectorised loops (src/eval/lobe_values.h) are tested against, as groundTruthTexel is for the truth.
 double methodValue(const TexelLobe& lobe, const DirectionPair& d);
 
 /// The lobe a method's shader reconstructs halfway between four texels from their bilinearly

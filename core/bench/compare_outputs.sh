@@ -4,6 +4,7 @@
 # then compare two such folders file by file.
 #
 #   core/bench/compare_outputs.sh run BURNISH_BINARY OUT_DIR   # bake sets, evaluations, renders, env
+#   core/bench/compare_outputs.sh bake BURNISH_BINARY OUT_DIR  # the bake sets only
 #   core/bench/compare_outputs.sh diff OLD_DIR NEW_DIR         # exit 0 when every output is the same
 #
 # `run` writes: every preset's default set for each map of ../shared/data/normal-maps; every
@@ -45,12 +46,20 @@ run() {
     for f in png8 png16 tga exr-half exr-float tiff16 tiff-float dds; do
       # The method's own preset where there is one (lean, clean, toksvig-map), else blackops.
       local p=blackops
-      if echo "$presets" | grep -qx "$m"; then p="$m"; fi
+      if grep -qx "$m" <<< "$presets"; then p="$m"; fi
       "$bin" bake "$one" --preset "$p" --method "$m" --format "$f" --out "$out/formats/$m-$f" >/dev/null \
         2>"$out/formats/$m-$f.err" || echo "failed" >> "$out/formats/$m-$f.err"
     done
   done
+  # Every DDS compression on the methods' own presets.
+  for p in $presets; do
+    for c in bc3 bc4 bc5 rgba8 rgba16f; do
+      "$bin" bake "$one" --preset "$p" --format dds --compression "$c" --allow-8bit --out "$out/formats/$p-dds-$c" \
+        >/dev/null 2>"$out/formats/$p-dds-$c.err" || echo "failed" >> "$out/formats/$p-dds-$c.err"
+    done
+  done
   find "$out/bake" "$out/formats" -name bake.json | while read -r j; do untime "$j"; done
+  [ "$bakeOnly" = 1 ] && { echo "compare_outputs: $(find "$out" -type f | wc -l) files in $out"; return; }
   mkdir -p "$out/evaluate"
   for map in "${maps[0]}" "${maps[2]:-${maps[0]}}"; do
     local stem; stem=$(basename "$map" .png)
@@ -102,7 +111,8 @@ diffdirs() {
 }
 
 case "${1:-}" in
-  run) run "$2" "$3" ;;
+  run) bakeOnly=0 run "$2" "$3" ;;
+  bake) bakeOnly=1 run "$2" "$3" ;;
   diff) diffdirs "$2" "$3" ;;
   *) sed -n '2,14p' "$0" >&2; exit 2 ;;
 esac

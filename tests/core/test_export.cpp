@@ -320,6 +320,49 @@ TEST(Export, DdsMipCountFollowsAShortChain) {
     }
 }
 
+// An 8-bit DDS stores unorm8's code, as PNG and TGA do: the float product v·255 rounds the 127
+// floats in [0, 1] just below (k + 1/2)/255, k >= 128, up to a tie, which lround took to k + 1.
+TEST(Export, DdsCodesAreThePngCodes) {
+    for (float v : {0.503921568f, 0.519607842f, 0.5f, 1.0f, 0.0f, 0.25f}) {
+        SCOPED_TRACE(v);
+        const TextureMip level{1, 1, TexelVector{v}};
+        const auto bytes = encodeDds({level}, 1, DdsCompression::Rgba8);
+        ASSERT_TRUE(bytes) << bytes.error();
+        ASSERT_GT(bytes->size(), 128u);
+        EXPECT_EQ(std::uint8_t((*bytes)[128]), unorm8(v)); // the texel's first byte after the header
+    }
+    EXPECT_EQ(unorm8(0.503921568f), 128);
+}
+
+// The streaming encoder reads each level a block at a time and gives the same bytes as the chain's.
+TEST(Export, StreamingDdsEncodesTheSameBytes) {
+    std::vector<TextureMip> chain;
+    for (int size = 67, k = 0; size >= 1; size /= 2, ++k) {
+        TextureMip m{size, 33 >> std::min(k, 5), {}};
+        m.height = std::max(1, m.height);
+        m.texels.resize(size_t(m.width) * size_t(m.height) * 2);
+        for (size_t i = 0; i < m.texels.size(); ++i)
+            m.texels[i] = float((i * 37 + size_t(k) * 11) % 101) / 100.0f;
+        chain.push_back(std::move(m));
+        if (size == 1) break;
+    }
+    for (DdsCompression c : {DdsCompression::Bc5, DdsCompression::Rgba8, DdsCompression::Rgba16f}) {
+        SCOPED_TRACE(ddsCompressionName(c));
+        const auto whole = encodeDds(chain, 2, c);
+        ASSERT_TRUE(whole) << whole.error();
+        size_t reads = 0;
+        const auto streamed = encodeDds(chain[0].width, chain[0].height, int(chain.size()), 2, c,
+                                        [&](size_t k, size_t begin, size_t end, float* out) {
+                                            ++reads;
+                                            for (size_t i = begin * 2; i < end * 2; ++i)
+                                                out[i - begin * 2] = chain[k].texels[i];
+                                        });
+        ASSERT_TRUE(streamed) << streamed.error();
+        EXPECT_EQ(*whole, *streamed);
+        EXPECT_GE(reads, chain.size());
+    }
+}
+
 TEST(Export, EncodeDdsRejectsBadChains) {
     TextureMip top{8, 8, TexelVector(64, 0.5f)};
     TextureMip wrong{3, 4, TexelVector(12, 0.5f)};
@@ -799,6 +842,7 @@ TEST(Export, CompactStorageKeepsTheExportsCodesAndWritesTheSameBytes) {
         const char* preset;
         std::optional<ExportFormat> format;
         std::map<TextureRole, TexelStorage> expected;
+        std::optional<DdsCompression> compression = {};
     };
     const std::vector<Case> cases{
         {"godot",
@@ -809,7 +853,28 @@ TEST(Export, CompactStorageKeepsTheExportsCodesAndWritesTheSameBytes) {
          ExportFormat::Tiff16,
          {{TextureRole::Normal, TexelStorage::Unorm16}, {TextureRole::Gloss, TexelStorage::Unorm16}}},
         {"unreal", {}, {{TextureRole::Gloss, TexelStorage::Unorm8}}}, // the normal's green is flipped
-        {"blackops", {}, {}},                                         // DDS
+        // DDS: 8-bit codes before block compression.
+        {"blackops",
+         {},
+         {{TextureRole::Normal, TexelStorage::Unorm8}, {TextureRole::Gloss, TexelStorage::Unorm8}}},
+        {"exp2",
+         {},
+         {{TextureRole::Normal, TexelStorage::Unorm8}, {TextureRole::Gloss, TexelStorage::Unorm8}}},
+        // DDS rgba16f: half floats.
+        {"lean",
+         ExportFormat::Dds,
+         {{TextureRole::LeanB, TexelStorage::Half},
+          {TextureRole::LeanM, TexelStorage::Half},
+          {TextureRole::LeanGloss, TexelStorage::Half}},
+         DdsCompression::Rgba16f},
+        // The mixture's roles, written together, each kept as half.
+        {"mixture",
+         {},
+         {{TextureRole::MixtureWeights, TexelStorage::Half},
+          {TextureRole::MixtureLobe0, TexelStorage::Half},
+          {TextureRole::MixtureLobe1, TexelStorage::Half},
+          {TextureRole::MixtureLobe2, TexelStorage::Half},
+          {TextureRole::MixtureCross, TexelStorage::Half}}},
         {"lean",
          {},
          {{TextureRole::LeanB, TexelStorage::Half},
@@ -822,12 +887,14 @@ TEST(Export, CompactStorageKeepsTheExportsCodesAndWritesTheSameBytes) {
         const Preset p = preset(c.preset);
         ExportOptions o;
         o.format = c.format;
+        o.compression = c.compression;
         o.stem = "map";
         if (p.findParameter("metallic")) o.parameters["metallic"] = 1.0;
         BakeOptions options;
         options.method = p.method;
         options.encoding = p.encoding;
         options.basePower = 256.0;
+        options.params.mixtureLobes = 3;
         options.roles = presetRoles(p);
         const auto shape = bakeShape(options, map.width, map.height);
         ASSERT_TRUE(shape) << shape.error();

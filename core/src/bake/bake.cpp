@@ -101,10 +101,7 @@ std::vector<BakedTexture> planTextures(const BakeOptions& options, const Channel
         t.decode = textureDecode(m.role, scales);
         t.channels = int(t.decode.size());
         t.needsHighPrecision = spec.needsHighPrecision;
-        // The mixture writes its roles together (mixtureRows): they stay float.
-        if (const auto it = options.storage.find(m.role);
-            it != options.storage.end() && options.method != Method::Mixture)
-            t.storage = it->second;
+        if (const auto it = options.storage.find(m.role); it != options.storage.end()) t.storage = it->second;
         textures.push_back(std::move(t));
     }
     return textures;
@@ -430,38 +427,57 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
             mip.texels.resize(values);
     }
     std::vector<ClampCounts> rowCounts(size_t(level.height));
+    // Codes: a row's floats go to a scratch row first and are then quantized as the export would.
+    auto storeCodes = [k](BakedTexture& tex, size_t at, size_t count, const float* px) {
+        TextureMip& mip = tex.mips[size_t(k)];
+        if (tex.storage == TexelStorage::Unorm8)
+            for (size_t i = 0; i < count; ++i)
+                mip.unorm8[at + i] = unorm8(px[i]);
+        else if (tex.storage == TexelStorage::Unorm16)
+            for (size_t i = 0; i < count; ++i)
+                mip.unorm16[at + i] = unorm16(px[i]);
+        else if (tex.storage == TexelStorage::Half)
+            for (size_t i = 0; i < count; ++i)
+                mip.halfBits[at + i] = halfCode(px[i]).bits();
+    };
     pyramid.forEachMomentRow(k, [&](int y, const NormalMoments* row) {
         const int width = level.width;
         const size_t first = size_t(y) * size_t(width);
         thread_local RowValues values;
         values.fill(plan, k, y, row, width);
         if (plan.mixture) {
+            // Every mixture role in one pass (four channels each), then each stored.
+            thread_local std::array<std::vector<float>, kMixtureRoles> scratch;
             std::array<float*, kMixtureRoles> px{};
             for (size_t r = 0; r < plan.roles.size(); ++r) {
                 const int i = int(plan.roles[r]) - int(TextureRole::MixtureWeights);
                 BakedTexture& tex = out.textures[r];
-                if (i >= 0 && i < kMixtureRoles) px[size_t(i)] = &tex.mips[size_t(k)].texels[first * 4];
+                if (i < 0 || i >= kMixtureRoles) continue;
+                if (tex.storage == TexelStorage::Float) {
+                    px[size_t(i)] = &tex.mips[size_t(k)].texels[first * 4];
+                } else {
+                    scratch[size_t(i)].resize(size_t(width) * 4);
+                    px[size_t(i)] = scratch[size_t(i)].data();
+                }
             }
             mixtureRows(plan, k, y, width, px);
+            for (size_t r = 0; r < plan.roles.size(); ++r) {
+                const int i = int(plan.roles[r]) - int(TextureRole::MixtureWeights);
+                if (i >= 0 && i < kMixtureRoles && out.textures[r].storage != TexelStorage::Float)
+                    storeCodes(out.textures[r], first * 4, size_t(width) * 4, px[size_t(i)]);
+            }
         }
         for (size_t r = 0; r < plan.roles.size(); ++r) {
             BakedTexture& tex = out.textures[r];
+            const int mixtureIndex = int(plan.roles[r]) - int(TextureRole::MixtureWeights);
+            if (plan.mixture && mixtureIndex >= 0 && mixtureIndex < kMixtureRoles) continue; // written above
             TextureMip& mip = tex.mips[size_t(k)];
             const size_t at = first * size_t(tex.channels), count = size_t(width) * size_t(tex.channels);
-            // Codes: the row's floats into a scratch row, then quantized as the export would.
             thread_local std::vector<float> scratch;
             if (tex.storage != TexelStorage::Float) scratch.resize(count);
             float* px = tex.storage == TexelStorage::Float ? &mip.texels[at] : scratch.data();
             const ClampCounts c = writeRoleRow(plan, plan.roles[r], row, values, width, px);
-            if (tex.storage == TexelStorage::Unorm8)
-                for (size_t i = 0; i < count; ++i)
-                    mip.unorm8[at + i] = unorm8(px[i]);
-            else if (tex.storage == TexelStorage::Unorm16)
-                for (size_t i = 0; i < count; ++i)
-                    mip.unorm16[at + i] = unorm16(px[i]);
-            else if (tex.storage == TexelStorage::Half)
-                for (size_t i = 0; i < count; ++i)
-                    mip.halfBits[at + i] = halfCode(px[i]).bits();
+            storeCodes(tex, at, count, px);
             rowCounts[size_t(y)].low += c.low;
             rowCounts[size_t(y)].high += c.high;
         }
@@ -515,7 +531,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     }
     RowPlan plan(options, base ? &*base : nullptr, mixture ? &*mixture : nullptr, out.textures, scales);
     plan.finestMap = &map;
-    for (int k = 0; k < levels; ++k) {
+    auto bakeAndRelease = [&](int k) {
         const PyramidLevel& level = pyramid.level(k);
         if (options.largestLevel > 0 && k + 1 < levels &&
             std::max(level.width, level.height) > options.largestLevel) {
@@ -524,10 +540,16 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
         } else {
             bakeLevel(plan, pyramid, k, out);
         }
-        // Level k's moments are read by nothing after its textures: the peak holds the textures
-        // written so far and the coarser levels' moments, not every level's.
+        // Level k's moments and lobes are read by nothing after its textures.
         pyramid.releaseBox(k);
-    }
+        if (mixture && k > 0) mixture->releaseLevel(k);
+    };
+    // Level 0 last: each level's textures depend on its own moments alone, and level 0's come from
+    // the normals, so by then every coarser level's moments (and the mixture's lobes) are freed and
+    // the peak holds the finest textures beside the normals, not beside the whole pyramid.
+    for (int k = 1; k < levels; ++k)
+        bakeAndRelease(k);
+    bakeAndRelease(0);
     out.stats.methodSeconds = seconds(start);
     return out;
 }

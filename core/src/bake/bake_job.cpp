@@ -3,6 +3,7 @@
 #include <burnish/core/eval/evaluate_report.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/prefilter/detail.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/sample_maps.h>
 #include <burnish/core/util/files.h>
 #include <burnish/core/util/hash.h>
@@ -280,17 +281,70 @@ Result<BakeOutput> bakeJobShape(const BakeJob& job, int width, int height, BakeR
     return shape;
 }
 
-double bakeBytesPerTexel(Method method, int mixtureLobes) {
+double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile>& files, bool glossMap) {
     constexpr double kMargin = 1.25;
-    if (method == Method::Mixture) return kMargin * (40.0 + 60.0 * std::clamp(mixtureLobes, 1, 4));
-    if (method == Method::Lean) return kMargin * 90.0;
-    return kMargin * 70.0;
+    constexpr double kNormals = 12.0; // the decoded normals (three floats), held to the end
+    constexpr double kRead = 16.0;    // the file's decoded samples beside them (four floats at most)
+    constexpr double kGloss = 20.0; // a gloss map: its decoded samples, then a float and a variance per texel
+    constexpr double kCoarser = 1.0 / 3.0; // levels 1, 2, … hold a third of level 0's texels
+    constexpr double kChain = 1.0 + kCoarser;
+    double textures = 0.0; // the finest level's bytes of every texture
+    for (const BakedTexture& t : shape.textures) {
+        const double bytes = t.storage == TexelStorage::Float    ? 4.0
+                             : t.storage == TexelStorage::Unorm8 ? 1.0
+                                                                 : 2.0;
+        textures += bytes * t.channels;
+    }
+    // What the export holds beside the textures, every file at once (they are written in
+    // parallel): the finest level converted to the file's type, or for a DDS file nvtt's 8-bit
+    // chain and the file's bytes.
+    double exportCopies = 0.0;
+    for (const ExportedFile& f : files) {
+        switch (f.format) {
+        case ExportFormat::Png8:
+        case ExportFormat::Tga:
+            exportCopies += 1.0 * f.storedChannels;
+            break;
+        case ExportFormat::Png16:
+        case ExportFormat::Tiff16:
+        case ExportFormat::ExrHalf:
+            exportCopies += 2.0 * f.storedChannels;
+            break;
+        case ExportFormat::ExrFloat:
+        case ExportFormat::TiffFloat:
+            exportCopies += 4.0 * f.storedChannels;
+            break;
+        case ExportFormat::Dds:
+            exportCopies += (4.0 + (f.compression == DdsCompression::Rgba16f ? 8.0 : 4.0)) * kChain;
+            break;
+        }
+    }
+    const double moments = 4.0 * momentStride(momentsNeeded(shape.method)) * kCoarser;
+    const bool lobes = std::any_of(shape.textures.begin(), shape.textures.end(),
+                                   [](const BakedTexture& t) { return t.role == TextureRole::MixtureLobe1; });
+    const double mixture = lobes ? double(sizeof(LobeMixture)) * kCoarser + 1.0 : 0.0;
+    // The coarser levels are baked first, beside the pyramid's moments (and the mixture's lobes);
+    // then level 0, once those are freed; then the export.
+    const double coarser = moments + mixture + textures * kCoarser;
+    const double finest = textures * kChain + exportCopies;
+    return kMargin * (kNormals + (glossMap ? kGloss : 0.0) + std::max({kRead, coarser, finest}));
 }
 
-std::uint64_t estimatedBakeBytes(Method method, int mixtureLobes, int width, int height) {
+Result<double> bakeJobBytesPerTexel(const BakeJob& job, int width, int height) {
+    BakeRecord planned;
+    auto shape = bakeJobShape(job, width, height, planned);
+    if (!shape) return Error{shape.error()};
+    const auto storage = compactStorage(*shape, job.preset, job.exportOptions, planned);
+    for (BakedTexture& t : shape.value().textures)
+        if (const auto it = storage.find(t.role); it != storage.end()) t.storage = it->second;
+    const auto plan = planExport(*shape, job.preset, job.exportOptions, planned);
+    if (!plan) return Error{plan.error()};
+    return bakeBytesPerTexel(*shape, plan->files, job.spec.gloss || job.spec.authoredGloss);
+}
+
+std::uint64_t estimatedBakeBytes(double bytesPerTexel, int width, int height) {
     constexpr double kProcessBytes = 150e6;
-    return std::uint64_t(kProcessBytes +
-                         bakeBytesPerTexel(method, mixtureLobes) * double(width) * double(height));
+    return std::uint64_t(kProcessBytes + bytesPerTexel * double(width) * double(height));
 }
 
 std::optional<std::uint64_t> availableMemoryBytes() {
@@ -336,9 +390,10 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
     if (!isSampleBakeInput(job.spec.input)) {
         const auto header = readImageHeader(job.spec.input);
         if (!header) return Error{header.error()};
-        const Status memory = checkBakeMemory(
-            estimatedBakeBytes(job.method, job.bake.params.mixtureLobes, header->width, header->height),
-            availableMemoryBytes(), header->width, header->height);
+        const auto perTexel = bakeJobBytesPerTexel(job, header->width, header->height);
+        if (!perTexel) return Error{perTexel.error()};
+        const Status memory = checkBakeMemory(estimatedBakeBytes(*perTexel, header->width, header->height),
+                                              availableMemoryBytes(), header->width, header->height);
         if (!memory) return Error{"'" + job.spec.input + "': " + memory.error()};
     }
     auto map = loadBakeInput(job.spec.input, job.normalMap);

@@ -77,19 +77,6 @@ struct PlannedFile {
     std::vector<Source> sources;
 
     int channels() const { return int(sources.size()); }
-
-    /// Level k's values, channels() per texel (what the DDS encoder takes).
-    TextureMip packedLevel(size_t k) const {
-        TextureMip mip;
-        mip.width = info.mipSizes[k].first;
-        mip.height = info.mipSizes[k].second;
-        const size_t n = size_t(mip.width) * size_t(mip.height);
-        mip.texels.resize(n * sources.size());
-        for (size_t t = 0; t < n; ++t)
-            for (size_t c = 0; c < sources.size(); ++c)
-                mip.texels[t * sources.size() + c] = sources[c].at(k, t);
-        return mip;
-    }
 };
 
 struct Plan {
@@ -496,7 +483,9 @@ struct PixelData {
     std::vector<std::uint16_t, TexelAllocator<std::uint16_t>> u16;
     std::vector<Imath::half, TexelAllocator<Imath::half>> f16;
     TexelVector f32;
+    const void* borrowed = nullptr; // the bake's own codes, when they are the file's level as it is
     const void* data() const {
+        if (borrowed) return borrowed;
         return type == OIIO::TypeDesc::UINT8    ? static_cast<const void*>(u8.data())
                : type == OIIO::TypeDesc::UINT16 ? static_cast<const void*>(u16.data())
                : type == OIIO::TypeDesc::HALF   ? static_cast<const void*>(f16.data())
@@ -585,6 +574,27 @@ constexpr auto code16 = [](float v) { return unorm16(v); };
 // Level k of the file converted in parallel blocks of texels (convertTexels).
 PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat format) {
     PixelData p;
+    // One texture's channels in order, kept as the codes this file stores: written from the bake's
+    // own array, with no copy of the level.
+    if (const Source* first = file.sources.empty() ? nullptr : &file.sources.front();
+        first && file.sources.size() == size_t(stored) && first->texture &&
+        first->texture->channels == stored) {
+        bool asStored = true;
+        for (size_t c = 0; asStored && c < file.sources.size(); ++c)
+            asStored = file.sources[c].texture == first->texture && file.sources[c].index == int(c) &&
+                       !file.sources[c].flip;
+        const TextureMip& mip = first->texture->mips[k];
+        const TexelStorage storage = first->texture->storage;
+        if (asStored && storage == TexelStorage::Unorm8 &&
+            (format == ExportFormat::Png8 || format == ExportFormat::Tga))
+            p.type = OIIO::TypeDesc::UINT8, p.borrowed = mip.unorm8.data();
+        else if (asStored && storage == TexelStorage::Unorm16 &&
+                 (format == ExportFormat::Png16 || format == ExportFormat::Tiff16))
+            p.type = OIIO::TypeDesc::UINT16, p.borrowed = mip.unorm16.data();
+        else if (asStored && storage == TexelStorage::Half && format == ExportFormat::ExrHalf)
+            p.type = OIIO::TypeDesc::HALF, p.borrowed = mip.halfBits.data();
+        if (p.borrowed) return p;
+    }
     const size_t n = size_t(file.info.mipSizes[k].first) * size_t(file.info.mipSizes[k].second);
     auto convert = [&](auto* out, auto&& code) {
         constexpr size_t kBlock = size_t(1) << 14; // texels per task: large enough to amortise
@@ -831,10 +841,17 @@ Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, co
         if (!t.file) {
             staged[i] = writeNewFile(t.staging, plan.result.manifest.dump(2) + "\n", t.path);
         } else if (t.file->info.format == ExportFormat::Dds) {
-            std::vector<TextureMip> mips;
-            for (size_t k = 0; k < t.file->info.mipSizes.size(); ++k)
-                mips.push_back(t.file->packedLevel(k));
-            const auto bytes = encodeDds(mips, t.file->channels(), *t.file->info.compression);
+            // Read from the bake a block at a time: no float copy of the file's chain.
+            const PlannedFile& file = *t.file;
+            const auto bytes =
+                encodeDds(file.info.mipSizes[0].first, file.info.mipSizes[0].second,
+                          int(file.info.mipSizes.size()), file.channels(), *file.info.compression,
+                          [&file](size_t k, size_t begin, size_t end, float* out) {
+                              const size_t channels = file.sources.size();
+                              for (size_t texel = begin; texel < end; ++texel)
+                                  for (size_t c = 0; c < channels; ++c)
+                                      out[(texel - begin) * channels + c] = file.sources[c].at(k, texel);
+                          });
             staged[i] = bytes ? writeNewFile(t.staging, *bytes, t.path)
                               : Status(Error{"cannot write '" + t.path.string() + "': " + bytes.error()});
         } else if (t.file->info.format == ExportFormat::Png8 || t.file->info.format == ExportFormat::Png16) {
@@ -881,10 +898,14 @@ std::map<TextureRole, TexelStorage> compactStorage(const BakeOutput& shape, cons
             if (!s.texture) continue;
             const ExportFormat format = f.info.format;
             // Codes only where this file would store exactly those codes: an unflipped channel
-            // of an 8- or 16-bit file that is not a DDS (nvtt and the DDS writer take floats).
+            // of an 8- or 16-bit file, or of a DDS file (8-bit codes before nvtt's compression,
+            // half floats for rgba16f).
             std::optional<TexelStorage> want;
             if (!s.flip && (format == ExportFormat::Png8 || format == ExportFormat::Tga))
                 want = TexelStorage::Unorm8;
+            if (!s.flip && format == ExportFormat::Dds && f.info.compression)
+                want = *f.info.compression == DdsCompression::Rgba16f ? TexelStorage::Half
+                                                                      : TexelStorage::Unorm8;
             if (!s.flip && (format == ExportFormat::Png16 || format == ExportFormat::Tiff16))
                 want = TexelStorage::Unorm16;
             if (!s.flip && format == ExportFormat::ExrHalf) want = TexelStorage::Half;

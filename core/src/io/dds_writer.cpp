@@ -9,6 +9,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <utility>
+#include <vector>
 
 namespace burnish {
 
@@ -30,9 +33,10 @@ struct ErrorCollector final : nvtt::ErrorHandler {
     }
 };
 
-// Round to nearest 8-bit code: the quantization every 8-bit format of the export shares.
+// The 8-bit code of every 8-bit format of the export (unorm8, bake.h), so a texture the bake kept
+// as 8-bit codes is written as those codes.
 std::uint8_t code8(float v) {
-    return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+    return unorm8(v);
 }
 
 nvtt::Format nvttFormat(DdsCompression compression) {
@@ -50,17 +54,37 @@ nvtt::Format nvttFormat(DdsCompression compression) {
     return nvtt::Format_RGBA;
 }
 
+// Texels a block the encoders read and convert at a time: one block of floats is all they hold
+// beside their output.
+constexpr size_t kReadBlock = size_t(1) << 12;
+
+// Calls fn(begin, end, values) for every block of level k's n texels, values holding the block's
+// `channels` floats per texel as `read` gives them.
+template <class Fn> void forEachBlock(const DdsLevelReader& read, size_t k, size_t n, int channels, Fn&& fn) {
+    std::vector<float> block(kReadBlock * size_t(channels));
+    for (size_t begin = 0; begin < n; begin += kReadBlock) {
+        const size_t end = std::min(n, begin + kReadBlock);
+        read(k, begin, end, block.data());
+        fn(begin, end, block.data());
+    }
+}
+
 // RGBA16F with a DX10 header, every level in order: the stored values in [0, 1] as half floats
 // (missing colour channels 0, missing alpha 1), for moments that 8 bits would ruin.
-std::string encodeRgba16f(const std::vector<TextureMip>& mips, int channels) {
-    std::string s = dds::rgba16fHeader(std::uint32_t(mips[0].width), std::uint32_t(mips[0].height),
-                                       std::uint32_t(mips.size()), false);
-    for (const auto& m : mips)
-        for (size_t t = 0; t < size_t(m.width) * size_t(m.height); ++t)
-            for (int c = 0; c < 4; ++c)
-                dds::putHalf(s, c < channels ? std::clamp(float(m.texels[t * size_t(channels) + size_t(c)]),
-                                                          0.0f, 1.0f)
-                                             : (c == 3 ? 1.0f : 0.0f));
+std::string encodeRgba16f(const std::vector<std::pair<int, int>>& sizes, int channels,
+                          const DdsLevelReader& read) {
+    std::string s = dds::rgba16fHeader(std::uint32_t(sizes[0].first), std::uint32_t(sizes[0].second),
+                                       std::uint32_t(sizes.size()), false);
+    for (size_t k = 0; k < sizes.size(); ++k)
+        forEachBlock(read, k, size_t(sizes[k].first) * size_t(sizes[k].second), channels,
+                     [&](size_t begin, size_t end, const float* v) {
+                         for (size_t t = 0; t < end - begin; ++t)
+                             for (int c = 0; c < 4; ++c)
+                                 dds::putHalf(
+                                     s, c < channels
+                                            ? std::clamp(v[t * size_t(channels) + size_t(c)], 0.0f, 1.0f)
+                                            : (c == 3 ? 1.0f : 0.0f));
+                     });
     return s;
 }
 
@@ -69,16 +93,6 @@ std::string encodeRgba16f(const std::vector<TextureMip>& mips, int channels) {
 Result<std::string> encodeDds(const std::vector<TextureMip>& mips, int channels, DdsCompression compression) {
     if (mips.empty()) return Error{"DDS: no mip levels to write"};
     if (channels < 1 || channels > 4) return Error{"DDS: a texture needs 1 to 4 channels"};
-    if (compression == DdsCompression::Bc4 && channels != 1)
-        return Error{"DDS: bc4 holds exactly one channel"};
-    if (compression == DdsCompression::Bc5 && channels != 2)
-        return Error{"DDS: bc5 holds exactly two channels"};
-    // nvtt 2.0 takes int extents; DDS readers expect at most 16384 on a side (D3D11's limit).
-    constexpr int kMaxDdsSide = 16384;
-    if (mips[0].width < 1 || mips[0].height < 1 || mips[0].width > kMaxDdsSide ||
-        mips[0].height > kMaxDdsSide)
-        return Error{"DDS: " + std::to_string(mips[0].width) + "x" + std::to_string(mips[0].height) +
-                     " is outside 1..16384 on a side"};
     for (size_t k = 0; k < mips.size(); ++k) {
         const auto& m = mips[k];
         if (k > 0 && (m.width != std::max(1, mips[k - 1].width / 2) ||
@@ -87,43 +101,70 @@ Result<std::string> encodeDds(const std::vector<TextureMip>& mips, int channels,
         if (m.texels.size() != size_t(m.width) * size_t(m.height) * size_t(channels))
             return Error{"DDS: mip " + std::to_string(k) + " has the wrong number of values"};
     }
+    return encodeDds(mips[0].width, mips[0].height, int(mips.size()), channels, compression,
+                     [&](size_t k, size_t begin, size_t end, float* out) {
+                         std::copy(mips[k].texels.begin() + std::ptrdiff_t(begin * size_t(channels)),
+                                   mips[k].texels.begin() + std::ptrdiff_t(end * size_t(channels)), out);
+                     });
+}
 
-    if (compression == DdsCompression::Rgba16f) return encodeRgba16f(mips, channels);
+Result<std::string> encodeDds(int width, int height, int levels, int channels, DdsCompression compression,
+                              const DdsLevelReader& read) {
+    if (levels < 1) return Error{"DDS: no mip levels to write"};
+    if (channels < 1 || channels > 4) return Error{"DDS: a texture needs 1 to 4 channels"};
+    if (compression == DdsCompression::Bc4 && channels != 1)
+        return Error{"DDS: bc4 holds exactly one channel"};
+    if (compression == DdsCompression::Bc5 && channels != 2)
+        return Error{"DDS: bc5 holds exactly two channels"};
+    // nvtt 2.0 takes int extents; DDS readers expect at most 16384 on a side (D3D11's limit).
+    constexpr int kMaxDdsSide = 16384;
+    if (width < 1 || height < 1 || width > kMaxDdsSide || height > kMaxDdsSide)
+        return Error{"DDS: " + std::to_string(width) + "x" + std::to_string(height) +
+                     " is outside 1..16384 on a side"};
+    std::vector<std::pair<int, int>> sizes{{width, height}};
+    for (int k = 1; k < levels; ++k)
+        sizes.emplace_back(std::max(1, sizes.back().first / 2), std::max(1, sizes.back().second / 2));
+
+    if (compression == DdsCompression::Rgba16f) return encodeRgba16f(sizes, channels, read);
     nvtt::InputOptions input;
-    input.setTextureLayout(nvtt::TextureType_2D, mips[0].width, mips[0].height);
+    input.setTextureLayout(nvtt::TextureType_2D, width, height);
     input.setFormat(nvtt::InputFormat_BGRA_8UB);
     // nvtt 2.0 writes only the top level when mipmap generation is off; with it on, a level given
     // through setMipmapData (matched by exact size) is used as is and nothing is generated.
     // maxLevel stops the chain where the bake's stops.
-    input.setMipmapGeneration(true, int(mips.size()) - 1);
+    input.setMipmapGeneration(true, levels - 1);
     input.setNormalMap(false);  // no renormalization: the bake's values are final
     input.setGamma(1.0f, 1.0f); // data, not colour: no gamma conversion
     input.setAlphaMode(nvtt::AlphaMode_None);
 
-    std::vector<std::uint8_t> bgra;
-    for (size_t k = 0; k < mips.size(); ++k) {
-        const auto& m = mips[k];
-        const size_t n = size_t(m.width) * size_t(m.height);
-        bgra.assign(n * 4, 0);
-        for (size_t t = 0; t < n; ++t) {
-            const float* v = &m.texels[t * size_t(channels)];
-            std::uint8_t r = 0, g = 0, b = 0, a = 255;
-            if (channels == 1) {
-                // Grey, and in alpha too: nvtt 2.0's BC4 compresses the alpha channel.
-                r = g = b = a = code8(v[0]);
-            } else {
-                r = code8(v[0]);
-                g = code8(v[1]);
-                if (channels >= 3) b = code8(v[2]);
-                if (channels == 4) a = code8(v[3]);
-            }
-            bgra[t * 4 + 0] = b;
-            bgra[t * 4 + 1] = g;
-            bgra[t * 4 + 2] = r;
-            bgra[t * 4 + 3] = a;
+    {
+        std::vector<std::uint8_t> bgra; // one level; nvtt keeps its own copy
+        for (size_t k = 0; k < sizes.size(); ++k) {
+            const auto [w, h] = sizes[k];
+            const size_t n = size_t(w) * size_t(h);
+            bgra.assign(n * 4, 0);
+            forEachBlock(read, k, n, channels, [&](size_t begin, size_t end, const float* values) {
+                for (size_t t = begin; t < end; ++t) {
+                    const float* v = &values[(t - begin) * size_t(channels)];
+                    std::uint8_t r = 0, g = 0, b = 0, a = 255;
+                    if (channels == 1) {
+                        // Grey, and in alpha too: nvtt 2.0's BC4 compresses the alpha channel.
+                        r = g = b = a = code8(v[0]);
+                    } else {
+                        r = code8(v[0]);
+                        g = code8(v[1]);
+                        if (channels >= 3) b = code8(v[2]);
+                        if (channels == 4) a = code8(v[3]);
+                    }
+                    bgra[t * 4 + 0] = b;
+                    bgra[t * 4 + 1] = g;
+                    bgra[t * 4 + 2] = r;
+                    bgra[t * 4 + 3] = a;
+                }
+            });
+            if (!input.setMipmapData(bgra.data(), w, h, 1, 0, int(k)))
+                return Error{"DDS: nvtt refused mip " + std::to_string(k)};
         }
-        if (!input.setMipmapData(bgra.data(), m.width, m.height, 1, 0, int(k)))
-            return Error{"DDS: nvtt refused mip " + std::to_string(k)};
     }
 
     nvtt::CompressionOptions compressionOptions;

@@ -386,6 +386,11 @@ std::array<LobeMoments, kMaxMixtureLobes> MixturePyramid::storedTexel(const Norm
     return out;
 }
 
+void MixturePyramid::releaseLevel(int k) {
+    if (k < 1 || k >= levelCount()) return;
+    std::vector<LobeMixture>().swap(m_levels[size_t(k - 1)].texels);
+}
+
 const LobeMixture& MixturePyramid::at(int level, int x, int y) const {
     const Level& l = m_levels[size_t(level - 1)];
     return l.texels[size_t(y) * size_t(l.width) + size_t(x)];

@@ -76,13 +76,19 @@ struct BakeJobSpec {
 /// bake.json's inputs.gloss.source for a job with an in-memory authored gloss.
 inline constexpr std::string_view kPaintedGlossSource = "painted layers";
 
-/// Peak memory of a bake per texel of its input, an upper bound over the presets measured by
-/// core/bench/bake_memory.sh (2048² maps, every preset with its defaults, full chains: 38-90 bytes
-/// for one-lobe methods, 216 for the mixture at K = 3), with a quarter more for margin.
-double bakeBytesPerTexel(Method method, int mixtureLobes);
+/// Peak memory of a bake per texel of its input, from its textures (`shape` as bakeShape gives it,
+/// each texture's storage set as the bake will keep it), the files its export writes and whether a
+/// gloss map is read: the normals beside the largest of the read, the coarser levels (the pyramid's
+/// moments, the mixture's lobes) and the finest level with the export's copies, with a quarter more
+/// for margin. It covers the peaks core/bench/bake_memory.sh measures (tested against them).
+double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile>& files, bool glossMap);
 /// The memory a bake of a width×height map needs at its peak: the process's own ~150 MB plus
-/// bakeBytesPerTexel per texel.
-std::uint64_t estimatedBakeBytes(Method method, int mixtureLobes, int width, int height);
+/// bytesPerTexel (bakeBytesPerTexel) per texel.
+std::uint64_t estimatedBakeBytes(double bytesPerTexel, int width, int height);
+struct BakeJob;
+/// bakeBytesPerTexel of a job for a width×height input: its textures as the bake keeps them
+/// (compactStorage) and its export's files. Errors: the job's shape or export plan fails.
+Result<double> bakeJobBytesPerTexel(const BakeJob& job, int width, int height);
 /// What the system can still hand out now: MemAvailable plus SwapFree of /proc/meminfo; nullopt
 /// where that cannot be read.
 std::optional<std::uint64_t> availableMemoryBytes();

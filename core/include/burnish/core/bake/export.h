@@ -24,6 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -107,7 +108,8 @@ Result<ExportResult> planExport(const BakeOutput& bake, const Preset& preset, co
                                 const BakeRecord& record = {});
 
 /// The roles an export stores only as 8- or 16-bit codes or half floats (every file that reads the
-/// role is a PNG, TGA, 16-bit TIFF or half EXR of one kind, none flips it, none is a DDS):
+/// role is a PNG, TGA, 16-bit TIFF, half EXR or DDS of one kind, and none flips it; a DDS file
+/// takes 8-bit codes, or half floats for rgba16f):
 /// BakeOptions::storage for a bake made only to be exported, which then holds a quarter (8-bit) or
 /// half (16-bit, half) of the float textures' memory and exports the same bytes. `shape` is bakeShape's.
 /// Empty when the plan fails.
@@ -142,5 +144,15 @@ nlohmann::json diagnosticsJson(const NormalMapDiagnostics& diagnostics);
 /// 1, BC3 and RGBA8 up to four (missing colour channels 0, or channel 0 repeated for one-channel
 /// images; missing alpha 1). Every level must be half its parent (rounded down, at least 1).
 Result<std::string> encodeDds(const std::vector<TextureMip>& mips, int channels, DdsCompression compression);
+
+/// Texels [begin, end) of level k of a DDS file's texture, `channels` values per texel into `out`,
+/// each in [0, 1]: what the streaming encodeDds reads instead of a whole chain of floats.
+using DdsLevelReader = std::function<void(size_t k, size_t begin, size_t end, float* out)>;
+
+/// encodeDds for a chain of `levels` levels from width×height down (each half its parent, at least
+/// 1), read through `read` a block of texels at a time: the same bytes as the chain's encodeDds,
+/// without a float copy of the chain (the export's DDS files are written this way).
+Result<std::string> encodeDds(int width, int height, int levels, int channels, DdsCompression compression,
+                              const DdsLevelReader& read);
 
 } // namespace burnish

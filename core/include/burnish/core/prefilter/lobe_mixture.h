@@ -109,6 +109,10 @@ public:
     /// evaluate filters between texels.
     std::array<LobeMoments, kMaxMixtureLobes> storedTexel(const NormalMap& finest, int k, int x, int y,
                                                           double finestPower) const;
+    /// Frees level k's lobes (1 <= k < levelCount()) once nothing reads them again: every level was
+    /// built with the pyramid, and level 0's slots (finestLobe) are kept apart. Reading level k
+    /// afterwards is an error the caller must not make.
+    void releaseLevel(int k);
 
 private:
     struct Level {

@@ -98,6 +98,7 @@ struct RenderCliOptions {
     std::string env = "off";
     float envRotation = 0.0f;
     float envIntensity = 1.0f;
+    bool envBackground = false;
     int envFis = 0; // 0: the prefiltered map; N: filtered importance sampling with N taps
 };
 
@@ -281,8 +282,13 @@ Result<Scene> buildScene(const RenderCliOptions& o) {
         env.rotationDegrees = o.envRotation;
         env.intensity = o.envIntensity;
         if (o.envFis > 0) env.fisSamples = o.envFis;
+        scene.environmentBackground = o.envBackground;
+        // The background from its own 512² faces: sharp where the lighting's cube is small.
+        env.backgroundFaceSize = 512;
     } else if (o.envFis > 0) {
         return Error{"--env-fis needs an environment (--env studio or --env FILE)"};
+    } else if (o.envBackground) {
+        return Error{"--env-background needs an environment (--env studio or --env FILE)"};
     }
     return scene;
 }
@@ -699,6 +705,9 @@ const CommandRegistration registration{
             ->check(CLI::Range(-360.0f, 360.0f));
         sub->add_option("--env-intensity", o->envIntensity, "Environment radiance scale (default 1).")
             ->check(CLI::Range(0.0f, 1e6f));
+        sub->add_flag("--env-background", o->envBackground,
+                      "Draw the environment behind the mesh (from its own 512² cube faces, turned and "
+                      "scaled as the lighting); the reference (--reference) shows it too.");
         sub->add_option(
                "--env-fis", o->envFis,
                "Filtered importance sampling of the environment with N taps per pixel instead of the "

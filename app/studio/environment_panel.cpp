@@ -93,6 +93,10 @@ EnvironmentPanel::EnvironmentPanel(MaterialDocument* doc, QWidget* parent)
     m_samples->setKeyboardTracking(false);
     form->addRow("", m_fis);
     form->addRow("Samples", m_samples);
+    m_background = new QCheckBox("Show as background", this);
+    m_background->setObjectName("environmentBackground");
+    m_background->setToolTip("Draw the environment behind the mesh, turned and scaled as its lighting");
+    form->addRow("", m_background);
 
     connect(m_source, &QComboBox::activated, this, &EnvironmentPanel::sourceChosen);
     connect(m_browse, &QPushButton::clicked, this, [this] { chooseFile({}); });
@@ -110,6 +114,8 @@ EnvironmentPanel::EnvironmentPanel(MaterialDocument* doc, QWidget* parent)
             [this](bool on) { edit([on](EnvironmentSettings& e) { e.fis = on; }); });
     connect(m_samples, &QSpinBox::valueChanged, this,
             [this](int n) { edit([n](EnvironmentSettings& e) { e.fisSamples = n; }); });
+    connect(m_background, &QCheckBox::toggled, this,
+            [this](bool on) { edit([on](EnvironmentSettings& e) { e.background = on; }); });
     connect(m_doc, &MaterialDocument::changed, this, &EnvironmentPanel::syncFromDocument);
     syncFromDocument();
 }
@@ -206,8 +212,12 @@ void EnvironmentPanel::syncFromDocument() {
         const QSignalBlocker block(m_samples);
         m_samples->setValue(e.fisSamples);
     }
+    {
+        const QSignalBlocker block(m_background);
+        m_background->setChecked(e.background);
+    }
     for (QWidget* w : {static_cast<QWidget*>(m_rotation), static_cast<QWidget*>(m_intensity),
-                       static_cast<QWidget*>(m_fis)})
+                       static_cast<QWidget*>(m_fis), static_cast<QWidget*>(m_background)})
         w->setEnabled(on);
     // The prefilter lobe matters only for the prefiltered map, the sample count only for FIS.
     m_lobe->setEnabled(on && !e.fis);

@@ -1,6 +1,7 @@
 // The environment panel (a dock): the viewport's environment lighting — Off, the procedural studio,
 // or an equirectangular HDR file (.exr/.hdr/.tif, from a library folder or Browse…) — with its
-// rotation, intensity, prefilter lobe, and filtered importance sampling with a sample count. Every
+// rotation, intensity, prefilter lobe, filtered importance sampling with a sample count, and whether
+// it is drawn behind the mesh. Every
 // control edits the MaterialDocument (undoable); the panel redraws from its changed() signal.
 #pragma once
 
@@ -38,6 +39,7 @@ public:
     QComboBox* lobeCombo() const { return m_lobe; }
     QCheckBox* fisCheck() const { return m_fis; }
     QSpinBox* samplesSpin() const { return m_samples; }
+    QCheckBox* backgroundCheck() const { return m_background; }
 
     /// The extensions the picker accepts, lower case without the dot.
     static QStringList fileExtensions();
@@ -57,6 +59,7 @@ private:
     QComboBox* m_lobe;
     QCheckBox* m_fis;
     QSpinBox* m_samples;
+    QCheckBox* m_background;
     QStringList m_library; // absolute paths listed after the two fixed entries
 };
 

@@ -44,16 +44,17 @@ struct ExportSettings {
 enum class EnvironmentChoice { Off, ProceduralStudio, File };
 
 /// The viewport's environment (saved with the settings, undoable like every edit): the source, its
-/// rotation and intensity, the prefilter lobe, and filtered importance sampling instead of the
-/// prefiltered map.
+/// rotation and intensity, the prefilter lobe, filtered importance sampling instead of the
+/// prefiltered map, and whether it is drawn as the viewport's background.
 struct EnvironmentSettings {
     EnvironmentChoice choice = EnvironmentChoice::ProceduralStudio;
     QString path;                 // for File: an equirectangular .exr/.hdr/.tif, absolute
     double rotationDegrees = 0.0; // about +y, [-180, 180]
     double intensity = 1.0;       // linear radiance scale, [0, kMaxEnvironmentIntensity]
     LobeModel lobe = LobeModel::BlinnPhong;
-    bool fis = false;    // filtered importance sampling at shading time
-    int fisSamples = 64; // taps per pixel, [1, kMaxFisSamples of env_sampling.h]
+    bool fis = false;       // filtered importance sampling at shading time
+    int fisSamples = 64;    // taps per pixel, [1, kMaxFisSamples of env_sampling.h]
+    bool background = true; // drawn behind the mesh
     friend bool operator==(const EnvironmentSettings&, const EnvironmentSettings&) = default;
 };
 /// The highest environment intensity the studio accepts (a 2^10 exposure range above 1).

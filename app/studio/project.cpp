@@ -214,7 +214,8 @@ std::string projectToJson(const MaterialSettings& s, const QString& projectFile,
           {"intensity", s.environment.intensity},
           {"lobe", lobeModelName(s.environment.lobe)},
           {"fis", s.environment.fis},
-          {"fisSamples", s.environment.fisSamples}}}};
+          {"fisSamples", s.environment.fisSamples},
+          {"background", s.environment.background}}}};
     // "layers" is written only when something is painted.
     if (!layers.empty()) {
         Json list = Json::array();
@@ -344,7 +345,8 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
     if (const Json* environment = top.get("environment", false)) {
         if (!environment->is_object()) return Error{where + ": 'environment' must be an object"};
         const Reader en(*environment, where + " environment");
-        if (Status st = en.known({"source", "file", "rotation", "intensity", "lobe", "fis", "fisSamples"});
+        if (Status st = en.known(
+                {"source", "file", "rotation", "intensity", "lobe", "fis", "fisSamples", "background"});
             !st)
             return Error{st.error()};
         const auto source = en.string("source");
@@ -368,6 +370,9 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
         if (fis && !fis->is_boolean()) en.fail("fis", "true or false");
         const auto samples = en.number("fisSamples", 1.0, double(kMaxFisSamples));
         if (samples && *samples != std::floor(*samples)) en.fail("fisSamples", "a whole number");
+        // Projects written before the background was saved show it, as a new document does.
+        const Json* background = en.get("background", false);
+        if (background && !background->is_boolean()) en.fail("background", "true or false");
         if (en.error()) return *en.error();
         EnvironmentSettings& e = s.environment;
         e.choice = *choice;
@@ -377,6 +382,7 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
         e.lobe = *lobeValue;
         e.fis = fis->get<bool>();
         e.fisSamples = int(*samples);
+        e.background = !background || background->get<bool>();
         // The viewport would fail on every frame: refuse it here with the file's name instead.
         if (e.choice == EnvironmentChoice::File && !QFileInfo(e.path).isFile())
             return Error{where + ": environment file '" + e.path.toStdString() + "' does not exist"};

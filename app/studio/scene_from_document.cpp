@@ -32,6 +32,8 @@ void applyEnvironment(const EnvironmentSettings& e, render::Scene& scene) {
     map.intensity = float(e.intensity);
     map.lobe = e.lobe;
     map.fisSamples = e.fisSamples;
+    map.backgroundFaceSize = kViewportBackgroundFaceSize;
+    scene.environmentBackground = e.background;
 }
 
 Result<render::MaterialSettings> SceneFromDocument::material(const MaterialDocument& doc) {

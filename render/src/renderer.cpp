@@ -228,6 +228,8 @@ struct Renderer::Impl {
     const Program* accumulate = nullptr;
     const Program* heatmap = nullptr;
     const Program* tonemap = nullptr;
+    const Program* background = nullptr;        // background.frag, HDR
+    const Program* backgroundDisplay = nullptr; // background.frag with DISPLAY_OUTPUT
     ProgramCache programs;
     std::unique_ptr<FullscreenTriangle> fullscreen;
 
@@ -269,6 +271,9 @@ struct Renderer::Impl {
     // Environment: the source cube (level 0) and its SH9, the prefiltered cube (PMREM) and the
     // box-filtered chain FIS reads, each remade only when what it depends on changes.
     std::optional<EnvironmentSourceKey> envSourceKey;
+    // The background's own cube (EnvironmentMap::backgroundFaceSize), keyed by its source and size.
+    std::optional<CubeMapTexture> envBackground;
+    std::optional<EnvironmentSourceKey> envBackgroundKey;
     CubeMap envSource;
     Sh9 envSh;
     std::string envPrefilterKey;
@@ -302,10 +307,11 @@ struct Renderer::Impl {
     void setMaterialUniforms(const Program& p, const FeatureSet& f, int width, int height,
                              glm::vec2 jitterNdc, bool reference);
     Status drawMaterial(const FeatureSet& f, const Program& p, int width, int height, glm::vec2 jitterNdc,
-                        bool reference);
-    Status accumulateReference(int width, int height, int samples);
+                        bool reference, bool background);
+    Status accumulateReference(int width, int height, int samples, bool background);
+    void drawBackground(int width, int height, bool display);
     Status displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView);
-    Status drawHdr(int width, int height);
+    Status drawHdr(int width, int height, bool background);
     Status drawFused(const RenderTarget& target);
     void setFaceCulling() const;
     void beginMaterialPass(const Framebuffer& target) const;
@@ -486,34 +492,46 @@ Status Renderer::Impl::prepareMaps() {
     return {};
 }
 
+namespace {
+
+// Level 0 of an environment's source as a cube of `faceSize` faces (a Cube source: its own level 0),
+// with non-finite and negative radiance removed.
+Result<CubeMap> environmentSource(const EnvironmentMap& e, int faceSize) {
+    CubeMap source;
+    switch (e.source) {
+    case EnvironmentSourceKind::ProceduralStudio: {
+        auto studio = proceduralStudioEnvironment(faceSize);
+        if (!studio) return Error{"environment: " + studio.error()};
+        source = std::move(studio).value();
+        break;
+    }
+    case EnvironmentSourceKind::File: {
+        auto loaded = loadEquirectEnvironment(e.path, faceSize);
+        if (!loaded) return Error{"environment '" + e.path.string() + "': " + loaded.error()};
+        source = std::move(loaded->cube);
+        break;
+    }
+    case EnvironmentSourceKind::Cube:
+        if (!e.cube || e.cube->levels.empty() || !isPowerOfTwo(e.cube->faceSize()))
+            return Error{"environment: the cube is empty or its face size is not a power of two"};
+        source.levels.push_back(e.cube->levels[0]);
+        break;
+    }
+    sanitizeRadiance(source);
+    return source;
+}
+
+} // namespace
+
 Status Renderer::Impl::prepareEnvironment(EnvironmentKind kind) {
     if (!usesEnvironmentMap(kind)) return {};
     const EnvironmentMap& e = scene.environmentMap;
     const auto start = Clock::now();
     const EnvironmentSourceKey key = environmentSourceKey(e);
     if (!(envSourceKey && *envSourceKey == key)) {
-        CubeMap source;
-        switch (e.source) {
-        case EnvironmentSourceKind::ProceduralStudio: {
-            auto studio = proceduralStudioEnvironment(e.faceSize);
-            if (!studio) return Error{"environment: " + studio.error()};
-            source = std::move(studio).value();
-            break;
-        }
-        case EnvironmentSourceKind::File: {
-            auto loaded = loadEquirectEnvironment(e.path, e.faceSize);
-            if (!loaded) return Error{"environment '" + e.path.string() + "': " + loaded.error()};
-            source = std::move(loaded->cube);
-            break;
-        }
-        case EnvironmentSourceKind::Cube:
-            if (!e.cube || e.cube->levels.empty() || !isPowerOfTwo(e.cube->faceSize()))
-                return Error{"environment: the cube is empty or its face size is not a power of two"};
-            source.levels.push_back(e.cube->levels[0]);
-            break;
-        }
-        sanitizeRadiance(source);
-        envSource = std::move(source);
+        auto source = environmentSource(e, e.faceSize);
+        if (!source) return Error{source.error()};
+        envSource = std::move(source).value();
         envSh = projectSh9(envSource);
         envSourceKey = key;
         envPrefilterKey.clear();
@@ -543,6 +561,24 @@ Status Renderer::Impl::prepareEnvironment(EnvironmentKind kind) {
         auto texture = CubeMapTexture::create(chain);
         if (!texture) return Error{"environment: " + texture.error()};
         envChain.emplace(std::move(texture).value());
+    }
+    // The background's sharper cube, made only while it is shown and kept while its source stays.
+    if (scene.environmentBackground && e.backgroundFaceSize > e.faceSize &&
+        e.source != EnvironmentSourceKind::Cube) {
+        EnvironmentMap background = e;
+        background.faceSize = e.backgroundFaceSize;
+        const EnvironmentSourceKey bkey = environmentSourceKey(background);
+        if (!(envBackgroundKey && *envBackgroundKey == bkey)) {
+            auto source = environmentSource(background, background.faceSize);
+            if (!source) return Error{source.error()};
+            auto texture = CubeMapTexture::create(*source);
+            if (!texture) return Error{"environment background: " + texture.error()};
+            envBackground.emplace(std::move(texture).value());
+            envBackgroundKey = bkey;
+        }
+    } else {
+        envBackground.reset();
+        envBackgroundKey.reset();
     }
     lastEnvironmentMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return {};
@@ -693,9 +729,10 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
 }
 
 Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int width, int height,
-                                    glm::vec2 jitterNdc, bool reference) {
+                                    glm::vec2 jitterNdc, bool reference, bool background) {
     if (auto s = ensureTarget(hdr, width, height, true); !s) return s;
     beginMaterialPass(*hdr);
+    if (background) drawBackground(width, height, false);
     p.use();
     setMaterialUniforms(p, f, width, height, jitterNdc, reference);
     mesh->draw();
@@ -703,7 +740,7 @@ Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int w
     return {};
 }
 
-Status Renderer::Impl::accumulateReference(int width, int height, int samples) {
+Status Renderer::Impl::accumulateReference(int width, int height, int samples, bool background) {
     if (auto s = prepareFinest(); !s) return s;
     FeatureSet f = features;
     f.referenceMode = true;
@@ -720,7 +757,7 @@ Status Renderer::Impl::accumulateReference(int width, int height, int samples) {
         haltonPoint(i + 1, jx, jy);
         // A pixel is 2/size wide in normalized device coordinates.
         const glm::vec2 jitterNdc((jx - 0.5f) * 2.0f / float(width), (jy - 0.5f) * 2.0f / float(height));
-        if (auto s = drawMaterial(f, **reference, width, height, jitterNdc, true); !s) return s;
+        if (auto s = drawMaterial(f, **reference, width, height, jitterNdc, true, background); !s) return s;
         accumulation->bind();
         glEnable(GL_BLEND);
         glBlendFunc(GL_ONE, GL_ONE);
@@ -764,6 +801,7 @@ Status Renderer::Impl::drawFused(const RenderTarget& target) {
     std::optional<Framebuffer>& out = target.interactive ? displayInteractive : display;
     if (auto s = ensureTarget(out, width, height, true, ColorFormat::Rgba8); !s) return s;
     beginMaterialPass(*out);
+    drawBackground(width, height, true);
     (*fused)->use();
     setMaterialUniforms(**fused, features, width, height, glm::vec2(0.0f), false);
     // tonemap.frag takes the linear scale 2^EV.
@@ -779,10 +817,43 @@ Status Renderer::Impl::drawFused(const RenderTarget& target) {
     return {};
 }
 
-Status Renderer::Impl::drawHdr(int width, int height) {
+Status Renderer::Impl::drawHdr(int width, int height, bool background) {
     if (!hasScene || !program) return Error{"no scene to render"};
-    if (auto s = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false); !s) return s;
+    if (auto s = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false, background); !s)
+        return s;
     return {};
+}
+
+// Scene::environmentBackground: level 0 of the lighting's cube in each pixel's view direction, drawn
+// into the bound material target after its clear and before the mesh (no depth written, so the mesh
+// covers it). Nothing without an environment map.
+void Renderer::Impl::drawBackground(int width, int height, bool display) {
+    if (!scene.environmentBackground || !usesEnvironmentMap(features.environment)) return;
+    const CubeMapTexture* cube = envBackground ? &*envBackground
+                                 : features.environment == EnvironmentKind::Prefiltered
+                                     ? (envPrefiltered ? &*envPrefiltered : nullptr)
+                                     : (envChain ? &*envChain : nullptr);
+    const Program* p = display ? backgroundDisplay : background;
+    if (!cube || !p) return;
+    glDisable(GL_DEPTH_TEST);
+    glDepthMask(GL_FALSE);
+    glDisable(GL_CULL_FACE);
+    p->use();
+    cube->bind(kUnitEnvironment);
+    p->set("uEnvironment", int(kUnitEnvironment));
+    const EnvironmentMap& e = scene.environmentMap;
+    // As setEnvironmentUniforms: world → environment, and no negative or non-finite radiance.
+    p->set("uEnvironmentRotation", glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(-e.rotationDegrees),
+                                                         glm::vec3(0.0f, 1.0f, 0.0f))));
+    p->set("uEnvironmentIntensity", std::isfinite(e.intensity) ? std::max(e.intensity, 0.0f) : 0.0f);
+    const float aspect = float(width) / float(height);
+    p->set("uInverseViewProjection",
+           glm::inverse(scene.camera.projection(aspect, meshRadius) * scene.camera.view()));
+    p->set("uExposure", std::exp2(scene.exposure));
+    fullscreen->draw();
+    glDepthMask(GL_TRUE);
+    glEnable(GL_DEPTH_TEST);
+    setFaceCulling();
 }
 
 Status Renderer::Impl::displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView) {
@@ -820,9 +891,16 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
     if (!heatmap) return Error{heatmap.error()};
     auto tonemap = impl.programs.get("fullscreen.vert", "tonemap.frag", {});
     if (!tonemap) return Error{tonemap.error()};
+    auto background = impl.programs.get("fullscreen.vert", "background.frag", {});
+    if (!background) return Error{background.error()};
+    auto backgroundDisplay =
+        impl.programs.get("fullscreen.vert", "background.frag", {{"DISPLAY_OUTPUT", "1"}});
+    if (!backgroundDisplay) return Error{backgroundDisplay.error()};
     impl.accumulate = *accumulate;
     impl.heatmap = *heatmap;
     impl.tonemap = *tonemap;
+    impl.background = *background;
+    impl.backgroundDisplay = *backgroundDisplay;
     impl.fullscreen = std::make_unique<FullscreenTriangle>();
     return r;
 }
@@ -904,14 +982,14 @@ Status Renderer::render(const RenderTarget& target) {
         impl.lastMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
         return {};
     }
-    if (auto s = impl.drawHdr(target.width, target.height); !s) return s;
+    if (auto s = impl.drawHdr(target.width, target.height, false); !s) return s;
     if (view == DebugView::ErrorHeatmap) {
         // The reference reuses the HDR target, so it is accumulated first (and cached until the
         // scene or the size changes), copied aside, and the method's image drawn again after it.
         const int samples = std::clamp(impl.scene.heatmapReferenceSamples, 1, kMaxReferenceSamples);
         if (!impl.heatmapReferenceValid || impl.heatmapReference->width() != target.width ||
             impl.heatmapReference->height() != target.height) {
-            if (auto s = impl.accumulateReference(target.width, target.height, samples); !s) return s;
+            if (auto s = impl.accumulateReference(target.width, target.height, samples, false); !s) return s;
             if (auto s = ensureTarget(impl.heatmapReference, target.width, target.height, false); !s)
                 return s;
             impl.heatmapReference->bind();
@@ -922,7 +1000,7 @@ Status Renderer::render(const RenderTarget& target) {
             impl.accumulate->set("uWeight", 1.0f);
             impl.fullscreen->draw();
             impl.heatmapReferenceValid = true;
-            if (auto s = impl.drawHdr(target.width, target.height); !s) return s;
+            if (auto s = impl.drawHdr(target.width, target.height, false); !s) return s;
         }
         bindTarget(target);
         glDisable(GL_DEPTH_TEST);
@@ -959,7 +1037,8 @@ Result<std::vector<float>> Renderer::renderToImage(int width, int height, ImageK
         return fb->readRgbaFloat();
     }
     const auto start = Clock::now();
-    if (auto s = impl.drawHdr(width, height); !s) return Error{s.error()};
+    if (auto s = impl.drawHdr(width, height, impl.features.debugView == DebugView::None); !s)
+        return Error{s.error()};
     glFinish();
     impl.lastMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     return impl.hdr->readRgbaFloat();
@@ -971,7 +1050,7 @@ Result<std::vector<float>> Renderer::renderReference(int width, int height, int 
     if (!impl.hasScene) return Error{"no scene to render"};
     if (samplesPerPixel < 1 || samplesPerPixel > kMaxReferenceSamples)
         return Error{"reference samples per pixel must lie in 1.." + std::to_string(kMaxReferenceSamples)};
-    if (auto s = impl.accumulateReference(width, height, samplesPerPixel); !s) return Error{s.error()};
+    if (auto s = impl.accumulateReference(width, height, samplesPerPixel, true); !s) return Error{s.error()};
     if (kind == ImageKind::Hdr) return impl.accumulation->readRgbaFloat();
     auto fb = Framebuffer::create(width, height, ColorFormat::Rgba8, false);
     if (!fb) return Error{fb.error()};
@@ -987,7 +1066,7 @@ Status Renderer::renderReference(const RenderTarget& target, int samplesPerPixel
         return Error{"reference samples per pixel must lie in 1.." + std::to_string(kMaxReferenceSamples)};
     const auto start = Clock::now();
     glDisable(GL_SCISSOR_TEST);
-    if (auto s = impl.accumulateReference(target.width, target.height, samplesPerPixel); !s) return s;
+    if (auto s = impl.accumulateReference(target.width, target.height, samplesPerPixel, true); !s) return s;
     if (auto s = impl.displayPass(target, *impl.accumulation, false); !s) return s;
     glFinish();
     impl.lastMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();

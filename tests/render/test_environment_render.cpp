@@ -9,7 +9,9 @@
 #include <burnish/core/env/storage.h>
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/sample_maps.h>
+#include <burnish/core/shading/color.h>
 #include <burnish/core/shading/sh.h>
+#include <burnish/core/shading/tonemap.h>
 #include <burnish/render/context.h>
 #include <burnish/render/cubemap.h>
 #include <burnish/render/gpu_resources.h>
@@ -194,6 +196,135 @@ TEST_F(EnvironmentRender, MirrorReflectsThePrefilteredTopMip) {
         EXPECT_LT(rel0, kMirrorMeanRel) << "rotation " << rotation;
         EXPECT_GT(rel1, kNextMipFactor * rel0) << "rotation " << rotation;
     }
+}
+
+// Scene::environmentBackground: where the view ray misses the sphere, each pixel is level 0 of the
+// cube the lighting reads, along that ray, turned and scaled as the lighting (core's seamless
+// bilinear lookup); without it, exactly 0. The display frame shows the same background through
+// core's tonemap and sRGB encoding, and the error heatmap's comparison leaves it out.
+TEST_F(EnvironmentRender, BackgroundIsTheLightingsCubeAlongEachViewRay) {
+    // Half storage, llvmpipe's 8-bit bilinear weights and float ray set-up, as the mirror test.
+    constexpr double kBackgroundMeanRel = 2e-3;
+    // A display value: the 8-bit target's rounding and the HDR error through the curve.
+    constexpr double kDisplayTolerance = 2.5 / 255.0;
+    const auto source = studioCube(kFaceSize);
+    PrefilterOptions options;
+    options.lobe = LobeModel::BlinnPhong;
+    options.encoding = GlossEncoding::blackOps();
+    options.lobeCutoff = EnvironmentMap{}.lobeCutoff;
+    auto pmrem = prefilterRadiance(*source, options);
+    ASSERT_TRUE(pmrem.ok()) << pmrem.error();
+
+    for (float rotation : {0.0f, 90.0f}) {
+        Scene scene = environmentScene(source, EnvironmentKind::Prefiltered);
+        scene.material.glossEncoding = GlossEncoding::blackOps(); // the cube prefiltered above
+        scene.camera.yawDegrees = 20.0f;
+        scene.camera.pitchDegrees = 35.0f;
+        scene.camera.distance = 6.0f; // the sphere small, most of the frame background
+        scene.environmentMap.rotationDegrees = rotation;
+        scene.environmentMap.intensity = 1.5f;
+        scene.exposure = -1.0f;
+        scene.environmentBackground = true;
+        const auto hdr = render(scene);
+        const auto display = render(scene, ImageKind::Display);
+        scene.environmentBackground = false;
+        const auto without = render(scene);
+        ASSERT_EQ(hdr.size(), size_t(kImageSize) * kImageSize * 4);
+        ASSERT_EQ(display.size(), hdr.size());
+        ASSERT_EQ(without.size(), hdr.size());
+
+        const MeshData sphere = makeSphere();
+        const float radius = std::max(glm::length(sphere.boundsMin), glm::length(sphere.boundsMax));
+        const glm::mat4 inverse = glm::inverse(scene.camera.projection(1.0f, radius) * scene.camera.view());
+        const glm::vec3 eye = scene.camera.position();
+        const glm::mat3 toEnvironment =
+            glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(-rotation), glm::vec3(0.0f, 1.0f, 0.0f)));
+        double err = 0.0, sum = 0.0, worstDisplay = 0.0;
+        int counted = 0;
+        for (int y = 0; y < kImageSize; ++y)
+            for (int x = 0; x < kImageSize; ++x) {
+                const glm::vec4 ndc((x + 0.5f) / kImageSize * 2.0f - 1.0f,
+                                    1.0f - (y + 0.5f) / kImageSize * 2.0f, 1.0f, 1.0f);
+                const glm::vec4 far = inverse * ndc;
+                const glm::vec3 dir = glm::normalize(glm::vec3(far) / far.w - eye);
+                // The ray's closest approach to the unit sphere's centre: skip the mesh and its edge.
+                const glm::vec3 closest = eye - dir * glm::dot(eye, dir);
+                if (glm::length(closest) < 1.1f) continue;
+                const glm::dvec3 expected = double(scene.environmentMap.intensity) *
+                                            sampleCube(pmrem->radiance, glm::dvec3(toEnvironment * dir), 0);
+                const size_t p = size_t(y) * kImageSize + size_t(x);
+                for (int c = 0; c < 3; ++c) {
+                    err += std::abs(hdr[4 * p + size_t(c)] - expected[c]);
+                    sum += expected[c];
+                    EXPECT_EQ(without[4 * p + size_t(c)], 0.0f) << "no background when it is off";
+                    const double shown =
+                        linearToSrgb(tonemapFilmic(expected[c] * std::exp2(double(scene.exposure))));
+                    worstDisplay = std::max(worstDisplay, std::abs(display[4 * p + size_t(c)] - shown));
+                }
+                ++counted;
+            }
+        ASSERT_GT(counted, kImageSize * kImageSize / 3) << "most of the frame is background";
+        ASSERT_GT(sum, 0.0);
+        std::printf("[ background ] rotation %g: mean relative error %.3e, worst display difference %.4f\n",
+                    double(rotation), err / sum, worstDisplay);
+        EXPECT_LT(err / sum, kBackgroundMeanRel) << "rotation " << rotation;
+        EXPECT_LT(worstDisplay, kDisplayTolerance) << "rotation " << rotation;
+    }
+
+    // A sharper cube of its own (EnvironmentMap::backgroundFaceSize) from the procedural studio,
+    // while the lighting reads 32² faces: each background pixel is that cube's level 0.
+    {
+        constexpr int kBackgroundFaceSize = 128;
+        Scene scene;
+        scene.light.intensity = 0.0f;
+        scene.environment = EnvironmentKind::Prefiltered;
+        scene.environmentMap.source = EnvironmentSourceKind::ProceduralStudio;
+        scene.environmentMap.faceSize = kFaceSize;
+        scene.environmentMap.backgroundFaceSize = kBackgroundFaceSize;
+        scene.camera.distance = 6.0f;
+        scene.environmentBackground = true;
+        const auto hdr = render(scene);
+        ASSERT_EQ(hdr.size(), size_t(kImageSize) * kImageSize * 4);
+        const auto sharp = studioCube(kBackgroundFaceSize);
+        const auto lighting = studioCube(kFaceSize);
+        const MeshData sphere = makeSphere();
+        const float radius = std::max(glm::length(sphere.boundsMin), glm::length(sphere.boundsMax));
+        const glm::mat4 inverse = glm::inverse(scene.camera.projection(1.0f, radius) * scene.camera.view());
+        const glm::vec3 eye = scene.camera.position();
+        double errSharp = 0.0, errLighting = 0.0, sum = 0.0;
+        for (int y = 0; y < kImageSize; ++y)
+            for (int x = 0; x < kImageSize; ++x) {
+                const glm::vec4 ndc((x + 0.5f) / kImageSize * 2.0f - 1.0f,
+                                    1.0f - (y + 0.5f) / kImageSize * 2.0f, 1.0f, 1.0f);
+                const glm::vec4 far = inverse * ndc;
+                const glm::vec3 dir = glm::normalize(glm::vec3(far) / far.w - eye);
+                if (glm::length(eye - dir * glm::dot(eye, dir)) < 1.1f) continue;
+                const glm::dvec3 a = sampleCube(*sharp, glm::dvec3(dir), 0);
+                const glm::dvec3 b = sampleCube(*lighting, glm::dvec3(dir), 0);
+                const size_t p = size_t(y) * kImageSize + size_t(x);
+                for (int c = 0; c < 3; ++c) {
+                    errSharp += std::abs(hdr[4 * p + size_t(c)] - a[c]);
+                    errLighting += std::abs(hdr[4 * p + size_t(c)] - b[c]);
+                    sum += a[c];
+                }
+            }
+        ASSERT_GT(sum, 0.0);
+        std::printf("[ background ] own %d² cube: mean relative error %.3e (against the lighting's %d² "
+                    "source %.3e)\n",
+                    kBackgroundFaceSize, errSharp / sum, kFaceSize, errLighting / sum);
+        EXPECT_LT(errSharp / sum, kBackgroundMeanRel);
+        EXPECT_GT(errLighting, 2.0 * errSharp) << "the background reads its own cube, not the lighting's";
+    }
+
+    // The heatmap compares the mesh alone: a background in one image and not the other would read
+    // as error everywhere around it.
+    Scene scene = environmentScene(source, EnvironmentKind::Prefiltered);
+    scene.environmentBackground = true;
+    scene.debugView = DebugView::ErrorHeatmap;
+    scene.heatmapReferenceSamples = 2;
+    const auto heat = render(scene, ImageKind::Display);
+    ASSERT_EQ(heat.size(), size_t(kImageSize) * kImageSize * 4);
+    EXPECT_EQ(heat[0] + heat[1] + heat[2], 0.0f) << "a background corner has no error";
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -280,6 +280,7 @@ TEST(Project, SaveLoadRoundTripsEveryField) {
     environment.lobe = LobeModel::Phong;
     environment.fis = true;
     environment.fisSamples = 96;
+    environment.background = false; // the default is true: the round trip must carry it
     doc->setEnvironment(environment);
     ASSERT_EQ(doc->settings().environment, environment) << "every value inside its range";
     const MaterialSettings saved = doc->settings();
@@ -298,6 +299,7 @@ TEST(Project, SaveLoadRoundTripsEveryField) {
     EXPECT_EQ(json["environment"]["source"], "file");
     EXPECT_EQ(json["environment"]["file"], "../sky.exr") << "relative to the project file";
     EXPECT_EQ(json["environment"]["lobe"], "phong");
+    EXPECT_EQ(json["environment"]["background"], false);
 
     TestWindow b;
     ASSERT_TRUE(b.window.openProject(file)) << b.messages.join("\n").toStdString();
@@ -357,6 +359,7 @@ TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
         {"environment-lobe",
          {environmentField("lobe", "ggx"), "'lobe' must be \"blinn-phong\" or \"phong\""}},
         {"environment-fis", {environmentField("fis", "yes"), "'fis' must be true or false"}},
+        {"environment-background", {environmentField("background", 1), "'background' must be true or false"}},
         {"environment-samples", {environmentField("fisSamples", 0), "'fisSamples' must be a number in [1"}},
         {"environment-fractional-samples",
          {environmentField("fisSamples", 2.5), "'fisSamples' must be a whole"}},

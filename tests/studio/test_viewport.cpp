@@ -90,13 +90,24 @@ TEST(Viewport, RendersTheSampleNonBlank) {
     ASSERT_EQ(frame.width(), kWidth);
     RecordProperty("surface", t.view.usesOpenGlWidget() ? "QOpenGLWidget" : "headless image");
     RecordProperty("context", t.view.contextDescription().toStdString());
-    // A lit, bumpy sphere over a black background: the luma spreads over much of the 8-bit range;
+    // A lit, bumpy sphere over the environment: the luma spreads over much of the 8-bit range;
     // a blank or uniform frame has a deviation of 0.
     constexpr double kMinLumaDeviation = 10.0;
     EXPECT_GT(lumaStats(frame, 0, kWidth).stddev, kMinLumaDeviation);
-    // The sphere is in the middle, the corners are background.
-    const QRgb corner = frame.pixel(1, 1);
-    EXPECT_EQ(qRed(corner) + qGreen(corner) + qBlue(corner), 0) << "the cleared background is black";
+    // The sphere is in the middle, the corners are background: the environment (the procedural
+    // studio) by default, black once "Show as background" is off, and back with undo.
+    auto cornerSum = [](const QImage& image) {
+        const QRgb corner = image.pixel(1, 1);
+        return qRed(corner) + qGreen(corner) + qBlue(corner);
+    };
+    EXPECT_TRUE(t.doc.settings().environment.background);
+    EXPECT_GT(cornerSum(frame), 0) << "the environment is drawn behind the sphere";
+    EnvironmentSettings off = t.doc.settings().environment;
+    off.background = false;
+    t.doc.setEnvironment(off);
+    EXPECT_EQ(cornerSum(t.grab()), 0) << "without the background the cleared frame is black";
+    t.doc.undoStack()->undo();
+    EXPECT_GT(cornerSum(t.grab()), 0) << "undo brings the background back";
     EXPECT_GT(t.view.frameMs(), 0.0);
 }
 

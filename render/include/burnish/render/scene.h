@@ -122,6 +122,10 @@ struct EnvironmentMap {
     double lobeCutoff = 1e-3;
     /// Taps per pixel of EnvironmentKind::FilteredImportanceSampling (1..kMaxFisSamples).
     int fisSamples = 64;
+    /// Face size of the cube drawn as the background (Scene::environmentBackground), made from the
+    /// same source when larger than faceSize; otherwise (and for a Cube source) the background is
+    /// level 0 of the cube the lighting reads.
+    int backgroundFaceSize = 0;
 };
 
 /// The linear F0 of a calibrated material of core's table (materials.h), by name (case-insensitive);
@@ -137,6 +141,11 @@ struct Scene {
     EnvironmentKind environment = EnvironmentKind::Off;
     glm::vec3 ambient{0.03f};      // constant radiance for EnvironmentKind::ConstantAmbient
     EnvironmentMap environmentMap; // for EnvironmentKind::Prefiltered and ::FilteredImportanceSampling
+    /// Draw the environment behind the mesh (Prefiltered and FilteredImportanceSampling only): level 0
+    /// of the cube the lighting reads, or of its own sharper cube (EnvironmentMap::backgroundFaceSize),
+    /// turned and scaled as the lighting. Not in debug views or the error heatmap, whose comparisons
+    /// are of the mesh alone.
+    bool environmentBackground = false;
     /// Exposure in stops, applied in the tonemap pass.
     float exposure = 0.0f;
     MaterialSettings material;

@@ -432,7 +432,7 @@ Result<render::Scene> Viewport::scene() {
     scene.objPath = m_view.objPath.toStdString();
     scene.camera.yawDegrees = m_view.yawDegrees;
     scene.camera.pitchDegrees = m_view.pitchDegrees;
-    scene.camera.distance = m_view.distance;
+    scene.camera.distance = cameraDistance();
     scene.camera.target = m_view.target;
     scene.light.direction = lightDirection(m_view.lightAzimuthDegrees, m_view.lightElevationDegrees);
     scene.exposure = m_view.exposure;
@@ -593,10 +593,38 @@ void Viewport::setViewSettings(const ViewSettings& view) {
     changed(true);
 }
 
+namespace {
+
+// The farthest vertex of a mesh from the origin (at least 1e-3: a mesh collapsed onto the origin).
+float farthestVertex(const render::MeshData& mesh) {
+    float radius = 1e-3f;
+    for (const render::Vertex& v : mesh.vertices)
+        if (const float r = glm::length(v.position); std::isfinite(r)) radius = std::max(radius, r);
+    return radius;
+}
+
+} // namespace
+
+float Viewport::meshRadius() {
+    if (m_view.mesh != render::MeshKind::Obj) return 1.0f;
+    if (m_radiusPath != m_view.objPath) { // a view set with an OBJ not measured yet
+        m_radiusPath = m_view.objPath;
+        const auto loaded = render::loadObj(m_view.objPath.toStdString());
+        m_objRadius = loaded ? farthestVertex(*loaded) : 1.0f; // an unreadable OBJ fails to draw anyway
+    }
+    return m_objRadius;
+}
+
+float Viewport::cameraDistance() {
+    return m_view.distance * meshRadius();
+}
+
 Status Viewport::setMesh(render::MeshKind mesh, const QString& objPath) {
     if (mesh == render::MeshKind::Obj) {
         auto loaded = render::loadObj(objPath.toStdString());
         if (!loaded) return Error{"OBJ '" + objPath.toStdString() + "': " + loaded.error()};
+        m_radiusPath = objPath;
+        m_objRadius = farthestVertex(*loaded);
     }
     m_view.mesh = mesh;
     m_view.objPath = mesh == render::MeshKind::Obj ? objPath : QString();
@@ -804,12 +832,12 @@ void Viewport::mouseMoveEvent(QMouseEvent* event) {
     render::OrbitCamera camera;
     camera.yawDegrees = m_view.yawDegrees;
     camera.pitchDegrees = m_view.pitchDegrees;
-    camera.distance = m_view.distance;
+    camera.distance = cameraDistance();
     camera.target = m_view.target;
     const glm::vec3 forward = glm::normalize(camera.target - camera.position());
     const glm::vec3 rightAxis = glm::normalize(glm::cross(forward, glm::vec3(0.0f, 1.0f, 0.0f)));
     const glm::vec3 upAxis = glm::cross(rightAxis, forward);
-    const float unitsPerPixel = 2.0f * m_view.distance * std::tan(glm::radians(camera.fovDegrees) * 0.5f) /
+    const float unitsPerPixel = 2.0f * camera.distance * std::tan(glm::radians(camera.fovDegrees) * 0.5f) /
                                 float(std::max(1, height()));
     m_view.target += (-float(d.x()) * rightAxis + float(d.y()) * upAxis) * unitsPerPixel;
     changed(true);

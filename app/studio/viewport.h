@@ -87,6 +87,12 @@ public:
     /// Mesh choice; an OBJ is read first and refused (nothing changes) when it cannot be drawn.
     Status setMesh(render::MeshKind mesh, const QString& objPath = {});
     void setDistance(float distance); // clamped to [kMinDistance, kMaxDistance]
+    /// The camera's distance from the orbit's centre in world units: the view's distance (in radii)
+    /// times the mesh's radius — 1 for the built-in meshes, an OBJ's farthest vertex from the
+    /// origin — so the closest distance keeps the camera outside any mesh.
+    float cameraDistance();
+    /// The mesh's radius the distance counts in (see cameraDistance).
+    float meshRadius();
     void setExposure(float stops);
     void setLight(float azimuthDegrees, float elevationDegrees);
     void setDebugView(render::DebugView view);
@@ -185,6 +191,8 @@ private:
 
     MaterialDocument* m_doc;
     ViewSettings m_view;
+    QString m_radiusPath;     // the OBJ meshRadius was measured for
+    float m_objRadius = 1.0f; // its farthest vertex from the origin
     std::unique_ptr<Engine> m_engine;
     GlSurface* m_glSurface = nullptr;
     ImageSurface* m_imageSurface = nullptr;

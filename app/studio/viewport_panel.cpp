@@ -10,6 +10,7 @@
 #include <QFileInfo>
 #include <QHBoxLayout>
 #include <QLabel>
+#include <QResizeEvent>
 #include <QSettings>
 #include <QSlider>
 #include <QVBoxLayout>
@@ -124,7 +125,7 @@ ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
     m_distanceValue = readout(this);
     m_exposureValue = readout(this);
     m_lightValue = readout(this);
-    auto* controls = new FlowLayout(nullptr, 6, 2);
+    auto* controls = m_controls = new FlowLayout(nullptr, 6, 2);
     controls->setContentsMargins(4, 2, 4, 2);
     controls->addWidget(m_mesh);
     controls->addWidget(group({caption("distance", this), m_distance, m_distanceValue}, this));
@@ -189,7 +190,9 @@ void ViewportPanel::syncFromView() {
     m_azimuth->setValue(int(std::lround(v.lightAzimuthDegrees)));
     m_elevation->setValue(int(std::lround(v.lightElevationDegrees)));
     m_distanceValue->setText(QString("%1 r").arg(double(v.distance), 0, 'f', v.distance < 10.0f ? 1 : 0));
-    m_distanceValue->setToolTip("Camera distance in radii of the sphere");
+    m_distanceValue->setToolTip(
+        "Camera distance in radii of the mesh (an OBJ's: its farthest vertex from the "
+        "centre), never closer than 1.5");
     m_exposureValue->setText(
         QString("%1%2 EV").arg(v.exposure >= 0.0f ? "+" : "").arg(double(v.exposure), 0, 'f', 1));
     m_lightValue->setText(QString("%1° %2°")
@@ -251,6 +254,17 @@ void ViewportPanel::updateShimmer() {
                            .arg(r->a, 0, 'f', 4)
                            .arg(r->b, 0, 'f', 4)
                            .arg(r->ratio, 0, 'f', 2));
+}
+
+int ViewportPanel::controlsHeightForWidth(int width) const {
+    return m_controls->heightForWidth(width);
+}
+
+void ViewportPanel::resizeEvent(QResizeEvent* event) {
+    QWidget::resizeEvent(event);
+    const int spacing = layout() ? layout()->spacing() : 0;
+    const int need = controlsHeightForWidth(event->size().width()) + spacing + m_viewport->minimumHeight();
+    if (minimumHeight() != need) setMinimumHeight(need);
 }
 
 } // namespace burnish::studio

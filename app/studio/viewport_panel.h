@@ -14,6 +14,7 @@ class QSlider;
 
 namespace burnish::studio {
 
+class FlowLayout;
 class Viewport;
 
 class ViewportPanel : public QWidget {
@@ -39,6 +40,13 @@ public:
     QLabel* distanceReadout() const { return m_distanceValue; }
     QLabel* exposureReadout() const { return m_exposureValue; }
     QLabel* lightReadout() const { return m_lightValue; }
+    /// The height the control rows take at `width` (they wrap onto more rows when narrower).
+    int controlsHeightForWidth(int width) const;
+
+protected:
+    /// Keeps the panel's minimum height at the control rows its width needs plus the view's
+    /// minimum, so a tall neighbour can never squeeze the rows over the view.
+    void resizeEvent(QResizeEvent* event) override;
 
 private:
     void syncFromView();
@@ -49,6 +57,7 @@ private:
 
     MaterialDocument* m_doc;
     Viewport* m_viewport;
+    FlowLayout* m_controls = nullptr;
     QComboBox* m_mesh;
     QComboBox* m_methodA;
     QComboBox* m_methodB;

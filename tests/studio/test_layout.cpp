@@ -6,6 +6,7 @@
 #include "elided_label.h"
 #include "flow_layout.h"
 #include "main_window.h"
+#include "viewport.h"
 #include "viewport_panel.h"
 
 #include "temp_dir.h"
@@ -25,6 +26,7 @@
 #include <QScreen>
 #include <QSet>
 #include <QSettings>
+#include <QSplitter>
 #include <QTest>
 #include <QVBoxLayout>
 
@@ -232,6 +234,30 @@ TEST(Layout, TheCheckFindsControlRowsUnderTheView) {
     QApplication::processEvents();
     const QStringList problems = layoutProblems(window, QRect(-10000, -10000, 20000, 20000));
     EXPECT_TRUE(problems.join("\n").contains("overlap")) << problems.join("\n").toStdString();
+}
+
+// The viewport panel's control rows keep their height when a neighbour takes the room: in a
+// vertical splitter under a tall panel, narrowed so its controls wrap onto several rows, the panel's
+// minimum height follows its width and nothing overlaps the view.
+TEST(Layout, ViewportControlRowsAreNeverSqueezedUnderTheView) {
+    MaterialDocument doc;
+    QMainWindow window;
+    auto* splitter = new QSplitter(Qt::Vertical);
+    auto* panel = new ViewportPanel(&doc);
+    splitter->addWidget(panel);
+    auto* tall = new QWidget;
+    tall->setMinimumHeight(100);
+    splitter->addWidget(tall);
+    window.setCentralWidget(splitter);
+    window.show();
+    window.resize(360, 700);
+    splitter->setSizes({10, 690}); // the user drags the neighbour as tall as it goes
+    QApplication::processEvents();
+    const int rows = panel->controlsHeightForWidth(panel->width());
+    EXPECT_GT(rows, 3 * 20) << "at 360 px the controls wrap onto several rows";
+    EXPECT_GE(panel->height(), rows + panel->viewport()->minimumHeight());
+    const QStringList problems = layoutProblems(window, QRect(-10000, -10000, 20000, 20000));
+    EXPECT_FALSE(problems.join("\n").contains("overlap")) << problems.join("\n").toStdString();
 }
 
 TEST(Layout, FitInsideMovesAndShrinksAsLittleAsItTakes) {

@@ -132,6 +132,36 @@ TEST(Viewport, ObjMeshesDrawAndBadOnesAreRefused) {
     EXPECT_EQ(t.view.viewSettings().objPath, quad) << "the mesh drawn before stays";
 }
 
+// The distance counts in the mesh's radii: at the closest setting the camera stays outside an OBJ
+// ten times the sphere's size (a cube of half-size 10: its corners 17.3 from the centre), where a
+// distance in the sphere's radii would put it inside; the built-in meshes keep radius 1.
+TEST(Viewport, TheClosestDistanceStaysOutsideABigMesh) {
+    TestViewport t;
+    t.view.setDistance(0.0f);
+    EXPECT_FLOAT_EQ(t.view.cameraDistance(), Viewport::kMinDistance) << "the sphere's radius is 1";
+    test::TempDir dir;
+    {
+        std::ofstream obj(dir / "box.obj");
+        for (int i = 0; i < 8; ++i)
+            obj << "v " << (i & 1 ? 10 : -10) << ' ' << (i & 2 ? 10 : -10) << ' ' << (i & 4 ? 10 : -10)
+                << "\n";
+        obj << "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+        for (const char* face : {"1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6"}) {
+            int a, b, c, d;
+            std::sscanf(face, "%d %d %d %d", &a, &b, &c, &d);
+            obj << "f " << a << "/1 " << b << "/2 " << c << "/3 " << d << "/4\n";
+        }
+    }
+    ASSERT_TRUE(t.view.setMesh(render::MeshKind::Obj, QString::fromStdString((dir / "box.obj").string())));
+    const float corner = std::sqrt(300.0f);
+    EXPECT_NEAR(t.view.meshRadius(), corner, 1e-3f);
+    EXPECT_GE(t.view.cameraDistance(), Viewport::kMinDistance * corner * 0.999f);
+    const QImage frame = t.grab();
+    EXPECT_GT(lumaStats(frame, 0, kWidth).stddev, 1.0) << "the box draws";
+    ASSERT_TRUE(t.view.setMesh(render::MeshKind::Torus));
+    EXPECT_FLOAT_EQ(t.view.cameraDistance(), Viewport::kMinDistance);
+}
+
 TEST(Viewport, ChangingTheDocumentsMethodChangesTheImage) {
     TestViewport t;
     t.view.setDistance(kFarDistance);

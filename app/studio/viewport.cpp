@@ -49,6 +49,8 @@ constexpr double kInteractiveAboveMs = 1000.0 / 60.0;
 // test prints both). The gap leaves the GUI thread free for the brush's mouse events between
 // bakes; the stroke's end (MaterialDocument::changed) draws the final frame at once.
 constexpr int kDabRedrawIntervalMs = 60;
+// How often the "baking … N%" note reads the bake's progress while it shows.
+constexpr int kBakingLabelIntervalMs = 200;
 // The renderer's largest reference sample count (renderer.cpp's kMaxReferenceSamples).
 constexpr int kMaxReferenceSamples = 4096;
 // The meter renders each side at this size, the whole object in view at any distance the control
@@ -289,6 +291,9 @@ Viewport::Viewport(MaterialDocument* doc, QWidget* parent)
     m_errorLabel->setStyleSheet("QLabel { background: rgba(90, 20, 20, 220); color: white; padding: 6px; }");
     m_errorLabel->hide();
     m_bakingLabel->hide();
+    m_bakingTimer = new QTimer(this);
+    m_bakingTimer->setInterval(kBakingLabelIntervalMs);
+    connect(m_bakingTimer, &QTimer::timeout, this, [this] { showBaking(m_bakingLabel->isVisible()); });
 
     m_orbitTimer = new QTimer(this);
     m_orbitTimer->setInterval(kOrbitIntervalMs);
@@ -750,11 +755,18 @@ void Viewport::setError(const QString& message) {
 void Viewport::showBaking(bool pending) {
     if (pending) {
         const NormalMap& map = *m_doc->maps().normal;
-        m_bakingLabel->setText(QString("baking %1 for %2×%3…")
+        const double done =
+            std::max(m_engine->a->bakeProgress(), m_view.split ? m_engine->b->bakeProgress() : 0.0);
+        m_bakingLabel->setText(QString("baking %1 for %2×%3… %4%")
                                    .arg(qs(methodName(m_doc->settings().method)))
                                    .arg(map.width)
-                                   .arg(map.height));
+                                   .arg(map.height)
+                                   .arg(int(std::floor(100.0 * std::clamp(done, 0.0, 1.0)))));
         m_bakingLabel->adjustSize();
+        // The fraction moves between frames: read again until the bake is taken in.
+        if (!m_bakingTimer->isActive()) m_bakingTimer->start();
+    } else {
+        m_bakingTimer->stop();
     }
     if (pending == m_bakingLabel->isVisible()) return;
     m_bakingLabel->setVisible(pending);

@@ -200,7 +200,8 @@ private:
     QLabel* m_labelA = nullptr;
     QLabel* m_labelB = nullptr;
     QLabel* m_errorLabel = nullptr;
-    QLabel* m_bakingLabel = nullptr; // "baking …" while a background bake for the view runs
+    QLabel* m_bakingLabel = nullptr; // "baking … 40%" while a background bake for the view runs
+    QTimer* m_bakingTimer = nullptr; // reads the bake's progress into the label while it shows
     QTimer* m_orbitTimer = nullptr;
     QTimer* m_restTimer = nullptr;
     QTimer* m_dabTimer = nullptr;     // throttles redraws during a stroke (kDabRedrawIntervalMs)

@@ -131,9 +131,11 @@ struct CpuBake {
 };
 
 // Levels above largestLevel (the renderer's maximum texture size) are never uploaded, so not baked.
-CpuBake cpuBake(const MaterialSettings& m, int largestLevel) {
+// `progress` is core's (BakeOptions::progress): the fraction done, false to stop.
+CpuBake cpuBake(const MaterialSettings& m, int largestLevel, std::function<bool(double)> progress = {}) {
     BakeOptions options;
     options.largestLevel = largestLevel;
+    options.progress = std::move(progress);
     options.method = m.method;
     options.encoding = m.glossEncoding;
     options.basePower = m.basePower;
@@ -157,6 +159,10 @@ struct BackgroundBake {
     MaterialSettings material;
     std::shared_ptr<CpuBake> result = std::make_shared<CpuBake>();
     std::shared_ptr<std::atomic<bool>> done = std::make_shared<std::atomic<bool>>(false);
+    // Set when a newer request (or a return to the drawn material) withdraws this bake: core's bake
+    // stops at its next level and the result is dropped.
+    std::shared_ptr<std::atomic<bool>> cancel = std::make_shared<std::atomic<bool>>(false);
+    std::shared_ptr<std::atomic<double>> progress = std::make_shared<std::atomic<double>>(0.0);
     std::thread worker;
 };
 
@@ -393,12 +399,18 @@ Result<bool> Renderer::Impl::backgroundBake(const MaterialSettings& m) {
     const BakeKey key = bakeKeyOf(m, maxTextureSize);
     if (bakeKey && *bakeKey == key) {
         // The request came back to what is drawn: a bake started for a request since withdrawn is
-        // dropped once it finishes (taking it in would draw the withdrawn material).
+        // stopped, and dropped once it finishes (taking it in would draw the withdrawn material).
+        if (pending) pending->cancel->store(true);
         if (pending && pending->done->load()) {
             pending->worker.join();
             pending.reset();
         }
         return true;
+    }
+    if (pending && pending->done->load() && pending->cancel->load()) {
+        // Stopped for a newer request: nothing to take in.
+        pending->worker.join();
+        pending.reset();
     }
     if (pending && pending->done->load()) {
         // A finished bake is newer than what is drawn: taken in, even if the request moved on.
@@ -408,19 +420,26 @@ Result<bool> Renderer::Impl::backgroundBake(const MaterialSettings& m) {
         bakedMaterial = finished->material;
         if (*bakeKey == key) return true;
     }
-    // One bake at a time (core's bake uses every core and cannot be stopped): a request made while
-    // one runs is started by the first setScene after it finishes (its callback asks for one), so
-    // a stroke of changes never piles bakes up, and the newest request is always baked last.
-    if (pending) return false;
+    // One bake at a time (core's bake uses every core): a request made while one runs stops it at
+    // its next level, and is started by the first setScene after it finishes (its callback asks for
+    // one), so a stroke of changes never piles bakes up, and the newest request is always baked last.
+    if (pending) {
+        if (!(pending->key == key)) pending->cancel->store(true);
+        return false;
+    }
     pending = std::make_unique<BackgroundBake>();
     pending->key = key;
     pending->material = m;
-    pending->worker = std::thread([material = m, largest = maxTextureSize, result = pending->result,
-                                   done = pending->done, ready = onBakeReady] {
-        *result = cpuBake(material, largest);
-        done->store(true);
-        if (ready) ready();
-    });
+    pending->worker =
+        std::thread([material = m, largest = maxTextureSize, result = pending->result, done = pending->done,
+                     cancel = pending->cancel, progress = pending->progress, ready = onBakeReady] {
+            *result = cpuBake(material, largest, [&cancel, &progress](double fraction) {
+                progress->store(fraction);
+                return !cancel->load();
+            });
+            done->store(true);
+            if (ready) ready();
+        });
     return false;
 }
 
@@ -959,6 +978,11 @@ void Renderer::setMaxTextureSize(int size) {
 
 bool Renderer::bakePending() const {
     return m_impl->drawingStale;
+}
+
+double Renderer::bakeProgress() const {
+    const auto& pending = m_impl->pending;
+    return pending && !pending->cancel->load() ? pending->progress->load() : 0.0;
 }
 
 void Renderer::setUseUbershader(bool on) {

@@ -245,6 +245,48 @@ TEST(Bake, RoleSubsetsProduceTheSameTexturesAsAFullBake) {
     }
 }
 
+// BakeOptions::progress: called once the pyramids are built and after each level, with fractions
+// that grow to 1 (levels skipped by largestLevel count for nothing); the bake it watches is the same
+// as one without it; returning false stops the bake with "cancelled" at once.
+TEST(Bake, ProgressGrowsToOneAndFalseCancels) {
+    const NormalMap map = gaussianField(64, 0.3, 0.15, 9);
+    for (const Method m : {Method::VarianceToGloss, Method::Mixture}) {
+        for (const int largest : {0, 16}) {
+            BakeOptions options;
+            options.method = m;
+            options.params.mixtureLobes = 3;
+            options.largestLevel = largest;
+            const auto plain = bake(map, options);
+            ASSERT_TRUE(plain) << plain.error();
+            std::vector<double> seen;
+            options.progress = [&seen](double f) {
+                seen.push_back(f);
+                return true;
+            };
+            const auto watched = bake(map, options);
+            ASSERT_TRUE(watched) << watched.error();
+            // The pyramids, then 7 levels (64² to 1²).
+            ASSERT_EQ(seen.size(), 8u) << methodName(m);
+            EXPECT_GT(seen.front(), 0.0);
+            EXPECT_EQ(seen.back(), 1.0);
+            for (size_t i = 1; i < seen.size(); ++i)
+                EXPECT_GE(seen[i], seen[i - 1]);
+            // 64² + 32² skipped: the pyramids (4096 texels) over 4096 + 16² + 8² + … + 1 ≈ 0.92.
+            if (largest == 16) EXPECT_NEAR(seen.front(), 4096.0 / (4096.0 + 341.0), 1e-12);
+            for (size_t t = 0; t < plain->textures.size(); ++t)
+                for (size_t k = 0; k < plain->textures[t].mips.size(); ++k)
+                    EXPECT_EQ(watched->textures[t].mips[k].texels, plain->textures[t].mips[k].texels);
+
+            int calls = 0;
+            options.progress = [&calls](double) { return ++calls < 3; };
+            const auto stopped = bake(map, options);
+            ASSERT_FALSE(stopped);
+            EXPECT_EQ(stopped.error(), "cancelled");
+            EXPECT_EQ(calls, 3) << "stopped at the first false";
+        }
+    }
+}
+
 // A viewer that draws from the first level no larger than N has the larger levels skipped: they
 // keep their size and no texels, and every level baked is the full bake's, bit for bit, for every
 // method, the mixture and an authored gloss map included.

@@ -531,6 +531,20 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     }
     RowPlan plan(options, base ? &*base : nullptr, mixture ? &*mixture : nullptr, out.textures, scales);
     plan.finestMap = &map;
+    // Progress by texels: the pyramids as the finest level's, then each level baked.
+    auto baked = [&](int k) {
+        const PyramidLevel& level = pyramid.level(k);
+        return options.largestLevel > 0 && k + 1 < levels &&
+                       std::max(level.width, level.height) > options.largestLevel
+                   ? 0.0
+                   : double(level.width) * double(level.height);
+    };
+    double total = double(map.texelCount()), done = total;
+    for (int k = 0; k < levels; ++k)
+        total += baked(k);
+    auto carryOn = [&]() { return !options.progress || options.progress(std::min(done / total, 1.0)); };
+    const Error cancelled{"cancelled"};
+    if (!carryOn()) return cancelled;
     auto bakeAndRelease = [&](int k) {
         const PyramidLevel& level = pyramid.level(k);
         if (options.largestLevel > 0 && k + 1 < levels &&
@@ -547,9 +561,14 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     // Level 0 last: each level's textures depend on its own moments alone, and level 0's come from
     // the normals, so by then every coarser level's moments (and the mixture's lobes) are freed and
     // the peak holds the finest textures beside the normals, not beside the whole pyramid.
-    for (int k = 1; k < levels; ++k)
+    for (int k = 1; k < levels; ++k) {
         bakeAndRelease(k);
+        done += baked(k);
+        if (!carryOn()) return cancelled;
+    }
     bakeAndRelease(0);
+    done += baked(0);
+    if (!carryOn()) return cancelled;
     out.stats.methodSeconds = seconds(start);
     return out;
 }

@@ -77,8 +77,9 @@ public:
     /// material has been baked: a scene whose bake is not in yet is drawn with the last baked
     /// material's maps, method and power (its colours, view and light as requested) while the bake
     /// runs on a worker; `onReady` is called from that worker when it finishes, and the next
-    /// setScene takes it in. One bake runs at a time: a material requested meanwhile is baked
-    /// next (the finished bake is drawn until then), so the newest request is always baked last.
+    /// setScene takes it in. One bake runs at a time: a material requested meanwhile stops the
+    /// running bake at its next level and is baked next (the last finished bake is drawn until
+    /// then), so the newest request is always baked last.
     /// Off by default (the command line and the tests draw exactly the scene they set).
     void setBackgroundBakes(bool on, std::function<void()> onReady = {});
     /// Uploads each baked chain from its first level no larger than `size` on a side (0: every
@@ -88,6 +89,9 @@ public:
     /// Whether the last setScene draws the last baked material because the requested one is still
     /// baking in the background.
     bool bakePending() const;
+    /// The fraction done of the background bake running for the requested material (0 when none
+    /// runs, or the running one was withdrawn and is stopping).
+    double bakeProgress() const;
     void setUseUbershader(bool on);
 
     /// Wall time of the last render()/renderToImage() draw, GPU work included (glFinish), in ms.

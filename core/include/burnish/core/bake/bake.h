@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -99,9 +100,13 @@ struct BakeOptions {
     /// Only the textures of these roles are produced (the ones an export's files read); all of
     /// the method's when unset. Each texture produced is the same whatever the others are.
     std::optional<std::vector<TextureRole>> roles;
-    /// Roles to keep as 8- or 16-bit codes instead of floats (compactStorage of export.h names the
-    /// ones an export allows); every other role, and every role of the mixture, is float.
+    /// Roles to keep as 8- or 16-bit codes or half floats instead of floats (compactStorage of
+    /// export.h names the ones an export allows); every other role is float.
     std::map<TextureRole, TexelStorage> storage;
+    /// Called on the bake's thread once the pyramids are built and after each level, with the
+    /// fraction done (by texels: the pyramids count as the finest level's texels); returning false
+    /// stops the bake, which then fails with "cancelled". Empty: the bake runs to the end.
+    std::function<bool(double fraction)> progress;
 };
 
 struct BakeStats {

@@ -1,7 +1,8 @@
 // Benchmarks of the bake and the ground-truth evaluation (figures, not pass/fail):
 //   BM_Bake/<method>/<roles>  in-memory bake of a 4096² normal map, all mips (pyramid included):
 //                      every texture of the method (0), or those its preset's files read (1)
-//   BM_ViewportBake/<n> the studio viewport's bake of an 8192² map, levels above n skipped (0: none)
+//   BM_ViewportBake/<size>/<n> the studio viewport's bake (a gloss or method change) of a size² map,
+//                      levels above n skipped (0: none)
 //   BM_ReadImage       reading that map as an 8-bit RGB PNG (written once to the temp folder)
 //   BM_DecodeNormalMap decoding the read floats into unit normals, with the diagnostics
 //   BM_LoadNormalMap   that PNG straight to unit normals (what `burnish bake` does; no float image)
@@ -138,13 +139,13 @@ template <class Read> void benchReadPng(benchmark::State& state, const Read& rea
 }
 
 // Reading the 4096² 8-bit PNG into floats (core's PNG decoder, the conversion on the other cores).
-// The studio viewport's bake after a gloss or method change on an 8192² map: levels above its 2048
-// texture cap skipped (BakeOptions::largestLevel, Arg 2048) against the whole chain (Arg 0).
+// The studio viewport's bake after a gloss or method change on a size² map: levels above its 2048
+// texture cap skipped (BakeOptions::largestLevel, 2048) against the whole chain (0).
 void BM_ViewportBake(benchmark::State& state) {
     std::string label;
-    const NormalMap& map = benchMap(8192, label);
+    const NormalMap& map = benchMap(int(state.range(0)), label);
     BakeOptions options;
-    options.largestLevel = int(state.range(0));
+    options.largestLevel = int(state.range(1));
     for (auto _ : state) {
         auto out = bake(map, options);
         benchmark::DoNotOptimize(out);
@@ -153,7 +154,14 @@ void BM_ViewportBake(benchmark::State& state) {
                    (options.largestLevel ? std::to_string(options.largestLevel) : std::string("8192")) +
                    ", " + label);
 }
-BENCHMARK(BM_ViewportBake)->Arg(0)->Arg(2048)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
+BENCHMARK(BM_ViewportBake)
+    ->Args({8192, 0})
+    ->Args({8192, 2048})
+    ->Args({2048, 2048})
+    ->Args({512, 2048})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(2)
+    ->UseRealTime();
 
 void BM_ReadImage(benchmark::State& state) {
     benchReadPng(state, [](const std::filesystem::path& path) { return readImage(path); });

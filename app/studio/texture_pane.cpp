@@ -2,6 +2,8 @@
 
 #include "elided_label.h"
 
+#include <burnish/core/bake/export.h>
+
 #include <QComboBox>
 #include <QCoreApplication>
 #include <QHBoxLayout>
@@ -105,8 +107,9 @@ TexturePane::TexturePane(MaterialDocument* doc, QWidget* parent)
 }
 
 TexturePane::~TexturePane() {
-    // A running worker finishes into a QPointer that is null by then; see startBake.
+    // A running worker stops at its next level and finishes into a QPointer that is null by then.
     ++m_generation;
+    if (m_bakeCancel) m_bakeCancel->store(true);
 }
 
 void TexturePane::setMode(TextureMode mode) {
@@ -180,6 +183,28 @@ void TexturePane::startBake() {
     options.encoding = m_doc->preset().encoding;
     options.basePower = m_doc->power();
     std::shared_ptr<const NormalMap> map = m_doc->maps().normal;
+    // Only the texture the view shows (each texture is the same whatever others are baked).
+    if (const auto shape = bakeShape(options, map->width, map->height))
+        if (const BakedTexture* shown = displayedBakedTexture(*shape))
+            options.roles = std::vector<TextureRole>{shown->role};
+    // A newer bake stops this one at its next level; its fraction done is shown as it goes.
+    if (m_bakeCancel) m_bakeCancel->store(true);
+    auto cancel = m_bakeCancel = std::make_shared<std::atomic<bool>>(false);
+    QPointer<TexturePane> progressTarget(this);
+    options.progress = [cancel, progressTarget, generation, shown = std::make_shared<int>(-1)](double f) {
+        if (const int percent = int(100.0 * f); percent != *shown) {
+            *shown = percent;
+            QMetaObject::invokeMethod(
+                QCoreApplication::instance(),
+                [progressTarget, generation, percent] {
+                    if (progressTarget && generation == progressTarget->m_generation &&
+                        progressTarget->m_bakeRunning && progressTarget->m_mode == TextureMode::BakedGloss)
+                        progressTarget->m_info->setText(QString("baking… %1%").arg(percent));
+                },
+                Qt::QueuedConnection);
+        }
+        return !cancel->load();
+    };
     std::shared_ptr<const Image> glossImage = m_doc->maps().gloss;
     // The composited authored gloss (painted layers over the gloss map or base gloss) when there is
     // one: the document copies before its next edit while the worker shares it.

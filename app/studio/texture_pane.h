@@ -12,6 +12,7 @@
 #include <QImage>
 #include <QWidget>
 
+#include <atomic>
 #include <memory>
 
 class QComboBox;
@@ -66,6 +67,8 @@ private:
     bool m_bakeRunning = false;
     bool m_bakeStale = true;
     int m_generation = 0;
+    // Set to stop the running bake when a newer one starts (it stops at its next level).
+    std::shared_ptr<std::atomic<bool>> m_bakeCancel;
 };
 
 } // namespace burnish::studio

@@ -69,6 +69,9 @@ private:
     int m_generation = 0;
     // Set to stop the running bake when a newer one starts (it stops at its next level).
     std::shared_ptr<std::atomic<bool>> m_bakeCancel;
+    // The normal map's image, kept while the document's map stays the same.
+    std::shared_ptr<const NormalMap> m_normalImageOf;
+    QImage m_normalImage;
 };
 
 } // namespace burnish::studio

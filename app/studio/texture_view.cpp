@@ -71,7 +71,17 @@ void TextureView::paintEvent(QPaintEvent*) {
     const QRectF target(m_offset, QSizeF(m_image.width() * m_zoom, m_image.height() * m_zoom));
     // Smooth when minified (what a mip would show), nearest when magnified (texels stay crisp).
     p.setRenderHint(QPainter::SmoothPixmapTransform, m_zoom < 1.0);
-    p.drawImage(target, m_image);
+    const QSize drawn(std::max(1, int(std::lround(target.width()))),
+                      std::max(1, int(std::lround(target.height()))));
+    if (m_zoom < 1.0 && drawn.width() * 2 < m_image.width()) {
+        if (m_minifiedOf != m_image.cacheKey() || m_minified.size() != drawn) {
+            m_minified = m_image.scaled(drawn, Qt::IgnoreAspectRatio, Qt::SmoothTransformation);
+            m_minifiedOf = m_image.cacheKey();
+        }
+        p.drawImage(target, m_minified);
+    } else {
+        p.drawImage(target, m_image);
+    }
     if (!m_overlay.isNull()) p.drawImage(target, m_overlay);
     p.setPen(QPen(palette().color(QPalette::Mid), 1.0));
     p.drawRect(target.adjusted(-0.5, -0.5, 0.5, 0.5));

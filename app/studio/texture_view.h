@@ -57,6 +57,10 @@ private:
     void zoomAbout(double zoom, const QPointF& widgetPos);
 
     QImage m_image;
+    // The image smoothly minified to its drawn size, made once per image and size: scaling an
+    // 8192² image on every paint took most of a paint's time.
+    QImage m_minified;
+    qint64 m_minifiedOf = 0; // m_image.cacheKey() it was made from
     double m_zoom = 1.0;
     QPointF m_offset;     // widget position of the image's top-left corner
     bool m_fitted = true; // follows the view size until the user zooms or pans

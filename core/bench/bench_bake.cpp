@@ -1,8 +1,9 @@
 // Benchmarks of the bake and the ground-truth evaluation (figures, not pass/fail):
 //   BM_Bake/<method>/<roles>  in-memory bake of a 4096² normal map, all mips (pyramid included):
 //                      every texture of the method (0), or those its preset's files read (1)
-//   BM_ViewportBake/<size>/<n> the studio viewport's bake (a gloss or method change) of a size² map,
-//                      levels above n skipped (0: none)
+//   BM_ViewportBake/<size>/<n>/<kept> the studio viewport's bake (a gloss or method change) of a
+//                      size² map, levels above n skipped (0: none), from the pyramid its first bake
+//                      kept (1) or its own (0)
 //   BM_ReadImage       reading that map as an 8-bit RGB PNG (written once to the temp folder)
 //   BM_DecodeNormalMap decoding the read floats into unit normals, with the diagnostics
 //   BM_LoadNormalMap   that PNG straight to unit normals (what `burnish bake` does; no float image)
@@ -146,19 +147,28 @@ void BM_ViewportBake(benchmark::State& state) {
     const NormalMap& map = benchMap(int(state.range(0)), label);
     BakeOptions options;
     options.largestLevel = int(state.range(1));
+    // The studio's later bakes of a map read the pyramid its first bake kept (bakePyramid).
+    const bool cached = state.range(2) != 0;
+    if (cached) {
+        const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
+        options.cachedPyramid = bakePyramid(borrowed, options);
+    }
     for (auto _ : state) {
         auto out = bake(map, options);
         benchmark::DoNotOptimize(out);
     }
     state.SetLabel(std::string(methodName(options.method)) + ", levels up to " +
-                   (options.largestLevel ? std::to_string(options.largestLevel) : std::string("8192")) +
-                   ", " + label);
+                   (options.largestLevel ? std::to_string(options.largestLevel) : std::to_string(map.width)) +
+                   (cached ? ", kept pyramid" : ", own pyramid") + ", " + label);
 }
 BENCHMARK(BM_ViewportBake)
-    ->Args({8192, 0})
-    ->Args({8192, 2048})
-    ->Args({2048, 2048})
-    ->Args({512, 2048})
+    ->Args({8192, 0, 0})
+    ->Args({8192, 2048, 0})
+    ->Args({8192, 2048, 1})
+    ->Args({2048, 2048, 0})
+    ->Args({2048, 2048, 1})
+    ->Args({512, 2048, 0})
+    ->Args({512, 2048, 1})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2)
     ->UseRealTime();

@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <thread>
 
@@ -128,7 +129,32 @@ BakeKey bakeKeyOf(const MaterialSettings& m, int largestLevel) {
 struct CpuBake {
     Result<BakeOutput> out = Error{"not baked"};
     double mixtureMinVariance = 1.0 / 1024.0;
+    std::shared_ptr<const NormalPyramid> pyramid; // the shared pyramid it read, kept by the renderer
 };
+
+// The pyramid a capped bake (largestLevel > 0: the studio's views) reads, one per map for every
+// renderer of the process: built by the first bake of a map with the moments its method reads, read
+// by every later one whose method reads no others (a gloss or method change then skips the pyramid,
+// most of an 8192² bake), rebuilt with the union when one does, freed with the last renderer that
+// holds it. Uncapped bakes (the command line) build their own and free it level by level.
+std::shared_ptr<const NormalPyramid> sharedBakePyramid(const std::shared_ptr<const NormalMap>& map,
+                                                       const BakeOptions& options) {
+    static std::mutex mutex;
+    static std::weak_ptr<const NormalPyramid> last;
+    static int lastLargest = 0;
+    const std::lock_guard<std::mutex> lock(mutex); // a second view's bake waits and shares it
+    auto pyramid = last.lock();
+    const unsigned needed = momentsNeeded(options.method);
+    const bool sameMap = pyramid && &pyramid->finest() == map.get() && lastLargest == options.largestLevel &&
+                         pyramid->options().border == options.pyramid.border &&
+                         pyramid->options().kernel == options.pyramid.kernel;
+    if (!sameMap || (pyramid->options().moments & needed) != needed) {
+        pyramid = bakePyramid(map, options, needed | (sameMap ? pyramid->options().moments : 0u));
+        last = pyramid;
+        lastLargest = options.largestLevel;
+    }
+    return pyramid;
+}
 
 // Levels above largestLevel (the renderer's maximum texture size) are never uploaded, so not baked.
 // `progress` is core's (BakeOptions::progress): the fraction done, false to stop.
@@ -142,7 +168,13 @@ CpuBake cpuBake(const MaterialSettings& m, int largestLevel, std::function<bool(
     options.params = m.methodParams;
     if (m.glossMap) options.authoredGloss = *m.glossMap;
     CpuBake b;
+    if (largestLevel > 0) options.cachedPyramid = sharedBakePyramid(m.normalMap, options);
+    if (options.progress && !options.progress(0.0)) {
+        b.out = Error{"cancelled"};
+        return b;
+    }
     b.out = bake(*m.normalMap, options);
+    b.pyramid = options.cachedPyramid;
     double maxPower = m.basePower;
     if (m.glossMap) {
         maxPower = 0.0;
@@ -246,6 +278,7 @@ struct Renderer::Impl {
     float meshRadius = 1.0f;
 
     // Method bake.
+    std::shared_ptr<const NormalPyramid> bakePyramid; // sharedBakePyramid's, while this map is drawn
     std::optional<BakeKey> bakeKey;
     // Background bakes: the material last baked (drawn while a newer one bakes) and the bake in
     // flight (joined at destruction).
@@ -380,6 +413,7 @@ Status Renderer::Impl::prepareMesh() {
 
 Status Renderer::Impl::uploadBake(const BakeKey& key, const CpuBake& cpu) {
     if (!cpu.out) return Error{"bake: " + cpu.out.error()};
+    bakePyramid = cpu.pyramid; // kept for the next bake of this map
     mixtureMinVariance = cpu.mixtureMinVariance;
     ++bakes;
     baked.clear();

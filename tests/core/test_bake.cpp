@@ -245,6 +245,52 @@ TEST(Bake, RoleSubsetsProduceTheSameTexturesAsAFullBake) {
     }
 }
 
+// BakeOptions::cachedPyramid: a bake from bakePyramid's pyramid (every moment, the levels above the
+// cap released) is the bake that builds its own, bit for bit, for every method with and without an
+// authored gloss map; it is read, never released, so a second bake from it is the same again; a
+// pyramid of another map, or one missing a level the bake computes, is refused.
+TEST(Bake, ACachedPyramidBakesTheSameAndIsRefusedWhereItCannotServe) {
+    const auto map = std::make_shared<const NormalMap>(gaussianField(64, 0.3, 0.15, 9));
+    std::vector<float> gloss(map->texelCount());
+    for (size_t i = 0; i < gloss.size(); ++i)
+        gloss[i] = float(i % 7) / 7.0f;
+    BakeOptions capped;
+    capped.largestLevel = 16;
+    const auto pyramid = bakePyramid(map, capped);
+    EXPECT_TRUE(pyramid->level(1).box.empty()) << "32² is above the cap: released";
+    EXPECT_FALSE(pyramid->level(2).box.empty());
+    for (const Method m : allMethods())
+        for (const bool authored : {false, true}) {
+            BakeOptions options = capped;
+            options.method = m;
+            options.params.mixtureLobes = 3;
+            if (authored) options.authoredGloss = gloss;
+            const auto own = bake(*map, options);
+            ASSERT_TRUE(own) << own.error();
+            options.cachedPyramid = pyramid;
+            for (int run = 0; run < 2; ++run) {
+                const auto cached = bake(*map, options);
+                ASSERT_TRUE(cached) << cached.error();
+                ASSERT_EQ(cached->textures.size(), own->textures.size());
+                for (size_t t = 0; t < own->textures.size(); ++t)
+                    for (size_t k = 0; k < own->textures[t].mips.size(); ++k)
+                        EXPECT_EQ(cached->textures[t].mips[k].texels, own->textures[t].mips[k].texels)
+                            << methodName(m) << " level " << k << " run " << run;
+            }
+        }
+    BakeOptions uncapped;
+    uncapped.cachedPyramid = pyramid;
+    const auto missing = bake(*map, uncapped);
+    ASSERT_FALSE(missing);
+    EXPECT_NE(missing.error().find("released level 1"), std::string::npos) << missing.error();
+    const NormalMap other = gaussianField(64, 0.3, 0.15, 10);
+    BakeOptions elsewhere = capped;
+    elsewhere.cachedPyramid = pyramid;
+    const auto wrongMap = bake(other, elsewhere);
+    ASSERT_FALSE(wrongMap);
+    EXPECT_NE(wrongMap.error().find("another normal map"), std::string::npos) << wrongMap.error();
+}
+
 // BakeOptions::progress: called once the pyramids are built and after each level, with fractions
 // that grow to 1 (levels skipped by largestLevel count for nothing); the bake it watches is the same
 // as one without it; returning false stops the bake with "cancelled" at once.

@@ -496,11 +496,23 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     BakeOutput out;
     out.method = options.method;
     auto start = Clock::now();
-    const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
-    // Only the moments the method reads: the rest are most of the pyramid's work.
-    PyramidOptions pyramidOptions = options.pyramid;
-    pyramidOptions.moments = momentsNeeded(options.method);
-    NormalPyramid pyramid = NormalPyramid::build(borrowed, pyramidOptions);
+    // The caller's pyramid, or one of its own with only the moments the method reads (the rest are
+    // most of the pyramid's work), whose levels are freed as they are baked.
+    std::optional<NormalPyramid> own;
+    if (const NormalPyramid* given = options.cachedPyramid.get()) {
+        const PyramidOptions& p = given->options();
+        const unsigned needed = momentsNeeded(options.method);
+        if (&given->finest() != &map) return Error{"the pyramid given is of another normal map"};
+        if (p.border != options.pyramid.border || p.kernel != options.pyramid.kernel)
+            return Error{"the pyramid given has another border or kernel than the bake's"};
+        if ((p.moments & needed) != needed) return Error{"the pyramid given lacks moments the method reads"};
+    } else {
+        const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
+        PyramidOptions pyramidOptions = options.pyramid;
+        pyramidOptions.moments = momentsNeeded(options.method);
+        own.emplace(NormalPyramid::build(borrowed, pyramidOptions));
+    }
+    const NormalPyramid& pyramid = own ? *own : *options.cachedPyramid;
     std::optional<BaseVariancePyramid> base;
     if (options.authoredGloss) {
         base.emplace(pyramid);
@@ -545,6 +557,11 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     auto carryOn = [&]() { return !options.progress || options.progress(std::min(done / total, 1.0)); };
     const Error cancelled{"cancelled"};
     if (!carryOn()) return cancelled;
+    // A given pyramid must hold every level this bake computes (bakePyramid releases the larger ones).
+    for (int k = 1; !own && k < levels; ++k)
+        if (baked(k) > 0.0 && pyramid.level(k).box.empty())
+            return Error{"the pyramid given has released level " + std::to_string(k) +
+                         ", which this bake computes"};
     auto bakeAndRelease = [&](int k) {
         const PyramidLevel& level = pyramid.level(k);
         if (options.largestLevel > 0 && k + 1 < levels &&
@@ -554,8 +571,9 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
         } else {
             bakeLevel(plan, pyramid, k, out);
         }
-        // Level k's moments and lobes are read by nothing after its textures.
-        pyramid.releaseBox(k);
+        // Level k's moments and lobes are read by nothing after its textures (a given pyramid is
+        // the caller's, kept).
+        if (own) own->releaseBox(k);
         if (mixture && k > 0) mixture->releaseLevel(k);
     };
     // Level 0 last: each level's textures depend on its own moments alone, and level 0's come from
@@ -571,6 +589,19 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     if (!carryOn()) return cancelled;
     out.stats.methodSeconds = seconds(start);
     return out;
+}
+
+std::shared_ptr<const NormalPyramid> bakePyramid(std::shared_ptr<const NormalMap> map,
+                                                 const BakeOptions& options, unsigned moments) {
+    PyramidOptions pyramidOptions = options.pyramid;
+    pyramidOptions.moments = moments;
+    auto pyramid = std::make_shared<NormalPyramid>(NormalPyramid::build(std::move(map), pyramidOptions));
+    // The levels a bake with this largestLevel skips (never the last one), as bake() decides.
+    for (int k = 0; options.largestLevel > 0 && k + 1 < pyramid->levelCount(); ++k) {
+        const PyramidLevel& level = pyramid->level(k);
+        if (std::max(level.width, level.height) > options.largestLevel) pyramid->releaseBox(k);
+    }
+    return pyramid;
 }
 
 } // namespace burnish

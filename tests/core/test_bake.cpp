@@ -268,6 +268,11 @@ TEST(Bake, ACachedPyramidBakesTheSameAndIsRefusedWhereItCannotServe) {
             const auto own = bake(*map, options);
             ASSERT_TRUE(own) << own.error();
             options.cachedPyramid = pyramid;
+            std::vector<double> seen;
+            options.progress = [&seen](double f) {
+                seen.push_back(f);
+                return true;
+            };
             for (int run = 0; run < 2; ++run) {
                 const auto cached = bake(*map, options);
                 ASSERT_TRUE(cached) << cached.error();
@@ -277,6 +282,10 @@ TEST(Bake, ACachedPyramidBakesTheSameAndIsRefusedWhereItCannotServe) {
                         EXPECT_EQ(cached->textures[t].mips[k].texels, own->textures[t].mips[k].texels)
                             << methodName(m) << " level " << k << " run " << run;
             }
+            // The kept pyramid cost these bakes nothing: the first report is 0, not the pyramid's share.
+            ASSERT_FALSE(seen.empty());
+            EXPECT_EQ(seen.front(), 0.0);
+            EXPECT_EQ(seen.back(), 1.0);
         }
     BakeOptions uncapped;
     uncapped.cachedPyramid = pyramid;

@@ -551,10 +551,13 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                    ? 0.0
                    : double(level.width) * double(level.height);
     };
-    double total = double(map.texelCount()), done = total;
+    // A given pyramid cost this bake nothing: only the levels count then.
+    double total = own ? double(map.texelCount()) : 0.0, done = total;
     for (int k = 0; k < levels; ++k)
         total += baked(k);
-    auto carryOn = [&]() { return !options.progress || options.progress(std::min(done / total, 1.0)); };
+    auto carryOn = [&]() {
+        return !options.progress || options.progress(total > 0.0 ? std::min(done / total, 1.0) : 1.0);
+    };
     const Error cancelled{"cancelled"};
     if (!carryOn()) return cancelled;
     // A given pyramid must hold every level this bake computes (bakePyramid releases the larger ones).

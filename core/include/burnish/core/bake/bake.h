@@ -105,7 +105,8 @@ struct BakeOptions {
     /// export.h names the ones an export allows); every other role is float.
     std::map<TextureRole, TexelStorage> storage;
     /// Called on the bake's thread once the pyramids are built and after each level, with the
-    /// fraction done (by texels: the pyramids count as the finest level's texels); returning false
+    /// fraction done (by texels: the pyramids count as the finest level's texels, a cachedPyramid as
+    /// none); returning false
     /// stops the bake, which then fails with "cancelled". Empty: the bake runs to the end.
     std::function<bool(double fraction)> progress;
     /// A normal pyramid of this map (the same NormalMap object) with the options' border and kernel

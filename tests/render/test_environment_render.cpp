@@ -87,6 +87,30 @@ Scene environmentScene(std::shared_ptr<const CubeMap> cube, EnvironmentKind kind
     return scene;
 }
 
+// The world direction of the view ray through the centre of pixel (x, y) (row 0 at the top) of a
+// kImageSize² render of `scene` drawing `mesh` (the projection's planes follow the mesh's bounds).
+struct ViewRays {
+    glm::mat4 inverse;
+    glm::vec3 eye;
+    ViewRays(const Scene& scene, const MeshData& mesh) {
+        const float radius = std::max(glm::length(mesh.boundsMin), glm::length(mesh.boundsMax));
+        inverse = glm::inverse(scene.camera.projection(1.0f, radius) * scene.camera.view());
+        eye = scene.camera.position();
+    }
+    glm::vec3 operator()(int x, int y) const {
+        const glm::vec4 ndc((x + 0.5f) / kImageSize * 2.0f - 1.0f, 1.0f - (y + 0.5f) / kImageSize * 2.0f,
+                            1.0f, 1.0f);
+        const glm::vec4 far = inverse * ndc;
+        return glm::normalize(glm::vec3(far) / far.w - eye);
+    }
+};
+
+// World → environment directions for an environment turned by `rotationDegrees` about +y.
+glm::mat3 toEnvironmentOf(float rotationDegrees) {
+    return glm::mat3(
+        glm::rotate(glm::mat4(1.0f), glm::radians(-rotationDegrees), glm::vec3(0.0f, 1.0f, 0.0f)));
+}
+
 size_t nonFinite(const std::vector<float>& rgba) {
     size_t n = 0;
     for (float v : rgba)
@@ -159,20 +183,14 @@ TEST_F(EnvironmentRender, MirrorReflectsThePrefilteredTopMip) {
         const auto image = render(scene);
         ASSERT_EQ(image.size(), size_t(kImageSize) * kImageSize * 4);
 
-        const MeshData plane = makePlane();
-        const float radius = std::max(glm::length(plane.boundsMin), glm::length(plane.boundsMax));
-        const glm::mat4 inverse = glm::inverse(scene.camera.projection(1.0f, radius) * scene.camera.view());
-        const glm::vec3 eye = scene.camera.position();
-        const glm::mat3 toEnvironment =
-            glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(-rotation), glm::vec3(0.0f, 1.0f, 0.0f)));
+        const ViewRays rays(scene, makePlane());
+        const glm::vec3 eye = rays.eye;
+        const glm::mat3 toEnvironment = toEnvironmentOf(rotation);
         double err0 = 0.0, err1 = 0.0, sum = 0.0;
         int counted = 0;
         for (int y = 0; y < kImageSize; ++y)
             for (int x = 0; x < kImageSize; ++x) {
-                const glm::vec4 ndc((x + 0.5f) / kImageSize * 2.0f - 1.0f,
-                                    1.0f - (y + 0.5f) / kImageSize * 2.0f, 1.0f, 1.0f);
-                glm::vec4 far = inverse * ndc;
-                const glm::vec3 dir = glm::normalize(glm::vec3(far) / far.w - eye);
+                const glm::vec3 dir = rays(x, y);
                 if (!(dir.y < -1e-3f)) continue; // the ray misses the plane y = 0
                 const glm::vec3 hit = eye + dir * (-eye.y / dir.y);
                 if (std::abs(hit.x) > 19.0f || std::abs(hit.z) > 19.0f) continue; // near the plane's edge
@@ -233,20 +251,14 @@ TEST_F(EnvironmentRender, BackgroundIsTheLightingsCubeAlongEachViewRay) {
         ASSERT_EQ(display.size(), hdr.size());
         ASSERT_EQ(without.size(), hdr.size());
 
-        const MeshData sphere = makeSphere();
-        const float radius = std::max(glm::length(sphere.boundsMin), glm::length(sphere.boundsMax));
-        const glm::mat4 inverse = glm::inverse(scene.camera.projection(1.0f, radius) * scene.camera.view());
-        const glm::vec3 eye = scene.camera.position();
-        const glm::mat3 toEnvironment =
-            glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(-rotation), glm::vec3(0.0f, 1.0f, 0.0f)));
+        const ViewRays rays(scene, makeSphere());
+        const glm::vec3 eye = rays.eye;
+        const glm::mat3 toEnvironment = toEnvironmentOf(rotation);
         double err = 0.0, sum = 0.0, worstDisplay = 0.0;
         int counted = 0;
         for (int y = 0; y < kImageSize; ++y)
             for (int x = 0; x < kImageSize; ++x) {
-                const glm::vec4 ndc((x + 0.5f) / kImageSize * 2.0f - 1.0f,
-                                    1.0f - (y + 0.5f) / kImageSize * 2.0f, 1.0f, 1.0f);
-                const glm::vec4 far = inverse * ndc;
-                const glm::vec3 dir = glm::normalize(glm::vec3(far) / far.w - eye);
+                const glm::vec3 dir = rays(x, y);
                 // The ray's closest approach to the unit sphere's centre: skip the mesh and its edge.
                 const glm::vec3 closest = eye - dir * glm::dot(eye, dir);
                 if (glm::length(closest) < 1.1f) continue;
@@ -287,17 +299,12 @@ TEST_F(EnvironmentRender, BackgroundIsTheLightingsCubeAlongEachViewRay) {
         ASSERT_EQ(hdr.size(), size_t(kImageSize) * kImageSize * 4);
         const auto sharp = studioCube(kBackgroundFaceSize);
         const auto lighting = studioCube(kFaceSize);
-        const MeshData sphere = makeSphere();
-        const float radius = std::max(glm::length(sphere.boundsMin), glm::length(sphere.boundsMax));
-        const glm::mat4 inverse = glm::inverse(scene.camera.projection(1.0f, radius) * scene.camera.view());
-        const glm::vec3 eye = scene.camera.position();
+        const ViewRays rays(scene, makeSphere());
+        const glm::vec3 eye = rays.eye;
         double errSharp = 0.0, errLighting = 0.0, sum = 0.0;
         for (int y = 0; y < kImageSize; ++y)
             for (int x = 0; x < kImageSize; ++x) {
-                const glm::vec4 ndc((x + 0.5f) / kImageSize * 2.0f - 1.0f,
-                                    1.0f - (y + 0.5f) / kImageSize * 2.0f, 1.0f, 1.0f);
-                const glm::vec4 far = inverse * ndc;
-                const glm::vec3 dir = glm::normalize(glm::vec3(far) / far.w - eye);
+                const glm::vec3 dir = rays(x, y);
                 if (glm::length(eye - dir * glm::dot(eye, dir)) < 1.1f) continue;
                 const glm::dvec3 a = sampleCube(*sharp, glm::dvec3(dir), 0);
                 const glm::dvec3 b = sampleCube(*lighting, glm::dvec3(dir), 0);

@@ -344,10 +344,14 @@ Result<Texture2D> Texture2D::create(const std::vector<TextureLevel>& levels, int
     for (size_t i = 0; i < levels.size(); ++i) {
         const TextureLevel& level = levels[i];
         // Image row 0 (the top) goes to the top of the texture, v = 1: GL's first row is v = 0.
-        flipped = level.texels;
-        flipRows(flipped.data(), size_t(level.width) * size_t(channels) * sizeof(float), level.height);
+        const float* rows = level.texels.data();
+        if (!level.bottomFirst) {
+            flipped = level.texels;
+            flipRows(flipped.data(), size_t(level.width) * size_t(channels) * sizeof(float), level.height);
+            rows = flipped.data();
+        }
         glTexImage2D(GL_TEXTURE_2D, GLint(i), GLint(internal), level.width, level.height, 0, format, GL_FLOAT,
-                     flipped.data());
+                     rows);
     }
     glPixelStorei(GL_UNPACK_ALIGNMENT, previousAlignment);
 

@@ -81,8 +81,16 @@ Result<GpuBaked> uploadBaked(const BakedTexture& baked, int maxSize = 0) {
         ++first;
     for (size_t k = first; k < baked.mips.size(); ++k) {
         const auto& mip = baked.mips[k];
-        levels.push_back(
-            TextureLevel{mip.width, mip.height, std::vector<float>(mip.texels.begin(), mip.texels.end())});
+        // Copied bottom row first, GL's order: the one copy the upload makes on this side (appended
+        // row by row, so the vector is not zero-filled first).
+        TextureLevel level{mip.width, mip.height, {}, true};
+        level.texels.reserve(mip.texels.size());
+        const size_t row = size_t(mip.width) * size_t(baked.channels);
+        for (int y = mip.height - 1; y >= 0; --y) {
+            const auto begin = mip.texels.begin() + std::ptrdiff_t(size_t(y) * row);
+            level.texels.insert(level.texels.end(), begin, begin + std::ptrdiff_t(row));
+        }
+        levels.push_back(std::move(level));
     }
     // Hardware trilinear filtering over the baked chain is what the methods were baked for.
     auto texture = Texture2D::create(levels, baked.channels, TextureFilter::LinearMipLinear, true);

@@ -73,6 +73,9 @@ struct TextureLevel {
     /// uploaded at v = 1 (GL's first row is v = 0), so an image drawn with UVs whose v points up
     /// (OBJ, the generated meshes, fullscreen.vert's vUv) reads back upright.
     std::vector<float> texels;
+    /// The rows are already bottom first (GL's order: the caller flipped them while copying), so
+    /// they are uploaded as they are, without another copy.
+    bool bottomFirst = false;
 };
 
 /// A 2D texture of 1–4 float channels, uploaded as R/RG/RGB/RGBA 32F (or 16F when `half`).

@@ -297,7 +297,10 @@ TEST_F(EnvironmentRender, BackgroundIsTheLightingsCubeAlongEachViewRay) {
         scene.environmentBackground = true;
         const auto hdr = render(scene);
         ASSERT_EQ(hdr.size(), size_t(kImageSize) * kImageSize * 4);
-        const auto sharp = studioCube(kBackgroundFaceSize);
+        // A backdrop samples the studio once per texel (its texels are as small as pixels).
+        const auto sharpStudio = proceduralStudioEnvironment(kBackgroundFaceSize, 1);
+        ASSERT_TRUE(sharpStudio) << sharpStudio.error();
+        const auto sharp = std::make_shared<const CubeMap>(*sharpStudio);
         const auto lighting = studioCube(kFaceSize);
         const ViewRays rays(scene, makeSphere());
         const glm::vec3 eye = rays.eye;

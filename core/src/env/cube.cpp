@@ -355,11 +355,10 @@ glm::dvec3 studioRadiance(const glm::dvec3& dirIn) {
     return L;
 }
 
-Result<CubeMap> proceduralStudioEnvironment(int faceSize) {
+Result<CubeMap> proceduralStudioEnvironment(int faceSize, int supersample) {
     if (const Status s = checkFaceSize(faceSize); !s) return Error{s.error()};
-    // 4×4 sub-samples per texel: the lights' rims are smooth, so this resolves them at any size.
-    constexpr int kSupersample = 4;
-    return rasterizeCube(faceSize, kSupersample, studioRadiance);
+    if (supersample < 1 || supersample > 8) return Error{"the studio's supersampling must lie in 1..8"};
+    return rasterizeCube(faceSize, supersample, studioRadiance);
 }
 
 Image proceduralStudioEquirect(int width, int height) {

@@ -127,8 +127,10 @@ Result<EnvironmentSource> loadCubeFaceEnvironment(const std::array<std::filesyst
 /// The procedural studio: a vertical gradient (bright ceiling, dim floor) with three soft area lights
 /// (a warm key, a cool fill, a white rim), radiance per channel in [0.02, 18]. Deterministic.
 glm::dvec3 studioRadiance(const glm::dvec3& dir);
-/// The studio on a cube (4×4 supersampled per texel); `faceSize` a power of two.
-Result<CubeMap> proceduralStudioEnvironment(int faceSize);
+/// The studio on a cube, `supersample`² sub-samples per texel (4×4 for lighting, which resolves the
+/// lights' rims at any size; a backdrop of fine texels needs fewer, at a 16th of the cost with 1);
+/// `faceSize` a power of two, `supersample` in 1..8.
+Result<CubeMap> proceduralStudioEnvironment(int faceSize, int supersample = 4);
 /// The studio as an equirectangular image (3 channels), in equirectToCube's convention.
 Image proceduralStudioEquirect(int width, int height);
 

@@ -283,8 +283,8 @@ Result<Scene> buildScene(const RenderCliOptions& o) {
         env.intensity = o.envIntensity;
         if (o.envFis > 0) env.fisSamples = o.envFis;
         scene.environmentBackground = o.envBackground;
-        // The background from its own 512² faces: sharp where the lighting's cube is small.
-        env.backgroundFaceSize = 512;
+        // The background from its own faces: sharp where the lighting's cube is small.
+        env.backgroundFaceSize = kBackdropFaceSize;
     } else if (o.envFis > 0) {
         return Error{"--env-fis needs an environment (--env studio or --env FILE)"};
     } else if (o.envBackground) {

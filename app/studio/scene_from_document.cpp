@@ -32,7 +32,7 @@ void applyEnvironment(const EnvironmentSettings& e, render::Scene& scene) {
     map.intensity = float(e.intensity);
     map.lobe = e.lobe;
     map.fisSamples = e.fisSamples;
-    map.backgroundFaceSize = kViewportBackgroundFaceSize;
+    map.backgroundFaceSize = render::kBackdropFaceSize; // built once per source
     scene.environmentBackground = e.background;
 }
 

@@ -17,9 +17,6 @@ namespace burnish::studio {
 void applyEnvironment(const EnvironmentSettings& environment, render::Scene& scene);
 /// Face size of the environment cube the viewport prefilters.
 inline constexpr int kViewportEnvironmentFaceSize = 64;
-/// The face size of the environment drawn behind the mesh: sharp at a 1920-pixel viewport's usual
-/// field of view (a 90° face over 512 texels), built once per source.
-inline constexpr int kViewportBackgroundFaceSize = 512;
 
 /// Maps a MaterialDocument to render::MaterialSettings. The renderer keys its bake cache on the gloss
 /// map's identity (its pointer), so the gloss handed over keeps its identity until its values change:

@@ -274,8 +274,8 @@ struct Renderer::Impl {
     const Program* accumulate = nullptr;
     const Program* heatmap = nullptr;
     const Program* tonemap = nullptr;
-    const Program* background = nullptr;        // background.frag, HDR
-    const Program* backgroundDisplay = nullptr; // background.frag with DISPLAY_OUTPUT
+    const Program* backgroundProgram = nullptr;        // background.frag, HDR
+    const Program* backgroundDisplayProgram = nullptr; // background.frag with DISPLAY_OUTPUT
     ProgramCache programs;
     std::unique_ptr<FullscreenTriangle> fullscreen;
 
@@ -286,7 +286,7 @@ struct Renderer::Impl {
     float meshRadius = 1.0f;
 
     // Method bake.
-    std::shared_ptr<const NormalPyramid> bakePyramid; // sharedBakePyramid's, while this map is drawn
+    std::shared_ptr<const NormalPyramid> keptPyramid; // sharedBakePyramid's, while this map is drawn
     std::optional<BakeKey> bakeKey;
     // Background bakes: the material last baked (drawn while a newer one bakes) and the bake in
     // flight (joined at destruction).
@@ -350,15 +350,21 @@ struct Renderer::Impl {
     Status prepareEnvironment(EnvironmentKind kind);
     void setEnvironmentUniforms(const Program& p, const FeatureSet& f);
     /// The material program of f; with `display` its DISPLAY_OUTPUT variant (tonemap fused).
-    Result<const Program*> materialProgram(const FeatureSet& f, bool display = false);
+    Result<const Program*> materialProgram(const FeatureSet& f, bool displayOutput = false);
     void setMaterialUniforms(const Program& p, const FeatureSet& f, int width, int height,
                              glm::vec2 jitterNdc, bool reference);
     Status drawMaterial(const FeatureSet& f, const Program& p, int width, int height, glm::vec2 jitterNdc,
-                        bool reference, bool background);
-    Status accumulateReference(int width, int height, int samples, bool background);
-    void drawBackground(int width, int height, bool display);
+                        bool reference, bool withBackground);
+    Status accumulateReference(int width, int height, int samples, bool withBackground);
+    void drawBackground(int width, int height, bool displayOutput);
+    /// The cube the lighting reads for `kind` (the prefiltered one, or FIS's chain), when made.
+    const CubeMapTexture* lightingCube(EnvironmentKind kind) const;
+    /// uEnvironmentRotation and uEnvironmentIntensity of the scene's environment map.
+    void setEnvironmentTurnAndScale(const Program& p) const;
+    /// The camera's projection × view for a width×height target.
+    glm::mat4 cameraViewProjection(int width, int height) const;
     Status displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView);
-    Status drawHdr(int width, int height, bool background);
+    Status drawHdr(int width, int height, bool withBackground);
     Status drawFused(const RenderTarget& target);
     void setFaceCulling() const;
     void beginMaterialPass(const Framebuffer& target) const;
@@ -421,7 +427,7 @@ Status Renderer::Impl::prepareMesh() {
 
 Status Renderer::Impl::uploadBake(const BakeKey& key, const CpuBake& cpu) {
     if (!cpu.out) return Error{"bake: " + cpu.out.error()};
-    bakePyramid = cpu.pyramid; // kept for the next bake of this map
+    keptPyramid = cpu.pyramid; // kept for the next bake of this map
     mixtureMinVariance = cpu.mixtureMinVariance;
     ++bakes;
     baked.clear();
@@ -628,11 +634,11 @@ Status Renderer::Impl::prepareEnvironment(EnvironmentKind kind) {
     // The background's sharper cube, made only while it is shown and kept while its source stays.
     if (scene.environmentBackground && e.backgroundFaceSize > e.faceSize &&
         e.source != EnvironmentSourceKind::Cube) {
-        EnvironmentMap background = e;
-        background.faceSize = e.backgroundFaceSize;
-        const EnvironmentSourceKey bkey = environmentSourceKey(background);
+        EnvironmentMap backdrop = e;
+        backdrop.faceSize = e.backgroundFaceSize;
+        const EnvironmentSourceKey bkey = environmentSourceKey(backdrop);
         if (!(envBackgroundKey && *envBackgroundKey == bkey)) {
-            auto source = environmentSource(background, background.faceSize, true);
+            auto source = environmentSource(backdrop, backdrop.faceSize, true);
             if (!source) return Error{source.error()};
             auto texture = CubeMapTexture::create(*source);
             if (!texture) return Error{"environment background: " + texture.error()};
@@ -647,26 +653,39 @@ Status Renderer::Impl::prepareEnvironment(EnvironmentKind kind) {
     return {};
 }
 
+const CubeMapTexture* Renderer::Impl::lightingCube(EnvironmentKind kind) const {
+    if (kind == EnvironmentKind::Prefiltered) return envPrefiltered ? &*envPrefiltered : nullptr;
+    if (kind == EnvironmentKind::FilteredImportanceSampling) return envChain ? &*envChain : nullptr;
+    return nullptr;
+}
+
+void Renderer::Impl::setEnvironmentTurnAndScale(const Program& p) const {
+    const EnvironmentMap& e = scene.environmentMap;
+    // World → environment: the inverse of turning the environment by +rotation about +y.
+    p.set("uEnvironmentRotation", glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(-e.rotationDegrees),
+                                                        glm::vec3(0.0f, 1.0f, 0.0f))));
+    // Negative or non-finite intensities would put negative or NaN radiance into the image.
+    p.set("uEnvironmentIntensity", std::isfinite(e.intensity) ? std::max(e.intensity, 0.0f) : 0.0f);
+}
+
+glm::mat4 Renderer::Impl::cameraViewProjection(int width, int height) const {
+    return scene.camera.projection(float(width) / float(height), meshRadius) * scene.camera.view();
+}
+
 void Renderer::Impl::setEnvironmentUniforms(const Program& p, const FeatureSet& f) {
     // Always: an unset samplerCube stays on unit 0 beside the normal map's sampler2D, and two sampler
     // types on one unit fail the draw (the ubershader declares it even without an environment).
     p.set("uEnvironment", int(kUnitEnvironment));
     p.set("uEnvironmentKind", int(f.environment));
     if (!usesEnvironmentMap(f.environment)) return;
-    const CubeMapTexture* cube = f.environment == EnvironmentKind::Prefiltered
-                                     ? (envPrefiltered ? &*envPrefiltered : nullptr)
-                                     : (envChain ? &*envChain : nullptr);
+    const CubeMapTexture* cube = lightingCube(f.environment);
     if (!cube) return;
     const EnvironmentMap& e = scene.environmentMap;
     const MaterialSettings& m = scene.material;
     cube->bind(kUnitEnvironment);
     p.set("uEnvironmentMips", float(cube->mipCount()));
     p.set("uEnvironmentFaceSize", float(cube->faceSize()));
-    // World → environment: the inverse of turning the environment by +rotation about +y.
-    p.set("uEnvironmentRotation", glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(-e.rotationDegrees),
-                                                        glm::vec3(0.0f, 1.0f, 0.0f))));
-    // Negative or non-finite intensities would put negative or NaN radiance into the image.
-    p.set("uEnvironmentIntensity", std::isfinite(e.intensity) ? std::max(e.intensity, 0.0f) : 0.0f);
+    setEnvironmentTurnAndScale(p);
     for (size_t k = 0; k < envSh.coefficients.size(); ++k)
         p.set(("uEnvironmentSh[" + std::to_string(k) + "]").c_str(), glm::vec3(envSh.coefficients[k]));
     p.set("uEnvironmentLobe", int(e.lobe));
@@ -679,22 +698,21 @@ void Renderer::Impl::setEnvironmentUniforms(const Program& p, const FeatureSet& 
     p.set("uEnvironmentSamples", std::clamp(e.fisSamples, 1, int(kMaxFisSamples)));
 }
 
-Result<const Program*> Renderer::Impl::materialProgram(const FeatureSet& f, bool display) {
+Result<const Program*> Renderer::Impl::materialProgram(const FeatureSet& f, bool displayOutput) {
     // The reference is always specialized: the ubershader has no reference mode.
     const bool uber = useUbershader && !f.referenceMode;
     ShaderDefines d = uber ? ubershaderDefines() : defines(f);
     if (!uber && f.method == Method::Mixture && !f.referenceMode)
         d.push_back({"MIXTURE_LOBES", std::to_string(std::clamp(scene.material.methodParams.mixtureLobes, 1,
                                                                 kMaxMixtureLobes))});
-    if (display) d.push_back({"DISPLAY_OUTPUT", "1"});
+    if (displayOutput) d.push_back({"DISPLAY_OUTPUT", "1"});
     return programs.get("material.vert", "material.frag", d);
 }
 
 void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, int width, int height,
                                          glm::vec2 jitterNdc, bool reference) {
     const MaterialSettings& m = scene.material;
-    const float aspect = float(width) / float(height);
-    const glm::mat4 viewProjection = scene.camera.projection(aspect, meshRadius) * scene.camera.view();
+    const glm::mat4 viewProjection = cameraViewProjection(width, height);
     p.set("uModel", glm::mat4(1.0f));
     p.set("uNormalMatrix", glm::mat3(1.0f));
     p.set("uViewProjection", viewProjection);
@@ -792,10 +810,10 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
 }
 
 Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int width, int height,
-                                    glm::vec2 jitterNdc, bool reference, bool background) {
+                                    glm::vec2 jitterNdc, bool reference, bool withBackground) {
     if (auto s = ensureTarget(hdr, width, height, true); !s) return s;
     beginMaterialPass(*hdr);
-    if (background) drawBackground(width, height, false);
+    if (withBackground) drawBackground(width, height, false);
     p.use();
     setMaterialUniforms(p, f, width, height, jitterNdc, reference);
     mesh->draw();
@@ -803,7 +821,7 @@ Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int w
     return {};
 }
 
-Status Renderer::Impl::accumulateReference(int width, int height, int samples, bool background) {
+Status Renderer::Impl::accumulateReference(int width, int height, int samples, bool withBackground) {
     if (auto s = prepareFinest(); !s) return s;
     FeatureSet f = features;
     f.referenceMode = true;
@@ -820,7 +838,8 @@ Status Renderer::Impl::accumulateReference(int width, int height, int samples, b
         haltonPoint(i + 1, jx, jy);
         // A pixel is 2/size wide in normalized device coordinates.
         const glm::vec2 jitterNdc((jx - 0.5f) * 2.0f / float(width), (jy - 0.5f) * 2.0f / float(height));
-        if (auto s = drawMaterial(f, **reference, width, height, jitterNdc, true, background); !s) return s;
+        if (auto s = drawMaterial(f, **reference, width, height, jitterNdc, true, withBackground); !s)
+            return s;
         accumulation->bind();
         glEnable(GL_BLEND);
         glBlendFunc(GL_ONE, GL_ONE);
@@ -880,23 +899,20 @@ Status Renderer::Impl::drawFused(const RenderTarget& target) {
     return {};
 }
 
-Status Renderer::Impl::drawHdr(int width, int height, bool background) {
+Status Renderer::Impl::drawHdr(int width, int height, bool withBackground) {
     if (!hasScene || !program) return Error{"no scene to render"};
-    if (auto s = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false, background); !s)
+    if (auto s = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false, withBackground); !s)
         return s;
     return {};
 }
 
-// Scene::environmentBackground: level 0 of the lighting's cube in each pixel's view direction, drawn
-// into the bound material target after its clear and before the mesh (no depth written, so the mesh
-// covers it). Nothing without an environment map.
-void Renderer::Impl::drawBackground(int width, int height, bool display) {
+// Scene::environmentBackground: the environment in each pixel's view direction, from the background's
+// own cube or level 0 of the lighting's, drawn into the bound material target after its clear and
+// before the mesh (no depth written, so the mesh covers it). Nothing without an environment map.
+void Renderer::Impl::drawBackground(int width, int height, bool displayOutput) {
     if (!scene.environmentBackground || !usesEnvironmentMap(features.environment)) return;
-    const CubeMapTexture* cube = envBackground ? &*envBackground
-                                 : features.environment == EnvironmentKind::Prefiltered
-                                     ? (envPrefiltered ? &*envPrefiltered : nullptr)
-                                     : (envChain ? &*envChain : nullptr);
-    const Program* p = display ? backgroundDisplay : background;
+    const CubeMapTexture* cube = envBackground ? &*envBackground : lightingCube(features.environment);
+    const Program* p = displayOutput ? backgroundDisplayProgram : backgroundProgram;
     if (!cube || !p) return;
     glDisable(GL_DEPTH_TEST);
     glDepthMask(GL_FALSE);
@@ -904,14 +920,8 @@ void Renderer::Impl::drawBackground(int width, int height, bool display) {
     p->use();
     cube->bind(kUnitEnvironment);
     p->set("uEnvironment", int(kUnitEnvironment));
-    const EnvironmentMap& e = scene.environmentMap;
-    // As setEnvironmentUniforms: world → environment, and no negative or non-finite radiance.
-    p->set("uEnvironmentRotation", glm::mat3(glm::rotate(glm::mat4(1.0f), glm::radians(-e.rotationDegrees),
-                                                         glm::vec3(0.0f, 1.0f, 0.0f))));
-    p->set("uEnvironmentIntensity", std::isfinite(e.intensity) ? std::max(e.intensity, 0.0f) : 0.0f);
-    const float aspect = float(width) / float(height);
-    p->set("uInverseViewProjection",
-           glm::inverse(scene.camera.projection(aspect, meshRadius) * scene.camera.view()));
+    setEnvironmentTurnAndScale(*p);
+    p->set("uInverseViewProjection", glm::inverse(cameraViewProjection(width, height)));
     p->set("uExposure", std::exp2(scene.exposure));
     fullscreen->draw();
     glDepthMask(GL_TRUE);
@@ -962,8 +972,8 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
     impl.accumulate = *accumulate;
     impl.heatmap = *heatmap;
     impl.tonemap = *tonemap;
-    impl.background = *background;
-    impl.backgroundDisplay = *backgroundDisplay;
+    impl.backgroundProgram = *background;
+    impl.backgroundDisplayProgram = *backgroundDisplay;
     impl.fullscreen = std::make_unique<FullscreenTriangle>();
     return r;
 }

@@ -1,7 +1,7 @@
-// The environment behind the mesh: in each pixel's view direction, the radiance the lighting reads
-// at level 0 of its cube (the prefiltered cube's top lobe, or the source for FIS), turned and scaled
-// as the lighting's (uEnvironmentRotation, uEnvironmentIntensity as setEnvironmentUniforms sets
-// them). Written as linear HDR, or with DISPLAY_OUTPUT as display values (tonemap.frag's transform),
+// The environment behind the mesh: in each pixel's view direction, level 0 of uEnvironment (the
+// background's own cube, or the lighting's: the prefiltered cube's top lobe, or the source for FIS),
+// turned and scaled as the lighting (uEnvironmentRotation, uEnvironmentIntensity as the renderer's
+// setEnvironmentTurnAndScale sets them). Written as linear HDR, or with DISPLAY_OUTPUT as display values (tonemap.frag's transform),
 // before the mesh is drawn over it.
 
 #include "common_color.glsl"

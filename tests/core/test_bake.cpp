@@ -327,7 +327,9 @@ TEST(Bake, ProgressGrowsToOneAndFalseCancels) {
             for (size_t i = 1; i < seen.size(); ++i)
                 EXPECT_GE(seen[i], seen[i - 1]);
             // 64² + 32² skipped: the pyramids (4096 texels) over 4096 + 16² + 8² + … + 1 ≈ 0.92.
-            if (largest == 16) EXPECT_NEAR(seen.front(), 4096.0 / (4096.0 + 341.0), 1e-12);
+            if (largest == 16) {
+                EXPECT_NEAR(seen.front(), 4096.0 / (4096.0 + 341.0), 1e-12);
+            }
             for (size_t t = 0; t < plain->textures.size(); ++t)
                 for (size_t k = 0; k < plain->textures[t].mips.size(); ++k)
                     EXPECT_EQ(watched->textures[t].mips[k].texels, plain->textures[t].mips[k].texels);

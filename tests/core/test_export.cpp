@@ -334,33 +334,55 @@ TEST(Export, DdsCodesAreThePngCodes) {
     EXPECT_EQ(unorm8(0.503921568f), 128);
 }
 
-// The streaming encoder reads each level a block at a time and gives the same bytes as the chain's.
-TEST(Export, StreamingDdsEncodesTheSameBytes) {
-    std::vector<TextureMip> chain;
-    for (int size = 67, k = 0; size >= 1; size /= 2, ++k) {
-        TextureMip m{size, 33 >> std::min(k, 5), {}};
-        m.height = std::max(1, m.height);
-        m.texels.resize(size_t(m.width) * size_t(m.height) * 2);
-        for (size_t i = 0; i < m.texels.size(); ++i)
-            m.texels[i] = float((i * 37 + size_t(k) * 11) % 101) / 100.0f;
-        chain.push_back(std::move(m));
-        if (size == 1) break;
+// The streaming encoder reads each level a block of texels at a time: every texel of every level
+// lands in the file where it belongs, read back from the uncompressed layouts (rgba8: a 128-byte
+// header, then B, G, R, A bytes; rgba16f: a 148-byte DX10 header, then R, G, B, A halves). Level 0
+// has more texels than one block. A chain longer than the map's is refused.
+TEST(Export, StreamingDdsWritesEveryTexelOfEveryLevel) {
+    const auto sizes = mipChainSizes(100, 70);
+    auto value = [](size_t k, size_t texel, size_t c) {
+        return float((texel * 37 + c * 53 + k * 11) % 101) / 100.0f;
+    };
+    size_t reads = 0;
+    const DdsLevelReader read = [&](size_t k, size_t begin, size_t end, float* out) {
+        ++reads;
+        for (size_t t = begin; t < end; ++t)
+            for (size_t c = 0; c < 2; ++c)
+                out[(t - begin) * 2 + c] = value(k, t, c);
+    };
+    const auto rgba8 = encodeDds(100, 70, int(sizes.size()), 2, DdsCompression::Rgba8, read);
+    ASSERT_TRUE(rgba8) << rgba8.error();
+    EXPECT_GT(reads, sizes.size()) << "level 0 takes more than one block";
+    const auto halves = encodeDds(100, 70, int(sizes.size()), 2, DdsCompression::Rgba16f, read);
+    ASSERT_TRUE(halves) << halves.error();
+    size_t at8 = 128, at16 = 148;
+    for (size_t k = 0; k < sizes.size(); ++k) {
+        const size_t n = size_t(sizes[k].first) * size_t(sizes[k].second);
+        ASSERT_LE(at8 + n * 4, rgba8->size());
+        ASSERT_LE(at16 + n * 8, halves->size());
+        for (size_t t = 0; t < n; ++t) {
+            const auto byte = [&](size_t i) { return std::uint8_t((*rgba8)[at8 + t * 4 + i]); };
+            ASSERT_EQ(byte(0), 0) << "blue of a two-channel texture, level " << k << " texel " << t;
+            ASSERT_EQ(byte(1), unorm8(value(k, t, 1))) << "level " << k << " texel " << t;
+            ASSERT_EQ(byte(2), unorm8(value(k, t, 0))) << "level " << k << " texel " << t;
+            ASSERT_EQ(byte(3), 255);
+            const auto half = [&](size_t i) {
+                const size_t b = at16 + t * 8 + i * 2;
+                return std::uint16_t(std::uint8_t((*halves)[b]) | (std::uint8_t((*halves)[b + 1]) << 8));
+            };
+            ASSERT_EQ(half(0), halfCode(value(k, t, 0)).bits()) << "level " << k << " texel " << t;
+            ASSERT_EQ(half(1), halfCode(value(k, t, 1)).bits()) << "level " << k << " texel " << t;
+            ASSERT_EQ(half(2), halfCode(0.0f).bits());
+            ASSERT_EQ(half(3), halfCode(1.0f).bits());
+        }
+        at8 += n * 4;
+        at16 += n * 8;
     }
-    for (DdsCompression c : {DdsCompression::Bc5, DdsCompression::Rgba8, DdsCompression::Rgba16f}) {
-        SCOPED_TRACE(ddsCompressionName(c));
-        const auto whole = encodeDds(chain, 2, c);
-        ASSERT_TRUE(whole) << whole.error();
-        size_t reads = 0;
-        const auto streamed = encodeDds(chain[0].width, chain[0].height, int(chain.size()), 2, c,
-                                        [&](size_t k, size_t begin, size_t end, float* out) {
-                                            ++reads;
-                                            for (size_t i = begin * 2; i < end * 2; ++i)
-                                                out[i - begin * 2] = chain[k].texels[i];
-                                        });
-        ASSERT_TRUE(streamed) << streamed.error();
-        EXPECT_EQ(*whole, *streamed);
-        EXPECT_GE(reads, chain.size());
-    }
+    EXPECT_EQ(at8, rgba8->size());
+    EXPECT_EQ(at16, halves->size());
+    const auto tooLong = encodeDds(100, 70, int(sizes.size()) + 1, 2, DdsCompression::Rgba8, read);
+    ASSERT_FALSE(tooLong);
+    EXPECT_NE(tooLong.error().find("chain of"), std::string::npos) << tooLong.error();
 }
 
 TEST(Export, EncodeDdsRejectsBadChains) {

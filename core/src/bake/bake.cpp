@@ -299,6 +299,12 @@ struct ClampCounts {
 // the index of the parent's lobe it belongs to (MixturePyramid::finestLobe).
 constexpr int kMixtureRoles = int(TextureRole::MixtureCross) - int(TextureRole::MixtureWeights) + 1;
 
+// The role's index among the mixture's roles (mixtureRows' px), or -1 for another role.
+int mixtureSlot(TextureRole role) {
+    const int i = int(role) - int(TextureRole::MixtureWeights);
+    return i >= 0 && i < kMixtureRoles ? i : -1;
+}
+
 void mixtureRows(const RowPlan& plan, int k, int y, int width, const std::array<float*, kMixtureRoles>& px) {
     const MixturePyramid& mix = *plan.mixture;
     const BakeOptions& o = plan.options;
@@ -450,9 +456,9 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
             thread_local std::array<std::vector<float>, kMixtureRoles> scratch;
             std::array<float*, kMixtureRoles> px{};
             for (size_t r = 0; r < plan.roles.size(); ++r) {
-                const int i = int(plan.roles[r]) - int(TextureRole::MixtureWeights);
+                const int i = mixtureSlot(plan.roles[r]);
                 BakedTexture& tex = out.textures[r];
-                if (i < 0 || i >= kMixtureRoles) continue;
+                if (i < 0) continue;
                 if (tex.storage == TexelStorage::Float) {
                     px[size_t(i)] = &tex.mips[size_t(k)].texels[first * 4];
                 } else {
@@ -462,15 +468,14 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
             }
             mixtureRows(plan, k, y, width, px);
             for (size_t r = 0; r < plan.roles.size(); ++r) {
-                const int i = int(plan.roles[r]) - int(TextureRole::MixtureWeights);
-                if (i >= 0 && i < kMixtureRoles && out.textures[r].storage != TexelStorage::Float)
+                const int i = mixtureSlot(plan.roles[r]);
+                if (i >= 0 && out.textures[r].storage != TexelStorage::Float)
                     storeCodes(out.textures[r], first * 4, size_t(width) * 4, px[size_t(i)]);
             }
         }
         for (size_t r = 0; r < plan.roles.size(); ++r) {
             BakedTexture& tex = out.textures[r];
-            const int mixtureIndex = int(plan.roles[r]) - int(TextureRole::MixtureWeights);
-            if (plan.mixture && mixtureIndex >= 0 && mixtureIndex < kMixtureRoles) continue; // written above
+            if (plan.mixture && mixtureSlot(plan.roles[r]) >= 0) continue; // written above
             TextureMip& mip = tex.mips[size_t(k)];
             const size_t at = first * size_t(tex.channels), count = size_t(width) * size_t(tex.channels);
             thread_local std::vector<float> scratch;
@@ -486,6 +491,16 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
         out.stats.glossClampedLow += c.low;
         out.stats.glossClampedHigh += c.high;
     }
+}
+
+} // namespace
+
+namespace {
+
+// Whether a bake with `largestLevel` skips level k of its `levels` (BakeOptions::largestLevel: wider
+// or taller than the limit, and never the last level).
+bool skipsLevel(const PyramidLevel& level, int k, int levels, int largestLevel) {
+    return largestLevel > 0 && k + 1 < levels && std::max(level.width, level.height) > largestLevel;
 }
 
 } // namespace
@@ -546,8 +561,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     // Progress by texels: the pyramids as the finest level's, then each level baked.
     auto baked = [&](int k) {
         const PyramidLevel& level = pyramid.level(k);
-        return options.largestLevel > 0 && k + 1 < levels &&
-                       std::max(level.width, level.height) > options.largestLevel
+        return skipsLevel(level, k, levels, options.largestLevel)
                    ? 0.0
                    : double(level.width) * double(level.height);
     };
@@ -567,8 +581,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
                          ", which this bake computes"};
     auto bakeAndRelease = [&](int k) {
         const PyramidLevel& level = pyramid.level(k);
-        if (options.largestLevel > 0 && k + 1 < levels &&
-            std::max(level.width, level.height) > options.largestLevel) {
+        if (skipsLevel(level, k, levels, options.largestLevel)) {
             for (auto& tex : out.textures)
                 tex.mips[size_t(k)].width = level.width, tex.mips[size_t(k)].height = level.height;
         } else {
@@ -599,11 +612,10 @@ std::shared_ptr<const NormalPyramid> bakePyramid(std::shared_ptr<const NormalMap
     PyramidOptions pyramidOptions = options.pyramid;
     pyramidOptions.moments = moments;
     auto pyramid = std::make_shared<NormalPyramid>(NormalPyramid::build(std::move(map), pyramidOptions));
-    // The levels a bake with this largestLevel skips (never the last one), as bake() decides.
-    for (int k = 0; options.largestLevel > 0 && k + 1 < pyramid->levelCount(); ++k) {
-        const PyramidLevel& level = pyramid->level(k);
-        if (std::max(level.width, level.height) > options.largestLevel) pyramid->releaseBox(k);
-    }
+    // The levels a bake with this largestLevel skips.
+    for (int k = 0; k < pyramid->levelCount(); ++k)
+        if (skipsLevel(pyramid->level(k), k, pyramid->levelCount(), options.largestLevel))
+            pyramid->releaseBox(k);
     return pyramid;
 }
 

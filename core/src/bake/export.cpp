@@ -493,6 +493,39 @@ struct PixelData {
     }
 };
 
+// The codes a file of this format stores for its texels (8- or 16-bit codes, or half floats; a DDS
+// file 8-bit codes before nvtt's compression, half floats for rgba16f), or nullopt for floats.
+std::optional<TexelStorage> fileCodes(ExportFormat format, std::optional<DdsCompression> compression) {
+    switch (format) {
+    case ExportFormat::Png8:
+    case ExportFormat::Tga:
+        return TexelStorage::Unorm8;
+    case ExportFormat::Png16:
+    case ExportFormat::Tiff16:
+        return TexelStorage::Unorm16;
+    case ExportFormat::ExrHalf:
+        return TexelStorage::Half;
+    case ExportFormat::Dds:
+        if (!compression) return std::nullopt;
+        return *compression == DdsCompression::Rgba16f ? TexelStorage::Half : TexelStorage::Unorm8;
+    case ExportFormat::ExrFloat:
+    case ExportFormat::TiffFloat:
+        break;
+    }
+    return std::nullopt;
+}
+
+// Whether the file stores one baked texture's channels unchanged and in order, `stored` of them.
+bool storesOneTextureInOrder(const PlannedFile& file, int stored) {
+    const size_t channels = file.sources.size();
+    bool inOrder = channels == size_t(stored) && channels > 0 && file.sources[0].texture &&
+                   file.sources[0].texture->channels == stored;
+    for (size_t c = 0; inOrder && c < channels; ++c)
+        inOrder = file.sources[c].texture == file.sources[0].texture && file.sources[c].index == int(c) &&
+                  !file.sources[c].flip;
+    return inOrder;
+}
+
 // Texels [begin, end) of level k of the file, read from its sources and converted by `code` into
 // out (texel `begin` first); `stored` channels per texel, those past the file's own zero (TGA's blue
 // of a two-channel file).
@@ -513,12 +546,7 @@ void convertTexels(const PlannedFile& file, size_t k, int stored, size_t begin, 
         }
         return nullptr;
     };
-    // Does the file store one baked texture's channels unchanged and in order?
-    bool contiguous = channels == size_t(stored) && channels > 0 && file.sources[0].texture &&
-                      file.sources[0].texture->channels == stored;
-    for (size_t c = 0; contiguous && c < channels; ++c)
-        contiguous = file.sources[c].texture == file.sources[0].texture && file.sources[c].index == int(c) &&
-                     !file.sources[c].flip;
+    bool contiguous = storesOneTextureInOrder(file, stored);
     // A compact texture in a file of another depth is read through Source::at (compactStorage
     // never plans one; this keeps a hand-made BakeOutput correct).
     contiguous = contiguous && (file.sources[0].texture->storage == TexelStorage::Float ||
@@ -576,24 +604,22 @@ PixelData pixelsOf(const PlannedFile& file, size_t k, int stored, ExportFormat f
     PixelData p;
     // One texture's channels in order, kept as the codes this file stores: written from the bake's
     // own array, with no copy of the level.
-    if (const Source* first = file.sources.empty() ? nullptr : &file.sources.front();
-        first && file.sources.size() == size_t(stored) && first->texture &&
-        first->texture->channels == stored) {
-        bool asStored = true;
-        for (size_t c = 0; asStored && c < file.sources.size(); ++c)
-            asStored = file.sources[c].texture == first->texture && file.sources[c].index == int(c) &&
-                       !file.sources[c].flip;
-        const TextureMip& mip = first->texture->mips[k];
-        const TexelStorage storage = first->texture->storage;
-        if (asStored && storage == TexelStorage::Unorm8 &&
-            (format == ExportFormat::Png8 || format == ExportFormat::Tga))
+    if (storesOneTextureInOrder(file, stored) &&
+        fileCodes(format, file.info.compression) == file.sources[0].texture->storage) {
+        const TextureMip& mip = file.sources[0].texture->mips[k];
+        switch (file.sources[0].texture->storage) {
+        case TexelStorage::Unorm8:
             p.type = OIIO::TypeDesc::UINT8, p.borrowed = mip.unorm8.data();
-        else if (asStored && storage == TexelStorage::Unorm16 &&
-                 (format == ExportFormat::Png16 || format == ExportFormat::Tiff16))
+            return p;
+        case TexelStorage::Unorm16:
             p.type = OIIO::TypeDesc::UINT16, p.borrowed = mip.unorm16.data();
-        else if (asStored && storage == TexelStorage::Half && format == ExportFormat::ExrHalf)
+            return p;
+        case TexelStorage::Half:
             p.type = OIIO::TypeDesc::HALF, p.borrowed = mip.halfBits.data();
-        if (p.borrowed) return p;
+            return p;
+        case TexelStorage::Float:
+            break;
+        }
     }
     const size_t n = size_t(file.info.mipSizes[k].first) * size_t(file.info.mipSizes[k].second);
     auto convert = [&](auto* out, auto&& code) {
@@ -896,19 +922,9 @@ std::map<TextureRole, TexelStorage> compactStorage(const BakeOutput& shape, cons
     for (const PlannedFile& f : plan->files)
         for (const Source& s : f.sources) {
             if (!s.texture) continue;
-            const ExportFormat format = f.info.format;
-            // Codes only where this file would store exactly those codes: an unflipped channel
-            // of an 8- or 16-bit file, or of a DDS file (8-bit codes before nvtt's compression,
-            // half floats for rgba16f).
-            std::optional<TexelStorage> want;
-            if (!s.flip && (format == ExportFormat::Png8 || format == ExportFormat::Tga))
-                want = TexelStorage::Unorm8;
-            if (!s.flip && format == ExportFormat::Dds && f.info.compression)
-                want = *f.info.compression == DdsCompression::Rgba16f ? TexelStorage::Half
-                                                                      : TexelStorage::Unorm8;
-            if (!s.flip && (format == ExportFormat::Png16 || format == ExportFormat::Tiff16))
-                want = TexelStorage::Unorm16;
-            if (!s.flip && format == ExportFormat::ExrHalf) want = TexelStorage::Half;
+            // Codes only where this file would store exactly those codes: an unflipped channel.
+            const std::optional<TexelStorage> want =
+                s.flip ? std::nullopt : fileCodes(f.info.format, f.info.compression);
             const auto [it, first] = uses.emplace(s.texture->role, want);
             if (!first && it->second != want) it->second.reset();
         }

@@ -33,12 +33,6 @@ struct ErrorCollector final : nvtt::ErrorHandler {
     }
 };
 
-// The 8-bit code of every 8-bit format of the export (unorm8, bake.h), so a texture the bake kept
-// as 8-bit codes is written as those codes.
-std::uint8_t code8(float v) {
-    return unorm8(v);
-}
-
 nvtt::Format nvttFormat(DdsCompression compression) {
     switch (compression) {
     case DdsCompression::Bc4:
@@ -121,9 +115,10 @@ Result<std::string> encodeDds(int width, int height, int levels, int channels, D
     if (width < 1 || height < 1 || width > kMaxDdsSide || height > kMaxDdsSide)
         return Error{"DDS: " + std::to_string(width) + "x" + std::to_string(height) +
                      " is outside 1..16384 on a side"};
-    std::vector<std::pair<int, int>> sizes{{width, height}};
-    for (int k = 1; k < levels; ++k)
-        sizes.emplace_back(std::max(1, sizes.back().first / 2), std::max(1, sizes.back().second / 2));
+    const std::vector<std::pair<int, int>> sizes = mipChainSizes(width, height, levels);
+    if (int(sizes.size()) != levels)
+        return Error{"DDS: " + std::to_string(levels) + " levels asked of a " + std::to_string(width) + "x" +
+                     std::to_string(height) + " chain of " + std::to_string(sizes.size())};
 
     if (compression == DdsCompression::Rgba16f) return encodeRgba16f(sizes, channels, read);
     nvtt::InputOptions input;
@@ -146,15 +141,17 @@ Result<std::string> encodeDds(int width, int height, int levels, int channels, D
             forEachBlock(read, k, n, channels, [&](size_t begin, size_t end, const float* values) {
                 for (size_t t = begin; t < end; ++t) {
                     const float* v = &values[(t - begin) * size_t(channels)];
+                    // unorm8: the code every 8-bit format of the export stores, so a texture the
+                    // bake kept as 8-bit codes is written as those codes.
                     std::uint8_t r = 0, g = 0, b = 0, a = 255;
                     if (channels == 1) {
                         // Grey, and in alpha too: nvtt 2.0's BC4 compresses the alpha channel.
-                        r = g = b = a = code8(v[0]);
+                        r = g = b = a = unorm8(v[0]);
                     } else {
-                        r = code8(v[0]);
-                        g = code8(v[1]);
-                        if (channels >= 3) b = code8(v[2]);
-                        if (channels == 4) a = code8(v[3]);
+                        r = unorm8(v[0]);
+                        g = unorm8(v[1]);
+                        if (channels >= 3) b = unorm8(v[2]);
+                        if (channels == 4) a = unorm8(v[3]);
                     }
                     bgra[t * 4 + 0] = b;
                     bgra[t * 4 + 1] = g;

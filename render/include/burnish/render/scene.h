@@ -123,10 +123,14 @@ struct EnvironmentMap {
     /// Taps per pixel of EnvironmentKind::FilteredImportanceSampling (1..kMaxFisSamples).
     int fisSamples = 64;
     /// Face size of the cube drawn as the background (Scene::environmentBackground), made from the
-    /// same source when larger than faceSize; otherwise (and for a Cube source) the background is
-    /// level 0 of the cube the lighting reads.
+    /// same source when larger than faceSize (kBackdropFaceSize for a display); otherwise (and for
+    /// a Cube source) the background is level 0 of the cube the lighting reads.
     int backgroundFaceSize = 0;
 };
+
+/// The background's face size for a display (the studio, `burnish render --env-background`): sharp
+/// at a 1920-pixel view's usual field of view (a 90° face over 512 texels).
+inline constexpr int kBackdropFaceSize = 512;
 
 /// The linear F0 of a calibrated material of core's table (materials.h), by name (case-insensitive);
 /// a range gives its middle. Errors: an unknown name.

@@ -106,8 +106,8 @@ struct BakeOptions {
     std::map<TextureRole, TexelStorage> storage;
     /// Called on the bake's thread once the pyramids are built and after each level, with the
     /// fraction done (by texels: the pyramids count as the finest level's texels, a cachedPyramid as
-    /// none); returning false
-    /// stops the bake, which then fails with "cancelled". Empty: the bake runs to the end.
+    /// none); returning false stops the bake, which then fails with "cancelled". Empty: the bake runs
+    /// to the end.
     std::function<bool(double fraction)> progress;
     /// A normal pyramid of this map (the same NormalMap object) with the options' border and kernel
     /// and at least the moments the method reads, to bake from instead of building one: what

@@ -1,0 +1,150 @@
+// burnish_studio_latency MAP [--repeats N] [--width W --height H]: how long the studio makes an
+// artist wait, measured as the artist sees it. The whole main window runs as the studio runs it
+// (background loads and bakes, the texture pane beside the viewport), on the platform Qt is given
+// (offscreen for a figure without a display). For one map it prints, in milliseconds:
+//   - load: from asking for the map (Load…, a drop) to the first frame that draws its bake;
+//   - method: from a method change to the first frame that draws the new method;
+//   - gloss: from a base-gloss change to the first frame that draws it (median of N changes);
+//   - landing frame: the viewport frame that takes a bake in (its upload included);
+// and the peak resident memory of the process. Figures, not a pass/fail test: core/bench/
+// studio_latency.sh runs it on a real map at several sizes.
+#include "main_window.h"
+#include "material_document.h"
+#include "viewport.h"
+
+#include <QApplication>
+#include <QCommandLineParser>
+#include <QElapsedTimer>
+#include <QSurfaceFormat>
+
+#include <algorithm>
+#include <cstdio>
+#include <sys/resource.h>
+#include <vector>
+
+namespace {
+
+using burnish::Method;
+using burnish::studio::MainWindow;
+using burnish::studio::MapSlot;
+using burnish::studio::MaterialDocument;
+using burnish::studio::Viewport;
+
+constexpr qint64 kTimeoutMs = 600000;
+
+struct Landing {
+    double ms = -1.0;     // request to the first frame without a bake pending; < 0: timed out
+    double frameMs = 0.0; // that frame's own time
+};
+
+// Runs the event loop from `request` (false: it was refused) until the viewport draws a frame with no bake
+// pending once `applied` holds (the frame that takes the requested bake in, or one drawn at once when nothing
+// had to be baked).
+template <typename Request, typename Applied>
+Landing timeUntilDrawn(Viewport& view, Request request, Applied applied) {
+    bool landed = false;
+    Landing result;
+    QElapsedTimer clock;
+    const auto connection = QObject::connect(&view, &Viewport::frameRendered, [&](double frameMs) {
+        if (landed || view.bakingShown() || !applied()) return;
+        landed = true;
+        result.ms = double(clock.nsecsElapsed()) / 1e6;
+        result.frameMs = frameMs;
+    });
+    clock.start();
+    const bool asked = request();
+    while (asked && !landed && clock.elapsed() < kTimeoutMs)
+        QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
+    QObject::disconnect(connection);
+    return result;
+}
+
+template <typename Request> Landing timeUntilDrawn(Viewport& view, Request request) {
+    return timeUntilDrawn(view, request, [] { return true; });
+}
+
+double peakResidentMb() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_maxrss) / 1024.0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    QSurfaceFormat format = QSurfaceFormat::defaultFormat();
+    format.setVersion(3, 3);
+    format.setProfile(QSurfaceFormat::CoreProfile);
+    QSurfaceFormat::setDefaultFormat(format);
+    QApplication app(argc, argv);
+    QCommandLineParser parser;
+    parser.setApplicationDescription("The studio's latencies for one normal map.");
+    parser.addHelpOption();
+    parser.addPositionalArgument("map", "the normal map to load");
+    const QCommandLineOption repeatsOption("repeats", "gloss changes timed (median)", "N", "5");
+    const QCommandLineOption widthOption("width", "window width", "W", "1920");
+    const QCommandLineOption heightOption("height", "window height", "H", "1080");
+    parser.addOptions({repeatsOption, widthOption, heightOption});
+    parser.process(app);
+    if (parser.positionalArguments().size() != 1) parser.showHelp(2);
+    const QString map = parser.positionalArguments().first();
+    const int repeats = std::max(1, parser.value(repeatsOption).toInt());
+
+    MainWindow window;
+    window.showMessage = [](const QString&, const QString& text) {
+        std::fprintf(stderr, "burnish_studio_latency: %s\n", qPrintable(text));
+    };
+    window.ask = [](const QString&, const QString&, QMessageBox::StandardButtons) {
+        return QMessageBox::Discard;
+    };
+    window.setBackgroundLoads(true);
+    window.resize(parser.value(widthOption).toInt(), parser.value(heightOption).toInt());
+    window.show();
+    auto* view = window.findChild<Viewport*>();
+    if (!view) {
+        std::fprintf(stderr, "burnish_studio_latency: the window has no viewport\n");
+        return 1;
+    }
+    MaterialDocument& doc = *window.document();
+    // The sample's first frame, so the load below starts from a settled window.
+    if (timeUntilDrawn(*view, [&] {
+            view->update();
+            return true;
+        }).ms < 0.0)
+        return 1;
+
+    const Landing load = timeUntilDrawn(
+        *view, [&] { return window.openFile(map); }, [&] { return doc.settings().normalMapPath == map; });
+    if (load.ms < 0.0 || doc.settings().normalMapPath != map) {
+        std::fprintf(stderr, "burnish_studio_latency: %s was not drawn\n", qPrintable(map));
+        return 1;
+    }
+    const auto& normal = *doc.maps().normal;
+
+    // A method change: to LEAN, or to the preset's default when it is already LEAN.
+    const std::vector<Method> methods = doc.availableMethods();
+    Method other = methods.front();
+    for (const Method m : methods)
+        if (m != doc.settings().method) other = m;
+    const Landing method = timeUntilDrawn(*view, [&] { return bool(doc.setMethod(other)); });
+
+    std::vector<Landing> gloss;
+    for (int i = 0; i < repeats; ++i) {
+        const double value = 0.3 + 0.5 * double(i % 2); // alternates, so each is a change
+        gloss.push_back(timeUntilDrawn(*view, [&] {
+            doc.setGloss(value);
+            return true;
+        }));
+    }
+    std::sort(gloss.begin(), gloss.end(), [](const Landing& a, const Landing& b) { return a.ms < b.ms; });
+    const Landing median = gloss[gloss.size() / 2];
+    if (method.ms < 0.0 || median.ms < 0.0) {
+        std::fprintf(stderr, "burnish_studio_latency: a change was not drawn in %lld s\n",
+                     static_cast<long long>(kTimeoutMs / 1000));
+        return 1;
+    }
+    std::printf("| %d×%d | %.0f | %.0f | %.0f (%.0f–%.0f) | %.0f | %.0f |\n", normal.width, normal.height,
+                load.ms, method.ms, median.ms, gloss.front().ms, gloss.back().ms, median.frameMs,
+                peakResidentMb());
+    return 0;
+}

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# How long the studio keeps an artist waiting, for a real normal map resized to each size
+# (oiiotool): load to the first frame with the map's bake, a method change and a base-gloss change
+# to the first frame that draws them, the viewport frame that takes a bake in, and the process's
+# peak memory. The whole main window runs (offscreen unless QT_QPA_PLATFORM says otherwise), with its
+# background loads and bakes. Figures, not a pass/fail test.
+#
+#   core/bench/studio_latency.sh LATENCY_BINARY MAP [SIZES...]   (default sizes: 512 2048 8192)
+#   LATENCY_BINARY: build/bin/burnish_studio_latency
+set -euo pipefail
+binary=$1
+map=$2
+shift 2
+sizes=("$@")
+[ ${#sizes[@]} -gt 0 ] || sizes=(512 2048 8192)
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+mkdir -p "$work/home"
+
+echo "| map | load to first frame, ms | method change, ms | gloss change, ms: median (range) | landing frame, ms | peak resident MB |"
+echo "| --- | ---: | ---: | ---: | ---: | ---: |"
+for size in "${sizes[@]}"; do
+    # Unassociated alpha: OpenImageIO would otherwise premultiply an RGBA map's normals by its alpha.
+    oiiotool --iconfig oiio:UnassociatedAlpha 1 "$map" --ch R,G,B --resize:filter=triangle "${size}x${size}" \
+        -o "$work/map.png"
+    HOME="$work/home" QT_QPA_PLATFORM="${QT_QPA_PLATFORM:-offscreen}" "$binary" "$work/map.png"
+done

@@ -54,10 +54,6 @@ QString qs(std::string_view s) {
     return QString::fromUtf8(s.data(), int(s.size()));
 }
 
-uchar toByte(double v) {
-    return uchar(std::lround(std::clamp(v, 0.0, 1.0) * 255.0));
-}
-
 } // namespace
 
 PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)

@@ -23,14 +23,6 @@
 
 namespace burnish::studio {
 
-namespace {
-
-uchar toByte(double v) {
-    return uchar(std::lround(std::clamp(v, 0.0, 1.0) * 255.0));
-}
-
-} // namespace
-
 // Rows converted in parallel (an 8192² map is 67 million texels).
 QImage normalMapImage(const NormalMap& map) {
     QImage image(map.width, map.height, QImage::Format_RGB888);

@@ -6,9 +6,16 @@
 #include <QPointF>
 #include <QWidget>
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 
 namespace burnish::studio {
+
+/// A value in [0, 1] (clamped) as the 8-bit code the views show it with.
+inline uchar toByte(double v) {
+    return uchar(std::lround(std::clamp(v, 0.0, 1.0) * 255.0));
+}
 
 class TextureView : public QWidget {
     Q_OBJECT

@@ -154,17 +154,19 @@ vec3 mixtureLobeCovariance(float w, vec2 wb, vec3 wM, float minVariance) {
 // its mean slope (core's mixtureValue). lobe[i] = (w·b.x, w·b.y, w·M.xx, w·M.yy); cross[i] = w·M.xy.
 float mixtureValue(vec4 weights, vec4 lobe[kMaxMixtureLobes], vec4 cross, int count, vec3 l, vec3 h,
                    float minVariance) {
+    // No early return and no `continue`: each costs a shader core a divergent branch (on llvmpipe a
+    // K = 1 mixture's frame took 23.5 ms with them, 13.4 ms without). An empty lobe's term is
+    // w = 0 times a finite value (mixtureLobeCovariance's (min, min, 0) lobe): 0, as core's skip.
     float total = 0.0;
-    for (int i = 0; i < kMaxMixtureLobes; ++i)
-        if (i < count) total += max(weights[i], 0.0);
-    if (!(total > 0.0)) return 0.0;
+    for (int i = 0; i < count; ++i)
+        total += max(weights[i], 0.0);
+    float share = total > 0.0 ? 1.0 / total : 0.0;
     float sum = 0.0;
-    for (int i = 0; i < kMaxMixtureLobes; ++i) {
+    for (int i = 0; i < count; ++i) {
         float w = max(weights[i], 0.0);
-        if (i >= count || !(w > 0.0)) continue;
         vec2 b = mixtureLobeMean(w, lobe[i].xy);
         vec3 cov = mixtureLobeCovariance(w, lobe[i].xy, vec3(lobe[i].zw, cross[i]), minVariance);
-        sum += w / total * slopeGaussianNdf(h, b, cov) * max(0.0, dot(normalOfSlope(b), l));
+        sum += w * share * slopeGaussianNdf(h, b, cov) * max(0.0, dot(normalOfSlope(b), l));
     }
     return sum;
 }

@@ -1,6 +1,9 @@
 // Benchmarks of the bake and the ground-truth evaluation (figures, not pass/fail):
 //   BM_Bake/<method>/<roles>  in-memory bake of a 4096² normal map, all mips (pyramid included):
-//                      every texture of the method (0), or those its preset's files read (1)
+//                      every texture of the method as floats (0), or as `burnish bake --preset P`
+//                      keeps them in memory (1): the textures P's files read, stored as the
+//                      files' codes or half floats (compactStorage), P the method's own preset
+//                      (toksvig-map, lean, clean, mixture), else blackops
 //   BM_ViewportBake/<size>/<n>/<kept> the studio viewport's bake (a gloss or method change) of a
 //                      size² map, levels above n skipped (0: none), from the pyramid its first bake
 //                      kept (1) or its own (0)
@@ -13,6 +16,8 @@
 // The map is BURNISH_BENCH_NORMAL_MAP (any normal map, tiled to the size) when set, else a
 // deterministic synthetic bumpy map. Run: build/core/burnish_bench --benchmark_filter='Bake|Pyramid|Evaluate'
 #include <burnish/core/bake/bake.h>
+#include <burnish/core/bake/bake_job.h>
+#include <burnish/core/bake/export.h>
 #include <burnish/core/bake/presets.h>
 #include <burnish/core/eval/evaluate.h>
 #include <burnish/core/io/image.h>
@@ -72,9 +77,10 @@ const NormalMap& benchMap(int size, std::string& label) {
     return cache.emplace(size, makeNormalMap(size, size, std::move(normals))).first->second;
 }
 
-// BM_Bake/<method>/<roles>: roles 0 bakes every texture the method has; roles 1 only those the
-// preset core/bench/bake_vs_maketx.sh uses for the method reads (its own preset for the Toksvig
-// map, LEAN and CLEAN, else blackops), with the preset's encoding: what that `burnish bake` bakes.
+// BM_Bake/<method>/<roles>: roles 0 bakes every texture the method has, as floats; roles 1 what
+// `burnish bake --preset P` bakes in memory for the method: the textures P's files read, each kept
+// as its files store it, with P's encoding (P its own preset for the Toksvig map, LEAN, CLEAN and
+// the mixture, else blackops; core/bench/bake_vs_maketx.sh uses the same).
 void BM_Bake(benchmark::State& state) {
     std::string label;
     const NormalMap& map = benchMap(4096, label);
@@ -83,15 +89,28 @@ void BM_Bake(benchmark::State& state) {
     std::string roles = "every texture";
     if (state.range(1) == 1) {
         const Method m = options.method;
-        const bool own = m == Method::ToksvigMap || m == Method::Lean || m == Method::Clean;
-        const auto preset = findPreset(own ? methodName(m) : "blackops");
-        if (!preset) {
-            state.SkipWithError(preset.error().c_str());
+        const bool own =
+            m == Method::ToksvigMap || m == Method::Lean || m == Method::Clean || m == Method::Mixture;
+        BakeJobSpec spec;
+        spec.input = "sample:bumpy";
+        spec.out = (std::filesystem::temp_directory_path() / "burnish-bench-bake").string(); // never written
+        spec.preset = own ? std::string(methodName(m)) : "blackops";
+        spec.method = std::string(methodName(m));
+        auto job = resolveBakeJob(spec);
+        if (!job) {
+            state.SkipWithError(job.error().c_str());
             return;
         }
-        options.encoding = preset->encoding;
-        options.roles = presetRoles(*preset);
-        roles = "preset " + preset->name + "'s textures";
+        options = job->bake;
+        options.roles = presetRoles(job->preset);
+        BakeRecord planned;
+        auto shape = bakeJobShape(*job, map.width, map.height, planned);
+        if (!shape) {
+            state.SkipWithError(shape.error().c_str());
+            return;
+        }
+        options.storage = compactStorage(*shape, job->preset, job->exportOptions, planned);
+        roles = "preset " + job->preset.name + "'s textures as its files keep them";
     }
     for (auto _ : state) {
         auto out = bake(map, options);
@@ -102,7 +121,7 @@ void BM_Bake(benchmark::State& state) {
         benchmark::Counter(double(map.texelCount()) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_Bake)
-    ->ArgsProduct({benchmark::CreateDenseRange(0, 6, 1), {0, 1}})
+    ->ArgsProduct({benchmark::CreateDenseRange(0, int(burnish::Method::Mixture), 1), {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2)
     ->UseRealTime();

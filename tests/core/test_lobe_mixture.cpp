@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -18,6 +19,7 @@
 #include <limits>
 #include <memory>
 #include <random>
+#include <vector>
 
 using namespace burnish;
 
@@ -215,6 +217,97 @@ TEST(LobeMixture, SameBitsOnOneThreadAndOnAll) {
                 ASSERT_EQ(std::memcmp(a.lobes.data(), o.lobes.data(), sizeof(a.lobes)), 0);
             }
     }
+}
+
+// The reduction as its header states it, one mergeCost call per pair per step (no cost matrix, no
+// four-at-a-time costs): first every lobe under kMinLobeShare, the lightest first, gives its weight to
+// its cheapest partner (its mean and covariance kept); then the cheapest pair merges until k remain,
+// and then while a pair costs nothing; ties to the lower indices; canonical order.
+LobeMixture referenceReduction(std::vector<LobeMoments> lobes, int k, double minVariance) {
+    std::erase_if(lobes, [](const LobeMoments& l) { return !(l.w > 0.0); });
+    double total = 0.0;
+    for (const auto& l : lobes)
+        total += l.w;
+    while (k > 1 && lobes.size() > 1) {
+        size_t light = lobes.size();
+        for (size_t i = 0; i < lobes.size(); ++i)
+            if (lobes[i].w < kMinLobeShare * total && (light == lobes.size() || lobes[i].w < lobes[light].w))
+                light = i;
+        if (light == lobes.size()) break;
+        size_t partner = light == 0 ? 1 : 0;
+        double best = std::numeric_limits<double>::infinity();
+        for (size_t j = 0; j < lobes.size(); ++j)
+            if (j != light && mergeCost(lobes[light], lobes[j], minVariance) < best)
+                best = mergeCost(lobes[light], lobes[j], minVariance), partner = j;
+        LobeMoments& p = lobes[partner];
+        const double scale = (p.w + lobes[light].w) / p.w;
+        p.w += lobes[light].w;
+        p.bx *= scale, p.by *= scale, p.mxx *= scale, p.myy *= scale, p.mxy *= scale;
+        lobes.erase(lobes.begin() + std::ptrdiff_t(light));
+    }
+    while (lobes.size() > 1) {
+        size_t bi = 0, bj = 0;
+        double best = std::numeric_limits<double>::infinity();
+        for (size_t i = 0; i < lobes.size(); ++i)
+            for (size_t j = i + 1; j < lobes.size(); ++j)
+                if (const double c = mergeCost(lobes[i], lobes[j], minVariance); c < best)
+                    best = c, bi = i, bj = j;
+        if (lobes.size() <= size_t(k) && !(best <= 1e-9 * total)) break;
+        lobes[bi] += lobes[bj];
+        lobes.erase(lobes.begin() + std::ptrdiff_t(bj));
+    }
+    std::sort(lobes.begin(), lobes.end(), [](const LobeMoments& a, const LobeMoments& b) {
+        const glm::dvec2 ma = a.mean(), mb = b.mean();
+        if (ma.x != mb.x) return ma.x < mb.x;
+        if (ma.y != mb.y) return ma.y < mb.y;
+        return a.w > b.w;
+    });
+    LobeMixture out;
+    out.count = int(lobes.size());
+    for (size_t i = 0; i < lobes.size(); ++i)
+        out.lobes[i] = lobes[i];
+    return out;
+}
+
+// The bake's reduction (a cost matrix, its rows four pairs at a time in AVX2 or SSE2) gives the
+// reference's lobes bit for bit: random clusters of 1 to 40 lobes (a level-1 footprint's normals, up
+// to 3×3 children of 4 lobes), light lobes and equal lobes among them, every K.
+TEST(LobeMixture, ReductionIsTheReferenceGreedyMergeBitForBit) {
+    std::mt19937 rng(7);
+    std::normal_distribution<double> slope(0.0, 0.4);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    const double minVariance = 1.0 / 256.0;
+    int cases = 0;
+    for (int trial = 0; trial < 600; ++trial) {
+        const size_t n = 1 + size_t(trial % 40);
+        std::vector<LobeMoments> lobes;
+        const glm::dvec2 centre(slope(rng), slope(rng));
+        for (size_t i = 0; i < n; ++i) {
+            if (trial % 7 == 0 && i > 0 && unit(rng) < 0.3) {
+                lobes.push_back(lobes.back()); // equal lobes
+                continue;
+            }
+            const double w = trial % 3 == 0 && unit(rng) < 0.25 ? 0.005 * unit(rng) : 0.2 + unit(rng);
+            const glm::dvec2 b = centre + glm::dvec2(slope(rng), slope(rng)) * (unit(rng) < 0.5 ? 0.1 : 1.0);
+            const double vx = minVariance * (1.0 + 20.0 * unit(rng)),
+                         vy = minVariance * (1.0 + 20.0 * unit(rng));
+            const double c = 0.5 * std::sqrt(vx * vy) * (2.0 * unit(rng) - 1.0);
+            LobeMoments l;
+            l.w = w;
+            l.bx = w * b.x, l.by = w * b.y;
+            l.mxx = w * (vx + b.x * b.x), l.myy = w * (vy + b.y * b.y), l.mxy = w * (c + b.x * b.y);
+            lobes.push_back(l);
+        }
+        for (int k = 1; k <= kMaxMixtureLobes; ++k) {
+            const LobeMixture got = reduceLobes(lobes, k, minVariance);
+            const LobeMixture want = referenceReduction(lobes, k, minVariance);
+            ASSERT_EQ(got.count, want.count) << "trial " << trial << ", k " << k;
+            ASSERT_EQ(std::memcmp(got.lobes.data(), want.lobes.data(), sizeof(got.lobes)), 0)
+                << "trial " << trial << ", k " << k;
+            ++cases;
+        }
+    }
+    EXPECT_EQ(cases, 2400);
 }
 
 TEST(LobeMixture, NdfKeepsItsEnergy) {

@@ -446,11 +446,12 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
             for (size_t i = 0; i < count; ++i)
                 mip.halfBits[at + i] = halfCode(px[i]).bits();
     };
-    pyramid.forEachMomentRow(k, [&](int y, const NormalMoments* row) {
+    // Row y of every role; `row` is the filtered moments of the row, null when no role reads them.
+    auto bakeRow = [&](int y, const NormalMoments* row) {
         const int width = level.width;
         const size_t first = size_t(y) * size_t(width);
         thread_local RowValues values;
-        values.fill(plan, k, y, row, width);
+        if (row) values.fill(plan, k, y, row, width);
         if (plan.mixture) {
             // Every mixture role in one pass (four channels each), then each stored.
             thread_local std::array<std::vector<float>, kMixtureRoles> scratch;
@@ -486,7 +487,15 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
             rowCounts[size_t(y)].low += c.low;
             rowCounts[size_t(y)].high += c.high;
         }
-    });
+    };
+    // The mixture's lobes (K >= 2) come from its own pyramid: a level of mixture roles only needs no
+    // filtered moments.
+    const bool readsMoments = !plan.mixture || std::any_of(plan.roles.begin(), plan.roles.end(),
+                                                           [](TextureRole r) { return mixtureSlot(r) < 0; });
+    if (readsMoments)
+        pyramid.forEachMomentRow(k, bakeRow);
+    else
+        tbb::parallel_for(0, level.height, [&](int y) { bakeRow(y, nullptr); });
     for (const ClampCounts& c : rowCounts) {
         out.stats.glossClampedLow += c.low;
         out.stats.glossClampedHigh += c.high;

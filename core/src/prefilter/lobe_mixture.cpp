@@ -1,13 +1,23 @@
+// Double4 values pass only between inline functions and the target_clones copies of this file (see
+// util/simd.h), never across a library's interface: GCC's note on their ABI does not apply.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
 #include <burnish/core/prefilter/lobe_mixture.h>
 
 #include <burnish/core/prefilter/methods.h>
+#include <burnish/core/util/numeric.h>
+#include <burnish/core/util/simd.h>
 
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <type_traits>
 
 namespace burnish {
 
@@ -153,33 +163,104 @@ namespace {
 // log det Σ of the lobe with raw moments (w, w·b, w·M), w > 0: LobeMoments::covariance's clamps
 // (variances at least minVariance, |ρ| <= kMaxCorrelation) on det directly, without the square root,
 // and the logarithm without a call (log2Positive: det is a positive normal double, at least
-// minVariance²·(1 − kMaxCorrelation²)). The merge costs' inner loop: no branch, no call.
-double logDetOfMoments(double w, double bx, double by, double mxx, double myy, double mxy,
-                       double minVariance) {
-    const double inv = 1.0 / w;
-    const double mx = bx * inv, my = by * inv;
-    double xx = mxx * inv - mx * mx, yy = myy * inv - my * my;
-    xx = xx > minVariance ? xx : minVariance; // also NaN → minVariance
-    yy = yy > minVariance ? yy : minVariance;
-    const double xy = mxy * inv - mx * my;
-    const double limit = kMaxCorrelation * kMaxCorrelation * xx * yy;
-    double xy2 = xy * xy;
+// minVariance²·(1 − kMaxCorrelation²)). The merge costs' inner loop: no branch, no call. D is double,
+// or Double4 for four lobes at once (the same operations lane by lane: the same bits).
+template <class D>
+[[gnu::always_inline]] inline D logDetOfMoments(D w, D bx, D by, D mxx, D myy, D mxy, double minVariance) {
+    const D floor = D{} + minVariance;
+    const D inv = 1.0 / w;
+    const D mx = bx * inv, my = by * inv;
+    D xx = mxx * inv - mx * mx, yy = myy * inv - my * my;
+    xx = xx > minVariance ? xx : floor; // also NaN → minVariance
+    yy = yy > minVariance ? yy : floor;
+    const D xy = mxy * inv - mx * my;
+    const D limit = kMaxCorrelation * kMaxCorrelation * xx * yy;
+    D xy2 = xy * xy;
     xy2 = xy2 < limit ? xy2 : limit; // also NaN → the limit
-    return kLn2<double> * log2Positive(xx * yy - xy2);
+    if constexpr (std::is_same_v<D, double>)
+        return kLn2<double> * log2Positive(xx * yy - xy2);
+    else
+        return kLn2<double> * log2Positive<D, simd::UInt64x4>(xx * yy - xy2);
 }
 
 // w · log det Σ of a lobe: the part of the merge cost each lobe brings, computed once per lobe.
-double weightedLogDet(const LobeMoments& a, double minVariance) {
+[[gnu::always_inline]] inline double weightedLogDet(const LobeMoments& a, double minVariance) {
     return a.w * logDetOfMoments(a.w, a.bx, a.by, a.mxx, a.myy, a.mxy, minVariance);
+}
+
+// Runnalls' cost from the merged lobe's log det and the two lobes' w·log det, in this order.
+template <class D> [[gnu::always_inline]] inline D costOfMerge(D w, D ld, D wlA, D wlB) {
+    const D cost = 0.5 * (w * ld - wlA - wlB);
+    return cost > 0.0 ? cost : D{}; // rounding below the bound's 0
 }
 
 double mergeCostOf(const LobeMoments& a, double wlA, const LobeMoments& b, double wlB, double minVariance) {
     const double w = a.w + b.w;
     const double ld = logDetOfMoments(w, a.bx + b.bx, a.by + b.by, a.mxx + b.mxx, a.myy + b.myy,
                                       a.mxy + b.mxy, minVariance);
-    const double cost = 0.5 * (w * ld - wlA - wlB);
-    return cost > 0.0 ? cost : 0.0; // rounding below the bound's 0
+    return costOfMerge(w, ld, wlA, wlB);
 }
+
+// The lobes of one reduction as columns with four to seven copies of lobe 0 after them (finite, w > 0:
+// lanes past the last lobe compute a harmless cost nobody reads, and a run of four from any lobe
+// stays inside), with each lobe's w·log det Σ.
+struct LobeColumns {
+    std::vector<double> w, bx, by, mxx, myy, mxy, wl;
+
+    static size_t padded(size_t n) { return (n + 7) / 4 * 4; }
+    [[gnu::always_inline]] void set(size_t i, const LobeMoments& l) {
+        w[i] = l.w, bx[i] = l.bx, by[i] = l.by, mxx[i] = l.mxx, myy[i] = l.myy, mxy[i] = l.mxy;
+    }
+    /// Columns of `lobes` (at least one) and their w·log det Σ, four at a time.
+    [[gnu::always_inline]] void assign(const std::vector<LobeMoments>& lobes, double minVariance) {
+        const size_t n = padded(lobes.size());
+        for (auto* c : {&w, &bx, &by, &mxx, &myy, &mxy, &wl})
+            c->resize(n);
+        for (size_t i = 0; i < n; ++i)
+            set(i, lobes[i < lobes.size() ? i : 0]);
+        for (size_t i = 0; i < n; i += 4) {
+            const simd::Double4 wi = load(w, i);
+            store(wl, i,
+                  wi * logDetOfMoments(wi, load(bx, i), load(by, i), load(mxx, i), load(myy, i), load(mxy, i),
+                                       minVariance));
+        }
+    }
+    /// Lobe i changed (a merge or an absorption): its columns and w·log det Σ.
+    [[gnu::always_inline]] void update(size_t i, const LobeMoments& l, double minVariance) {
+        set(i, l);
+        wl[i] = weightedLogDet(l, minVariance);
+    }
+    /// The merge costs of lobe i with lobes j (j0 <= j < j0 + 4·⌈count/4⌉) into out[j]: as
+    /// mergeCostOf(lobe lo, wl[lo], lobe hi, wl[hi]) with (lo, hi) = (i, j), or with `byIndex` the
+    /// pair in index order (min(i, j), max(i, j)), the order of the cost matrix. j = i gives garbage.
+    [[gnu::always_inline]] void costsWith(size_t i, size_t j0, size_t count, bool byIndex, double minVariance,
+                                          std::vector<double>& out) const {
+        const simd::Double4 wi = D4(w[i]), bxi = D4(bx[i]), byi = D4(by[i]), mxxi = D4(mxx[i]),
+                            myyi = D4(myy[i]), mxyi = D4(mxy[i]), wli = D4(wl[i]);
+        for (size_t j = j0; j < j0 + count; j += 4) {
+            const simd::Double4 ww = wi + load(w, j);
+            const simd::Double4 ld =
+                logDetOfMoments(ww, bxi + load(bx, j), byi + load(by, j), mxxi + load(mxx, j),
+                                myyi + load(myy, j), mxyi + load(mxy, j), minVariance);
+            const simd::Double4 wlj = load(wl, j);
+            const simd::Int64x4 index{std::int64_t(j), std::int64_t(j + 1), std::int64_t(j + 2),
+                                      std::int64_t(j + 3)};
+            const simd::Int64x4 swap = byIndex ? index < std::int64_t(i) : simd::Int64x4{};
+            store(out, j, costOfMerge(ww, ld, swap ? wlj : wli, swap ? wli : wlj));
+        }
+    }
+
+private:
+    [[gnu::always_inline]] static simd::Double4 D4(double v) { return simd::Double4{v, v, v, v}; }
+    [[gnu::always_inline]] static simd::Double4 load(const std::vector<double>& c, size_t i) {
+        simd::Double4 v;
+        std::memcpy(&v, c.data() + i, sizeof v);
+        return v;
+    }
+    [[gnu::always_inline]] static void store(std::vector<double>& c, size_t i, simd::Double4 v) {
+        std::memcpy(c.data() + i, &v, sizeof v);
+    }
+};
 
 } // namespace
 
@@ -190,34 +271,36 @@ double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance)
 namespace {
 
 // reduceLobes on the caller's vector (changed), with the pair costs in per-thread buffers: no
-// allocation per texel once the buffers have grown.
-LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lobes, int k, double minVariance) {
+// allocation per texel once the buffers have grown. The costs are computed four pairs at a time
+// (LobeColumns), each bit for bit the scalar mergeCost.
+BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lobes, int k,
+                                                   double minVariance) {
     k = std::clamp(k, 1, kMaxMixtureLobes);
     std::erase_if(lobes, [](const LobeMoments& l) { return !(l.w > 0.0); });
     double total = 0.0;
     for (const auto& l : lobes)
         total += l.w;
-    auto cheapestPartner = [&](size_t i) {
-        size_t best = i == 0 ? 1 : 0;
-        double bestCost = std::numeric_limits<double>::infinity();
-        for (size_t j = 0; j < lobes.size(); ++j) {
-            if (j == i) continue;
-            const double c = mergeCost(lobes[i], lobes[j], minVariance);
-            if (c < bestCost) bestCost = c, best = j;
-        }
-        return best;
-    };
+    thread_local LobeColumns columns;
+    thread_local std::vector<double> row;
     // Lobes too light to carry a cluster of their own go first (k >= 2: one lobe is the exact sum), the
-    // lightest first: their weight is absorbed by the cheapest partner, whose mean and covariance stay as
-    // they are. A few steep outlier normals then keep their energy without dragging a lobe's moments (a slope
-    // of 100 at 1/256 of a footprint would add 39 to a merged variance).
+    // lightest first: their weight is absorbed by the cheapest partner (the first of the lowest mergeCost),
+    // whose mean and covariance stay as they are. A few steep outlier normals then keep their energy
+    // without dragging a lobe's moments (a slope of 100 at 1/256 of a footprint would add 39 to a merged
+    // variance).
     while (k > 1 && lobes.size() > 1) {
         size_t light = lobes.size();
         for (size_t i = 0; i < lobes.size(); ++i)
             if (lobes[i].w < kMinLobeShare * total && (light == lobes.size() || lobes[i].w < lobes[light].w))
                 light = i;
         if (light == lobes.size()) break;
-        LobeMoments& partner = lobes[cheapestPartner(light)];
+        columns.assign(lobes, minVariance);
+        row.resize(columns.w.size());
+        columns.costsWith(light, 0, lobes.size(), false, minVariance, row);
+        size_t partnerIndex = light == 0 ? 1 : 0;
+        double bestCost = std::numeric_limits<double>::infinity();
+        for (size_t j = 0; j < lobes.size(); ++j)
+            if (j != light && row[j] < bestCost) bestCost = row[j], partnerIndex = j;
+        LobeMoments& partner = lobes[partnerIndex];
         const double scale = (partner.w + lobes[light].w) / partner.w;
         partner.w += lobes[light].w;
         partner.bx *= scale;
@@ -232,32 +315,38 @@ LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lobes, int k, double mi
     // recomputes only the merged lobe's row.
     const size_t n = lobes.size();
     if (n > 1) {
-        thread_local std::vector<double> cost, wl;
+        thread_local std::vector<double> cost;
         thread_local std::vector<char> alive;
+        columns.assign(lobes, minVariance);
+        row.resize(columns.w.size());
         cost.assign(n * n, 0.0);
-        wl.assign(n, 0.0);
         alive.assign(n, 1);
-        for (size_t i = 0; i < n; ++i)
-            wl[i] = weightedLogDet(lobes[i], minVariance);
-        for (size_t i = 0; i < n; ++i)
-            for (size_t j = i + 1; j < n; ++j)
-                cost[i * n + j] = mergeCostOf(lobes[i], wl[i], lobes[j], wl[j], minVariance);
+        for (size_t i = 0; i + 1 < n; ++i) {
+            columns.costsWith(i, i + 1, n - i - 1, false, minVariance, row);
+            std::copy(row.begin() + std::ptrdiff_t(i + 1), row.begin() + std::ptrdiff_t(n),
+                      cost.begin() + std::ptrdiff_t(i * n + i + 1));
+        }
+        // A merged-away lobe's pairs cost +∞ (a cost is finite or +∞, never NaN): the scan for the
+        // first cheapest pair needs no test of which lobes remain.
+        constexpr double kGone = std::numeric_limits<double>::infinity();
         for (size_t remaining = n; remaining > 1; --remaining) {
             size_t bi = 0, bj = 0;
-            double best = std::numeric_limits<double>::infinity();
-            for (size_t i = 0; i < n; ++i) {
-                if (!alive[i]) continue;
+            double best = kGone;
+            for (size_t i = 0; i + 1 < n; ++i) {
+                const double* c = cost.data() + i * n;
                 for (size_t j = i + 1; j < n; ++j)
-                    if (alive[j] && cost[i * n + j] < best) best = cost[i * n + j], bi = i, bj = j;
+                    if (c[j] < best) best = c[j], bi = i, bj = j;
             }
             if (remaining <= size_t(k) && !(best <= kNegligibleMergeCost * total)) break;
             lobes[bi] += lobes[bj];
-            wl[bi] = weightedLogDet(lobes[bi], minVariance);
+            columns.update(bi, lobes[bi], minVariance);
             alive[bj] = 0;
+            for (size_t o = 0; o < n; ++o)
+                cost[std::min(o, bj) * n + std::max(o, bj)] = kGone;
+            columns.costsWith(bi, 0, n, true, minVariance, row);
             for (size_t o = 0; o < n; ++o) {
                 if (!alive[o] || o == bi) continue;
-                const size_t lo = std::min(o, bi), hi = std::max(o, bi);
-                cost[lo * n + hi] = mergeCostOf(lobes[lo], wl[lo], lobes[hi], wl[hi], minVariance);
+                cost[std::min(o, bi) * n + std::max(o, bi)] = row[o];
             }
         }
         size_t out = 0;

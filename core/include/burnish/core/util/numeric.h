@@ -62,16 +62,19 @@ template <class T> inline T powUnit(T x, T p) {
 /// |s| <= 0.1716, by its odd series to s^15: the truncation is below 2e-14, so the result is
 /// within 2e-14 of std::log2 (tested) and exact at powers of two. Zero, negative, subnormal,
 /// infinite and NaN inputs give meaningless (finite or not) values: clamp x first.
-inline double log2Positive(double x) {
-    const std::uint64_t bits = std::bit_cast<std::uint64_t>(x);
+/// D is double, or a vector of doubles (GCC vector extensions, e.g. simd::Double4) with U its
+/// vector of 64-bit unsigned integers: the same IEEE operations lane by lane, so a lane's result is
+/// the double's bit for bit.
+template <class D, class U = std::uint64_t> inline D log2Positive(D x) {
+    const U bits = std::bit_cast<U>(x);
     // The biased exponent as a double, exactly: OR it into 2^52's mantissa and subtract 2^52.
-    const double biased = std::bit_cast<double>((bits >> 52) | 0x4330000000000000ull) - 0x1p52;
-    double m = std::bit_cast<double>((bits & 0x000fffffffffffffull) | 0x3ff0000000000000ull); // [1, 2)
-    const bool high = m > 1.4142135623730951;
+    const D biased = std::bit_cast<D>((bits >> 52) | 0x4330000000000000ull) - 0x1p52;
+    D m = std::bit_cast<D>((bits & 0x000fffffffffffffull) | 0x3ff0000000000000ull); // [1, 2)
+    const auto high = m > 1.4142135623730951;
     m = high ? 0.5 * m : m;
-    const double e = (high ? biased + 1.0 : biased) - 1023.0;
-    const double s = (m - 1.0) / (m + 1.0), s2 = s * s;
-    double series = 1.0 / 15;
+    const D e = (high ? biased + 1.0 : biased) - 1023.0;
+    const D s = (m - 1.0) / (m + 1.0), s2 = s * s;
+    D series = D{} + 1.0 / 15;
     for (const double c : {1.0 / 13, 1.0 / 11, 1.0 / 9, 1.0 / 7, 1.0 / 5, 1.0 / 3, 1.0})
         series = c + s2 * series;
     return e + (2.0 / kLn2<double>)*s * series;

@@ -4,6 +4,7 @@
 // function compiled twice (target_clones, see BURNISH_AVX2_CLONES) gives the same bits in both copies.
 #pragma once
 
+#include <cstdint>
 #include <cstring>
 
 // GCC notes that a 32-byte vector passed by value has another ABI with AVX than without. Float8 values
@@ -20,6 +21,10 @@ using Int4 = int __attribute__((vector_size(16)));
 using Float8 = float __attribute__((vector_size(32)));
 using Int8 = int __attribute__((vector_size(32)));
 using UInt8 = unsigned __attribute__((vector_size(32)));
+/// Four doubles (one AVX register, two SSE ones) and their bits; a comparison gives an Int64x4 mask.
+using Double4 = double __attribute__((vector_size(32)));
+using UInt64x4 = std::uint64_t __attribute__((vector_size(32)));
+using Int64x4 = std::int64_t __attribute__((vector_size(32)));
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 // An AVX2 copy of a function beside the default (SSE2) one, picked when the program loads on CPUs that

@@ -6,7 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <random>
+#include <vector>
 
 using namespace burnish;
 
@@ -386,4 +390,38 @@ TEST(Bake, LevelsLargerThanTheLargestAreSkippedAndTheRestAreTheFullBakes) {
     ASSERT_TRUE(three) << three.error();
     EXPECT_FALSE(three->textures.front().mips.back().texels.empty());
     EXPECT_TRUE(three->textures.front().mips.front().texels.empty());
+}
+
+// The eight-lane half conversion the bake stores half textures with gives halfCode's bits: for
+// every 61st float bit pattern of [0, 1] (normal, denormal and zero halves, ties included), every
+// pattern around the denormal and zero thresholds, −0, values outside [0, 1], infinities and NaN.
+TEST(Bake, HalfCodesAreHalfCodeBitForBit) {
+    std::vector<float> values;
+    auto addBits = [&](std::uint32_t b) {
+        float f;
+        std::memcpy(&f, &b, sizeof f);
+        values.push_back(f);
+    };
+    for (std::uint32_t b = 0; b <= 0x3f800000u; b += 61)
+        addBits(b);
+    for (const std::uint32_t edge : {0x33000000u, 0x38800000u, 0x387fe000u, 0x3f7ff000u})
+        for (std::uint32_t b = edge - 4096; b <= edge + 4096; ++b)
+            addBits(b);
+    for (const float f :
+         {-0.0f, -1e-30f, -2.0f, 1.0f, 1.0000001f, 3.5f, 70000.0f, std::numeric_limits<float>::infinity(),
+          -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()})
+        values.push_back(f);
+    // An odd count: the last values take the scalar tail.
+    values.push_back(0.5f);
+    std::vector<std::uint16_t> bits(values.size());
+    halfCodes(values.data(), values.size(), bits.data());
+    size_t mismatches = 0;
+    for (size_t i = 0; i < values.size(); ++i)
+        if (bits[i] != halfCode(values[i]).bits()) {
+            if (++mismatches <= 5)
+                ADD_FAILURE() << "value " << values[i] << ": " << bits[i] << " against "
+                              << halfCode(values[i]).bits();
+        }
+    EXPECT_EQ(mismatches, 0u);
+    EXPECT_GT(values.size(), 17'000'000u);
 }

@@ -12,8 +12,54 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 namespace burnish {
+
+// Imath's float-to-half (round to nearest even) for values clamped to [0, 1], eight lanes at a time:
+// the normal halves from the float's bits by one rounding add, those below 2^-14 as denormals by a
+// shift and the same tie rule, below 2^-25 zero. A block holding a NaN takes the scalar path.
+BURNISH_AVX2_CLONES void halfCodes(const float* values, size_t count, std::uint16_t* bits) {
+    using simd::Float8;
+    using simd::UInt8;
+    size_t i = 0;
+    for (; i + 8 <= count; i += 8) {
+        Float8 v;
+        std::memcpy(&v, values + i, sizeof v);
+        bool nan = false;
+        for (int k = 0; k < 8; ++k)
+            nan |= v[k] != v[k];
+        if (nan) {
+            for (size_t k = i; k < i + 8; ++k)
+                bits[k] = halfCode(values[k]).bits();
+            continue;
+        }
+        v = v < 0.0f ? Float8{} : v; // std::clamp(v, 0, 1): −0 stays −0
+        v = 1.0f < v ? Float8{} + 1.0f : v;
+        UInt8 u;
+        std::memcpy(&u, &v, sizeof u);
+        const UInt8 sign = (u >> 16) & 0x8000u;
+        const UInt8 ui = u & 0x7fffffffu;
+        const UInt8 biased = ui - 0x38000000u;
+        const UInt8 normal = (biased + 0x0fffu + ((biased >> 13) & 1u)) >> 13;
+        // Denormal halves: the mantissa with its implicit bit, shifted right by 0x7e − e (14..24 in
+        // that range; other lanes are clamped to a valid shift and not used).
+        UInt8 shift = 0x7eu - (ui >> 23);
+        shift = shift > 31u ? UInt8{} + 31u : shift;
+        shift = shift < 1u ? UInt8{} + 1u : shift;
+        const UInt8 m = 0x800000u | (ui & 0x7fffffu);
+        const UInt8 rest = m << (32u - shift);
+        UInt8 denormal = m >> shift;
+        const auto up = (rest > 0x80000000u) | ((rest == 0x80000000u) & ((denormal & 1u) != 0u));
+        denormal = up ? denormal + 1u : denormal;
+        UInt8 half = ui >= 0x38800000u ? normal : ui < 0x33000001u ? UInt8{} : denormal;
+        half |= sign;
+        for (int k = 0; k < 8; ++k)
+            bits[i + size_t(k)] = std::uint16_t(half[k]);
+    }
+    for (; i < count; ++i)
+        bits[i] = halfCode(values[i]).bits();
+}
 
 namespace {
 
@@ -443,8 +489,7 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
             for (size_t i = 0; i < count; ++i)
                 mip.unorm16[at + i] = unorm16(px[i]);
         else if (tex.storage == TexelStorage::Half)
-            for (size_t i = 0; i < count; ++i)
-                mip.halfBits[at + i] = halfCode(px[i]).bits();
+            halfCodes(px, count, &mip.halfBits[at]);
     };
     // Row y of every role; `row` is the filtered moments of the row, null when no role reads them.
     auto bakeRow = [&](int y, const NormalMoments* row) {

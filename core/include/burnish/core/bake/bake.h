@@ -49,6 +49,9 @@ inline std::uint16_t unorm16(float v) {
 inline Imath::half halfCode(float v) {
     return Imath::half(std::clamp(v, 0.0f, 1.0f));
 }
+/// halfCode(v).bits() of each of `count` values, eight at a time: the same bits (tested over the
+/// floats of [0, 1], -0, values outside and NaN).
+void halfCodes(const float* values, size_t count, std::uint16_t* bits);
 
 struct TextureMip {
     int width = 0;

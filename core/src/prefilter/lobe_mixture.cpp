@@ -218,7 +218,9 @@ struct LobeColumns {
             c->resize(n);
         for (size_t i = 0; i < n; ++i)
             set(i, lobes[i < lobes.size() ? i : 0]);
-        for (size_t i = 0; i < n; i += 4) {
+        // The lobes' own w·log det Σ; lanes past them hold any finite value (zeros or an earlier
+        // reduction's), read only by costs nobody reads.
+        for (size_t i = 0; i < lobes.size(); i += 4) {
             const simd::Double4 wi = load(w, i);
             store(wl, i,
                   wi * logDetOfMoments(wi, load(bx, i), load(by, i), load(mxx, i), load(myy, i), load(mxy, i),

@@ -2,8 +2,9 @@
 # How long the studio keeps an artist waiting, for a real normal map resized to each size
 # (oiiotool): load to the first frame with the map's bake, a method change and a base-gloss change
 # to the first frame that draws them, the viewport frame that takes a bake in, and the process's
-# peak memory. The whole main window runs (offscreen unless QT_QPA_PLATFORM says otherwise), with its
-# background loads and bakes. Figures, not a pass/fail test.
+# peak memory (the budget the studio keeps: under 4 GB for an 8192² map). The whole main window runs
+# (offscreen unless QT_QPA_PLATFORM says otherwise), with its background loads and bakes. Figures, not
+# a pass/fail test.
 #
 #   core/bench/studio_latency.sh LATENCY_BINARY MAP [SIZES...]   (default sizes: 512 2048 8192)
 #   LATENCY_BINARY: build/bin/burnish_studio_latency

@@ -304,6 +304,67 @@ TEST(Bake, ACachedPyramidBakesTheSameAndIsRefusedWhereItCannotServe) {
     EXPECT_NE(wrongMap.error().find("another normal map"), std::string::npos) << wrongMap.error();
 }
 
+// PyramidOptions::boxMoments = false: the levels' extents and footprints of a full pyramid with no
+// box moments. A mixture of K >= 2 lobes baking its own roles reads none (its bake builds such a
+// pyramid, and takes one given), and bakes the same bits as from a full pyramid; a bake that reads
+// moments (K = 1 is LEAN's) refuses it.
+TEST(Bake, AMixtureBakesFromAPyramidOfFootprintsAlone) {
+    const auto map = std::make_shared<const NormalMap>(gaussianField(48, 0.3, 0.15, 4));
+    PyramidOptions geometry;
+    geometry.boxMoments = false;
+    const auto bare = std::make_shared<const NormalPyramid>(NormalPyramid::build(map, geometry));
+    const auto full = std::make_shared<const NormalPyramid>(NormalPyramid::build(map, PyramidOptions{}));
+    ASSERT_EQ(bare->levelCount(), full->levelCount());
+    for (int k = 1; k < full->levelCount(); ++k) {
+        const PyramidLevel &a = bare->level(k), &b = full->level(k);
+        EXPECT_EQ(a.width, b.width);
+        EXPECT_EQ(a.height, b.height);
+        EXPECT_EQ(a.xStart, b.xStart);
+        EXPECT_EQ(a.yStart, b.yStart);
+        EXPECT_EQ(a.xChild, b.xChild);
+        EXPECT_EQ(a.yChild, b.yChild);
+        EXPECT_TRUE(a.box.empty());
+        EXPECT_FALSE(b.box.empty());
+    }
+    for (int lobes = 1; lobes <= kMaxMixtureLobes; ++lobes) {
+        BakeOptions options;
+        options.method = Method::Mixture;
+        options.params.mixtureLobes = lobes;
+        // The mixture preset's files: no normal texture (that one reads the moments).
+        options.roles = {TextureRole::MixtureWeights, TextureRole::MixtureLobe0, TextureRole::MixtureLobe1,
+                         TextureRole::MixtureLobe2,   TextureRole::MixtureLobe3, TextureRole::MixtureCross};
+        const auto own = bake(*map, options);
+        ASSERT_TRUE(own) << own.error();
+        options.cachedPyramid = full;
+        const auto fromFull = bake(*map, options);
+        options.cachedPyramid = bare;
+        const auto fromBare = bake(*map, options);
+        ASSERT_TRUE(fromFull) << fromFull.error();
+        if (lobes == 1) {
+            ASSERT_FALSE(fromBare);
+            EXPECT_NE(fromBare.error().find("lacks moments"), std::string::npos) << fromBare.error();
+            continue;
+        }
+        ASSERT_TRUE(fromBare) << fromBare.error();
+        ASSERT_EQ(own->textures.size(), size_t(lobes + 2));
+        for (size_t t = 0; t < own->textures.size(); ++t)
+            for (size_t k = 0; k < own->textures[t].mips.size(); ++k) {
+                EXPECT_EQ(fromFull->textures[t].mips[k].texels, own->textures[t].mips[k].texels) << lobes;
+                EXPECT_EQ(fromBare->textures[t].mips[k].texels, own->textures[t].mips[k].texels) << lobes;
+            }
+    }
+    BakeOptions lean;
+    lean.method = Method::Lean;
+    lean.cachedPyramid = bare;
+    EXPECT_FALSE(bake(*map, lean));
+    // With its normal texture, a mixture reads the moments.
+    BakeOptions withNormal;
+    withNormal.method = Method::Mixture;
+    withNormal.params.mixtureLobes = 3;
+    withNormal.cachedPyramid = bare;
+    EXPECT_FALSE(bake(*map, withNormal));
+}
+
 // BakeOptions::progress: called once the pyramids are built and after each level, with fractions
 // that grow to 1 (levels skipped by largestLevel count for nothing); the bake it watches is the same
 // as one without it; returning false stops the bake with "cancelled" at once.

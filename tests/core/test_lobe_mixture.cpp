@@ -126,7 +126,7 @@ TEST(LobeMixture, OneLobeAgreesWithLean) {
         for (int y = 0; y < l.height; y += 7)
             for (int x = 0; x < l.width; x += 5) {
                 const TexelLobe lean = methodLobe(Method::Lean, b.pyramid.boxMoments(level, x, y), s);
-                const LobeMoments& m = one.at(level, x, y).lobes[0];
+                const LobeMoments m = one.at(level, x, y).lobes[0];
                 const auto c = m.covariance(one.minVariance());
                 worst = std::max({worst, std::abs(m.mean().x - lean.slopeMean.x),
                                   std::abs(m.mean().y - lean.slopeMean.y),

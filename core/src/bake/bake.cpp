@@ -131,15 +131,21 @@ std::string describe(std::string_view text, const BakeOptions& options) {
     return out;
 }
 
+// Whether the bake writes the method's texture `role`: not a mixture's unused lobes, and only the
+// roles asked for.
+bool bakesRole(const BakeOptions& options, TextureRole role) {
+    if (!bakesTexture(options.method, role, options.params)) return false;
+    return !options.roles ||
+           std::find(options.roles->begin(), options.roles->end(), role) != options.roles->end();
+}
+
 // The textures the method's table row names (those of options.roles when given), described, with
 // their decodes under the bake's slope scales and no mips yet.
+
 std::vector<BakedTexture> planTextures(const BakeOptions& options, const ChannelScales& scales) {
     std::vector<BakedTexture> textures;
     for (const MethodTexture& m : methodSpec(options.method).textures) {
-        if (!bakesTexture(options.method, m.role, options.params)) continue; // a mixture's unused lobes
-        if (options.roles &&
-            std::find(options.roles->begin(), options.roles->end(), m.role) == options.roles->end())
-            continue;
+        if (!bakesRole(options, m.role)) continue;
         const TextureSpec& spec = textureSpec(m.role);
         BakedTexture t;
         t.role = m.role;
@@ -358,11 +364,33 @@ void mixtureRows(const RowPlan& plan, int k, int y, int width, const std::array<
     const double invB2 = 1.0 / (2 * sB), invM = 1.0 / sM, invM2 = 1.0 / (2 * sM);
     float* weights = px[0];
     float* cross = px[kMixtureRoles - 1];
+    if (k == 0) {
+        // One lobe per texel, weight 1, in its slot; the other slots' values are the loop's below
+        // for zero moments (0·scale + 0.5 is 0.5).
+        const float zero = unit(0.0), half = unit(0.5);
+        for (int x = 0; x < width; ++x) {
+            const double s = o.authoredGloss
+                                 ? o.encoding.power((*o.authoredGloss)[size_t(y) * size_t(width) + size_t(x)])
+                                 : o.basePower;
+            const LobeMoments l = LobeMoments::ofNormal((*plan.finestMap).at(x, y), s);
+            const int own = mix.finestLobe(x, y);
+            for (int i = 0; i < kMaxMixtureLobes; ++i) {
+                const bool mine = i == own;
+                if (weights) weights[4 * x + i] = mine ? unit(l.w) : zero;
+                if (cross) cross[4 * x + i] = mine ? unit(l.mxy * invM2 + 0.5) : half;
+                if (float* p = px[size_t(1 + i)]) {
+                    p[4 * x] = mine ? unit(l.bx * invB2 + 0.5) : half;
+                    p[4 * x + 1] = mine ? unit(l.by * invB2 + 0.5) : half;
+                    p[4 * x + 2] = mine ? unit(l.mxx * invM) : zero;
+                    p[4 * x + 3] = mine ? unit(l.myy * invM) : zero;
+                }
+            }
+        }
+        return;
+    }
     for (int x = 0; x < width; ++x) {
-        const double s = k == 0 && o.authoredGloss
-                             ? o.encoding.power((*o.authoredGloss)[size_t(y) * size_t(width) + size_t(x)])
-                             : o.basePower;
-        const std::array<LobeMoments, kMaxMixtureLobes> lobes = mix.storedTexel(*plan.finestMap, k, x, y, s);
+        const std::array<LobeMoments, kMaxMixtureLobes> lobes =
+            mix.storedTexel(*plan.finestMap, k, x, y, o.basePower); // k >= 1: the power is level 0's
         for (int i = 0; i < kMaxMixtureLobes; ++i) {
             const LobeMoments& l = lobes[size_t(i)];
             if (weights) weights[4 * x + i] = unit(l.w);
@@ -454,6 +482,16 @@ ClampCounts writeRoleRow(const RowPlan& plan, TextureRole role, const NormalMome
     return counts;
 }
 
+// Whether a bake reads the pyramid's filtered moments: every method but a mixture of K >= 2 lobes,
+// whose lobes come from its own pyramid, baking only its own roles.
+bool readsMomentRows(const BakeOptions& options) {
+    if (options.method != Method::Mixture || std::clamp(options.params.mixtureLobes, 1, kMaxMixtureLobes) < 2)
+        return true;
+    for (const MethodTexture& m : methodSpec(options.method).textures)
+        if (bakesRole(options, m.role) && mixtureSlot(m.role) < 0) return true;
+    return false;
+}
+
 // Level k of every texture, each row from its filtered moments as they stream out of the pyramid,
 // one role at a time, so each inner loop does one texture's arithmetic.
 void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOutput& out) {
@@ -535,9 +573,7 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
     };
     // The mixture's lobes (K >= 2) come from its own pyramid: a level of mixture roles only needs no
     // filtered moments.
-    const bool readsMoments = !plan.mixture || std::any_of(plan.roles.begin(), plan.roles.end(),
-                                                           [](TextureRole r) { return mixtureSlot(r) < 0; });
-    if (readsMoments)
+    if (readsMomentRows(o))
         pyramid.forEachMomentRow(k, bakeRow);
     else
         tbb::parallel_for(0, level.height, [&](int y) { bakeRow(y, nullptr); });
@@ -574,11 +610,13 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
         if (&given->finest() != &map) return Error{"the pyramid given is of another normal map"};
         if (p.border != options.pyramid.border || p.kernel != options.pyramid.kernel)
             return Error{"the pyramid given has another border or kernel than the bake's"};
-        if ((p.moments & needed) != needed) return Error{"the pyramid given lacks moments the method reads"};
+        if ((p.moments & needed) != needed || (!p.boxMoments && readsMomentRows(options)))
+            return Error{"the pyramid given lacks moments the method reads"};
     } else {
         const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
         PyramidOptions pyramidOptions = options.pyramid;
         pyramidOptions.moments = momentsNeeded(options.method);
+        pyramidOptions.boxMoments = readsMomentRows(options);
         own.emplace(NormalPyramid::build(borrowed, pyramidOptions));
     }
     const NormalPyramid& pyramid = own ? *own : *options.cachedPyramid;
@@ -629,7 +667,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     const Error cancelled{"cancelled"};
     if (!carryOn()) return cancelled;
     // A given pyramid must hold every level this bake computes (bakePyramid releases the larger ones).
-    for (int k = 1; !own && k < levels; ++k)
+    for (int k = 1; !own && readsMomentRows(options) && k < levels; ++k)
         if (baked(k) > 0.0 && pyramid.level(k).box.empty())
             return Error{"the pyramid given has released level " + std::to_string(k) +
                          ", which this bake computes"};

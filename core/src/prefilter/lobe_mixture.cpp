@@ -42,10 +42,11 @@ bool canonicalLess(const LobeMoments& a, const LobeMoments& b) {
 // and det Σ, and log w − ½ log det Σ.
 class LobeScorer {
 public:
-    LobeScorer(const LobeMixture& mixture, double minVariance)
-        : m_count(mixture.count) {
+    /// The first `count` of `lobes` (a mixture's slots).
+    LobeScorer(const LobeMoments* lobes, int count, double minVariance)
+        : m_count(count) {
         for (int i = 0; i < m_count; ++i) {
-            const LobeMoments& l = mixture.lobes[size_t(i)];
+            const LobeMoments& l = lobes[size_t(i)];
             const auto c = l.covariance(minVariance);
             Lobe& d = m_lobes[size_t(i)];
             d.mean = l.mean();
@@ -53,19 +54,20 @@ public:
             d.offset = std::log(l.w) - 0.5 * std::log(d.det);
         }
     }
-    /// Puts the lobes of `child` into the slots of this mixture's lobes: the assignment of child lobes
-    /// to distinct slots 0..slots−1 (the lobe count K, at least child.count) with the largest total score (an
-    /// empty slot scores kEmptySlotScore, below any lobe's); ties to the first in lexicographic order. Empty
-    /// slots get empty lobes; count becomes the last used slot + 1.
-    void reorder(LobeMixture& child, int slots) const {
-        const int n = std::min(child.count, kMaxMixtureLobes);
+    /// Puts a child's lobes (the first `count` of its `slots` stored ones) into the slots of this
+    /// mixture's lobes: the assignment of child lobes to distinct slots 0..slots−1 (the lobe count K, at
+    /// least count) with the largest total score (an empty slot scores kEmptySlotScore, below any lobe's);
+    /// ties to the first in lexicographic order. Empty slots get empty lobes; count becomes the last used
+    /// slot + 1.
+    void reorder(LobeMoments* lobes, unsigned char& count, int slots) const {
+        const int n = std::min(int(count), kMaxMixtureLobes);
         if (n == 0) return;
         std::array<std::array<double, kMaxMixtureLobes>, kMaxMixtureLobes> score{};
         for (int c = 0; c < n; ++c)
             for (int slot = 0; slot < slots; ++slot)
                 score[size_t(c)][size_t(slot)] =
                     slot < m_count && m_lobes[size_t(slot)].offset > -std::numeric_limits<double>::infinity()
-                        ? scoreOf(slot, child.lobes[size_t(c)].mean())
+                        ? scoreOf(slot, lobes[size_t(c)].mean())
                         : kEmptySlotScore;
         std::array<int, kMaxMixtureLobes> best{}, current{};
         double bestTotal = -std::numeric_limits<double>::infinity();
@@ -82,12 +84,14 @@ public:
             }
         };
         search(search, 0, 0u, 0.0);
-        LobeMixture out;
+        std::array<LobeMoments, kMaxMixtureLobes> out{};
+        int outCount = 0;
         for (int c = 0; c < n; ++c) {
-            out.lobes[size_t(best[size_t(c)])] = child.lobes[size_t(c)];
-            out.count = std::max(out.count, best[size_t(c)] + 1);
+            out[size_t(best[size_t(c)])] = lobes[size_t(c)];
+            outCount = std::max(outCount, best[size_t(c)] + 1);
         }
-        child = out;
+        std::copy_n(out.begin(), slots, lobes);
+        count = (unsigned char)outCount;
     }
 
     /// The lobe with the largest log(w N(b; μ, Σ)) (up to a constant); ties to the lower index.
@@ -135,12 +139,21 @@ std::array<double, 3> LobeMoments::covariance(double minVariance) const {
     return {xx, yy, xy};
 }
 
-LobeMoments LobeMoments::ofNormal(const glm::vec3& n, double s) {
-    const NormalMoments m = NormalMoments::ofNormal(n); // the pyramid's slope of a finest normal
-    // A non-finite normal (decoders replace them; guarded anyway) counts as the flat one.
+namespace {
+
+// A finest normal's slope: the pyramid's (NormalMoments), (0, 0) for a non-finite normal (decoders
+// replace them; guarded anyway), which counts as the flat one. Its lobe's mean (w = 1).
+glm::dvec2 finestSlope(const glm::vec3& n) {
+    const NormalMoments m = NormalMoments::ofNormal(n);
     const bool finite = std::isfinite(m.slope.x) && std::isfinite(m.slope.y);
-    const double bx = finite ? m.slope.x : 0.0, by = finite ? m.slope.y : 0.0,
-                 invS = slopeInverseBasePower(s);
+    return finite ? glm::dvec2(m.slope) : glm::dvec2(0.0);
+}
+
+} // namespace
+
+LobeMoments LobeMoments::ofNormal(const glm::vec3& n, double s) {
+    const glm::dvec2 b = finestSlope(n);
+    const double bx = b.x, by = b.y, invS = slopeInverseBasePower(s);
     LobeMoments l;
     l.w = 1.0;
     l.bx = bx;
@@ -385,12 +398,15 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
     const int last =
         lastLevel >= 0 ? std::min(lastLevel, pyramid.levelCount() - 1) : pyramid.levelCount() - 1;
     const NormalMap& finest = pyramid.finest();
+    const size_t K = size_t(out.m_k);
     for (int level = 1; level <= last; ++level) {
         const PyramidLevel& l = pyramid.level(level);
         Level built;
         built.width = l.width;
         built.height = l.height;
-        built.texels.resize(size_t(l.width) * size_t(l.height));
+        const size_t texels = size_t(l.width) * size_t(l.height);
+        built.lobes.reset(static_cast<LobeMoments*>(::operator new(sizeof(LobeMoments) * texels * K)));
+        built.counts.reset(static_cast<unsigned char*>(::operator new(texels)));
         const Level* child = level > 1 ? &out.m_levels.back() : nullptr;
         tbb::parallel_for(0, l.height, [&](int y) {
             std::vector<LobeMoments> lobes;
@@ -405,16 +421,32 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
                             lobes.push_back(LobeMoments::ofNormal(finest.at(i, j), p));
                             continue;
                         }
-                        const LobeMixture& m = child->texels[size_t(j) * size_t(child->width) + size_t(i)];
-                        for (int c = 0; c < m.count; ++c)
-                            lobes.push_back(m.lobes[size_t(c)]);
+                        const size_t t = size_t(j) * size_t(child->width) + size_t(i);
+                        lobes.insert(lobes.end(), &child->lobes[t * K],
+                                     &child->lobes[t * K] + child->counts[t]);
                     }
-                built.texels[size_t(y) * size_t(l.width) + size_t(x)] =
-                    reduceLobesInPlace(lobes, out.m_k, out.m_minVariance);
+                built.set(size_t(y) * size_t(l.width) + size_t(x), out.m_k,
+                          reduceLobesInPlace(lobes, out.m_k, out.m_minVariance));
             }
         });
         out.m_levels.push_back(std::move(built));
     }
+    // Level 0's lobe indices, from the level-1 parents (after level 1's slots below).
+    out.m_finestWidth = finest.width;
+    const bool finestSlots = last >= 1 && out.m_k > 1;
+    if (finestSlots) out.m_finestLobe.assign(finest.texelCount(), 0);
+    const PyramidLevel& l1 = pyramid.level(std::min(last, 1));
+    auto assignFinest = [&](int x, int y) {
+        const Level& level1 = out.m_levels.front();
+        const size_t t = size_t(y) * size_t(level1.width) + size_t(x);
+        const LobeScorer parent(&level1.lobes[t * K], level1.counts[t], out.m_minVariance);
+        for (int j = l1.yChild[size_t(y)]; j < l1.yChild[size_t(y) + 1]; ++j)
+            for (int i = l1.xChild[size_t(x)]; i < l1.xChild[size_t(x) + 1]; ++i) {
+                // The mean of LobeMoments::ofNormal's lobe (w = 1): its slope.
+                out.m_finestLobe[size_t(j) * size_t(finest.width) + size_t(i)] =
+                    (unsigned char)parent.assign(finestSlope(finest.at(i, j)));
+            }
+    };
     // Top-down, each texel's lobes take the slots of its parent's lobes they belong to most, so the
     // texels under one parent, and the levels between, give one cluster one slot: bilinear and
     // trilinear filtering then merge like with like. The top level keeps the canonical order.
@@ -424,33 +456,21 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         Level& children = out.m_levels[size_t(level - 1)];
         tbb::parallel_for(0, pl.height, [&](int y) {
             for (int x = 0; x < pl.width; ++x) {
-                const LobeScorer parent(parents.texels[size_t(y) * size_t(pl.width) + size_t(x)],
-                                        out.m_minVariance);
+                const size_t p = size_t(y) * size_t(pl.width) + size_t(x);
+                const LobeScorer parent(&parents.lobes[p * K], parents.counts[p], out.m_minVariance);
                 for (int j = pl.yChild[size_t(y)]; j < pl.yChild[size_t(y) + 1]; ++j)
-                    for (int i = pl.xChild[size_t(x)]; i < pl.xChild[size_t(x) + 1]; ++i)
-                        parent.reorder(children.texels[size_t(j) * size_t(children.width) + size_t(i)],
-                                       out.m_k);
-            }
-        });
-    }
-    // Level 0's lobe indices, from the level-1 parents.
-    out.m_finestWidth = finest.width;
-    if (last >= 1 && out.m_k > 1) {
-        const PyramidLevel& l1 = pyramid.level(1);
-        out.m_finestLobe.assign(finest.texelCount(), 0);
-        tbb::parallel_for(0, l1.height, [&](int y) {
-            for (int x = 0; x < l1.width; ++x) {
-                const LobeScorer parent(out.at(1, x, y), out.m_minVariance);
-                for (int j = l1.yChild[size_t(y)]; j < l1.yChild[size_t(y) + 1]; ++j)
-                    for (int i = l1.xChild[size_t(x)]; i < l1.xChild[size_t(x) + 1]; ++i) {
-                        const double p =
-                            texelPowers ? (*texelPowers)[size_t(j) * size_t(finest.width) + size_t(i)] : s;
-                        out.m_finestLobe[size_t(j) * size_t(finest.width) + size_t(i)] =
-                            (unsigned char)parent.assign(LobeMoments::ofNormal(finest.at(i, j), p).mean());
+                    for (int i = pl.xChild[size_t(x)]; i < pl.xChild[size_t(x) + 1]; ++i) {
+                        const size_t t = size_t(j) * size_t(children.width) + size_t(i);
+                        parent.reorder(&children.lobes[t * K], children.counts[t], out.m_k);
                     }
             }
         });
     }
+    if (finestSlots)
+        tbb::parallel_for(0, l1.height, [&](int y) {
+            for (int x = 0; x < l1.width; ++x)
+                assignFinest(x, y);
+        });
     return out;
 }
 
@@ -466,11 +486,17 @@ std::array<LobeMoments, kMaxMixtureLobes> MixturePyramid::storedTexel(const Norm
         out[size_t(finestLobe(x, y))] = LobeMoments::ofNormal(finest.at(x, y), finestPower); // weight 1
         return out;
     }
-    const LobeMixture& m = at(k, x, y);
-    const double total = m.totalWeight();
+    // From the level's own storage (LobeMixture::totalWeight's sum).
+    const Level& level = m_levels[size_t(k - 1)];
+    const size_t t = size_t(y) * size_t(level.width) + size_t(x);
+    const int count = level.counts[t];
+    const LobeMoments* lobes = &level.lobes[t * size_t(m_k)];
+    double total = 0.0;
+    for (int i = 0; i < count; ++i)
+        total += lobes[i].w;
     const double inv = total > 0.0 ? 1.0 / total : 0.0;
-    for (int i = 0; i < m.count; ++i) {
-        LobeMoments l = m.lobes[size_t(i)];
+    for (int i = 0; i < count; ++i) {
+        LobeMoments l = lobes[i];
         l.w *= inv, l.bx *= inv, l.by *= inv, l.mxx *= inv, l.myy *= inv, l.mxy *= inv;
         out[size_t(i)] = l;
     }
@@ -479,12 +505,25 @@ std::array<LobeMoments, kMaxMixtureLobes> MixturePyramid::storedTexel(const Norm
 
 void MixturePyramid::releaseLevel(int k) {
     if (k < 1 || k >= levelCount()) return;
-    std::vector<LobeMixture>().swap(m_levels[size_t(k - 1)].texels);
+    m_levels[size_t(k - 1)].lobes.reset();
+    m_levels[size_t(k - 1)].counts.reset();
 }
 
-const LobeMixture& MixturePyramid::at(int level, int x, int y) const {
+LobeMixture MixturePyramid::at(int level, int x, int y) const {
     const Level& l = m_levels[size_t(level - 1)];
-    return l.texels[size_t(y) * size_t(l.width) + size_t(x)];
+    return l.get(size_t(y) * size_t(l.width) + size_t(x), m_k);
+}
+
+LobeMixture MixturePyramid::Level::get(size_t texel, int k) const {
+    LobeMixture m;
+    m.count = counts[texel];
+    std::copy_n(&lobes[texel * size_t(k)], k, m.lobes.begin());
+    return m;
+}
+
+void MixturePyramid::Level::set(size_t texel, int k, const LobeMixture& m) {
+    counts[texel] = (unsigned char)m.count; // at most k
+    std::copy_n(m.lobes.begin(), k, &lobes[texel * size_t(k)]);
 }
 
 double mixtureNdf(const LobeMixture& mixture, const glm::dvec3& h, double minVariance) {

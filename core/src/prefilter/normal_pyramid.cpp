@@ -448,6 +448,10 @@ NormalPyramid NormalPyramid::build(std::shared_ptr<const NormalMap> map, const P
             parent.yStart[size_t(y)] = child.yStart[size_t(cy[size_t(y)])];
         parent.xChild = cx;
         parent.yChild = cy;
+        if (!options.boxMoments) {
+            pyramid.m_levels.push_back(std::move(parent));
+            continue;
+        }
         const unsigned set = options.moments & kMomentsAll;
         const size_t stride = size_t(momentStride(set));
         parent.box.resize(size_t(parent.width) * size_t(parent.height) * stride);

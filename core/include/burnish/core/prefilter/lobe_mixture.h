@@ -27,6 +27,8 @@
 #include <glm/vec3.hpp>
 
 #include <array>
+#include <memory>
+#include <new>
 #include <vector>
 
 namespace burnish {
@@ -98,7 +100,7 @@ public:
     int lobeCount() const { return m_k; }
     double minVariance() const { return m_minVariance; }
     /// Texel (x, y) of level `level` (1 <= level < levelCount()).
-    const LobeMixture& at(int level, int x, int y) const;
+    LobeMixture at(int level, int x, int y) const;
     /// The lobe index a finest texel's own lobe takes at level 0: that of the lobe of its level-1
     /// parent it belongs to most (the largest w_i N(b; b_i, Σ_i)), so trilinear filtering between levels 0
     /// and 1 merges a normal into its own cluster. 0 without a level 1.
@@ -115,10 +117,22 @@ public:
     void releaseLevel(int k);
 
 private:
+    /// Frees storage from ::operator new.
+    struct FreeStorage {
+        void operator()(void* p) const noexcept { ::operator delete(p); }
+    };
+    /// A level's texels, each its lobe count and m_k lobes (the slots from the count up empty): 200
+    /// bytes of LobeMixture a texel would be 145 at K = 3. Not value-initialised: the build writes
+    /// every texel from parallel rows, so the kernel clears the pages in the threads that fill them,
+    /// with no serial memset first.
     struct Level {
         int width = 0;
         int height = 0;
-        std::vector<LobeMixture> texels;
+        std::unique_ptr<LobeMoments[], FreeStorage> lobes;
+        std::unique_ptr<unsigned char[], FreeStorage> counts;
+
+        LobeMixture get(size_t texel, int k) const;
+        void set(size_t texel, int k, const LobeMixture& m);
     };
     int m_k = 1;
     double m_minVariance = 1.0;

@@ -115,6 +115,9 @@ struct PyramidOptions {
     BorderMode border = BorderMode::Wrap;
     FilterKernel kernel = FilterKernel::Tent;
     unsigned moments = kMomentsAll; // MomentSet flags
+    /// false: the levels' extents and footprints alone, no box moments (every level's box empty),
+    /// for a reader of footprints only (the mixture's own textures). Nothing may read moments then.
+    bool boxMoments = true;
 };
 
 /// One level's extent and where its footprints lie in the finest level.

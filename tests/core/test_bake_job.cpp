@@ -499,9 +499,9 @@ TEST(BakeNinja, OutputsAreExactlyWhatTheJobWrites) {
 
 } // namespace
 // The memory check: the estimate covers the peaks core/bench/bake_memory.sh and the runs below
-// measured (bytes a texel above the process's own, 2048² trak-rust1, 2026-12-02), without being
-// loose by more than a factor of three, and a need beyond what is available is one error naming
-// the size, the need and what there is.
+// measured (bytes a texel above the process's own, 2048² trak-rust1, 2026-12-02; the mixture's on
+// 2026-12-03), without being loose by more than a factor of three, and a need beyond what is
+// available is one error naming the size, the need and what there is.
 TEST(BakeMemory, EstimateCoversTheMeasuredPeaksAndRefusesWhatCannotFit) {
     struct Measured {
         const char* preset;
@@ -520,9 +520,9 @@ TEST(BakeMemory, EstimateCoversTheMeasuredPeaksAndRefusesWhatCannotFit) {
         {"toksvig-map", {}, {}, false, 28.8},
         {"lean", {}, {}, false, 39.7},
         {"clean", {}, {}, false, 27.5},
-        {"mixture", {}, {}, false, 101.6},
+        {"mixture", {}, {}, false, 71.6},
         {"lean", "exr-float", {}, false, 79.8},
-        {"mixture", "exr-float", {}, false, 161.4},
+        {"mixture", "exr-float", {}, false, 163.9},
         {"gltf", {}, {}, true, 41.7},
         {"gltf", "exr-float", {}, false, 65.0},
         {"lean", "dds", "rgba16f", false, 61.3},

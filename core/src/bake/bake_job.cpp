@@ -319,10 +319,18 @@ double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile
             break;
         }
     }
-    const double moments = 4.0 * momentStride(momentsNeeded(shape.method)) * kCoarser;
-    const bool lobes = std::any_of(shape.textures.begin(), shape.textures.end(),
-                                   [](const BakedTexture& t) { return t.role == TextureRole::MixtureLobe1; });
-    const double mixture = lobes ? double(sizeof(LobeMixture)) * kCoarser + 1.0 : 0.0;
+    // A mixture of K >= 2 lobes keeps K lobes and a count per texel of the levels above the finest,
+    // and a slot per finest texel; baking its own textures alone, it reads no moments.
+    const auto lobes = std::count_if(shape.textures.begin(), shape.textures.end(),
+                                     [](const BakedTexture& t) { return isMixtureLobeRole(t.role); });
+    const bool mixtureOnly =
+        lobes >= 2 && std::all_of(shape.textures.begin(), shape.textures.end(), [](const BakedTexture& t) {
+            return isMixtureLobeRole(t.role) || t.role == TextureRole::MixtureWeights ||
+                   t.role == TextureRole::MixtureCross;
+        });
+    const double moments = mixtureOnly ? 0.0 : 4.0 * momentStride(momentsNeeded(shape.method)) * kCoarser;
+    const double mixture =
+        lobes >= 2 ? (double(sizeof(LobeMoments)) * double(lobes) + 1.0) * kCoarser + 1.0 : 0.0;
     // The coarser levels are baked first, beside the pyramid's moments (and the mixture's lobes);
     // then level 0, once those are freed; then the export.
     const double coarser = moments + mixture + textures * kCoarser;

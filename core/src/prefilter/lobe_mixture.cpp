@@ -431,22 +431,6 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         });
         out.m_levels.push_back(std::move(built));
     }
-    // Level 0's lobe indices, from the level-1 parents (after level 1's slots below).
-    out.m_finestWidth = finest.width;
-    const bool finestSlots = last >= 1 && out.m_k > 1;
-    if (finestSlots) out.m_finestLobe.assign(finest.texelCount(), 0);
-    const PyramidLevel& l1 = pyramid.level(std::min(last, 1));
-    auto assignFinest = [&](int x, int y) {
-        const Level& level1 = out.m_levels.front();
-        const size_t t = size_t(y) * size_t(level1.width) + size_t(x);
-        const LobeScorer parent(&level1.lobes[t * K], level1.counts[t], out.m_minVariance);
-        for (int j = l1.yChild[size_t(y)]; j < l1.yChild[size_t(y) + 1]; ++j)
-            for (int i = l1.xChild[size_t(x)]; i < l1.xChild[size_t(x) + 1]; ++i) {
-                // The mean of LobeMoments::ofNormal's lobe (w = 1): its slope.
-                out.m_finestLobe[size_t(j) * size_t(finest.width) + size_t(i)] =
-                    (unsigned char)parent.assign(finestSlope(finest.at(i, j)));
-            }
-    };
     // Top-down, each texel's lobes take the slots of its parent's lobes they belong to most, so the
     // texels under one parent, and the levels between, give one cluster one slot: bilinear and
     // trilinear filtering then merge like with like. The top level keeps the canonical order.
@@ -466,11 +450,24 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
             }
         });
     }
-    if (finestSlots)
+    // Level 0's lobe indices, from the level-1 parents.
+    out.m_finestWidth = finest.width;
+    if (last >= 1 && out.m_k > 1) {
+        const PyramidLevel& l1 = pyramid.level(1);
+        const Level& level1 = out.m_levels.front();
+        out.m_finestLobe.assign(finest.texelCount(), 0);
         tbb::parallel_for(0, l1.height, [&](int y) {
-            for (int x = 0; x < l1.width; ++x)
-                assignFinest(x, y);
+            for (int x = 0; x < l1.width; ++x) {
+                const size_t t = size_t(y) * size_t(l1.width) + size_t(x);
+                const LobeScorer parent(&level1.lobes[t * K], level1.counts[t], out.m_minVariance);
+                for (int j = l1.yChild[size_t(y)]; j < l1.yChild[size_t(y) + 1]; ++j)
+                    for (int i = l1.xChild[size_t(x)]; i < l1.xChild[size_t(x) + 1]; ++i)
+                        // The mean of LobeMoments::ofNormal's lobe (w = 1) is its slope.
+                        out.m_finestLobe[size_t(j) * size_t(finest.width) + size_t(i)] =
+                            (unsigned char)parent.assign(finestSlope(finest.at(i, j)));
+            }
         });
+    }
     return out;
 }
 

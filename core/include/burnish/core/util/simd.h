@@ -31,9 +31,9 @@ using Int64x4 = std::int64_t __attribute__((vector_size(32)));
 // have it. FMA is not enabled (it is not part of "avx2"), so no multiply-add is fused: both copies do
 // the same IEEE operations lane by lane and give the same bits.
 #define BURNISH_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
-// An AVX-512 copy too, for loops of doubles (evaluate's lobe values). The 512-bit copy fuses
-// multiply-adds, so its last bits may differ from the others' (about 1e-16 relative); on one machine
-// every run and thread count gives the same bits.
+// An AVX-512 copy too, for loops of doubles (evaluate's lobe values). Core is built with
+// -ffp-contract=off, so this copy fuses no multiply-add either: every copy, run, thread count and
+// heap layout gives the same bits.
 #define BURNISH_AVX512_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 #else
 #define BURNISH_AVX2_CLONES

@@ -534,7 +534,7 @@ void convertTexels(const PlannedFile& file, size_t k, int stored, size_t begin, 
                    const Code& code) {
     const size_t channels = file.sources.size();
     // The codes a compact texture holds, for this file's type: copied as they are.
-    auto codesOf = [k](const BakedTexture& tex) -> const T* {
+    auto codesOf = [&](const BakedTexture& tex) -> const T* { // k is unused for float files
         if constexpr (std::is_same_v<T, std::uint8_t>) {
             if (tex.storage == TexelStorage::Unorm8) return tex.mips[k].unorm8.data();
         } else if constexpr (std::is_same_v<T, std::uint16_t>) {

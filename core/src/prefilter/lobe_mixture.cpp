@@ -1,6 +1,6 @@
 // Double4 values pass only between inline functions and the target_clones copies of this file (see
 // util/simd.h), never across a library's interface: GCC's note on their ABI does not apply.
-#if defined(__GNUC__) && !defined(__clang__)
+#if defined(__GNUC__) // GCC, and Clang (which defines __GNUC__ and has the same warning)
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
 

@@ -10,7 +10,7 @@
 // GCC notes that a 32-byte vector passed by value has another ABI with AVX than without. Float8 values
 // pass only between inline functions and target_clones copies inside one translation unit, never
 // across a library's interface, so the note does not apply to any file that uses them.
-#if defined(__GNUC__) && !defined(__clang__)
+#if defined(__GNUC__) // GCC, and Clang (which defines __GNUC__ and has the same warning)
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
 

@@ -28,6 +28,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,19 @@ std::vector<fs::path> benchMaps(benchmark::State& state) {
     return maps;
 }
 
+// The table benchmarks: one run at each of s = 64, 256 and 1024.
+void atThreePowers(benchmark::internal::Benchmark* b) {
+    b->Arg(64)->Arg(256)->Arg(1024)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+}
+
+// The box pyramid of a map file (evaluate's footprints), or nothing when it does not load.
+std::optional<NormalPyramid> boxPyramid(const fs::path& path) {
+    auto loaded = loadNormalMap(path);
+    if (!loaded) return std::nullopt;
+    return NormalPyramid::build(std::make_shared<NormalMap>(std::move(loaded).value()),
+                                {BorderMode::Wrap, FilterKernel::Box});
+}
+
 void BM_MixtureError(benchmark::State& state) {
     const double s = double(state.range(0));
     const std::vector<fs::path> maps = benchMaps(state);
@@ -79,10 +93,9 @@ void BM_MixtureError(benchmark::State& state) {
             "\n| map | s | mip | LEAN L1 | K=1 | K=2 | K=3 | K=4 | LEAN energy | K=2 | K=3 | K=4 |\n");
         std::printf("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
         for (const fs::path& path : maps) {
-            auto loaded = loadNormalMap(path);
-            if (!loaded) continue;
-            const auto map = std::make_shared<NormalMap>(std::move(loaded).value());
-            const NormalPyramid pyramid = NormalPyramid::build(map, {BorderMode::Wrap, FilterKernel::Box});
+            const auto pyramidOf = boxPyramid(path);
+            if (!pyramidOf) continue;
+            const NormalPyramid& pyramid = *pyramidOf;
             const int last = std::min(4, pyramid.levelCount() - 1);
             std::vector<MixturePyramid> mixtures;
             for (int k = 1; k <= kMaxMixtureLobes; ++k)
@@ -116,13 +129,7 @@ void BM_MixtureError(benchmark::State& state) {
         std::fflush(stdout);
     }
 }
-BENCHMARK(BM_MixtureError)
-    ->Arg(64)
-    ->Arg(256)
-    ->Arg(1024)
-    ->Unit(benchmark::kSecond)
-    ->Iterations(1)
-    ->UseRealTime();
+BENCHMARK(BM_MixtureError)->Apply(atThreePowers);
 
 // BM_MixtureRefine: K = 3 lobes as parameters (per lobe: log weight, mean slope, log-Cholesky
 // covariance), their residuals the mixture's value minus the truth at each training direction.
@@ -193,10 +200,9 @@ void BM_MixtureRefine(benchmark::State& state) {
             "ms per texel |\n");
         std::printf("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
         for (const fs::path& path : maps) {
-            auto loaded = loadNormalMap(path);
-            if (!loaded) continue;
-            const auto map = std::make_shared<NormalMap>(std::move(loaded).value());
-            const NormalPyramid pyramid = NormalPyramid::build(map, {BorderMode::Wrap, FilterKernel::Box});
+            const auto pyramidOf = boxPyramid(path);
+            if (!pyramidOf) continue;
+            const NormalPyramid& pyramid = *pyramidOf;
             const int last = std::min(4, pyramid.levelCount() - 1);
             const MixturePyramid mixture = MixturePyramid::build(pyramid, s, RefineResiduals::kLobes, last);
             for (int level = 1; level <= last; ++level) {
@@ -240,12 +246,6 @@ void BM_MixtureRefine(benchmark::State& state) {
         std::fflush(stdout);
     }
 }
-BENCHMARK(BM_MixtureRefine)
-    ->Arg(64)
-    ->Arg(256)
-    ->Arg(1024)
-    ->Unit(benchmark::kSecond)
-    ->Iterations(1)
-    ->UseRealTime();
+BENCHMARK(BM_MixtureRefine)->Apply(atThreePowers);
 
 } // namespace

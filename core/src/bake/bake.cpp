@@ -141,7 +141,6 @@ bool bakesRole(const BakeOptions& options, TextureRole role) {
 
 // The textures the method's table row names (those of options.roles when given), described, with
 // their decodes under the bake's slope scales and no mips yet.
-
 std::vector<BakedTexture> planTextures(const BakeOptions& options, const ChannelScales& scales) {
     std::vector<BakedTexture> textures;
     for (const MethodTexture& m : methodSpec(options.method).textures) {
@@ -488,7 +487,7 @@ bool readsMomentRows(const BakeOptions& options) {
     if (options.method != Method::Mixture || std::clamp(options.params.mixtureLobes, 1, kMaxMixtureLobes) < 2)
         return true;
     for (const MethodTexture& m : methodSpec(options.method).textures)
-        if (bakesRole(options, m.role) && mixtureSlot(m.role) < 0) return true;
+        if (bakesRole(options, m.role) && !isMixtureRole(m.role)) return true;
     return false;
 }
 

@@ -324,10 +324,8 @@ double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile
     const auto lobes = std::count_if(shape.textures.begin(), shape.textures.end(),
                                      [](const BakedTexture& t) { return isMixtureLobeRole(t.role); });
     const bool mixtureOnly =
-        lobes >= 2 && std::all_of(shape.textures.begin(), shape.textures.end(), [](const BakedTexture& t) {
-            return isMixtureLobeRole(t.role) || t.role == TextureRole::MixtureWeights ||
-                   t.role == TextureRole::MixtureCross;
-        });
+        lobes >= 2 && std::all_of(shape.textures.begin(), shape.textures.end(),
+                                  [](const BakedTexture& t) { return isMixtureRole(t.role); });
     const double moments = mixtureOnly ? 0.0 : 4.0 * momentStride(momentsNeeded(shape.method)) * kCoarser;
     const double mixture =
         lobes >= 2 ? (double(sizeof(LobeMoments)) * double(lobes) + 1.0) * kCoarser + 1.0 : 0.0;

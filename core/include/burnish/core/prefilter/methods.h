@@ -199,6 +199,10 @@ struct MethodParams {
 inline bool isMixtureLobeRole(TextureRole role) {
     return role >= TextureRole::MixtureLobe0 && role <= TextureRole::MixtureLobe3;
 }
+/// Any of the mixture's own textures: its weights, lobes and cross moments (contiguous roles).
+inline bool isMixtureRole(TextureRole role) {
+    return role >= TextureRole::MixtureWeights && role <= TextureRole::MixtureCross;
+}
 inline int mixtureLobeIndex(TextureRole role) {
     return int(role) - int(TextureRole::MixtureLobe0);
 }

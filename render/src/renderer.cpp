@@ -63,10 +63,9 @@ Status ensureTarget(std::optional<Framebuffer>& target, int width, int height, b
 }
 
 // A baked texture on the GPU with its per-channel decode (stored·scale + bias).
+// A baked texture on the GPU, holding decoded values (stored·scale + bias, its ChannelDecode).
 struct GpuBaked {
     Texture2D texture;
-    glm::vec4 scale{1.0f};
-    glm::vec4 bias{0.0f};
 };
 
 // `maxSize` > 0: the chain from its first level no larger than that on a side (a display needs no
@@ -79,16 +78,28 @@ Result<GpuBaked> uploadBaked(const BakedTexture& baked, int maxSize = 0) {
     while (maxSize > 0 && first + 1 < baked.mips.size() &&
            std::max(baked.mips[first].width, baked.mips[first].height) > maxSize)
         ++first;
+    // Each channel's decode (stored·scale + bias) is applied here, in float as the shader did: it is
+    // affine, so the hardware's filtering of decoded values is the decode of its filtering of the
+    // stored ones, and the shader reads physical values without a uniform per channel (on llvmpipe
+    // each uniform read is a gather: the decode of the mixture's five textures took 3 ms a frame).
+    const size_t channels = size_t(baked.channels);
+    std::vector<float> scale(channels, 1.0f), bias(channels, 0.0f);
+    for (size_t c = 0; c < baked.decode.size() && c < channels; ++c) {
+        scale[c] = float(baked.decode[c].scale);
+        bias[c] = float(baked.decode[c].bias);
+    }
     for (size_t k = first; k < baked.mips.size(); ++k) {
         const auto& mip = baked.mips[k];
-        // Copied bottom row first, GL's order: the one copy the upload makes on this side (appended
+        // Decoded bottom row first, GL's order: the one copy the upload makes on this side (appended
         // row by row, so the vector is not zero-filled first).
         TextureLevel level{mip.width, mip.height, {}, true};
         level.texels.reserve(mip.texels.size());
-        const size_t row = size_t(mip.width) * size_t(baked.channels);
+        const size_t row = size_t(mip.width) * channels;
         for (int y = mip.height - 1; y >= 0; --y) {
-            const auto begin = mip.texels.begin() + std::ptrdiff_t(size_t(y) * row);
-            level.texels.insert(level.texels.end(), begin, begin + std::ptrdiff_t(row));
+            const float* in = mip.texels.data() + size_t(y) * row;
+            for (size_t i = 0; i < row; i += channels)
+                for (size_t c = 0; c < channels; ++c)
+                    level.texels.push_back(in[i + c] * scale[c] + bias[c]);
         }
         levels.push_back(std::move(level));
     }
@@ -96,12 +107,7 @@ Result<GpuBaked> uploadBaked(const BakedTexture& baked, int maxSize = 0) {
     auto texture = Texture2D::create(levels, baked.channels, TextureFilter::LinearMipLinear, true);
     if (!texture)
         return Error{"uploading the '" + std::string(roleName(baked.role)) + "' texture: " + texture.error()};
-    GpuBaked out{std::move(texture).value()};
-    for (size_t c = 0; c < baked.decode.size() && c < 4; ++c) {
-        out.scale[int(c)] = float(baked.decode[c].scale);
-        out.bias[int(c)] = float(baked.decode[c].bias);
-    }
-    return out;
+    return GpuBaked{std::move(texture).value()};
 }
 
 // What a bake depends on; shared_ptrs keep the identities alive so an address is never reused.
@@ -745,32 +751,17 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
     if (m.normalMap)
         p.set("uNormalMapSize", glm::vec2(float(m.normalMap->width), float(m.normalMap->height)));
 
-    // A baked texture at its role's unit, with its decode uniforms as its table row names them.
+    // A baked texture at its role's unit, under the sampler its table row names.
     auto bindBaked = [&](TextureRole role, const GpuBaked& gpu) {
-        const TextureSpec& spec = textureSpec(role);
         const int unit = textureUnit(role);
-        const std::string sampler(spec.sampler), scale(spec.scaleUniform), bias(spec.biasUniform);
         gpu.texture.bind(unit);
-        p.set(sampler.c_str(), unit);
-        if (scale.empty()) return;
-        if (spec.channels.size() == 2) {
-            p.set(scale.c_str(), glm::vec2(gpu.scale));
-            p.set(bias.c_str(), glm::vec2(gpu.bias));
-        } else if (spec.channels.size() == 3) {
-            p.set(scale.c_str(), glm::vec3(gpu.scale));
-            p.set(bias.c_str(), glm::vec3(gpu.bias));
-        } else if (spec.channels.size() == 4) {
-            p.set(scale.c_str(), gpu.scale);
-            p.set(bias.c_str(), gpu.bias);
-        }
+        p.set(std::string(textureSpec(role).sampler).c_str(), unit);
     };
     if (reference) {
         // The finest normals are stored signed: no decode.
         if (finestNormal) {
             finestNormal->bind(kUnitNormal);
             p.set("uNormalMap", int(kUnitNormal));
-            p.set("uNormalScale", glm::vec3(1.0f));
-            p.set("uNormalBias", glm::vec3(0.0f));
         }
         if (finestGloss) {
             finestGloss->bind(kUnitGloss);
@@ -784,8 +775,6 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
     if (detail && f.detailMap) {
         detail->texture.bind(kUnitDetail);
         p.set("uDetailMap", int(kUnitDetail));
-        p.set("uDetailScale", detail->scale);
-        p.set("uDetailBias", detail->bias);
     }
     if (specular && f.specularTexture) {
         specular->bind(kUnitSpecular);

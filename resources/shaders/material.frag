@@ -110,11 +110,10 @@ uniform float uBasePower;
 
 #if defined(HAS_NORMAL_MAP)
 // The baked "normal" texture (every method but LEAN/CLEAN/mixture reads it); in the reference, the
-// finest normals themselves. Decoded as stored·scale + bias (core's ChannelDecode).
+// finest normals themselves. Every baked texture arrives decoded (the renderer applies core's
+// ChannelDecode, stored·scale + bias, as it uploads): its values are physical.
 #if UBERSHADER || !STATIC_SLOPE_METHOD
 uniform sampler2D uNormalMap;
-uniform vec3 uNormalScale;
-uniform vec3 uNormalBias;
 #endif
 // The normal map's finest size, for the mip-level view and the slope methods' derivatives.
 uniform vec2 uNormalMapSize;
@@ -138,16 +137,10 @@ uniform float uToksvigFixedPower; // the power the Toksvig factor was baked for
 #endif
 #if UBERSHADER || METHOD == METHOD_LEAN
 uniform sampler2D uLeanB;
-uniform vec2 uLeanBScale;
-uniform vec2 uLeanBBias;
 uniform sampler2D uLeanM;
-uniform vec3 uLeanMScale;
-uniform vec3 uLeanMBias;
 #endif
 #if UBERSHADER || METHOD == METHOD_CLEAN
 uniform sampler2D uClean;
-uniform vec3 uCleanScale;
-uniform vec3 uCleanBias;
 #endif
 #if UBERSHADER || METHOD == METHOD_MIXTURE
 // The mixture's textures (method table rows mixture-weights, mixture-lobe0..3, mixture-cross):
@@ -162,28 +155,14 @@ uniform int uMixtureLobes;
 #endif
 uniform float uMixtureMinVariance; // 1/s of the narrowest authored lobe
 uniform sampler2D uMixtureWeights;
-uniform vec4 uMixtureWeightsScale;
-uniform vec4 uMixtureWeightsBias;
 uniform sampler2D uMixtureLobe0;
 uniform sampler2D uMixtureLobe1;
 uniform sampler2D uMixtureLobe2;
 uniform sampler2D uMixtureLobe3;
-uniform vec4 uMixtureLobe0Scale;
-uniform vec4 uMixtureLobe1Scale;
-uniform vec4 uMixtureLobe2Scale;
-uniform vec4 uMixtureLobe3Scale;
-uniform vec4 uMixtureLobe0Bias;
-uniform vec4 uMixtureLobe1Bias;
-uniform vec4 uMixtureLobe2Bias;
-uniform vec4 uMixtureLobe3Bias;
 uniform sampler2D uMixtureCross;
-uniform vec4 uMixtureCrossScale;
-uniform vec4 uMixtureCrossBias;
 #endif
 #if defined(HAS_DETAIL_MAP)
 uniform sampler2D uDetailMap; // core's bakeDetail: [x, y, 0, variance]
-uniform vec4 uDetailScale;
-uniform vec4 uDetailBias;
 uniform float uDetailUvScale; // detail tiling relative to the base map
 #endif
 #endif
@@ -290,7 +269,7 @@ Lobe materialLobe(vec2 uv) {
 #endif
 #if UBERSHADER || !STATIC_SLOPE_METHOD
         if (!IS_SLOPE_METHOD) {
-            vec3 Na = sampleMap(uNormalMap, uv).xyz * uNormalScale + uNormalBias;
+            vec3 Na = sampleMap(uNormalMap, uv).xyz;
             lobe.n = safeNormalize(Na, vec3(0.0, 0.0, 1.0));
             lobe.power = s;
             if (IS_METHOD(METHOD_TOKSVIG)) {
@@ -319,8 +298,8 @@ Lobe materialLobe(vec2 uv) {
 #endif
 #if UBERSHADER || METHOD == METHOD_LEAN
         if (IS_METHOD(METHOD_LEAN)) {
-            vec2 B = sampleMap(uLeanB, uv).xy * uLeanBScale + uLeanBBias;
-            vec3 M = sampleMap(uLeanM, uv).xyz * uLeanMScale + uLeanMBias;
+            vec2 B = sampleMap(uLeanB, uv).xy;
+            vec3 M = sampleMap(uLeanM, uv).xyz;
             // Olano & Baker 2010, "LEAN Mapping": Σ = M − BBᵀ (1/s already on M's diagonal)
             lobe.slope = true;
             lobe.B = B;
@@ -329,7 +308,7 @@ Lobe materialLobe(vec2 uv) {
 #endif
 #if UBERSHADER || METHOD == METHOD_CLEAN
         if (IS_METHOD(METHOD_CLEAN)) {
-            vec3 c = sampleMap(uClean, uv).xyz * uCleanScale + uCleanBias;
+            vec3 c = sampleMap(uClean, uv).xyz;
             // Baker 2011 via Baker & Hill 2012 (CLEAN): σ² = (M_xx + M_yy)/2 − |B|²/2 (1/s included)
             float sigma2 = c.z - 0.5 * dot(c.xy, c.xy);
             lobe.slope = true;
@@ -342,15 +321,15 @@ Lobe materialLobe(vec2 uv) {
             // Premultiplied moments, filtered by the hardware: same-index lobes merge exactly.
             lobe.mixtureLobes = MIXTURE_LOBE_COUNT;
             lobe.mixtureMinVariance = max(uMixtureMinVariance, kMinVariance);
-            lobe.mixtureWeights = sampleMap(uMixtureWeights, uv) * uMixtureWeightsScale + uMixtureWeightsBias;
-            lobe.mixtureCross = sampleMap(uMixtureCross, uv) * uMixtureCrossScale + uMixtureCrossBias;
-            lobe.mixtureLobe[0] = sampleMap(uMixtureLobe0, uv) * uMixtureLobe0Scale + uMixtureLobe0Bias;
+            lobe.mixtureWeights = sampleMap(uMixtureWeights, uv);
+            lobe.mixtureCross = sampleMap(uMixtureCross, uv);
+            lobe.mixtureLobe[0] = sampleMap(uMixtureLobe0, uv);
             if (lobe.mixtureLobes > 1)
-                lobe.mixtureLobe[1] = sampleMap(uMixtureLobe1, uv) * uMixtureLobe1Scale + uMixtureLobe1Bias;
+                lobe.mixtureLobe[1] = sampleMap(uMixtureLobe1, uv);
             if (lobe.mixtureLobes > 2)
-                lobe.mixtureLobe[2] = sampleMap(uMixtureLobe2, uv) * uMixtureLobe2Scale + uMixtureLobe2Bias;
+                lobe.mixtureLobe[2] = sampleMap(uMixtureLobe2, uv);
             if (lobe.mixtureLobes > 3)
-                lobe.mixtureLobe[3] = sampleMap(uMixtureLobe3, uv) * uMixtureLobe3Scale + uMixtureLobe3Bias;
+                lobe.mixtureLobe[3] = sampleMap(uMixtureLobe3, uv);
             // Lobes above the count and lost weights carry nothing.
             for (int i = 0; i < kMaxMixtureLobes; ++i)
                 if (i >= lobe.mixtureLobes) lobe.mixtureWeights[i] = 0.0;
@@ -383,7 +362,7 @@ Lobe materialLobe(vec2 uv) {
         }
 #if defined(HAS_DETAIL_MAP)
         if (UBER_ON(uHasDetailMap)) {
-            vec4 d = sampleMap(uDetailMap, uv * uDetailUvScale) * uDetailScale + uDetailBias;
+            vec4 d = sampleMap(uDetailMap, uv * uDetailUvScale);
             vec3 detailN = vec3(d.xy, sqrt(max(1.0 - dot(d.xy, d.xy), 0.0)));
             float sigma2 = max(d.w, 0.0);
             if (lobe.slope) {

@@ -129,9 +129,9 @@ struct TextureSpec {
     std::vector<ChannelSpec> channels;
     /// Needs 16-bit or float storage to keep the method's accuracy (LEAN's second moments).
     bool needsHighPrecision = false;
-    /// The shader's sampler and its decode uniforms (empty: the texture is for export only, or
-    /// bound by its own code, as the detail map is).
-    std::string_view sampler, scaleUniform, biasUniform;
+    /// The shader's sampler (empty: the texture is for export only, or bound by its own code, as the
+    /// detail map is). The renderer uploads the decoded values (ChannelDecode): no decode uniforms.
+    std::string_view sampler;
 };
 const TextureSpec& textureSpec(TextureRole role);
 

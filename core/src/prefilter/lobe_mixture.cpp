@@ -285,6 +285,31 @@ double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance)
 
 namespace {
 
+// The index of the first of the smallest of c[0..count) (count a multiple of 4; finite or +∞
+// values, no NaN), with that value in `best`: what a scan that keeps a value only when it is
+// strictly below the best so far picks, without its branch per value (a reduction of 12 lobes scans
+// 66 pairs nine times, and the branch on each mispredicted). The minimum four at a time, then its
+// first occurrence.
+[[gnu::always_inline]] inline size_t firstCheapest(const double* c, size_t count, double& best) {
+    simd::Double4 m;
+    std::memcpy(&m, c, sizeof m);
+    for (size_t i = 4; i < count; i += 4) {
+        simd::Double4 v;
+        std::memcpy(&v, c + i, sizeof v);
+        m = v < m ? v : m;
+    }
+    const double m01 = m[1] < m[0] ? m[1] : m[0], m23 = m[3] < m[2] ? m[3] : m[2];
+    best = m23 < m01 ? m23 : m01;
+    for (size_t i = 0; i < count; i += 4) {
+        simd::Double4 v;
+        std::memcpy(&v, c + i, sizeof v);
+        const simd::Int64x4 hit = v == best;
+        if (hit[0] | hit[1] | hit[2] | hit[3])
+            return i + (hit[0] ? 0 : hit[1] ? 1 : hit[2] ? 2 : 3);
+    }
+    return 0;
+}
+
 // reduceLobes on the caller's vector (changed), with the pair costs in per-thread buffers: no
 // allocation per texel once the buffers have grown. The costs are computed four pairs at a time
 // (LobeColumns), each bit for bit the scalar mergeCost.
@@ -330,28 +355,26 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
     // recomputes only the merged lobe's row.
     const size_t n = lobes.size();
     if (n > 1) {
+        // A merged-away lobe's pairs cost +∞ (a cost is finite or +∞, never NaN): the scan for the
+        // first cheapest pair needs no test of which lobes remain.
+        constexpr double kGone = std::numeric_limits<double>::infinity();
         thread_local std::vector<double> cost;
         thread_local std::vector<char> alive;
         columns.assign(lobes, minVariance);
         row.resize(columns.w.size());
-        cost.assign(n * n, 0.0);
+        // The pairs (i, j), i < j, at i·n + j; the rest (j <= i, and the padding to whole Double4s)
+        // +∞, never the cheapest.
+        cost.assign((n * n + 3) / 4 * 4, kGone);
         alive.assign(n, 1);
         for (size_t i = 0; i + 1 < n; ++i) {
             columns.costsWith(i, i + 1, n - i - 1, false, minVariance, row);
             std::copy(row.begin() + std::ptrdiff_t(i + 1), row.begin() + std::ptrdiff_t(n),
                       cost.begin() + std::ptrdiff_t(i * n + i + 1));
         }
-        // A merged-away lobe's pairs cost +∞ (a cost is finite or +∞, never NaN): the scan for the
-        // first cheapest pair needs no test of which lobes remain.
-        constexpr double kGone = std::numeric_limits<double>::infinity();
         for (size_t remaining = n; remaining > 1; --remaining) {
-            size_t bi = 0, bj = 0;
             double best = kGone;
-            for (size_t i = 0; i + 1 < n; ++i) {
-                const double* c = cost.data() + i * n;
-                for (size_t j = i + 1; j < n; ++j)
-                    if (c[j] < best) best = c[j], bi = i, bj = j;
-            }
+            const size_t first = firstCheapest(cost.data(), cost.size(), best);
+            const size_t bi = best < kGone ? first / n : 0, bj = best < kGone ? first % n : 0;
             if (remaining <= size_t(k) && !(best <= kNegligibleMergeCost * total)) break;
             lobes[bi] += lobes[bj];
             columns.update(bi, lobes[bi], minVariance);

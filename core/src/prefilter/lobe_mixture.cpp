@@ -304,8 +304,7 @@ namespace {
         simd::Double4 v;
         std::memcpy(&v, c + i, sizeof v);
         const simd::Int64x4 hit = v == best;
-        if (hit[0] | hit[1] | hit[2] | hit[3])
-            return i + (hit[0] ? 0 : hit[1] ? 1 : hit[2] ? 2 : 3);
+        if (hit[0] | hit[1] | hit[2] | hit[3]) return i + (hit[0] ? 0 : hit[1] ? 1 : hit[2] ? 2 : 3);
     }
     return 0;
 }

@@ -99,23 +99,34 @@ vec3 normalOfSlope(vec2 B) {
     return normalize(vec3(B, 1.0));
 }
 
-// Olano & Baker 2010, "LEAN Mapping": exp(−½ dᵀΣ⁻¹d)/(2π√detΣ) / h_z⁴ with d = h.xy/h.z − B
-float slopeGaussianNdf(vec3 h, vec2 mean, vec3 cov) {
-    if (!(h.z > 0.0)) return 0.0;
+// Olano & Baker 2010, "LEAN Mapping": exp(−½ dᵀΣ⁻¹d)/(2π√detΣ) / h_z⁴ with d = h's slope − B, from
+// h's slope h.xy/h_z and logNorm = log(2π h_z⁴) (slopeGaussianLogNorm), which every lobe at one h
+// shares (mixtureValue computes them once for its K lobes).
+float slopeGaussianNdfAtSlope(vec2 slope, float logNorm, vec2 mean, vec3 cov) {
     float det = cov.x * cov.y - cov.z * cov.z;
-    // A positive definite Σ has det > 0; a singular or broken one gives no lobe (as core).
-    if (!(det > 0.0)) return 0.0;
-    // kMinCosine bounds 1/h_z at 1e6: below it h_z⁴ underflows float to 0 (0/0 = NaN); there the
-    // Gaussian of any Σ a method produces (|B| <= 100, Σ <= 1e6) is exp(−1e6)-small, 0 in core too.
-    float hz = max(h.z, kMinCosine);
-    float dx = h.x / hz - mean.x;
-    float dy = h.y / hz - mean.y;
+    float dx = slope.x - mean.x;
+    float dy = slope.y - mean.y;
     float e = (dx * dx * cov.y + dy * dy * cov.x - 2.0 * dx * dy * cov.z) / det;
     // In log form, so neither exp(−e/2) nor 1/h_z⁴ alone can overflow or underflow to 0·∞;
     // 80 keeps exp finite; below −104 exp underflows even float denormals, and a NaN logD (an
-    // infinite e) fails the comparison, so both give 0.
-    float logD = -0.5 * e - log(2.0 * kPi * sqrt(det)) - 4.0 * log(hz);
-    return logD > -104.0 ? exp(min(logD, 80.0)) : 0.0;
+    // infinite e) fails the comparison, so both give 0. A positive definite Σ has det > 0; a
+    // singular or broken one gives no lobe (as core). Selects, not early returns: a shader core
+    // pays for divergent branches.
+    float logD = -0.5 * e - 0.5 * log(det) - logNorm;
+    return det > 0.0 && logD > -104.0 ? exp(min(logD, 80.0)) : 0.0;
+}
+
+// log(2π h_z⁴) for slopeGaussianNdfAtSlope, h_z at least kMinCosine: that bounds 1/h_z at 1e6, where
+// h_z⁴ would underflow float to 0 (0/0 = NaN); there the Gaussian of any Σ a method produces
+// (|B| <= 100, Σ <= 1e6) is exp(−1e6)-small, 0 in core too.
+float slopeGaussianLogNorm(float hz) {
+    return log(2.0 * kPi) + 4.0 * log(hz);
+}
+
+float slopeGaussianNdf(vec3 h, vec2 mean, vec3 cov) {
+    float hz = max(h.z, kMinCosine);
+    float D = slopeGaussianNdfAtSlope(h.xy / hz, slopeGaussianLogNorm(hz), mean, cov);
+    return h.z > 0.0 ? D : 0.0;
 }
 
 // The isotropic methods' NDF (methodNdf for a lobe with power p about normal): (p+2)/(2π)(n̄·h)^p
@@ -157,6 +168,10 @@ float mixtureValue(vec4 weights, vec4 lobe[kMaxMixtureLobes], vec4 cross, int co
     // No early return and no `continue`: each costs a shader core a divergent branch (on llvmpipe a
     // K = 1 mixture's frame took 23.5 ms with them, 13.4 ms without). An empty lobe's term is
     // w = 0 times a finite value (mixtureLobeCovariance's (min, min, 0) lobe): 0, as core's skip.
+    // h's slope and the Gaussian's normalisation are the same for every lobe: computed once.
+    float hz = max(h.z, kMinCosine);
+    vec2 slope = h.xy / hz;
+    float logNorm = slopeGaussianLogNorm(hz);
     float total = 0.0;
     for (int i = 0; i < count; ++i)
         total += max(weights[i], 0.0);
@@ -166,7 +181,7 @@ float mixtureValue(vec4 weights, vec4 lobe[kMaxMixtureLobes], vec4 cross, int co
         float w = max(weights[i], 0.0);
         vec2 b = mixtureLobeMean(w, lobe[i].xy);
         vec3 cov = mixtureLobeCovariance(w, lobe[i].xy, vec3(lobe[i].zw, cross[i]), minVariance);
-        sum += w * share * slopeGaussianNdf(h, b, cov) * max(0.0, dot(normalOfSlope(b), l));
+        sum += w * share * slopeGaussianNdfAtSlope(slope, logNorm, b, cov) * max(0.0, dot(normalOfSlope(b), l));
     }
-    return sum;
+    return h.z > 0.0 ? sum : 0.0;
 }

@@ -388,6 +388,26 @@ TEST(ImageIo, FilesCutShortAreTruncatedNotTexels) {
     ASSERT_FALSE(levels.ok());
     EXPECT_NE(levels.error().find("corrupt"), std::string::npos) << levels.error();
     EXPECT_NE(levels.error().find("905969666 mip levels"), std::string::npos) << levels.error();
+    // An uncompressed 8×8 file (no FourCC flag) of 0 bits per texel: refused as corrupt before
+    // OpenImageIO's reader, which never returned on it (found by fuzzing); 4 bits too.
+    put32(28, 0);
+    put32(80, 0x41); // RGB | alpha, no FourCC
+    for (std::uint32_t bits : {0u, 4u}) {
+        put32(88, bits);
+        std::ofstream(dir / "no-bits.dds", std::ios::binary) << header << std::string(256, '\x80');
+        const auto noBits = readImage(dir / "no-bits.dds");
+        ASSERT_FALSE(noBits.ok());
+        EXPECT_NE(noBits.error().find("corrupt"), std::string::npos) << noBits.error();
+        EXPECT_NE(noBits.error().find(std::to_string(bits) + " bits per texel"), std::string::npos)
+            << noBits.error();
+        EXPECT_FALSE(loadNormalMap(dir / "no-bits.dds").ok());
+    }
+    // 32 bits per texel with its masks is still read.
+    put32(88, 32);
+    std::ofstream(dir / "rgba32.dds", std::ios::binary) << header << std::string(256, '\x80');
+    const auto rgba32 = readImage(dir / "rgba32.dds");
+    ASSERT_TRUE(rgba32.ok()) << rgba32.error();
+    EXPECT_EQ(rgba32->width, 8);
 }
 
 TEST(ImageIo, AlphaIsNotPremultipliedIntoTheColour) {

@@ -62,7 +62,6 @@ Status ensureTarget(std::optional<Framebuffer>& target, int width, int height, b
     return {};
 }
 
-// A baked texture on the GPU with its per-channel decode (stored·scale + bias).
 // A baked texture on the GPU, holding decoded values (stored·scale + bias, its ChannelDecode).
 struct GpuBaked {
     Texture2D texture;

@@ -388,11 +388,28 @@ TEST(ImageIo, FilesCutShortAreTruncatedNotTexels) {
     ASSERT_FALSE(levels.ok());
     EXPECT_NE(levels.error().find("corrupt"), std::string::npos) << levels.error();
     EXPECT_NE(levels.error().find("905969666 mip levels"), std::string::npos) << levels.error();
-    // An uncompressed 8×8 file (no FourCC flag) of 0 bits per texel: refused as corrupt before
-    // OpenImageIO's reader, which never returned on it (found by fuzzing); 4 bits too.
+    // The same 8×8 blocks as DXT2 or DXT4 (premultiplied alpha): refused as unsupported before
+    // OpenImageIO's reader, which divides by zero on any such file (found by fuzzing); the same
+    // blocks as DXT3 and DXT5 are read.
     put32(28, 0);
+    for (const char* fourCC : {"DXT2", "DXT4", "DXT3", "DXT5"}) {
+        std::memcpy(header.data() + 84, fourCC, 4);
+        std::ofstream(dir / "premultiplied.dds", std::ios::binary) << header << std::string(4 * 16, '\x80');
+        const auto read = readImage(dir / "premultiplied.dds");
+        const bool premultiplied = fourCC[3] == '2' || fourCC[3] == '4';
+        ASSERT_EQ(read.ok(), !premultiplied) << fourCC;
+        if (premultiplied) {
+            EXPECT_NE(read.error().find(std::string("unsupported: it is ") + fourCC), std::string::npos)
+                << read.error();
+            EXPECT_NE(read.error().find("save it as BC5"), std::string::npos) << read.error();
+            EXPECT_FALSE(loadNormalMap(dir / "premultiplied.dds").ok());
+        }
+    }
+    // An uncompressed 8×8 file (no FourCC flag) of 0 bits per texel: refused as corrupt before
+    // OpenImageIO's reader, which never returned on it (found by fuzzing); 4 bits too, and 64 (its
+    // reader copies a texel into 32 bits).
     put32(80, 0x41); // RGB | alpha, no FourCC
-    for (std::uint32_t bits : {0u, 4u}) {
+    for (std::uint32_t bits : {0u, 4u, 64u}) {
         put32(88, bits);
         std::ofstream(dir / "no-bits.dds", std::ios::binary) << header << std::string(256, '\x80');
         const auto noBits = readImage(dir / "no-bits.dds");

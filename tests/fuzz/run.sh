@@ -1,8 +1,13 @@
 #!/usr/bin/env bash
 # Runs one libFuzzer target from its seed corpus for a fixed time and fails on any finding.
 #
-#   tests/fuzz/run.sh --target BIN --corpus SEEDS --work DIR [--seconds N] [--jobs J]
-#   tests/fuzz/run.sh --all BUILD_DIR [--seconds N]      # every target of a build, one after another
+#   tests/fuzz/run.sh --target BIN --corpus SEEDS --work DIR [--seconds N] [--seed S]
+#   tests/fuzz/run.sh --all BUILD_DIR [--seconds N] [--seed S]  # every target of a build, in turn
+#
+# --seed fixes libFuzzer's random seed, so a run mutates the same inputs in the same order and a
+# rerun reproduces it (CTest passes BURNISH_FUZZ_SEED: CI's verdict does not depend on the luck of
+# the draw); without it each run draws a fresh seed, which the long runs that look for new findings
+# want. The seed in use is in the log's first lines ("Seed: S").
 #
 # SEEDS (the repository's corpus) is only read: new inputs go to DIR/corpus, a reproducer of a
 # finding to DIR/crash-*, and the log to DIR/log.txt. The long run the project documents is
@@ -11,7 +16,7 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 seconds=30
-target="" corpus="" work="" all=""
+target="" corpus="" work="" all="" seed=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --target) target="$2"; shift 2 ;;
@@ -19,6 +24,7 @@ while [ $# -gt 0 ]; do
     --work) work="$2"; shift 2 ;;
     --seconds) seconds="$2"; shift 2 ;;
     --all) all="$2"; shift 2 ;;
+    --seed) seed="$2"; shift 2 ;;
     *) echo "run.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -28,7 +34,8 @@ if [ -n "$all" ]; then
   for bin in "$all"/fuzz/fuzz_*; do
     [ -x "$bin" ] || continue
     name="$(basename "$bin")"; name="${name#fuzz_}"
-    "$0" --target "$bin" --corpus "$here/corpus/$name" --work "$all/fuzz/$name" --seconds "$seconds" || status=1
+    "$0" --target "$bin" --corpus "$here/corpus/$name" --work "$all/fuzz/$name" --seconds "$seconds" \
+      ${seed:+--seed "$seed"} || status=1
   done
   exit $status
 fi
@@ -46,11 +53,12 @@ export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$here/../lsan.supp:print_suppr
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 set +e
 "$target" "$work/corpus" "$corpus" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=3072 \
-  -max_len=65536 -artifact_prefix="$work/" -print_final_stats=1 >"$work/log.txt" 2>&1
+  ${seed:+-seed="$seed"} -max_len=65536 -artifact_prefix="$work/" -print_final_stats=1 >"$work/log.txt" 2>&1
 rc=$?
 set -e
 runs=$(grep -Eo 'stat::number_of_executed_units: *[0-9]+' "$work/log.txt" | grep -Eo '[0-9]+$' || echo 0)
-echo "fuzz $(basename "$target"): ${seconds} s, ${runs} runs, corpus $(ls "$work/corpus" | wc -l) new inputs, exit $rc"
+used=$(grep -Eo 'Seed: [0-9]+' "$work/log.txt" | head -n 1 | grep -Eo '[0-9]+' || echo "?")
+echo "fuzz $(basename "$target"): seed ${used}, ${seconds} s, ${runs} runs, corpus $(ls "$work/corpus" | wc -l) new inputs, exit $rc"
 if [ $rc -ne 0 ]; then
   tail -n 60 "$work/log.txt"
   ls "$work" | grep -E '^(crash|leak|timeout|oom|slow-unit)-' || true

@@ -38,6 +38,38 @@ bool canonicalLess(const LobeMoments& a, const LobeMoments& b) {
 
 } // namespace
 
+namespace {
+
+using InjectiveMap = std::array<unsigned char, kMaxMixtureLobes>;
+
+// The injective maps of n children into `slots` slots (1 <= n <= slots <= kMaxMixtureLobes), in
+// lexicographic order of (slot of child 0, slot of child 1, ...): built once per (n, slots).
+const std::vector<InjectiveMap>& injectiveMaps(int n, int slots) {
+    static const auto tables = [] {
+        std::array<std::array<std::vector<InjectiveMap>, kMaxMixtureLobes + 1>, kMaxMixtureLobes + 1> t;
+        for (int count = 1; count <= kMaxMixtureLobes; ++count)
+            for (int width = count; width <= kMaxMixtureLobes; ++width) {
+                InjectiveMap current{};
+                auto walk = [&](auto&& self, int c, unsigned used) -> void {
+                    if (c == count) {
+                        t[size_t(count)][size_t(width)].push_back(current);
+                        return;
+                    }
+                    for (int slot = 0; slot < width; ++slot) {
+                        if (used & (1u << slot)) continue;
+                        current[size_t(c)] = (unsigned char)slot;
+                        self(self, c + 1, used | (1u << slot));
+                    }
+                };
+                walk(walk, 0, 0u);
+            }
+        return t;
+    }();
+    return tables[size_t(n)][size_t(slots)];
+}
+
+} // namespace
+
 // A mixture's lobes decoded once for assigning many slopes to them: per lobe its mean, Σ's entries
 // and det Σ, and log w − ½ log det Σ.
 class LobeScorer {
@@ -69,21 +101,16 @@ public:
                     slot < m_count && m_lobes[size_t(slot)].offset > -std::numeric_limits<double>::infinity()
                         ? scoreOf(slot, lobes[size_t(c)].mean())
                         : kEmptySlotScore;
-        std::array<int, kMaxMixtureLobes> best{}, current{};
+        // Every injective map of the n child lobes into the slots (at most 4·3·2·1), in lexicographic
+        // order, each total summed child by child: the first of the largest.
+        std::array<unsigned char, kMaxMixtureLobes> best{};
         double bestTotal = -std::numeric_limits<double>::infinity();
-        // Depth-first over injective maps of the n child lobes into the slots (at most 4·3·2·1).
-        auto search = [&](auto&& self, int c, unsigned used, double total) -> void {
-            if (c >= n || c >= kMaxMixtureLobes) {
-                if (total > bestTotal) bestTotal = total, best = current;
-                return;
-            }
-            for (int slot = 0; slot < slots; ++slot) {
-                if (used & (1u << slot)) continue;
-                current[size_t(c)] = slot;
-                self(self, c + 1, used | (1u << slot), total + score[size_t(c)][size_t(slot)]);
-            }
-        };
-        search(search, 0, 0u, 0.0);
+        for (const auto& map : injectiveMaps(n, slots)) {
+            double total = 0.0;
+            for (int c = 0; c < n; ++c)
+                total += score[size_t(c)][map[size_t(c)]];
+            if (total > bestTotal) bestTotal = total, best = map;
+        }
         std::array<LobeMoments, kMaxMixtureLobes> out{};
         int outCount = 0;
         for (int c = 0; c < n; ++c) {
@@ -358,32 +385,43 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
         // first cheapest pair needs no test of which lobes remain.
         constexpr double kGone = std::numeric_limits<double>::infinity();
         thread_local std::vector<double> cost;
+        thread_local std::vector<size_t> rowStart;
         thread_local std::vector<char> alive;
         columns.assign(lobes, minVariance);
         row.resize(columns.w.size());
-        // The pairs (i, j), i < j, at i·n + j; the rest (j <= i, and the padding to whole Double4s)
-        // +∞, never the cheapest.
-        cost.assign((n * n + 3) / 4 * 4, kGone);
+        // The pairs (i, j), i < j, packed row by row: (i, j) at rowStart[i] + j − i − 1, so the scan
+        // meets them in the order of the full matrix's rows. The padding to whole Double4s is +∞,
+        // never the cheapest.
+        rowStart.resize(n + 1);
+        for (size_t i = 0; i <= n; ++i)
+            rowStart[i] = i * n - i * (i + 1) / 2;
+        const auto at = [&](size_t i, size_t j) { return rowStart[i] + j - i - 1; };
+        cost.assign((rowStart[n] + 3) / 4 * 4, kGone);
         alive.assign(n, 1);
         for (size_t i = 0; i + 1 < n; ++i) {
             columns.costsWith(i, i + 1, n - i - 1, false, minVariance, row);
             std::copy(row.begin() + std::ptrdiff_t(i + 1), row.begin() + std::ptrdiff_t(n),
-                      cost.begin() + std::ptrdiff_t(i * n + i + 1));
+                      cost.begin() + std::ptrdiff_t(rowStart[i]));
         }
         for (size_t remaining = n; remaining > 1; --remaining) {
             double best = kGone;
             const size_t first = firstCheapest(cost.data(), cost.size(), best);
-            const size_t bi = best < kGone ? first / n : 0, bj = best < kGone ? first % n : 0;
+            size_t bi = 0, bj = 0;
+            if (best < kGone) {
+                while (rowStart[bi + 1] <= first)
+                    ++bi;
+                bj = first - rowStart[bi] + bi + 1;
+            }
             if (remaining <= size_t(k) && !(best <= kNegligibleMergeCost * total)) break;
             lobes[bi] += lobes[bj];
             columns.update(bi, lobes[bi], minVariance);
             alive[bj] = 0;
             for (size_t o = 0; o < n; ++o)
-                cost[std::min(o, bj) * n + std::max(o, bj)] = kGone;
+                if (o != bj) cost[at(std::min(o, bj), std::max(o, bj))] = kGone;
             columns.costsWith(bi, 0, n, true, minVariance, row);
             for (size_t o = 0; o < n; ++o) {
                 if (!alive[o] || o == bi) continue;
-                cost[std::min(o, bi) * n + std::max(o, bi)] = row[o];
+                cost[at(std::min(o, bi), std::max(o, bi))] = row[o];
             }
         }
         size_t out = 0;

@@ -587,7 +587,9 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
         Pass pass;
         pass.errorMaps = options.errorMaps;
         pass.betweenTexels = options.betweenTexels;
-        // The mixtures, one per K >= 2 (K = 1 is LEAN's lobe, from the moments).
+        // The mixtures, one per K >= 2 (K = 1 is LEAN's lobe, from the moments), every level up to
+        // 1×1 as the bake builds them: a level's lobe slots follow the level above (the top level's
+        // are canonical), so the last evaluated mip holds the slots the bake stores.
         std::vector<std::optional<MixturePyramid>> mixturePyramids(kMaxMixtureLobes + 1);
         std::vector<const MixturePyramid*> mixtures(methodCount, nullptr);
         for (size_t m = 0; m < methodCount; ++m) {
@@ -595,7 +597,7 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             if (v.method != Method::Mixture || v.lobes < 2) continue;
             if (cancelled()) return Error{std::string(kCancelledMessage)};
             auto& mix = mixturePyramids[size_t(v.lobes)];
-            if (!mix) mix.emplace(MixturePyramid::build(pyramid, s, v.lobes, lastMip, texelPowers));
+            if (!mix) mix.emplace(MixturePyramid::build(pyramid, s, v.lobes, -1, texelPowers));
             mixtures[m] = &*mix;
         }
         // Lobes of every variant at every evaluated mip.

@@ -83,7 +83,7 @@ public:
             Lobe& d = m_lobes[size_t(i)];
             d.mean = l.mean();
             d.xx = c[0], d.yy = c[1], d.xy = c[2], d.det = c[0] * c[1] - c[2] * c[2];
-            d.offset = std::log(l.w) - 0.5 * std::log(d.det);
+            d.offset = 0.5 * std::log(l.w * l.w / d.det); // log w − ½ log det Σ in one logarithm
         }
     }
     /// Puts a child's lobes (the first `count` of its `slots` stored ones) into the slots of this
@@ -174,6 +174,21 @@ glm::dvec2 finestSlope(const glm::vec3& n) {
     const NormalMoments m = NormalMoments::ofNormal(n);
     const bool finite = std::isfinite(m.slope.x) && std::isfinite(m.slope.y);
     return finite ? glm::dvec2(m.slope) : glm::dvec2(0.0);
+}
+
+} // namespace
+
+namespace {
+
+// The two texels of a level of `parentSize` (and their weights) that bilinear filtering reads at the
+// centre of texel i of a level of `size`, the border mode resolving those outside.
+void bilinearTaps(int i, int size, int parentSize, BorderMode border, std::array<int, 2>& at,
+                  std::array<double, 2>& weight) {
+    const double u = (double(i) + 0.5) / double(size) * double(parentSize) - 0.5;
+    const double f = std::floor(u);
+    const int i0 = int(f);
+    weight = {1.0 - (u - f), u - f};
+    at = {borderIndex(i0, parentSize, border), borderIndex(i0 + 1, parentSize, border)};
 }
 
 } // namespace
@@ -491,26 +506,40 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         });
         out.m_levels.push_back(std::move(built));
     }
-    // Top-down, each texel's lobes take the slots of its parent's lobes they belong to most, so the
-    // texels under one parent, and the levels between, give one cluster one slot: bilinear and
-    // trilinear filtering then merge like with like. The top level keeps the canonical order.
+    // Top-down, each texel's lobes take the slots of the lobes they belong to most in the level above
+    // as a GPU samples it at the texel's centre: its parents' lobes bilinearly filtered, slot by slot.
+    // That reference varies smoothly across texels, whichever parent they fall under, so
+    // neighbouring texels, and the levels between, give one cluster one slot: bilinear and trilinear
+    // filtering then merge like with like. The top level keeps the canonical order.
+    const BorderMode border = pyramid.options().border;
     for (int level = last - 1; level >= 1; --level) {
-        const PyramidLevel& pl = pyramid.level(level + 1);
         const Level& parents = out.m_levels[size_t(level)];
         Level& children = out.m_levels[size_t(level - 1)];
-        tbb::parallel_for(0, pl.height, [&](int y) {
-            for (int x = 0; x < pl.width; ++x) {
-                const size_t p = size_t(y) * size_t(pl.width) + size_t(x);
-                const LobeScorer parent(&parents.lobes[p * K], parents.counts[p], out.m_minVariance);
-                for (int j = pl.yChild[size_t(y)]; j < pl.yChild[size_t(y) + 1]; ++j)
-                    for (int i = pl.xChild[size_t(x)]; i < pl.xChild[size_t(x) + 1]; ++i) {
-                        const size_t t = size_t(j) * size_t(children.width) + size_t(i);
-                        parent.reorder(&children.lobes[t * K], children.counts[t], out.m_k);
+        tbb::parallel_for(0, children.height, [&](int y) {
+            std::array<int, 2> py{};
+            std::array<double, 2> wy{};
+            bilinearTaps(y, children.height, parents.height, border, py, wy);
+            for (int x = 0; x < children.width; ++x) {
+                std::array<int, 2> px{};
+                std::array<double, 2> wx{};
+                bilinearTaps(x, children.width, parents.width, border, px, wx);
+                std::array<LobeMoments, kMaxMixtureLobes> reference{};
+                for (size_t j = 0; j < 2; ++j)
+                    for (size_t i = 0; i < 2; ++i) {
+                        const double weight = wy[j] * wx[i];
+                        if (weight == 0.0) continue;
+                        const size_t p = size_t(py[j]) * size_t(parents.width) + size_t(px[i]);
+                        for (size_t slot = 0; slot < parents.counts[p]; ++slot)
+                            reference[slot] += parents.lobes[p * K + slot].scaled(weight);
                     }
+                const LobeScorer scorer(reference.data(), out.m_k, out.m_minVariance);
+                const size_t t = size_t(y) * size_t(children.width) + size_t(x);
+                scorer.reorder(&children.lobes[t * K], children.counts[t], out.m_k);
             }
         });
     }
-    // Level 0's lobe indices, from the level-1 parents.
+    // Level 0's lobe indices, from the level-1 parents: a finest texel has one lobe, and the
+    // filtered reference for each of them would cost more than the rest of the build.
     out.m_finestWidth = finest.width;
     if (last >= 1 && out.m_k > 1) {
         const PyramidLevel& l1 = pyramid.level(1);

@@ -52,6 +52,8 @@ struct LobeMoments {
         mxy += o.mxy;
         return *this;
     }
+    /// The lobe with its weight times f (its mean and covariance unchanged): f·(w, w·b, w·M).
+    LobeMoments scaled(double f) const { return {w * f, bx * f, by * f, mxx * f, myy * f, mxy * f}; }
     /// The slope mean b = (w·b)/w ((0, 0) for an empty lobe).
     glm::dvec2 mean() const;
     /// The slope covariance Σ = (w·M)/w − bbᵀ (xx, yy, xy), its variances at least `minVariance`
@@ -65,7 +67,7 @@ struct LobeMoments {
 
 /// Up to kMaxMixtureLobes lobes of one footprint in slots 0..count−1, an empty slot a lobe of weight
 /// 0. reduceLobes packs them in canonical order; MixturePyramid then moves every level's lobes below
-/// the top into the slots of their parent's lobes.
+/// the top into the slots of the level above's lobes, bilinearly filtered at the texel's centre.
 struct LobeMixture {
     std::array<LobeMoments, kMaxMixtureLobes> lobes{};
     int count = 0;

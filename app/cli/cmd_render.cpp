@@ -1,6 +1,6 @@
 // `burnish render`: the scene renderer headless — an image (PNG or EXR), the supersampled ground
 // truth, a debug view, the program's features (--explain), the shimmer of a slow orbit
-// (--sequence) and frame-time figures (--bench).
+// (--sequence), a frame's error against the ground truth (--compare) and frame-time figures (--bench).
 #include "command.h"
 #include "common.h"
 
@@ -86,6 +86,8 @@ struct RenderCliOptions {
     bool force = false;
     bool ubershader = false;
     int sequence = 0;
+    int compare = 0;
+    std::string kernel = "tent";
     float orbitDegrees = 0.5f;
     std::string framesDir;
     std::string shimmerSpace = "hdr";
@@ -172,6 +174,9 @@ Result<Scene> buildScene(const RenderCliOptions& o) {
         m.method = *method;
     }
     m.methodParams.mixtureLobes = o.lobes;
+    m.kernel = o.kernel == "box"        ? FilterKernel::Box
+               : o.kernel == "gaussian" ? FilterKernel::Gaussian
+                                        : FilterKernel::Tent;
 
     // Base power: --power, or --gloss as a value in the encoding or as an authored gloss map (read
     // after the normal map, whose size it must have).
@@ -486,11 +491,54 @@ int runSequence(Renderer& renderer, const Scene& scene, int width, int height, c
     return 0;
 }
 
+int runCompare(Renderer& renderer, const Scene& scene, int width, int height, const RenderCliOptions& o) {
+    ImageErrorOptions options;
+    options.width = width;
+    options.height = height;
+    options.referenceSamples = o.compare;
+    ProgressBar bar("compare");
+    bar.update(0.0, "method and reference");
+    auto report = measureImageError(renderer, scene, options);
+    bar.finish();
+    if (!report) return fail(report.error());
+    std::string method(methodName(scene.material.method));
+    if (scene.material.method == Method::Mixture)
+        method += "-k" + std::to_string(scene.material.methodParams.mixtureLobes);
+    if (o.json) {
+        nlohmann::json j{{"method", method},
+                         {"mesh", meshKindName(scene.mesh)},
+                         {"distance", scene.camera.distance},
+                         {"width", report->width},
+                         {"height", report->height},
+                         {"reference_samples", report->referenceSamples},
+                         {"measured_pixels", report->measuredPixels},
+                         {"relative_l1", report->relativeL1},
+                         {"energy_ratio", report->energyRatio},
+                         {"reference_noise_l1", report->referenceNoiseL1}};
+        std::printf("%s\n", j.dump(2).c_str());
+        return 0;
+    }
+    std::printf(
+        "%s on the %s at distance %g, %dx%d, against the %d-sample reference (linear HDR luminance over "
+        "the %lld pixels the object covers, silhouette dropped):\n"
+        "relative L1 %.4f, energy ratio %.4f; the reference's own noise %.4f%s\n",
+        method.c_str(), std::string(meshKindName(scene.mesh)).c_str(), double(scene.camera.distance),
+        report->width, report->height, report->referenceSamples,
+        static_cast<long long>(report->measuredPixels), report->relativeL1, report->energyRatio,
+        report->referenceNoiseL1,
+        report->relativeL1 < 3.0 * report->referenceNoiseL1
+            ? " (the error is within 3x the reference's noise: raise --compare)"
+            : "");
+    return 0;
+}
+
 int runRender(const RenderCliOptions& o, bool sizeGiven) {
     if (o.reference > 0 && o.debug != "none")
         return fail("--reference draws the ground truth, which has no debug view; drop --debug");
-    const int modes = (o.sequence > 0 ? 1 : 0) + (o.bench ? 1 : 0);
-    if (modes > 1) return fail("give --sequence or --bench, not both");
+    const int modes = (o.sequence > 0 ? 1 : 0) + (o.bench ? 1 : 0) + (o.compare > 0 ? 1 : 0);
+    if (modes > 1) return fail("give one of --sequence, --bench and --compare");
+    if (o.compare > 0 && (o.reference > 0 || !o.out.empty()))
+        return fail("--compare renders the method and its reference itself: drop --reference and --out");
     if (modes == 0 && o.out.empty() && !o.explain) return fail("no --out FILE.png|FILE.exr given");
     if (!o.out.empty()) {
         const std::string ext = lower(fs::path(o.out).extension().string());
@@ -523,6 +571,7 @@ int runRender(const RenderCliOptions& o, bool sizeGiven) {
     if (o.explain) std::printf("%s\n", (*renderer)->explainProgram().c_str());
     if (o.bench) return runBench(**renderer, **context, *scene, width, height, o);
     if (o.sequence > 0) return runSequence(**renderer, *scene, width, height, o);
+    if (o.compare > 0) return runCompare(**renderer, *scene, width, height, o);
     if (o.out.empty()) return 0; // --explain alone
 
     const bool exr = lower(fs::path(o.out).extension().string()) == ".exr";
@@ -565,7 +614,8 @@ const CommandRegistration registration{
         auto o = std::make_shared<RenderCliOptions>();
         CLI::App* sub = app.add_subcommand(
             "render", "Render the material headless (OpenGL on EGL or OSMesa): an image, the supersampled "
-                      "ground truth, a debug view, the shimmer of a slow orbit, or frame-time figures.");
+                      "ground truth, a debug view, the shimmer of a slow orbit, a frame's error against "
+                      "the ground truth, or frame-time figures.");
         sub->add_option(
                "normal_map", o->input,
                "Tangent-space normal map (PNG, TGA, JPEG, EXR, TIFF, DDS); none: the built-in --sample.")
@@ -594,6 +644,10 @@ const CommandRegistration registration{
                         "Lobes per texel of --method mixture, 1..4 (default 3; 1 is LEAN).")
             ->check(CLI::Range(1, 4))
             ->type_name("K");
+        sub->add_option("--kernel", o->kernel,
+                        "Per-mip filter of the moments the bake stores, as burnish bake --kernel: box, "
+                        "tent (default) or gaussian.")
+            ->check(CLI::IsMember({"box", "tent", "gaussian"}));
         sub->add_option("--power", o->power, "Base Blinn-Phong power (default 1024).")
             ->check(CLI::Range(1.0, 1e9))
             ->type_name("S");
@@ -675,6 +729,12 @@ const CommandRegistration registration{
                "Render an N-frame slow orbit with the method and the reference and print the shimmer "
                "(mean |dY| per pixel between frames) of both and their ratio.")
             ->check(CLI::Range(2, 10000))
+            ->type_name("N");
+        sub->add_option("--compare", o->compare,
+                        "Render the method and its N-sample supersampled ground truth and print the method's "
+                        "error on the screen: relative L1 of linear HDR luminance over the pixels the object "
+                        "covers (silhouette dropped), the energy ratio, and the reference's own noise.")
+            ->check(CLI::Range(2, 4096))
             ->type_name("N");
         sub->add_option("--orbit-degrees", o->orbitDegrees, "Yaw step per frame of --sequence (default 0.5).")
             ->check(CLI::Range(-360.0, 360.0));

@@ -119,11 +119,12 @@ struct BakeKey {
     std::string encoding;
     int mixtureLobes = 0;
     int largestLevel = 0; // the levels above it are not baked (BakeOptions::largestLevel)
+    FilterKernel kernel = FilterKernel::Tent;
 
     bool operator==(const BakeKey& o) const {
         return normalMap == o.normalMap && glossMap == o.glossMap && method == o.method &&
                toksvigMapPower == o.toksvigMapPower && basePower == o.basePower && encoding == o.encoding &&
-               mixtureLobes == o.mixtureLobes && largestLevel == o.largestLevel;
+               mixtureLobes == o.mixtureLobes && largestLevel == o.largestLevel && kernel == o.kernel;
     }
 };
 
@@ -135,7 +136,8 @@ BakeKey bakeKeyOf(const MaterialSettings& m, int largestLevel) {
                    m.basePower,
                    m.glossEncoding.name(),
                    m.method == Method::Mixture ? m.methodParams.mixtureLobes : 0,
-                   largestLevel};
+                   largestLevel,
+                   m.kernel};
 }
 
 // The CPU half of a material's bake (any thread): core's bake, and the mixture's covariance floor.
@@ -179,6 +181,7 @@ CpuBake cpuBake(const MaterialSettings& m, int largestLevel, std::function<bool(
     options.encoding = m.glossEncoding;
     options.basePower = m.basePower;
     options.params = m.methodParams;
+    options.pyramid.kernel = m.kernel;
     if (m.glossMap) options.authoredGloss = *m.glossMap;
     CpuBake b;
     if (largestLevel > 0) options.cachedPyramid = sharedBakePyramid(m.normalMap, options);

@@ -24,6 +24,20 @@ double mean(const std::vector<double>& values) {
     return sum / double(values.size());
 }
 
+// Clears covered[p] where `frame` (drawn as its normals view, which leaves the background at 0) does
+// not cover pixel p. Leaves the renderer holding that debug view of the frame.
+Status clearUncovered(Renderer& renderer, Scene frame, int width, int height,
+                      std::vector<std::uint8_t>& covered) {
+    frame.debugView = DebugView::Normals;
+    if (auto s = renderer.setScene(frame); !s) return s;
+    auto normals = renderer.renderToImage(width, height, ImageKind::Hdr);
+    if (!normals) return Error{normals.error()};
+    for (size_t p = 0; p < covered.size(); ++p)
+        if ((*normals)[4 * p] + (*normals)[4 * p + 1] + (*normals)[4 * p + 2] <= kCoveredThreshold)
+            covered[p] = 0;
+    return {};
+}
+
 } // namespace
 
 std::vector<float> frameLuminance(const std::vector<float>& rgba) {
@@ -116,15 +130,9 @@ Result<ShimmerReport> measureShimmer(Renderer& renderer, const Scene& scene, con
             if (!half) return failed(half.error());
             halfY.push_back(frameLuminance(*half));
         }
-        if (options.maskToObject) {
-            frame.debugView = DebugView::Normals;
-            if (auto s = renderer.setScene(frame); !s) return failed(s.error());
-            auto normals = renderer.renderToImage(options.width, options.height, ImageKind::Hdr);
-            if (!normals) return failed(normals.error());
-            for (size_t p = 0; p < pixels; ++p)
-                if ((*normals)[4 * p] + (*normals)[4 * p + 1] + (*normals)[4 * p + 2] <= kCoveredThreshold)
-                    covered[p] = 0;
-        }
+        if (options.maskToObject)
+            if (auto s = clearUncovered(renderer, frame, options.width, options.height, covered); !s)
+                return failed(s.error());
         if (options.onFrame) options.onFrame(ShimmerFrame{i, frame.camera.yawDegrees, &*method, &*reference});
     }
     if (auto s = renderer.setScene(scene); !s) return Error{s.error()};
@@ -173,6 +181,71 @@ Result<ShimmerReport> measureShimmer(Renderer& renderer, const Scene& scene, con
     report.methodMean = mean(report.methodDeltas);
     report.referenceMean = mean(report.referenceDeltas);
     report.ratio = report.methodMean / std::max(report.referenceMean, kMinShimmer);
+    return report;
+}
+
+Result<ImageErrorReport> measureImageError(Renderer& renderer, const Scene& scene,
+                                           const ImageErrorOptions& options) {
+    if (options.width < 1 || options.height < 1)
+        return Error{"frame size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
+                     " is empty"};
+    if (options.referenceSamples < 2)
+        return Error{"the reference's noise is estimated from two halves of its samples: it needs at least 2 "
+                     "samples per pixel, got " +
+                     std::to_string(options.referenceSamples)};
+    Scene frame = scene;
+    frame.debugView = DebugView::None;
+    auto failed = [&](const std::string& message) -> Result<ImageErrorReport> {
+        (void)renderer.setScene(scene);
+        return Error{message};
+    };
+    if (auto s = renderer.setScene(frame); !s) return failed(s.error());
+    auto method = renderer.renderToImage(options.width, options.height, ImageKind::Hdr);
+    if (!method) return failed(method.error());
+    auto reference =
+        renderer.renderReference(options.width, options.height, options.referenceSamples, ImageKind::Hdr);
+    if (!reference) return failed(reference.error());
+    // The first half of the same samples (renderReference always starts at the same index).
+    const int half = options.referenceSamples / 2;
+    auto first = renderer.renderReference(options.width, options.height, half, ImageKind::Hdr);
+    if (!first) return failed(first.error());
+    const size_t pixels = size_t(options.width) * size_t(options.height);
+    std::vector<std::uint8_t> mask(pixels, 1);
+    if (options.maskToObject) {
+        if (auto s = clearUncovered(renderer, frame, options.width, options.height, mask); !s)
+            return failed(s.error());
+        mask = erodeMask(mask, options.width, options.height);
+    }
+    if (auto s = renderer.setScene(scene); !s) return Error{s.error()};
+
+    const std::vector<float> Y = frameLuminance(*method), C = frameLuminance(*reference),
+                             A = frameLuminance(*first);
+    // The N-sample mean C = (h·A + (N − h)·B)/N, so the second half is B = (N·C − h·A)/(N − h); C's
+    // own noise has the standard deviation of A − B times √(h(N − h))/N (see ShimmerReport).
+    const double N = double(options.referenceSamples), h = double(half);
+    const double toMeanNoise = std::sqrt(h * (N - h)) / N;
+    ImageErrorReport report;
+    report.width = options.width;
+    report.height = options.height;
+    report.referenceSamples = options.referenceSamples;
+    double absError = 0.0, methodSum = 0.0, referenceSum = 0.0, noise = 0.0;
+    for (size_t p = 0; p < pixels; ++p) {
+        if (!mask[p]) continue;
+        ++report.measuredPixels;
+        absError += std::abs(double(Y[p]) - double(C[p]));
+        methodSum += double(Y[p]);
+        referenceSum += double(C[p]);
+        const double B = (N * double(C[p]) - h * double(A[p])) / (N - h);
+        noise += std::abs(double(A[p]) - B) * toMeanNoise;
+    }
+    if (report.measuredPixels == 0)
+        return Error{"the object covers no pixel (after dropping its silhouette); move the camera closer or "
+                     "render a larger frame"};
+    if (!(referenceSum > 0.0) || !std::isfinite(referenceSum) || !std::isfinite(methodSum))
+        return Error{"the reference is black (or not finite) where the object is: nothing to compare"};
+    report.relativeL1 = absError / referenceSum;
+    report.energyRatio = methodSum / referenceSum;
+    report.referenceNoiseL1 = noise / referenceSum;
     return report;
 }
 

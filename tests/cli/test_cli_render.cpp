@@ -189,6 +189,34 @@ TEST(CliRender, SequenceJsonParses) {
     EXPECT_GT(j.at("reference_mean").get<double>(), 0.0);
 }
 
+TEST(CliRender, ComparePrintsTheScreenErrorAgainstTheReference) {
+    const std::string scene = "render --sample bumpy --sample-size 32 --size 32x32 --compare 4 ";
+    const CliResult j = runBurnish(scene + "--method mixture --lobes 2 --kernel box --json");
+    ASSERT_EQ(j.exitCode, 0) << j.err;
+    const auto parsed = nlohmann::json::parse(j.out, nullptr, false);
+    ASSERT_FALSE(parsed.is_discarded()) << j.out;
+    EXPECT_EQ(parsed.at("method").get<std::string>(), "mixture-k2");
+    EXPECT_EQ(parsed.at("reference_samples").get<int>(), 4);
+    EXPECT_GT(parsed.at("measured_pixels").get<int>(), 0);
+    for (const char* key : {"relative_l1", "energy_ratio", "reference_noise_l1"}) {
+        const double v = parsed.at(key).get<double>();
+        EXPECT_TRUE(std::isfinite(v) && v >= 0.0) << key << " = " << v;
+    }
+    EXPECT_GT(parsed.at("energy_ratio").get<double>(), 0.0);
+    const CliResult text = runBurnish(scene + "--method lean");
+    ASSERT_EQ(text.exitCode, 0) << text.err;
+    EXPECT_NE(text.out.find("relative L1 "), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("energy ratio "), std::string::npos) << text.out;
+    // It renders its own images: --out and --reference are mistakes, one line each.
+    TempDir dir;
+    expectOneErrorLine(runBurnish(scene + "--out " + shellQuote((dir / "x.png").string())), "--compare");
+    expectOneErrorLine(runBurnish(scene + "--reference 8"), "--compare");
+    expectOneErrorLine(runBurnish(scene + "--sequence 3"), "--compare");
+    expectOneErrorLine(runBurnish("render --sample-size 32 --size 32x32 --compare 1"), "--compare");
+    expectOneErrorLine(runBurnish(scene + "--kernel wide"), "--kernel");
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
+}
+
 TEST(CliRender, BenchPrintsFiguresPerMethod) {
     const CliResult r = runBurnish("render --sample-size 16 --bench --size 32x32 --bench-frames 1 --json");
     ASSERT_EQ(r.exitCode, 0) << r.err;

@@ -310,4 +310,65 @@ TEST_F(ShimmerTest, NaiveShimmersMoreThanTheReferenceAtDistance) {
     EXPECT_GT(naive->methodMean, kMinNaiveOverBaked * baked->methodMean);
 }
 
+// A still frame against the ground truth (measureImageError). A flat surface: the method's lobe is
+// the reference's, so only the reference's own noise and the lobe's shape separate them.
+TEST_F(ShimmerTest, FlatSurfaceMatchesItsReferenceOnTheScreen) {
+    Scene scene = bumpyMetal();
+    scene.material.normalMap.reset();
+    scene.material.basePower = 64.0;
+    scene.material.method = Method::Lean;
+    ImageErrorOptions o;
+    o.width = o.height = kFrameSize;
+    o.referenceSamples = 16;
+    auto report = measureImageError(renderer(), scene, o);
+    ASSERT_TRUE(report.ok()) << report.error();
+    std::cout << "flat: relative L1 " << report->relativeL1 << ", energy " << report->energyRatio
+              << ", reference noise " << report->referenceNoiseL1 << "\n";
+    EXPECT_GT(report->measuredPixels, kFrameSize * kFrameSize / 4);
+    EXPECT_LT(report->relativeL1, 0.05);
+    EXPECT_NEAR(report->energyRatio, 1.0, 0.03);
+    EXPECT_TRUE(std::isfinite(report->referenceNoiseL1));
+}
+
+// The bumpy sample seen from a distance, where a pixel covers many finest texels: the baked LEAN lobe
+// and the mixture stand far closer to the truth than naive's aliased, too narrow highlights, and the
+// mixture keeps the energy.
+TEST_F(ShimmerTest, BakedLobesErrLessThanNaiveOnTheScreenAtDistance) {
+    Scene scene = distantBumpyPlane(512.0);
+    ImageErrorOptions o;
+    o.width = o.height = kFrameSize;
+    o.referenceSamples = 64;
+    std::map<Method, ImageErrorReport> r;
+    for (Method m : {Method::Naive, Method::Lean, Method::Mixture}) {
+        scene.material.method = m;
+        auto report = measureImageError(renderer(), scene, o);
+        ASSERT_TRUE(report.ok()) << report.error();
+        std::cout << methodName(m) << ": relative L1 " << report->relativeL1 << ", energy "
+                  << report->energyRatio << ", reference noise " << report->referenceNoiseL1 << "\n";
+        r[m] = *report;
+    }
+    EXPECT_LT(r[Method::Lean].relativeL1, r[Method::Naive].relativeL1);
+    EXPECT_LT(r[Method::Mixture].relativeL1, r[Method::Naive].relativeL1);
+    EXPECT_NEAR(r[Method::Mixture].energyRatio, 1.0, 0.1);
+    // The scene is the caller's again.
+    EXPECT_EQ(renderer().scene().material.method, Method::Mixture);
+}
+
+TEST_F(ShimmerTest, ImageErrorBadOptionsAreErrors) {
+    const Scene scene = bumpyMetal();
+    ImageErrorOptions o;
+    o.width = o.height = kFrameSize;
+    o.referenceSamples = 1; // the noise estimate needs two halves
+    EXPECT_FALSE(measureImageError(renderer(), scene, o).ok());
+    o.referenceSamples = 4;
+    o.width = 0;
+    EXPECT_FALSE(measureImageError(renderer(), scene, o).ok());
+    o.width = kFrameSize;
+    Scene far = scene;
+    far.camera.distance = 1e4f;
+    auto none = measureImageError(renderer(), far, o);
+    ASSERT_FALSE(none.ok());
+    EXPECT_NE(none.error().find("covers no pixel"), std::string::npos) << none.error();
+}
+
 } // namespace

@@ -9,6 +9,7 @@
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/prefilter/normal_pyramid.h>
 #include <burnish/core/util/result.h>
 #include <burnish/render/features.h>
 
@@ -69,6 +70,9 @@ struct MaterialSettings {
     GlossEncoding glossEncoding = GlossEncoding::blackOps();
     Method method = Method::VarianceToGloss;
     MethodParams methodParams;
+    /// The per-mip filter the bake applies to the moments (BakeOptions::pyramid.kernel; the bake's
+    /// default, tent).
+    FilterKernel kernel = FilterKernel::Tent;
     /// The tangent-space normal map, or none (a flat surface with the base power).
     std::shared_ptr<const NormalMap> normalMap;
     /// An optional detail normal map, tiled `detailUvScale` times over the base map.

@@ -101,6 +101,37 @@ struct ShimmerReport {
 /// per pixel, below anything a frame can show.
 inline constexpr double kMinShimmer = 0.1 / 255.0;
 
+/// A still frame's error against the ground truth, in screen space: the scene's method and its
+/// supersampled reference (Renderer::renderReference) in linear HDR, compared by Rec. 709
+/// luminance over the pixels the object covers (its silhouette dropped, as ShimmerOptions).
+struct ImageErrorOptions {
+    int width = 256;
+    int height = 256;
+    /// Samples per pixel of the reference (2..4096: its noise is estimated from two halves).
+    int referenceSamples = 64;
+    bool maskToObject = true;
+};
+
+struct ImageErrorReport {
+    int width = 0;
+    int height = 0;
+    int referenceSamples = 0;
+    std::int64_t measuredPixels = 0;
+    /// Σ|Y − Y_ref| / Σ Y_ref over the measured pixels: evaluate's relative L1, on the screen.
+    double relativeL1 = 0.0;
+    /// Σ Y / Σ Y_ref: the energy the method keeps.
+    double energyRatio = 0.0;
+    /// The reference's own Monte Carlo noise as the same ratio (from two halves of its samples, as
+    /// ShimmerReport::referenceNoise): a relativeL1 not well above it is noise, not the method's error.
+    double referenceNoiseL1 = 0.0;
+};
+
+/// Renders `scene` (its debug view ignored) and its reference and compares them. Leaves `renderer`
+/// holding `scene` again. Errors: an empty frame, fewer than 2 reference samples, an object that
+/// covers no pixel, a reference that is black where the object is, anything the renderer refuses.
+Result<ImageErrorReport> measureImageError(Renderer& renderer, const Scene& scene,
+                                           const ImageErrorOptions& options);
+
 /// Renders the orbit: the scene's camera yaw advanced by degreesPerFrame each frame, everything
 /// else as given (the debug view is ignored: the shimmer compares shading with the ground truth).
 /// Leaves `renderer` holding `scene` again. Errors: frames < 2, a non-finite step, a size or sample

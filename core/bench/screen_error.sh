@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Issue 14's screen-space figures: each method's image against the supersampled ground truth
+# (`burnish render --compare N`: relative L1 of linear HDR luminance over the pixels the object
+# covers, and the energy ratio), on the plane and the sphere at several distances. A metal of
+# constant F0 (no diffuse, no Fresnel), so only the specular lobes differ. On the plane the light is
+# the camera's direction mirrored in it, so the flat-mirror highlight sits on the target. Figures,
+# not a pass/fail test.
+#
+#   core/bench/screen_error.sh BURNISH MAP [POWER] [SAMPLES] [METHODS]
+#
+# METHODS defaults to naive,lean,mixture; the reference's own noise (as the same ratio) is printed
+# beside each row: an error not well above it is noise.
+set -euo pipefail
+bin=$1
+map=$2
+power=${3:-256}
+samples=${4:-256}
+methods=${5:-naive,lean,mixture}
+common=(--metal --specular 0.9 --fresnel none --power "$power" --size 256x256 --uv-scale 2
+        --compare "$samples" --json)
+# Camera yaw 30°, pitch 30°: the direction to the camera is (0.433, 0.5, 0.75); mirrored in the plane.
+plane=(--mesh plane --pitch 30 --light-dir=-0.433,0.5,-0.75)
+sphere=(--mesh sphere)
+
+field() { python3 -c "import json,sys; j=json.load(sys.stdin); print(' '.join('%.4f' % j[k] for k in sys.argv[1:]))" "$@"; }
+
+echo "$(basename "$map"), power $power, reference $samples samples per pixel, 256x256, uv scale 2"
+echo
+header="| mesh | distance |"
+rule="| --- | ---: |"
+IFS=, read -r -a list <<< "$methods"
+for m in "${list[@]}"; do header+=" $m rel. L1 (energy) |"; rule+=" ---: |"; done
+echo "$header reference noise |"
+echo "$rule ---: |"
+for mesh in plane sphere; do
+  for distance in 2 4 8; do
+    row="| $mesh | $distance |"
+    noise=""
+    for m in "${list[@]}"; do
+      if [ "$mesh" = plane ]; then extra=("${plane[@]}"); else extra=("${sphere[@]}"); fi
+      read -r l1 energy n < <("$bin" render "$map" --method "$m" --distance "$distance" "${extra[@]}" \
+                                "${common[@]}" 2>/dev/null | field relative_l1 energy_ratio reference_noise_l1)
+      row+=" $l1 ($energy) |"
+      noise=$n
+    done
+    echo "$row $noise |"
+  done
+done

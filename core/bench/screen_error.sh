@@ -9,7 +9,9 @@
 #   core/bench/screen_error.sh BURNISH MAP [POWER] [SAMPLES] [METHODS]
 #
 # METHODS defaults to naive,lean,mixture; the reference's own noise (as the same ratio) is printed
-# beside each row: an error not well above it is noise.
+# beside each row: an error not well above it is noise. A second table gives the shimmer of a slow
+# orbit at distance 4 (`render --sequence 8`, 0.5° a frame, mean |ΔY| of linear HDR luminance per
+# pixel between frames) for each method and the reference.
 set -euo pipefail
 bin=$1
 map=$2
@@ -45,4 +47,26 @@ for mesh in plane sphere; do
     done
     echo "$row $noise |"
   done
+done
+
+echo
+echo "Shimmer at distance 4 (8 frames, 0.5 degrees a frame, reference $samples samples):"
+echo
+header="| mesh |"
+rule="| --- |"
+for m in "${list[@]}"; do header+=" $m |"; rule+=" ---: |"; done
+echo "$header reference |"
+echo "$rule ---: |"
+for mesh in plane sphere; do
+  row="| $mesh |"
+  reference=""
+  for m in "${list[@]}"; do
+    if [ "$mesh" = plane ]; then extra=("${plane[@]}"); else extra=("${sphere[@]}"); fi
+    read -r mine theirs < <("$bin" render "$map" --method "$m" --distance 4 "${extra[@]}" --metal \
+        --specular 0.9 --fresnel none --power "$power" --size 256x256 --uv-scale 2 --sequence 8 \
+        --reference "$samples" --json 2>/dev/null | field method_mean reference_mean)
+    row+=" $mine |"
+    reference=$theirs
+  done
+  echo "$row $reference |"
 done

@@ -315,12 +315,8 @@ void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, siz
                                              ? (*texelPowers)[size_t(yi) * size_t(map.width) + size_t(xi)]
                                              : s;
                         const auto stored = mix->storedTexel(map, k, xi, yi, p);
-                        for (size_t i = 0; i < stored.size(); ++i) {
-                            LobeMoments l = stored[i];
-                            l.w *= 0.25, l.bx *= 0.25, l.by *= 0.25, l.mxx *= 0.25, l.myy *= 0.25,
-                                l.mxy *= 0.25;
-                            sum[i] += l;
-                        }
+                        for (size_t i = 0; i < stored.size(); ++i)
+                            sum[i] += stored[i].scaled(0.25);
                     }
                     LobeMixture filtered;
                     for (const LobeMoments& l : sum)

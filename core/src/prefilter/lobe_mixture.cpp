@@ -36,10 +36,6 @@ bool canonicalLess(const LobeMoments& a, const LobeMoments& b) {
     return a.w > b.w;
 }
 
-} // namespace
-
-namespace {
-
 using InjectiveMap = std::array<unsigned char, kMaxMixtureLobes>;
 
 // The injective maps of n children into `slots` slots (1 <= n <= slots <= kMaxMixtureLobes), in
@@ -103,7 +99,7 @@ public:
                         : kEmptySlotScore;
         // Every injective map of the n child lobes into the slots (at most 4·3·2·1), in lexicographic
         // order, each total summed child by child: the first of the largest.
-        std::array<unsigned char, kMaxMixtureLobes> best{};
+        InjectiveMap best{};
         double bestTotal = -std::numeric_limits<double>::infinity();
         for (const auto& map : injectiveMaps(n, slots)) {
             double total = 0.0;
@@ -175,10 +171,6 @@ glm::dvec2 finestSlope(const glm::vec3& n) {
     const bool finite = std::isfinite(m.slope.x) && std::isfinite(m.slope.y);
     return finite ? glm::dvec2(m.slope) : glm::dvec2(0.0);
 }
-
-} // namespace
-
-namespace {
 
 // The two texels of a level of `parentSize` (and their weights) that bilinear filtering reads at the
 // centre of texel i of a level of `size`, the border mode resolving those outside.
@@ -581,11 +573,8 @@ std::array<LobeMoments, kMaxMixtureLobes> MixturePyramid::storedTexel(const Norm
     for (int i = 0; i < count; ++i)
         total += lobes[i].w;
     const double inv = total > 0.0 ? 1.0 / total : 0.0;
-    for (int i = 0; i < count; ++i) {
-        LobeMoments l = lobes[i];
-        l.w *= inv, l.bx *= inv, l.by *= inv, l.mxx *= inv, l.myy *= inv, l.mxy *= inv;
-        out[size_t(i)] = l;
-    }
+    for (int i = 0; i < count; ++i)
+        out[size_t(i)] = lobes[i].scaled(inv);
     return out;
 }
 

@@ -568,4 +568,30 @@ TEST(CliBake, HelpListsPresetsMethodsAndFormats) {
         EXPECT_NE(r.out.find(word), std::string::npos) << word;
 }
 
+// OpenImageIO is loaded on its first call (core/src/io/oiio_lazy): a PNG read and baked to PNG never
+// loads it (core has its own PNG codec), an EXR export does and works through the loaded library.
+TEST(CliBake, OpenImageIOLoadsOnlyWhenAFormatNeedsIt) {
+    TempDir tmp;
+    const fs::path dir = tmp.path();
+    writeNormalMap(dir / "bumps.png");
+    const std::string in = quote((dir / "bumps.png").string());
+    // The dynamic loader names every library it opens on stderr.
+    auto r = runBurnish("bake " + in + " --preset lean --format png16 --out " + quote((dir / "png").string()),
+                        "LD_DEBUG=files");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.err.find("libOpenImageIO.so"), std::string::npos);
+    EXPECT_TRUE(fs::exists(dir / "png" / "bumps_lean-b.png"));
+
+    r = runBurnish("bake " + in + " --preset lean --format exr-half --out " + quote((dir / "exr").string()),
+                   "LD_DEBUG=files");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.err.find("libOpenImageIO.so"), std::string::npos);
+    const fs::path exr = dir / "exr" / "bumps_lean-b.exr";
+    ASSERT_TRUE(fs::exists(exr));
+    auto file = OIIO::ImageInput::open(exr.string());
+    ASSERT_TRUE(file) << OIIO::geterror();
+    EXPECT_EQ(file->spec().width, 32);
+    EXPECT_EQ(file->spec().format, OIIO::TypeDesc::HALF);
+}
+
 } // namespace

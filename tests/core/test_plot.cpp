@@ -1,6 +1,8 @@
 // The plotting module: a PNG that OpenImageIO reads back at the requested size, not blank, with
-// text where labels go; clear errors instead of unlabeled plots.
+// text where labels go; clear errors instead of unlabeled plots; FreeType's text measured and placed.
 #include <burnish/core/util/plot.h>
+
+#include "../../core/src/util/font.h"
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -55,6 +57,16 @@ int darkPixels(const OIIO::ImageBuf& img, int x0, int x1, int y0, int y1) {
     return count;
 }
 
+int darkPixels(const PlotImage& img, int x0, int x1, int y0, int y1) {
+    int count = 0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+            const float* px = img.pixel(x, y);
+            if ((px[0] + px[1] + px[2]) / 3.0f < kDarkThreshold) ++count;
+        }
+    return count;
+}
+
 class PlotTest : public ::testing::Test {
 protected:
     void SetUp() override {
@@ -93,6 +105,20 @@ TEST_F(PlotTest, WritesAReadablePngWithContentAndText) {
     ASSERT_TRUE(plain.ok()) << plain.error();
     EXPECT_EQ(darkPixels(*plain, 0, spec.width, 0, 10), 0);
 
+    // The file holds the rendered plot, each value rounded to the nearest of 256 levels.
+    auto rendered = renderPlot(spec);
+    ASSERT_TRUE(rendered.ok()) << rendered.error();
+    int mismatches = 0;
+    for (int y = 0; y < spec.height; ++y)
+        for (int x = 0; x < spec.width; ++x) {
+            float px[3];
+            img.getpixel(x, y, px, 3);
+            for (int c = 0; c < 3; ++c)
+                if (std::lround(px[c] * 255.0f) != std::lround(rendered->pixel(x, y)[c] * 255.0f))
+                    ++mismatches;
+        }
+    EXPECT_EQ(mismatches, 0);
+
     // Series colours reach the image: some pixel is far more orange (series b) than grey.
     bool sawOrange = false;
     for (int y = 0; y < spec.height && !sawOrange; ++y)
@@ -121,7 +147,7 @@ TEST_F(PlotTest, ALegendTallerThanThePlotWrapsIntoColumns) {
     auto plot = renderPlot(spec);
     ASSERT_TRUE(plot.ok()) << plot.error();
     // The image widens for the second column instead of squeezing the plot area.
-    const int w = plot->spec().width, h = plot->spec().height;
+    const int w = plot->width, h = plot->height;
     EXPECT_GT(w, spec.width);
     EXPECT_EQ(h, spec.height);
     // The second column holds text; no entry runs into the bottom rows.
@@ -157,9 +183,8 @@ TEST_F(PlotTest, UnplaceablePointsAreSkippedNotFatal) {
     spec.series[0].y = {0.0, -1.0, std::nan(""), INFINITY, 0.01};
     auto img = renderPlot(spec);
     ASSERT_TRUE(img.ok()) << img.error();
-    const auto stats = OIIO::ImageBufAlgo::computePixelStats(*img);
-    for (int c = 0; c < 3; ++c)
-        EXPECT_TRUE(std::isfinite(stats.avg[c]));
+    for (const float v : img->rgb)
+        ASSERT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f);
 
     // No placeable data at all still gives labelled axes (one default decade).
     PlotSpec empty = sampleSpec();
@@ -172,6 +197,56 @@ TEST_F(PlotTest, SaveIntoMissingFolderFailsCleanly) {
     const fs::path png = m_dir / "missing" / "plot.png";
     EXPECT_FALSE(savePlotPng(sampleSpec(), png).ok());
     EXPECT_FALSE(fs::exists(png));
+}
+
+TEST(PlotFont, MeasuresAndPlacesUtf8Text) {
+    auto font = Font::find("DejaVuSans");
+    ASSERT_TRUE(font.ok()) << font.error();
+    const TextBox zero = (*font)->measure("0", 16);
+    EXPECT_GT(zero.width(), 4);
+    EXPECT_LT(zero.y0, 0); // above the baseline
+    EXPECT_GT((*font)->measure("00", 16).width(), zero.width());
+    EXPECT_GT((*font)->measure("0", 32).height(), zero.height());
+    EXPECT_EQ((*font)->measure("", 16).width(), 0);
+    // Two-byte code points (σ, ²) are one glyph each, not two replacement glyphs.
+    const int sigma = (*font)->measure("\xCF\x83", 16).width();
+    const int replacement = (*font)->measure("\xEF\xBF\xBD", 16).width();
+    EXPECT_GT(sigma, 0);
+    EXPECT_LT(sigma, 2 * replacement);
+    // A cut-off or stray byte reads as one replacement glyph, never past the end of the text.
+    EXPECT_EQ((*font)->measure("\xCF", 16).width(), replacement);
+    EXPECT_EQ((*font)->measure("\x80", 16).width(), replacement);
+
+    // Drawn coverage lies inside the measured box, placed at the origin.
+    const TextBox box = (*font)->measure("Burnish", 20);
+    struct Extent {
+        int x0 = 1 << 20, x1 = -(1 << 20), y0 = 1 << 20, y1 = -(1 << 20), pixels = 0;
+    } e;
+    (*font)->draw(
+        "Burnish", 20, 100, 50,
+        [](void* c, int x, int y, float coverage) {
+            auto* ext = static_cast<Extent*>(c);
+            ASSERT_TRUE(coverage > 0.0f && coverage <= 1.0f);
+            ext->x0 = std::min(ext->x0, x), ext->x1 = std::max(ext->x1, x + 1);
+            ext->y0 = std::min(ext->y0, y), ext->y1 = std::max(ext->y1, y + 1);
+            ++ext->pixels;
+        },
+        &e);
+    EXPECT_GT(e.pixels, 50);
+    EXPECT_EQ(e.x0, 100 + box.x0);
+    EXPECT_EQ(e.x1, 100 + box.x1);
+    EXPECT_EQ(e.y0, 50 + box.y0);
+    EXPECT_EQ(e.y1, 50 + box.y1);
+
+    EXPECT_FALSE(Font::find("NoSuchFontBurnishTest").ok());
+    EXPECT_FALSE(Font::find("/no/such/folder/font.ttf").ok());
+}
+
+TEST(PlotImageFile, ASizeThatDoesNotMatchItsValuesIsAnError) {
+    PlotImage bad{4, 4, std::vector<float>(10, 1.0f)};
+    EXPECT_FALSE(encodePlotImage(bad).ok());
+    PlotImage ok{4, 4, std::vector<float>(48, 0.5f)};
+    EXPECT_TRUE(encodePlotImage(ok).ok());
 }
 
 } // namespace

@@ -4,6 +4,7 @@
 // for them and for the files left to libpng (interlaced, palette, tRNS, 4-bit); loadNormalMap's
 // direct PNG path gives bit for bit decodeNormalMap(readImage(...)); corrupt and truncated files
 // are errors that say what is wrong, and data past the last row or a cut-off trailer lose nothing.
+#include "../../core/src/io/image_read.h"
 #include "../../core/src/io/png_decode.h"
 
 #include <burnish/core/io/image.h>
@@ -192,6 +193,14 @@ void expectReadsLikeOiio(const std::filesystem::path& path, const std::string& w
     ASSERT_EQ(image->pixels.size(), expected.size()) << what;
     EXPECT_EQ(std::memcmp(image->pixels.data(), expected.data(), expected.size() * sizeof(float)), 0)
         << what << ": readImage differs from OpenImageIO's read_image(FLOAT)";
+    // What the file is said to be, as OpenImageIO would say it (core's decoder never asks it).
+    auto in = OIIO::ImageInput::open(path.string());
+    ASSERT_TRUE(in) << what;
+    EXPECT_EQ(image->source.formatName, in->format_name()) << what;
+    EXPECT_EQ(image->source.channelType, in->spec().format.c_str()) << what;
+    EXPECT_EQ(image->source.bitsPerChannel, int(in->spec().format.size() * 8)) << what;
+    EXPECT_EQ(image->source.isFloat, in->spec().format.is_floating_point()) << what;
+    EXPECT_EQ(image->source.colorSpace, in->spec().get_string_attribute("oiio:ColorSpace")) << what;
 }
 
 std::string describe(const Sample& s) {
@@ -246,6 +255,44 @@ TEST(PngDecode, ReadImageMatchesOpenImageIO) {
             ASSERT_TRUE(writeFileAtomic(path, pngOf(s, filtered(s, [](int y) { return (y * 3) % 5; }))).ok());
             expectReadsLikeOiio(path, describe(s));
         }
+}
+
+TEST(PngDecode, ColourTagsAndCodeFloatsAreOpenImageIOs) {
+    // sRGB, gAMA of display gamma 2.2 and 1.0, gAMA beside sRGB (sRGB wins), none.
+    std::string gamma22, gamma1;
+    appendU32(gamma22, 45455);
+    appendU32(gamma1, 100000);
+    const std::vector<std::pair<std::string, std::string>> tags = {
+        {"sRGB", chunk("sRGB", std::string(1, '\0'))},
+        {"gAMA 2.2", chunk("gAMA", gamma22)},
+        {"gAMA 1", chunk("gAMA", gamma1)},
+        {"gAMA and sRGB", chunk("gAMA", gamma22) + chunk("sRGB", std::string(1, '\0'))},
+        {"no tag", ""}};
+    TempDir dir;
+    unsigned seed = 90;
+    for (const auto& [name, before] : tags)
+        for (int bitDepth : {8, 16}) {
+            const Sample s = makeSample(9, 7, 3, bitDepth, seed++);
+            const auto path = dir / ("tag" + std::to_string(seed) + ".png");
+            ASSERT_TRUE(
+                writeFileAtomic(path, pngOf(s, filtered(s, [](int) { return 4; }), 997, before)).ok());
+            expectReadsLikeOiio(path, name + " " + describe(s));
+        }
+    // Every 8- and 16-bit code's float is OpenImageIO's conversion, bit for bit.
+    for (int bitDepth : {8, 16}) {
+        const std::vector<float> table = unsignedCodeTable(bitDepth);
+        std::vector<float> oiio(table.size());
+        std::vector<uint8_t> codes8(bitDepth == 8 ? 256 : 0);
+        std::vector<uint16_t> codes16(bitDepth == 16 ? 65536 : 0);
+        for (size_t c = 0; c < codes8.size(); ++c)
+            codes8[c] = uint8_t(c);
+        for (size_t c = 0; c < codes16.size(); ++c)
+            codes16[c] = uint16_t(c);
+        const void* data = bitDepth == 8 ? static_cast<const void*>(codes8.data()) : codes16.data();
+        ASSERT_TRUE(OIIO::convert_pixel_values(bitDepth == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16,
+                                               data, OIIO::TypeDesc::FLOAT, oiio.data(), int(oiio.size())));
+        EXPECT_EQ(std::memcmp(table.data(), oiio.data(), table.size() * sizeof(float)), 0) << bitDepth;
+    }
 }
 
 TEST(PngDecode, FilesLeftToLibpngStillReadLikeOpenImageIO) {

@@ -243,37 +243,30 @@ std::optional<Error> pendingReadError(OIIO::ImageInput& in, const fs::path& path
 
 } // namespace
 
-Result<OpenedImage> openImage(const fs::path& path) {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) return Error{"image '" + path.string() + "' does not exist"};
-    if (fs::is_directory(path, ec)) return Error{"'" + path.string() + "' is a folder, not an image"};
+namespace {
 
-    // PNG files are read and their chunks checked first: libpng, which OpenImageIO reads them with,
-    // prints its own multi-line messages for damaged headers before any error reaches us.
-    OpenedImage opened;
-    if (fileHasPngSignature(path)) {
-        auto file = readFileBytes(path);
-        if (!file) return Error{"cannot read image '" + path.string() + "': " + file.error()};
-        auto layout = parsePng(std::string_view(file->data(), file->size()));
-        if (!layout) return Error{"cannot read image '" + path.string() + "': " + layout.error()};
-        // Files core's decoder leaves to libpng: their data checked here, before libpng reads it.
-        if (!layout->decodable)
-            if (const Status data = checkPngData(*layout); !data)
-                return Error{"cannot read image '" + path.string() + "': " + data.error()};
-        opened.pngFile = std::move(file).value();
-    }
+/// The size limits every reader shares.
+Status checkImageSize(const fs::path& path, int width, int height, int channels) {
+    if (width <= 0 || height <= 0 || channels <= 0)
+        return Error{"image '" + path.string() + "' has no pixels"};
+    if (width > kMaxImageSide || height > kMaxImageSide ||
+        static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height) > kMaxImageTexels)
+        return Error{"image '" + path.string() + "' is " + std::to_string(width) + "x" +
+                     std::to_string(height) + ", larger than Burnish accepts (65536 on a side, 2^30 texels)"};
+    if (channels > 4)
+        return Error{"image '" + path.string() + "' has " + std::to_string(channels) +
+                     " channels; Burnish reads 1 to 4"};
+    return Status::success();
+}
 
-    if (const Status exr = checkExrHeaders(path); !exr)
-        return Error{"cannot read image '" + path.string() + "': " + exr.error()};
-    if (const Status dds = checkDdsHeader(path); !dds)
-        return Error{"cannot read image '" + path.string() + "': " + dds.error()};
-
+/// Opens the file with OpenImageIO (the formats core does not decode itself) and checks what it sees.
+Status openWithOiio(OpenedImage& opened) {
+    const fs::path& path = opened.path;
     // Data maps are read as stored: OpenImageIO would otherwise premultiply the colour of PNG/TGA
     // files by their alpha ("associated alpha"), scaling an RGBA normal map's vectors by the
     // height map in its alpha.
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
-    opened.path = path;
     opened.input = OIIO::ImageInput::open(path.string(), &config);
     if (!opened.input) {
         const std::string why = OIIO::geterror();
@@ -286,16 +279,7 @@ Result<OpenedImage> openImage(const fs::path& path) {
                                   : oneLine(why))};
     }
     const OIIO::ImageSpec& spec = opened.input->spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-        return Error{"image '" + path.string() + "' has no pixels"};
-    if (spec.width > kMaxImageSide || spec.height > kMaxImageSide ||
-        static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height) > kMaxImageTexels)
-        return Error{"image '" + path.string() + "' is " + std::to_string(spec.width) + "x" +
-                     std::to_string(spec.height) +
-                     ", larger than Burnish accepts (65536 on a side, 2^30 texels)"};
-    if (spec.nchannels > 4)
-        return Error{"image '" + path.string() + "' has " + std::to_string(spec.nchannels) +
-                     " channels; Burnish reads 1 to 4"};
+    if (const Status size = checkImageSize(path, spec.width, spec.height, spec.nchannels); !size) return size;
     if (spec.depth > 1)
         return Error{"image '" + path.string() + "' is a volume texture; Burnish reads 2D images"};
     opened.width = spec.width;
@@ -326,6 +310,66 @@ Result<OpenedImage> openImage(const fs::path& path) {
                          std::string(spec.format.c_str())};
         opened.bitDepth = eightBit ? 8 : 16;
     }
+    return Status::success();
+}
+
+} // namespace
+
+std::vector<float> unsignedCodeTable(int bitDepth) {
+    // OpenImageIO's integer-to-float conversion: the code times the float reciprocal of the largest
+    // code (a test checks every code against it), so core's decoder gives its floats bit for bit.
+    const std::uint32_t codes = bitDepth == 8 ? 256u : 65536u;
+    const float scale = 1.0f / float(codes - 1);
+    std::vector<float> table(codes);
+    for (std::uint32_t c = 0; c < codes; ++c)
+        table[c] = float(c) * scale;
+    return table;
+}
+
+Result<OpenedImage> openImage(const fs::path& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) return Error{"image '" + path.string() + "' does not exist"};
+    if (fs::is_directory(path, ec)) return Error{"'" + path.string() + "' is a folder, not an image"};
+
+    // PNG files are read and their chunks checked first: libpng, which OpenImageIO reads them with,
+    // prints its own multi-line messages for damaged headers before any error reaches us.
+    OpenedImage opened;
+    opened.path = path;
+    if (fileHasPngSignature(path)) {
+        auto file = readFileBytes(path);
+        if (!file) return Error{"cannot read image '" + path.string() + "': " + file.error()};
+        auto layout = parsePng(std::string_view(file->data(), file->size()));
+        if (!layout) return Error{"cannot read image '" + path.string() + "': " + layout.error()};
+        if (layout->decodable) {
+            // Core decodes it (readPngCodes): OpenImageIO is not asked, nor loaded.
+            if (const Status size = checkImageSize(path, layout->width, layout->height, layout->channels);
+                !size)
+                return Error{size.error()};
+            opened.width = layout->width;
+            opened.height = layout->height;
+            opened.channels = layout->channels;
+            opened.bitDepth = layout->bitDepth;
+            opened.source.path = path.string();
+            opened.source.formatName = "png";
+            opened.source.channelType = layout->bitDepth == 8 ? "uint8" : "uint16";
+            opened.source.bitsPerChannel = layout->bitDepth;
+            opened.source.isFloat = false;
+            opened.source.colorSpace = layout->colorSpace();
+            opened.table = unsignedCodeTable(layout->bitDepth);
+            opened.pngFile = std::move(file).value();
+            return opened;
+        }
+        // Files core's decoder leaves to libpng: their data checked here, before libpng reads it.
+        if (const Status data = checkPngData(*layout); !data)
+            return Error{"cannot read image '" + path.string() + "': " + data.error()};
+        opened.pngFile = std::move(file).value();
+    }
+
+    if (const Status exr = checkExrHeaders(path); !exr)
+        return Error{"cannot read image '" + path.string() + "': " + exr.error()};
+    if (const Status dds = checkDdsHeader(path); !dds)
+        return Error{"cannot read image '" + path.string() + "': " + dds.error()};
+    if (const Status oiio = openWithOiio(opened); !oiio) return Error{oiio.error()};
     return opened;
 }
 
@@ -364,13 +408,6 @@ Result<Image> readOpenedImage(OpenedImage&& opened) {
     } catch (const std::bad_alloc&) {
         return Error{"not enough memory to read image '" + path.string() + "'"};
     }
-    OIIO::ImageInput& in = *opened.input;
-    const OIIO::ImageSpec& spec = in.spec();
-    auto readFailed = [&]() -> Error {
-        const std::string why = in.geterror();
-        return Error{"cannot read image '" + path.string() +
-                     "': " + (why.empty() ? std::string("the file is truncated or corrupt") : damaged(why))};
-    };
     const std::vector<float>& table = opened.table;
     if (opened.bitDepth != 0) {
         // PNGs core decodes itself: each batch of rows is converted on the other cores while later
@@ -390,9 +427,21 @@ Result<Image> readOpenedImage(OpenedImage&& opened) {
         converting.wait();
         if (fast) {
             if (!*fast) return Error{fast->error()};
-            in.close();
+            if (opened.input) opened.input->close();
             return image;
         }
+    }
+    // The rest is OpenImageIO's to read.
+    if (!opened.input)
+        if (const Status oiio = openWithOiio(opened); !oiio) return Error{oiio.error()};
+    OIIO::ImageInput& in = *opened.input;
+    const OIIO::ImageSpec& spec = in.spec();
+    auto readFailed = [&]() -> Error {
+        const std::string why = in.geterror();
+        return Error{"cannot read image '" + path.string() +
+                     "': " + (why.empty() ? std::string("the file is truncated or corrupt") : damaged(why))};
+    };
+    if (opened.bitDepth != 0) {
 
         const size_t samples = image.pixels.size();
         const bool eightBit = opened.bitDepth == 8;

@@ -22,7 +22,7 @@ namespace burnish {
 /// A file opened through OpenImageIO with its header checked (size, channels, not a volume).
 struct OpenedImage {
     std::filesystem::path path;
-    std::unique_ptr<OIIO::ImageInput> input;
+    std::unique_ptr<OIIO::ImageInput> input; // null for the PNG files core decodes (openImage)
     int width = 0, height = 0, channels = 0;
     ImageSourceInfo source;
     /// 8 or 16 for unsigned integer files, 0 otherwise.
@@ -36,8 +36,13 @@ struct OpenedImage {
     std::vector<char, TexelAllocator<char>> pngFile;
 };
 
-/// OpenImageIO's open and the checks readImage documents.
+/// Opens an image and makes the checks readImage documents: PNG files core decodes itself (8 or 16
+/// bits, not interlaced, no palette or tRNS) from their header alone, without OpenImageIO (input stays
+/// null); every other file through OpenImageIO.
 Result<OpenedImage> openImage(const std::filesystem::path& path);
+
+/// Each unsigned 8- or 16-bit code's float, as OpenImageIO converts them (code / (2^bits − 1)).
+std::vector<float> unsignedCodeTable(int bitDepth);
 
 /// Reads the pixels of an opened image as floats (readImage's second half).
 Result<Image> readOpenedImage(OpenedImage&& opened);

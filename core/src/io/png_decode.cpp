@@ -4,6 +4,8 @@
 #include <isa-l/igzip_lib.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
@@ -349,12 +351,24 @@ Result<PngLayout> parsePng(std::string_view file) {
             if (!layout.idat.empty()) idatEnded = true;
             if (type == "IEND") break;
             if (type == "tRNS") layout.decodable = false; // libpng turns it into an alpha channel
+            if (type == "sRGB") layout.srgb = true;
+            if (type == "gAMA" && length == 4) layout.fileGamma = double(readU32(data.data())) / 100000.0;
             if (critical && type != "PLTE")
                 return Error{"PNG file has an unknown critical chunk " + std::string(type)};
         }
     }
     if (layout.idat.empty()) return Error{"corrupt PNG file (no image data)"};
     return layout;
+}
+
+std::string PngLayout::colorSpace() const {
+    if (srgb || !(fileGamma > 0.0)) return "sRGB";
+    // Display gamma rounded to hundredths, 2.2 rather than 2.19998.
+    const float g = std::round(100.0f * float(1.0 / fileGamma)) / 100.0f;
+    if (g == 1.0f) return "linear";
+    char name[32];
+    std::snprintf(name, sizeof name, "Gamma%.2g", double(g));
+    return name;
 }
 
 Status decodePngRows(const PngLayout& layout, uint8_t* out, const std::function<void(int, int)>& rowsDone) {

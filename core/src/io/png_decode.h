@@ -23,6 +23,12 @@ struct PngLayout {
     bool decodable = false;             // false: interlaced, palette, tRNS or < 8 bits (left to libpng)
     bool interlaced = false;            // Adam7
     std::vector<std::string_view> idat; // the IDAT chunks' data, in order (views into the file)
+    bool srgb = false;                  // an sRGB chunk
+    double fileGamma = 0.0;             // a gAMA chunk's value (0.45455 for display gamma 2.2), 0 without
+
+    /// The colour space tag OpenImageIO gives the file ("oiio:ColorSpace"): sRGB with an sRGB chunk
+    /// or none, else from gAMA ("linear", "Gamma2.2"). Informative only: the values are read as stored.
+    std::string colorSpace() const;
 
     std::size_t rowBytes() const {
         return std::size_t(width) * std::size_t(channels) * std::size_t(bitDepth / 8);

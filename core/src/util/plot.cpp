@@ -2,9 +2,9 @@
 
 #include <burnish/core/util/files.h>
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imagebufalgo.h>
-#include <OpenImageIO/imageio.h>
+#include "io/png_encode.h"
+#include "util/font.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -15,9 +15,59 @@ namespace burnish {
 
 namespace {
 
-using OIIO::ImageBuf;
-using OIIO::ROI;
-namespace IBA = OIIO::ImageBufAlgo;
+enum class AlignX { Left, Center, Right };
+enum class AlignY { Baseline, Top, Center, Bottom };
+
+/// Pixels [x0, x1) × [y0, y1) that drawing may touch.
+struct Clip {
+    int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+    bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
+};
+
+Clip whole(const PlotImage& img) {
+    return {0, img.width, 0, img.height};
+}
+
+/// Paints one pixel `color` with opacity `alpha` over what is there.
+void blend(PlotImage& img, int x, int y, const PlotColor& color, float alpha, const Clip& clip) {
+    if (!clip.contains(x, y) || x < 0 || y < 0 || x >= img.width || y >= img.height) return;
+    float* p = img.rgb.data() + 3 * (size_t(y) * size_t(img.width) + size_t(x));
+    for (int c = 0; c < 3; ++c)
+        p[c] = p[c] * (1.0f - alpha) + color[size_t(c)] * alpha;
+}
+
+/// A one-pixel line from (x0, y0) to (x1, y1), both ends included (Bresenham).
+void drawLine(PlotImage& img, int x0, int y0, int x1, int y1, const PlotColor& color, const Clip& clip) {
+    const int dx = std::abs(x1 - x0), dy = -std::abs(y1 - y0);
+    const int sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
+    int err = dx + dy;
+    for (;;) {
+        blend(img, x0, y0, color, 1.0f, clip);
+        if (x0 == x1 && y0 == y1) return;
+        const int e2 = 2 * err;
+        if (e2 >= dy) err += dy, x0 += sx;
+        if (e2 <= dx) err += dx, y0 += sy;
+    }
+}
+
+void drawLine(PlotImage& img, int x0, int y0, int x1, int y1, const PlotColor& color) {
+    drawLine(img, x0, y0, x1, y1, color, whole(img));
+}
+
+/// The box with corners (x0, y0) and (x1, y1), both included: its outline, or filled.
+void drawBox(PlotImage& img, int x0, int y0, int x1, int y1, const PlotColor& color, bool fill,
+             const Clip& clip) {
+    if (!fill) {
+        drawLine(img, x0, y0, x1, y0, color, clip);
+        drawLine(img, x1, y0, x1, y1, color, clip);
+        drawLine(img, x1, y1, x0, y1, color, clip);
+        drawLine(img, x0, y1, x0, y0, color, clip);
+        return;
+    }
+    for (int y = std::min(y0, y1); y <= std::max(y0, y1); ++y)
+        for (int x = std::min(x0, x1); x <= std::max(x0, x1); ++x)
+            blend(img, x, y, color, 1.0f, clip);
+}
 
 constexpr PlotColor kBlack = {0.0f, 0.0f, 0.0f};
 constexpr PlotColor kGrid = {0.88f, 0.88f, 0.88f};
@@ -113,52 +163,64 @@ AxisMap makeAxis(const PlotAxis& axis, const std::vector<double>& values) {
     return map;
 }
 
-/// Draws text or returns the renderer's error (an unknown font is the usual one).
-Status drawText(ImageBuf& dst, int x, int y, std::string_view text, int size, const std::string& font,
-                const PlotColor& color, IBA::TextAlignX ax, IBA::TextAlignY ay) {
-    if (text.empty()) return Status::success();
-    if (!IBA::render_text(dst, x, y, text, size, font, color, ax, ay))
-        return Error{fmt::format("plot: cannot render text with font \"{}\": {}", font, dst.geterror())};
-    return Status::success();
+/// Draws text (UTF-8) at (x, y), aligned on that point as asked, anti-aliased over the image.
+void drawText(PlotImage& dst, const Font& font, int x, int y, std::string_view text, int size,
+              const PlotColor& color, AlignX ax, AlignY ay) {
+    if (text.empty()) return;
+    const TextBox box = font.measure(text, size);
+    if (ax == AlignX::Right) x -= box.width();
+    if (ax == AlignX::Center) x -= box.width() / 2 + box.x0;
+    if (ay == AlignY::Top) y -= box.y0;
+    if (ay == AlignY::Bottom) y -= box.y1;
+    if (ay == AlignY::Center) y -= box.height() / 2 + box.y0;
+    struct Target {
+        PlotImage* img;
+        const PlotColor* color;
+    } target{&dst, &color};
+    font.draw(
+        text, size, x, y,
+        [](void* context, int px, int py, float coverage) {
+            auto* t = static_cast<Target*>(context);
+            blend(*t->img, px, py, *t->color, coverage, whole(*t->img));
+        },
+        &target);
 }
 
-int textWidth(std::string_view text, int size, const std::string& font) {
-    if (text.empty()) return 0;
-    const ROI r = IBA::text_size(text, size, font);
-    return r.defined() ? r.width() : 0;
+int textWidth(const Font& font, std::string_view text, int size) {
+    return text.empty() ? 0 : font.measure(text, size).width();
 }
 
-void drawMarker(ImageBuf& dst, double px, double py, MarkerShape shape, int size, const PlotColor& color,
-                const ROI& clip) {
+void drawMarker(PlotImage& dst, double px, double py, MarkerShape shape, int size, const PlotColor& color,
+                const Clip& clip) {
     const int h = std::max(1, size / 2);
     const int x = static_cast<int>(std::lround(px)), y = static_cast<int>(std::lround(py));
     switch (shape) {
     case MarkerShape::None:
         return;
     case MarkerShape::Square:
-        IBA::render_box(dst, x - h, y - h, x + h, y + h, color, true, clip);
+        drawBox(dst, x - h, y - h, x + h, y + h, color, true, clip);
         return;
     case MarkerShape::HollowSquare:
         // Two nested outlines so a hollow marker is as visible as a filled one.
-        IBA::render_box(dst, x - h, y - h, x + h, y + h, color, false, clip);
-        IBA::render_box(dst, x - h + 1, y - h + 1, x + h - 1, y + h - 1, color, false, clip);
+        drawBox(dst, x - h, y - h, x + h, y + h, color, false, clip);
+        drawBox(dst, x - h + 1, y - h + 1, x + h - 1, y + h - 1, color, false, clip);
         return;
     case MarkerShape::OutlinedSquare:
-        IBA::render_box(dst, x - h, y - h, x + h, y + h, color, true, clip);
-        IBA::render_box(dst, x - h - 1, y - h - 1, x + h + 1, y + h + 1, kBlack, false, clip);
+        drawBox(dst, x - h, y - h, x + h, y + h, color, true, clip);
+        drawBox(dst, x - h - 1, y - h - 1, x + h + 1, y + h + 1, kBlack, false, clip);
         return;
     }
 }
 
-void drawThickLine(ImageBuf& dst, double x0, double y0, double x1, double y1, int width,
-                   const PlotColor& color, const ROI& clip) {
+void drawThickLine(PlotImage& dst, double x0, double y0, double x1, double y1, int width,
+                   const PlotColor& color, const Clip& clip) {
     const int ix0 = static_cast<int>(std::lround(x0)), iy0 = static_cast<int>(std::lround(y0));
     const int ix1 = static_cast<int>(std::lround(x1)), iy1 = static_cast<int>(std::lround(y1));
     // Offset copies across the line's minor axis give it a width.
     const bool steep = std::abs(iy1 - iy0) > std::abs(ix1 - ix0);
     for (int o = -(width - 1) / 2; o <= width / 2; ++o) {
         const int dx = steep ? o : 0, dy = steep ? 0 : o;
-        IBA::render_line(dst, ix0 + dx, iy0 + dy, ix1 + dx, iy1 + dy, color, false, clip);
+        drawLine(dst, ix0 + dx, iy0 + dy, ix1 + dx, iy1 + dy, color, clip);
     }
 }
 
@@ -174,7 +236,7 @@ PlotColor plotPalette(size_t index) {
     return kPalette[index % std::size(kPalette)];
 }
 
-Result<ImageBuf> renderPlot(const PlotSpec& spec) {
+Result<PlotImage> renderPlot(const PlotSpec& spec) {
     if (spec.width < 200 || spec.height < 200)
         return Error{
             fmt::format("plot: size {}x{} is too small (at least 200x200)", spec.width, spec.height)};
@@ -190,17 +252,19 @@ Result<ImageBuf> renderPlot(const PlotSpec& spec) {
         ys.insert(ys.end(), s.y.begin(), s.y.end());
     }
     const int fs = std::max(8, spec.fontSize);
-    const std::string& font = spec.fontName;
-    // Measure first: an unknown font must fail before anything is drawn.
-    if (!IBA::text_size("0", fs, font).defined())
-        return Error{fmt::format("plot: font \"{}\" not found (install fonts-dejavu-core)", font)};
+    // Found first: an unknown font must fail before anything is drawn.
+    const auto found = Font::find(spec.fontName);
+    if (!found)
+        return Error{fmt::format("plot: font \"{}\" not found (install fonts-dejavu-core): {}", spec.fontName,
+                                 found.error())};
+    const Font& font = **found;
 
     AxisMap ax = makeAxis(spec.x, xs);
     AxisMap ay = makeAxis(spec.y, ys);
 
     int yTickWidth = 0;
     for (const auto& t : ay.ticks)
-        yTickWidth = std::max(yTickWidth, textWidth(t.label, fs - 2, font));
+        yTickWidth = std::max(yTickWidth, textWidth(font, t.label, fs - 2));
     // The legend: one entry a row down the right side, in as many columns as the height needs (an
     // entry below the image would be lost, and OpenImageIO aborts on text drawn wholly outside it).
     const int top = spec.title.empty() ? 20 : 2 * fs + 14;
@@ -209,7 +273,7 @@ Result<ImageBuf> renderPlot(const PlotSpec& spec) {
     int legendWidth = 0, named = 0;
     for (const auto& s : spec.series)
         if (!s.name.empty()) {
-            legendWidth = std::max(legendWidth, textWidth(s.name, fs - 1, font) + 48);
+            legendWidth = std::max(legendWidth, textWidth(font, s.name, fs - 1) + 48);
             ++named;
         }
     const int legendColumns = (named + legendRows - 1) / legendRows;
@@ -228,32 +292,25 @@ Result<ImageBuf> renderPlot(const PlotSpec& spec) {
     ax.p0 = left, ax.p1 = right;
     ay.p0 = bottom, ay.p1 = top; // y grows upwards
 
-    ImageBuf img(OIIO::ImageSpec(width, spec.height, 3, OIIO::TypeDesc::FLOAT));
-    IBA::fill(img, kWhite);
-    const ROI plotRoi(left, right + 1, top, bottom + 1, 0, 1, 0, 3);
+    PlotImage img{width, spec.height, std::vector<float>(size_t(width) * size_t(spec.height) * 3, 1.0f)};
+    const Clip plotRoi{left, right + 1, top, bottom + 1};
 
     // Grid and ticks.
     for (const auto& t : ax.ticks) {
         const int px = static_cast<int>(std::lround(ax.toPixel(t.value)));
         if (px < left || px > right) continue;
-        IBA::render_line(img, px, top, px, bottom, t.label.empty() ? kMinorGrid : kGrid);
-        IBA::render_line(img, px, bottom, px, bottom + (t.label.empty() ? 3 : 6), kBlack);
-        if (auto st = drawText(img, px, bottom + 9, t.label, fs - 2, font, kBlack, IBA::TextAlignX::Center,
-                               IBA::TextAlignY::Top);
-            !st)
-            return Error{st.error()};
+        drawLine(img, px, top, px, bottom, t.label.empty() ? kMinorGrid : kGrid);
+        drawLine(img, px, bottom, px, bottom + (t.label.empty() ? 3 : 6), kBlack);
+        drawText(img, font, px, bottom + 9, t.label, fs - 2, kBlack, AlignX::Center, AlignY::Top);
     }
     for (const auto& t : ay.ticks) {
         const int py = static_cast<int>(std::lround(ay.toPixel(t.value)));
         if (py < top || py > bottom) continue;
-        IBA::render_line(img, left, py, right, py, t.label.empty() ? kMinorGrid : kGrid);
-        IBA::render_line(img, left - (t.label.empty() ? 3 : 6), py, left, py, kBlack);
-        if (auto st = drawText(img, left - 9, py, t.label, fs - 2, font, kBlack, IBA::TextAlignX::Right,
-                               IBA::TextAlignY::Center);
-            !st)
-            return Error{st.error()};
+        drawLine(img, left, py, right, py, t.label.empty() ? kMinorGrid : kGrid);
+        drawLine(img, left - (t.label.empty() ? 3 : 6), py, left, py, kBlack);
+        drawText(img, font, left - 9, py, t.label, fs - 2, kBlack, AlignX::Right, AlignY::Center);
     }
-    IBA::render_box(img, left, top, right, bottom, kBlack, false);
+    drawBox(img, left, top, right, bottom, kBlack, false, whole(img));
 
     // Series: lines under markers, labels on top.
     for (const auto& s : spec.series) {
@@ -281,36 +338,31 @@ Result<ImageBuf> renderPlot(const PlotSpec& spec) {
             if (!ax.placeable(s.x[i]) || !ay.placeable(s.y[i])) continue;
             const int px = static_cast<int>(std::lround(ax.toPixel(s.x[i]))) + s.markerSize / 2 + 3;
             const int py = static_cast<int>(std::lround(ay.toPixel(s.y[i]))) - s.markerSize / 2 - 1;
-            if (auto st = drawText(img, px, py, s.pointLabels[i], fs - 4, font, kBlack, IBA::TextAlignX::Left,
-                                   IBA::TextAlignY::Baseline);
-                !st)
-                return Error{st.error()};
+            drawText(img, font, px, py, s.pointLabels[i], fs - 4, kBlack, AlignX::Left, AlignY::Baseline);
         }
 
     // Title, axis labels (the y label rotated to read bottom to top), legend.
     // Centred over the plot area, moved right where it would start left of the image.
-    const int titleX = std::max((left + right) / 2, textWidth(spec.title, fs + 2, font) / 2 + 8);
-    if (auto st = drawText(img, titleX, 10, spec.title, fs + 2, font, kBlack, IBA::TextAlignX::Center,
-                           IBA::TextAlignY::Top);
-        !st)
-        return Error{st.error()};
-    if (auto st = drawText(img, (left + right) / 2, spec.height - 10, spec.x.label, fs, font, kBlack,
-                           IBA::TextAlignX::Center, IBA::TextAlignY::Bottom);
-        !st)
-        return Error{st.error()};
+    const int titleX = std::max((left + right) / 2, textWidth(font, spec.title, fs + 2) / 2 + 8);
+    drawText(img, font, titleX, 10, spec.title, fs + 2, kBlack, AlignX::Center, AlignY::Top);
+    drawText(img, font, (left + right) / 2, spec.height - 10, spec.x.label, fs, kBlack, AlignX::Center,
+             AlignY::Bottom);
     if (!spec.y.label.empty()) {
-        const ROI size = IBA::text_size(spec.y.label, fs, font);
-        if (!size.defined()) return Error{fmt::format("plot: font \"{}\" cannot measure the y label", font)};
-        ImageBuf label(OIIO::ImageSpec(size.width() + 4, fs + 10, 3, OIIO::TypeDesc::FLOAT));
-        IBA::fill(label, kWhite);
-        if (auto st = drawText(label, 2, (fs + 10) / 2, spec.y.label, fs, font, kBlack, IBA::TextAlignX::Left,
-                               IBA::TextAlignY::Center);
-            !st)
-            return Error{st.error()};
-        const ImageBuf rotated = IBA::rotate270(label);
+        // Drawn level on a white strip, then turned a quarter anticlockwise into place.
+        const TextBox size = font.measure(spec.y.label, fs);
+        const int lw = size.width() + 4, lh = fs + 10;
+        PlotImage label{lw, lh, std::vector<float>(size_t(lw) * size_t(lh) * 3, 1.0f)};
+        drawText(label, font, 2, lh / 2, spec.y.label, fs, kBlack, AlignX::Left, AlignY::Center);
         const int lx = 14;
-        const int ly = std::max(0, (top + bottom) / 2 - rotated.spec().height / 2);
-        if (!IBA::paste(img, lx, ly, 0, 0, rotated)) return Error{"plot: " + img.geterror()};
+        const int ly = std::max(0, (top + bottom) / 2 - lw / 2);
+        // The rotated strip is lh wide and lw tall: its pixel (u, v) is the label's (lw − 1 − v, u).
+        for (int v = 0; v < lw; ++v)
+            for (int u = 0; u < lh; ++u) {
+                const int x = lx + u, y = ly + v;
+                if (x < 0 || y < 0 || x >= img.width || y >= img.height) continue;
+                const float* from = label.rgb.data() + 3 * (size_t(u) * size_t(lw) + size_t(lw - 1 - v));
+                std::copy(from, from + 3, img.rgb.data() + 3 * (size_t(y) * size_t(img.width) + size_t(x)));
+            }
     }
     int entry = 0;
     for (const auto& s : spec.series) {
@@ -319,49 +371,53 @@ Result<ImageBuf> renderPlot(const PlotSpec& spec) {
         const int cy = top + 8 + (entry % legendRows) * legendStep + fs / 2;
         ++entry;
         if (s.line)
-            drawThickLine(img, legendX, cy, legendX + 26, cy, std::max(1, s.lineWidth), s.color, ROI());
-        drawMarker(img, legendX + 13, cy, s.marker, s.markerSize, s.color, ROI());
-        if (auto st = drawText(img, legendX + 36, cy, s.name, fs - 1, font, kBlack, IBA::TextAlignX::Left,
-                               IBA::TextAlignY::Center);
-            !st)
-            return Error{st.error()};
+            drawThickLine(img, legendX, cy, legendX + 26, cy, std::max(1, s.lineWidth), s.color, whole(img));
+        drawMarker(img, legendX + 13, cy, s.marker, s.markerSize, s.color, whole(img));
+        drawText(img, font, legendX + 36, cy, s.name, fs - 1, kBlack, AlignX::Left, AlignY::Center);
     }
     return img;
 }
 
-Status savePng(const ImageBuf& image, const std::filesystem::path& path) {
-    const auto bytes = encodePng(image, path.filename().string());
-    if (!bytes) return Error{bytes.error()};
-    return writeFileAtomic(path, *bytes);
+Result<std::string> encodePlotImage(const PlotImage& image) {
+    if (image.width <= 0 || image.height <= 0 ||
+        image.rgb.size() != size_t(image.width) * size_t(image.height) * 3)
+        return Error{
+            fmt::format("plot: a {}x{} image holds {} values", image.width, image.height, image.rgb.size())};
+    PngPixels pixels;
+    pixels.width = image.width;
+    pixels.height = image.height;
+    pixels.channels = 3;
+    pixels.bitDepth = 8;
+    const size_t rowValues = size_t(image.width) * 3;
+    pixels.rows = [&image, rowValues](size_t y0, size_t y1, void* out) {
+        auto* bytes = static_cast<uint8_t*>(out);
+        for (size_t i = y0 * rowValues; i < y1 * rowValues; ++i) {
+            const float v = image.rgb[i];
+            // NaN reads as black; [0, 1] rounds to the nearest of 256 levels.
+            *bytes++ = uint8_t(std::lround(std::clamp(v == v ? v : 0.0f, 0.0f, 1.0f) * 255.0f));
+        }
+    };
+    auto bytes = encodePng(pixels);
+    if (!bytes) return Error{"plot: cannot encode PNG: " + bytes.error()};
+    return bytes;
 }
 
-Result<std::string> encodePng(const ImageBuf& image, const std::string& name) {
-    std::vector<unsigned char> bytes;
-    OIIO::Filesystem::IOVecOutput memory(bytes);
-    auto out = OIIO::ImageOutput::create("png");
-    if (!out) return Error{"plot: OpenImageIO has no PNG writer: " + OIIO::geterror()};
-    if (!out->set_ioproxy(&memory)) return Error{"plot: the PNG writer cannot write to memory"};
-    OIIO::ImageSpec spec(image.spec().width, image.spec().height, image.spec().nchannels,
-                         OIIO::TypeDesc::UINT8);
-    if (!out->open(name, spec)) return Error{"plot: cannot encode PNG: " + out->geterror()};
-    if (!image.write(out.get())) {
-        out->close();
-        return Error{"plot: cannot encode PNG: " + image.geterror()};
-    }
-    if (!out->close()) return Error{"plot: cannot encode PNG: " + out->geterror()};
-    return std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+Status savePlotImage(const PlotImage& image, const std::filesystem::path& path) {
+    const auto bytes = encodePlotImage(image);
+    if (!bytes) return Error{bytes.error()};
+    return writeFileAtomic(path, *bytes);
 }
 
 Result<std::string> encodePlotPng(const PlotSpec& spec) {
     auto image = renderPlot(spec);
     if (!image) return Error{image.error()};
-    return encodePng(*image, "plot.png");
+    return encodePlotImage(*image);
 }
 
 Status savePlotPng(const PlotSpec& spec, const std::filesystem::path& path) {
     auto image = renderPlot(spec);
     if (!image) return Error{image.error()};
-    return savePng(*image, path);
+    return savePlotImage(*image, path);
 }
 
 } // namespace burnish

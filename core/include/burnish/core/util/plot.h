@@ -1,12 +1,10 @@
 // A small plotting module: renders line and scatter series on linear or logarithmic axes into an
-// OpenImageIO ImageBuf (RGB float, white background) with ticks, tick labels, a title, axis labels
-// and a legend, and saves it as PNG through writeFileAtomic. Used by the approximations report
-// (error against cost) and the bake report (error per mip).
+// RGB float image (white background) with ticks, tick labels, a title, axis labels and a legend, its
+// text anti-aliased by FreeType, and saves it as PNG (core's encoder) through writeFileAtomic. Used by the
+// approximations report (error against cost) and the bake report (error per mip).
 #pragma once
 
 #include <burnish/core/util/result.h>
-
-#include <OpenImageIO/imagebuf.h>
 
 #include <array>
 #include <filesystem>
@@ -56,19 +54,30 @@ struct PlotSpec {
     std::string fontName = "DejaVuSans";
 };
 
+/// A rendered plot: linear RGB in [0, 1], 3 floats a pixel, row-major, top row first.
+struct PlotImage {
+    int width = 0;
+    int height = 0;
+    std::vector<float> rgb;
+
+    const float* pixel(int x, int y) const {
+        return rgb.data() + 3 * (size_t(y) * size_t(width) + size_t(x));
+    }
+};
+
 /// Renders the plot. Points with a NaN/Inf coordinate, or a non-positive one on a log axis, are
 /// skipped (they cannot be placed). Fails with a message when the font cannot be found (no plot
 /// is ever produced without its labels), when x and y lengths differ, or when the size is < 200 px.
-Result<OIIO::ImageBuf> renderPlot(const PlotSpec& spec);
+Result<PlotImage> renderPlot(const PlotSpec& spec);
 
-/// Encodes an image as 8-bit PNG in memory and writes it with writeFileAtomic.
-Status savePng(const OIIO::ImageBuf& image, const std::filesystem::path& path);
-/// The PNG file's bytes of an image (`name` only labels errors).
-Result<std::string> encodePng(const OIIO::ImageBuf& image, const std::string& name);
+/// Encodes a plot as 8-bit RGB PNG in memory and writes it with writeFileAtomic.
+Status savePlotImage(const PlotImage& image, const std::filesystem::path& path);
+/// The PNG file's bytes of a plot (errors: a size that does not match its values, encoder failures).
+Result<std::string> encodePlotImage(const PlotImage& image);
 /// renderPlot, encoded as a PNG file's bytes (for a file set that stages them).
 Result<std::string> encodePlotPng(const PlotSpec& spec);
 
-/// renderPlot then savePng.
+/// renderPlot then savePlotImage.
 Status savePlotPng(const PlotSpec& spec, const std::filesystem::path& path);
 
 /// A qualitative palette of `index`-th distinct colour (cycles after 10).

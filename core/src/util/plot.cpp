@@ -72,7 +72,6 @@ void drawBox(PlotImage& img, int x0, int y0, int x1, int y1, const PlotColor& co
 constexpr PlotColor kBlack = {0.0f, 0.0f, 0.0f};
 constexpr PlotColor kGrid = {0.88f, 0.88f, 0.88f};
 constexpr PlotColor kMinorGrid = {0.95f, 0.95f, 0.95f};
-constexpr PlotColor kWhite = {1.0f, 1.0f, 1.0f};
 // Tick labels stay readable up to about this many per axis on the default 1100 px width.
 constexpr int kMaxMajorTicks = 10;
 

@@ -3,7 +3,15 @@
 # first points at a resolver that dlopens OpenImageIO, looks the function up and repoints the slot
 # (oiio_lazy.cpp). A trampoline is a jump, not a call, so any signature passes through unchanged;
 # the resolver saves every argument register around its lookup. Programs opt in with the target
-# property BURNISH_LAZY_OIIO; the others link OpenImageIO as usual.
+# property BURNISH_LAZY_OIIO (set to the variable of that name, ON where this file builds the
+# trampolines); the others link OpenImageIO as usual.
+# Sanitizer builds link OpenImageIO: UBSan's vptr checks name the typeinfo of its classes, data that
+# no trampoline can stand in for.
+if(BURNISH_SANITIZE OR NOT CMAKE_SYSTEM_PROCESSOR MATCHES "x86_64|AMD64")
+  set(BURNISH_LAZY_OIIO OFF CACHE INTERNAL "")
+  return()
+endif()
+set(BURNISH_LAZY_OIIO ON CACHE INTERNAL "")
 set(_lazy_dir ${CMAKE_CURRENT_LIST_DIR})
 set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${_lazy_dir}/symbols.txt)
 file(STRINGS ${_lazy_dir}/symbols.txt _lazy_symbols REGEX "^[^#]")

@@ -64,8 +64,9 @@ template <class T> inline T powUnit(T x, T p) {
 /// infinite and NaN inputs give meaningless (finite or not) values: clamp x first.
 /// D is double, or a vector of doubles (GCC vector extensions, e.g. simd::Double4) with U its
 /// vector of 64-bit unsigned integers: the same IEEE operations lane by lane, so a lane's result is
-/// the double's bit for bit.
-template <class D, class U = std::uint64_t> inline D log2Positive(D x) {
+/// the double's bit for bit. Always inlined: called out of line from a target_clones copy, its
+/// vector instance gave other bits (see the -Wpsabi note in simd.h).
+template <class D, class U = std::uint64_t> [[gnu::always_inline]] inline D log2Positive(D x) {
     const U bits = std::bit_cast<U>(x);
     // The biased exponent as a double, exactly: OR it into 2^52's mantissa and subtract 2^52.
     const D biased = std::bit_cast<D>((bits >> 52) | 0x4330000000000000ull) - 0x1p52;

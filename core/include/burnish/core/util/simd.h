@@ -7,9 +7,11 @@
 #include <cstdint>
 #include <cstring>
 
-// GCC notes that a 32-byte vector passed by value has another ABI with AVX than without. Float8 values
-// pass only between inline functions and target_clones copies inside one translation unit, never
-// across a library's interface, so the note does not apply to any file that uses them.
+// GCC notes that a 32-byte vector passed by value has another ABI with AVX than without. Float8 and
+// Double4 values pass only into always-inlined functions inside a target_clones copy, never through a
+// call between code built for different targets. When a change made GCC emit log2Positive<Double4>
+// out of line (with that note) and call it from the AVX2 copy, the mixture's 1×1 lobes of a 4096² map
+// changed; inlined, they are the same bits. Every function taking these types is always inlined.
 #if defined(__GNUC__) // GCC, and Clang (which defines __GNUC__ and has the same warning)
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
@@ -65,8 +67,8 @@ inline float horizontalSum(Float4 v) {
 /// 2^x lane by lane for x in [−125, 0], within 1.4e-7 (relative) of the exact value. Other x give
 /// unspecified values (callers drop those lanes). No calls, no branches.
 // Cephes exp2f (Moshier): 2^x = 2^k (1 + f P(f)), k = round(x), |f| <= 1/2; P by Estrin's scheme
-// (a shorter chain of dependent operations than Horner's)
-inline Float8 exp2NonPositive(Float8 x) {
+// (a shorter chain of dependent operations than Horner's). Always inlined (see the -Wpsabi note above).
+[[gnu::always_inline]] inline Float8 exp2NonPositive(Float8 x) {
     // Adding 1.5·2^23 rounds x to the nearest integer k, which lands in the sum's low mantissa bits.
     constexpr float kRound = 12582912.0f;
     constexpr unsigned kRoundBits = 0x4B400000u; // the bits of 1.5·2^23

@@ -222,16 +222,14 @@ TEST(PlotFont, MeasuresAndPlacesUtf8Text) {
     struct Extent {
         int x0 = 1 << 20, x1 = -(1 << 20), y0 = 1 << 20, y1 = -(1 << 20), pixels = 0;
     } e;
-    (*font)->draw(
-        "Burnish", 20, 100, 50,
-        [](void* c, int x, int y, float coverage) {
-            auto* ext = static_cast<Extent*>(c);
-            ASSERT_TRUE(coverage > 0.0f && coverage <= 1.0f);
-            ext->x0 = std::min(ext->x0, x), ext->x1 = std::max(ext->x1, x + 1);
-            ext->y0 = std::min(ext->y0, y), ext->y1 = std::max(ext->y1, y + 1);
-            ++ext->pixels;
-        },
-        &e);
+    bool coverageInRange = true;
+    (*font)->draw("Burnish", 20, 100, 50, [&](int x, int y, float coverage) {
+        coverageInRange = coverageInRange && coverage > 0.0f && coverage <= 1.0f;
+        e.x0 = std::min(e.x0, x), e.x1 = std::max(e.x1, x + 1);
+        e.y0 = std::min(e.y0, y), e.y1 = std::max(e.y1, y + 1);
+        ++e.pixels;
+    });
+    EXPECT_TRUE(coverageInRange);
     EXPECT_GT(e.pixels, 50);
     EXPECT_EQ(e.x0, 100 + box.x0);
     EXPECT_EQ(e.x1, 100 + box.x1);

@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -131,44 +132,49 @@ Result<std::shared_ptr<const Font>> Font::find(const std::string& name) {
     return font;
 }
 
-TextBox Font::measure(std::string_view text, int pixelSize) const {
-    std::lock_guard lock(m_face->mutex);
-    FT_Face face = m_face->face;
-    TextBox box;
-    if (text.empty() || FT_Set_Pixel_Sizes(face, 0, FT_UInt(std::max(pixelSize, 1))) != 0) return box;
-    bool any = false;
+namespace {
+
+// Renders each glyph of `text` at `pixelSize` in turn and hands it to `glyph` with the pen's x (the
+// origin at 0); glyphs the font cannot render are skipped. The face's lock must be held.
+void layOut(FT_Face face, std::string_view text, int pixelSize,
+            const std::function<void(const FT_GlyphSlotRec& g, int penX)>& glyph) {
+    if (text.empty() || FT_Set_Pixel_Sizes(face, 0, FT_UInt(std::max(pixelSize, 1))) != 0) return;
     int x = 0;
     for (const char32_t c : codePoints(text)) {
         if (!renderGlyph(face, c)) continue;
-        const FT_GlyphSlot g = face->glyph;
-        const int gx0 = x + g->bitmap_left, gy0 = -g->bitmap_top;
-        const int gx1 = gx0 + int(g->bitmap.width), gy1 = gy0 + int(g->bitmap.rows);
+        glyph(*face->glyph, x);
+        x += int(face->glyph->advance.x >> 6);
+    }
+}
+
+} // namespace
+
+TextBox Font::measure(std::string_view text, int pixelSize) const {
+    std::lock_guard lock(m_face->mutex);
+    TextBox box;
+    bool any = false;
+    layOut(m_face->face, text, pixelSize, [&](const FT_GlyphSlotRec& g, int x) {
+        const int gx0 = x + g.bitmap_left, gy0 = -g.bitmap_top;
+        const int gx1 = gx0 + int(g.bitmap.width), gy1 = gy0 + int(g.bitmap.rows);
         if (!any) box = {gx0, gx1, gy0, gy1};
         box.x0 = std::min(box.x0, gx0), box.x1 = std::max(box.x1, gx1);
         box.y0 = std::min(box.y0, gy0), box.y1 = std::max(box.y1, gy1);
         any = true;
-        x += int(g->advance.x >> 6);
-    }
+    });
     return box;
 }
 
-void Font::draw(std::string_view text, int pixelSize, int x, int y, CoverageSink sink, void* context) const {
+void Font::draw(std::string_view text, int pixelSize, int x, int y, const CoverageSink& sink) const {
     std::lock_guard lock(m_face->mutex);
-    FT_Face face = m_face->face;
-    if (text.empty() || FT_Set_Pixel_Sizes(face, 0, FT_UInt(std::max(pixelSize, 1))) != 0) return;
-    for (const char32_t c : codePoints(text)) {
-        if (!renderGlyph(face, c)) continue;
-        const FT_GlyphSlot g = face->glyph;
-        const FT_Bitmap& bitmap = g->bitmap;
-        for (unsigned row = 0; row < bitmap.rows; ++row) {
-            const unsigned char* line = bitmap.buffer + std::ptrdiff_t(row) * bitmap.pitch;
-            for (unsigned col = 0; col < bitmap.width; ++col)
+    layOut(m_face->face, text, pixelSize, [&](const FT_GlyphSlotRec& g, int penX) {
+        for (unsigned row = 0; row < g.bitmap.rows; ++row) {
+            const unsigned char* line = g.bitmap.buffer + std::ptrdiff_t(row) * g.bitmap.pitch;
+            for (unsigned col = 0; col < g.bitmap.width; ++col)
                 if (line[col] != 0)
-                    sink(context, x + g->bitmap_left + int(col), y - g->bitmap_top + int(row),
+                    sink(x + penX + g.bitmap_left + int(col), y - g.bitmap_top + int(row),
                          float(line[col]) / 255.0f);
         }
-        x += int(g->advance.x >> 6);
-    }
+    });
 }
 
 } // namespace burnish

@@ -5,6 +5,7 @@
 
 #include <burnish/core/util/result.h>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -20,7 +21,7 @@ struct TextBox {
 };
 
 /// Blends one pixel: the callback gets (x, y, coverage in (0, 1]).
-using CoverageSink = void (*)(void* context, int x, int y, float coverage);
+using CoverageSink = std::function<void(int x, int y, float coverage)>;
 
 class Font {
 public:
@@ -33,7 +34,7 @@ public:
     /// The extent of `text` (UTF-8) at `pixelSize`.
     TextBox measure(std::string_view text, int pixelSize) const;
     /// Calls `sink` for every pixel `text` covers with its origin (the baseline's start) at (x, y).
-    void draw(std::string_view text, int pixelSize, int x, int y, CoverageSink sink, void* context) const;
+    void draw(std::string_view text, int pixelSize, int x, int y, const CoverageSink& sink) const;
 
     struct Face;
     explicit Font(std::unique_ptr<Face> face);

@@ -172,17 +172,8 @@ void drawText(PlotImage& dst, const Font& font, int x, int y, std::string_view t
     if (ay == AlignY::Top) y -= box.y0;
     if (ay == AlignY::Bottom) y -= box.y1;
     if (ay == AlignY::Center) y -= box.height() / 2 + box.y0;
-    struct Target {
-        PlotImage* img;
-        const PlotColor* color;
-    } target{&dst, &color};
-    font.draw(
-        text, size, x, y,
-        [](void* context, int px, int py, float coverage) {
-            auto* t = static_cast<Target*>(context);
-            blend(*t->img, px, py, *t->color, coverage, whole(*t->img));
-        },
-        &target);
+    font.draw(text, size, x, y,
+              [&](int px, int py, float coverage) { blend(dst, px, py, color, coverage, whole(dst)); });
 }
 
 int textWidth(const Font& font, std::string_view text, int size) {

@@ -99,33 +99,39 @@ vec3 normalOfSlope(vec2 B) {
     return normalize(vec3(B, 1.0));
 }
 
+// The largest slope-space Gaussian value: e^80, where float still has room for the shading's factors.
+const float kMaxSlopeNdf = 5.5406223e34;
+
 // Olano & Baker 2010, "LEAN Mapping": exp(−½ dᵀΣ⁻¹d)/(2π√detΣ) / h_z⁴ with d = h's slope − B, from
-// h's slope h.xy/h_z and logNorm = log(2π h_z⁴) (slopeGaussianLogNorm), which every lobe at one h
+// h's slope h.xy/h_z and invNorm = 1/(2π h_z⁴) (slopeGaussianInvNorm), which every lobe at one h
 // shares (mixtureValue computes them once for its K lobes).
-float slopeGaussianNdfAtSlope(vec2 slope, float logNorm, vec2 mean, vec3 cov) {
+float slopeGaussianNdfAtSlope(vec2 slope, float invNorm, vec2 mean, vec3 cov) {
     float det = cov.x * cov.y - cov.z * cov.z;
     float dx = slope.x - mean.x;
     float dy = slope.y - mean.y;
-    float e = (dx * dx * cov.y + dy * dy * cov.x - 2.0 * dx * dy * cov.z) / det;
-    // In log form, so neither exp(−e/2) nor 1/h_z⁴ alone can overflow or underflow to 0·∞;
-    // 80 keeps exp finite; below −104 exp underflows even float denormals, and a NaN logD (an
-    // infinite e) fails the comparison, so both give 0. A positive definite Σ has det > 0; a
-    // singular or broken one gives no lobe (as core). Selects, not early returns: a shader core
-    // pays for divergent branches.
-    float logD = -0.5 * e - 0.5 * log(det) - logNorm;
-    return det > 0.0 && logD > -104.0 ? exp(min(logD, 80.0)) : 0.0;
+    // One inverse square root gives both 1/√detΣ and 1/detΣ (no division, no logarithm).
+    float r = inversesqrt(det);
+    float e = (dx * dx * cov.y + dy * dy * cov.x - 2.0 * dx * dy * cov.z) * (r * r);
+    // exp(−e/2) <= 1 for a positive definite Σ, 1/√detΣ <= 2.3e10 for the guarded covariances every
+    // method produces and invNorm <= 1.6e23: the product stays finite in float. kMaxSlopeNdf (e^80)
+    // bounds what a broken Σ could give. A singular or broken Σ (det <= 0, NaN) gives no lobe (as
+    // core): the comparisons fail. Selects, not early returns: a shader core pays for divergent
+    // branches.
+    float D = exp(-0.5 * e) * r * invNorm;
+    return det > 0.0 && D > 0.0 ? min(D, kMaxSlopeNdf) : 0.0;
 }
 
-// log(2π h_z⁴) for slopeGaussianNdfAtSlope, h_z at least kMinCosine: that bounds 1/h_z at 1e6, where
-// h_z⁴ would underflow float to 0 (0/0 = NaN); there the Gaussian of any Σ a method produces
-// (|B| <= 100, Σ <= 1e6) is exp(−1e6)-small, 0 in core too.
-float slopeGaussianLogNorm(float hz) {
-    return log(2.0 * kPi) + 4.0 * log(hz);
+// 1/(2π h_z⁴) for slopeGaussianNdfAtSlope, h_z at least kMinCosine: that bounds 1/h_z at 1e6, where
+// h_z⁴ (1e-24) is still a normal float; there the Gaussian of any Σ a method produces (|B| <= 100,
+// Σ <= 1e6) is exp(−1e6)-small, 0 in core too.
+float slopeGaussianInvNorm(float hz) {
+    float hz2 = hz * hz;
+    return 1.0 / (2.0 * kPi * hz2 * hz2);
 }
 
 float slopeGaussianNdf(vec3 h, vec2 mean, vec3 cov) {
     float hz = max(h.z, kMinCosine);
-    float D = slopeGaussianNdfAtSlope(h.xy / hz, slopeGaussianLogNorm(hz), mean, cov);
+    float D = slopeGaussianNdfAtSlope(h.xy / hz, slopeGaussianInvNorm(hz), mean, cov);
     return h.z > 0.0 ? D : 0.0;
 }
 
@@ -142,17 +148,19 @@ const float kMaxCorrelation = 0.999;
 
 // LobeMoments::mean: b = (w·b)/w, (0, 0) for an empty lobe
 vec2 mixtureLobeMean(float w, vec2 wb) {
-    return w > 0.0 ? wb / w : vec2(0.0);
+    return w > 0.0 ? wb * (1.0 / w) : vec2(0.0);
 }
 
 // LobeMoments::covariance: Σ = (w·M)/w − bbᵀ (wM = xx, yy, xy), each variance at least minVariance
 // (NaN too) and the correlation inside ±kMaxCorrelation; an empty lobe gets (min, min, 0).
 vec3 mixtureLobeCovariance(float w, vec2 wb, vec3 wM, float minVariance) {
     if (!(w > 0.0)) return vec3(minVariance, minVariance, 0.0);
-    vec2 b = wb / w;
-    float xx = wM.x / w - b.x * b.x;
-    float yy = wM.y / w - b.y * b.y;
-    float xy = wM.z / w - b.x * b.y;
+    // One reciprocal for the five quotients (mixtureLobeMean's too, once the compiler merges them).
+    float r = 1.0 / w;
+    vec2 b = wb * r;
+    float xx = wM.x * r - b.x * b.x;
+    float yy = wM.y * r - b.y * b.y;
+    float xy = wM.z * r - b.x * b.y;
     xx = xx > minVariance ? xx : minVariance;
     yy = yy > minVariance ? yy : minVariance;
     float limit = kMaxCorrelation * sqrt(xx * yy);
@@ -171,7 +179,7 @@ float mixtureValue(vec4 weights, vec4 lobe[kMaxMixtureLobes], vec4 cross, int co
     // h's slope and the Gaussian's normalisation are the same for every lobe: computed once.
     float hz = max(h.z, kMinCosine);
     vec2 slope = h.xy / hz;
-    float logNorm = slopeGaussianLogNorm(hz);
+    float invNorm = slopeGaussianInvNorm(hz);
     float total = 0.0;
     for (int i = 0; i < count; ++i)
         total += max(weights[i], 0.0);
@@ -181,7 +189,7 @@ float mixtureValue(vec4 weights, vec4 lobe[kMaxMixtureLobes], vec4 cross, int co
         float w = max(weights[i], 0.0);
         vec2 b = mixtureLobeMean(w, lobe[i].xy);
         vec3 cov = mixtureLobeCovariance(w, lobe[i].xy, vec3(lobe[i].zw, cross[i]), minVariance);
-        sum += w * share * slopeGaussianNdfAtSlope(slope, logNorm, b, cov) * max(0.0, dot(normalOfSlope(b), l));
+        sum += w * share * slopeGaussianNdfAtSlope(slope, invNorm, b, cov) * max(0.0, dot(normalOfSlope(b), l));
     }
     return h.z > 0.0 ? sum : 0.0;
 }

@@ -355,6 +355,8 @@ int runBench(Renderer& renderer, const GlContext& context, Scene scene, int widt
     const double steps = double(methods.size() + 2);
     nlohmann::json perMethod = nlohmann::json::array();
     std::string table;
+    // The sphere's tessellation at full size and at the interactive frame's half size (0: not a sphere).
+    int sphereSegments = 0, interactiveSphereSegments = 0;
     scene.debugView = DebugView::None;
     for (size_t i = 0; i < methods.size(); ++i) {
         bar.update(double(i) / steps, std::string(methodName(methods[i])));
@@ -362,8 +364,10 @@ int runBench(Renderer& renderer, const GlContext& context, Scene scene, int widt
         if (auto s = renderer.setScene(scene); !s) return fail(s.error());
         auto ms = medianFrameMs(renderer, *target, o.benchFrames);
         if (!ms) return fail(ms.error());
+        sphereSegments = renderer.lastSphereSegments();
         auto moving = medianFrameMs(renderer, *target, o.benchFrames, true);
         if (!moving) return fail(moving.error());
+        interactiveSphereSegments = renderer.lastSphereSegments();
         perMethod.push_back(
             {{"method", methodName(methods[i])}, {"median_ms", *ms}, {"interactive_median_ms", *moving}});
         char row[128];
@@ -401,6 +405,8 @@ int runBench(Renderer& renderer, const GlContext& context, Scene scene, int widt
                          {"height", height},
                          {"frames", o.benchFrames},
                          {"mesh", meshKindName(scene.mesh)},
+                         {"sphere_segments", sphereSegments},
+                         {"interactive_sphere_segments", interactiveSphereSegments},
                          {"methods", perMethod},
                          {"simple_scene",
                           {{"specialised_ms", *specialised},
@@ -414,6 +420,10 @@ int runBench(Renderer& renderer, const GlContext& context, Scene scene, int widt
                 "included (glFinish). Figures, not a pass/fail test.\n\n",
                 context.description().c_str(), width, height, std::string(meshKindName(scene.mesh)).c_str(),
                 o.benchFrames, kBenchWarmupFrames);
+    if (sphereSegments > 0)
+        std::printf(
+            "Sphere tessellated for its size on screen: %d x %d segments (interactive frame: %d x %d).\n\n",
+            sphereSegments, sphereSegments / 2, interactiveSphereSegments, interactiveSphereSegments / 2);
     std::printf(
         "| method | median ms | interactive (half size, while the camera moves) |\n| --- | --- | --- |\n%s\n",
         table.c_str());

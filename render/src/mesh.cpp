@@ -87,6 +87,23 @@ MeshData makeSphere(int segments, int rings, float uvRepeat) {
     return mesh;
 }
 
+int sphereSegmentsForRadius(double radiusPixels) {
+    if (!(radiusPixels < 1e9)) return kMaxSphereSegments; // NaN, infinite or absurdly large
+    if (!(radiusPixels > kSphereSilhouetteTolerancePixels)) return kMinSphereSegments;
+    // r(1 − cos(π/N)) <= ε  ⇔  N >= π / acos(1 − ε/r)
+    const double needed = kPi<double> / std::acos(1.0 - kSphereSilhouetteTolerancePixels / radiusPixels);
+    const double steps = std::ceil(std::min(needed, double(kMaxSphereSegments)) / 16.0);
+    return std::clamp(int(steps) * 16, kMinSphereSegments, kMaxSphereSegments);
+}
+
+double sphereScreenRadius(double eyeDistance, double fovYRadians, int heightPixels) {
+    if (!(eyeDistance > 1.0)) return std::numeric_limits<double>::infinity();
+    // The silhouette is the cone of half-angle asin(1/d) about the eye's line to the centre.
+    const double tanCone = 1.0 / std::sqrt(eyeDistance * eyeDistance - 1.0);
+    const double tanHalfFov = std::tan(0.5 * std::clamp(fovYRadians, 1e-3, kPi<double> - 1e-3));
+    return tanCone / tanHalfFov * 0.5 * double(std::max(heightPixels, 1));
+}
+
 MeshData makePlane(float size, float uvRepeat, int subdivisions) {
     size = std::isfinite(size) && size > 0.0f ? size : 1.0f;
     uvRepeat = sanitizeRepeat(uvRepeat);

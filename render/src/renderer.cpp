@@ -287,8 +287,11 @@ struct Renderer::Impl {
     ProgramCache programs;
     std::unique_ptr<FullscreenTriangle> fullscreen;
 
-    // Mesh.
+    // Mesh: an OBJ, the plane or the torus in `mesh`; the sphere in `spheres`, one per tessellation
+    // drawn (sphereSegmentsForRadius of its size on screen), made when first needed.
     std::optional<GpuMesh> mesh;
+    std::map<int, GpuMesh> spheres;
+    int lastSphereSegments = 0;
     MeshKind meshKind = MeshKind::Sphere;
     std::filesystem::path meshPath;
     float meshRadius = 1.0f;
@@ -348,6 +351,7 @@ struct Renderer::Impl {
     double lastMs = 0.0;
 
     Status prepareMesh();
+    Result<const GpuMesh*> drawnMesh(int height);
     Status prepareBake();
     Status prepareFinest();
     Status uploadBake(const BakeKey& key, const CpuBake& cpu);
@@ -404,12 +408,19 @@ void Renderer::Impl::setFaceCulling() const {
 }
 
 Status Renderer::Impl::prepareMesh() {
+    if (scene.mesh == MeshKind::Sphere) {
+        // Drawn from `spheres` (drawnMesh); the unit sphere's bounds.
+        mesh.reset();
+        meshKind = MeshKind::Sphere;
+        meshPath.clear();
+        meshRadius = 1.0f;
+        return {};
+    }
     if (mesh && meshKind == scene.mesh && (scene.mesh != MeshKind::Obj || meshPath == scene.objPath))
         return {};
     MeshData data;
     switch (scene.mesh) {
     case MeshKind::Sphere:
-        data = makeSphere();
         break;
     case MeshKind::Plane:
         data = makePlane();
@@ -431,6 +442,27 @@ Status Renderer::Impl::prepareMesh() {
     meshPath = scene.objPath;
     meshRadius = std::max(glm::length(data.boundsMin), glm::length(data.boundsMax));
     return {};
+}
+
+// The mesh a frame `height` pixels tall draws: the sphere tessellated for its size on screen, or
+// the scene's other mesh.
+Result<const GpuMesh*> Renderer::Impl::drawnMesh(int height) {
+    if (meshKind != MeshKind::Sphere) {
+        if (!mesh) return Error{"no mesh to draw"};
+        lastSphereSegments = 0;
+        return &*mesh;
+    }
+    const OrbitCamera& camera = scene.camera;
+    const int segments = sphereSegmentsForRadius(
+        sphereScreenRadius(double(glm::length(camera.position())), double(camera.fovYRadians()), height));
+    auto found = spheres.find(segments);
+    if (found == spheres.end()) {
+        auto uploaded = GpuMesh::upload(makeSphere(segments, segments / 2));
+        if (!uploaded) return Error{"uploading the mesh: " + uploaded.error()};
+        found = spheres.emplace(segments, std::move(uploaded).value()).first;
+    }
+    lastSphereSegments = segments;
+    return &found->second;
 }
 
 Status Renderer::Impl::uploadBake(const BakeKey& key, const CpuBake& cpu) {
@@ -805,9 +837,11 @@ Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int w
     if (auto s = ensureTarget(hdr, width, height, true); !s) return s;
     beginMaterialPass(*hdr);
     if (withBackground) drawBackground(width, height, false);
+    auto drawn = drawnMesh(height);
+    if (!drawn) return Error{drawn.error()};
     p.use();
     setMaterialUniforms(p, f, width, height, jitterNdc, reference);
-    mesh->draw();
+    (*drawn)->draw();
     glDisable(GL_DEPTH_TEST);
     return {};
 }
@@ -873,13 +907,15 @@ Status Renderer::Impl::drawFused(const RenderTarget& target) {
     const int height = target.interactive ? std::max(1, (target.height + 1) / 2) : target.height;
     std::optional<Framebuffer>& out = target.interactive ? displayInteractive : display;
     if (auto s = ensureTarget(out, width, height, true, ColorFormat::Rgba8); !s) return s;
+    auto drawn = drawnMesh(height);
+    if (!drawn) return Error{drawn.error()};
     beginMaterialPass(*out);
     drawBackground(width, height, true);
     (*fused)->use();
     setMaterialUniforms(**fused, features, width, height, glm::vec2(0.0f), false);
     // tonemap.frag takes the linear scale 2^EV.
     (*fused)->set("uExposure", std::exp2(scene.exposure));
-    mesh->draw();
+    (*drawn)->draw();
     glDisable(GL_DEPTH_TEST);
     bindTarget(target); // binds it for reading too: read from the display target
     glBindFramebuffer(GL_READ_FRAMEBUFFER, out->id());
@@ -1144,6 +1180,10 @@ Status Renderer::renderReference(const RenderTarget& target, int samplesPerPixel
 
 double Renderer::lastFrameMs() const {
     return m_impl->lastMs;
+}
+
+int Renderer::lastSphereSegments() const {
+    return m_impl->lastSphereSegments;
 }
 
 const FeatureSet& Renderer::features() const {

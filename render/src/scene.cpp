@@ -30,9 +30,12 @@ glm::mat4 OrbitCamera::projection(float aspect, float sceneRadius) const {
     // plane seen at a grazing angle; far past the whole scene.
     const float zNear = std::max(d * 1e-3f, 1e-3f);
     const float zFar = d + 2.0f * r + 1.0f;
+    return glm::perspective(fovYRadians(), std::max(aspect, 1e-3f), zNear, zFar);
+}
+
+float OrbitCamera::fovYRadians() const {
     // 1°..170°: a valid perspective (tan finite and positive).
-    const float fov = glm::radians(std::clamp(fovDegrees, 1.0f, 170.0f));
-    return glm::perspective(fov, std::max(aspect, 1e-3f), zNear, zFar);
+    return glm::radians(std::clamp(fovDegrees, 1.0f, 170.0f));
 }
 
 Result<glm::vec3> calibratedSpecularColor(std::string_view name) {

@@ -9,12 +9,14 @@
 #include "temp_dir.h"
 
 #include <burnish/core/util/files.h>
+#include <burnish/core/util/numeric.h>
 
 #include <epoxy/gl.h>
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -111,6 +113,54 @@ TEST(Mesh, SphereIsAValidUnitSphere) {
         EXPECT_NEAR(sphere.boundsMax.y, 1.0f, kBoundsTolerance);
         EXPECT_NEAR(sphere.boundsMax.x, 1.0f, kBoundsTolerance);
     }
+}
+
+// The renderer's sphere is tessellated for its size on screen: the fewest segments (in steps of 16)
+// whose silhouette keeps within half a pixel of the circle, so no finer mesh costs shading for nothing.
+TEST(Mesh, SphereSegmentsFollowTheSilhouetteTolerance) {
+    const auto sagitta = [](double radius, int segments) {
+        return radius * (1.0 - std::cos(kPi<double> / double(segments)));
+    };
+    int previous = 0;
+    for (const double radius : {1.0, 10.0, 31.0, 100.0, 175.0, 349.7, 524.5, 1000.0, 4000.0}) {
+        SCOPED_TRACE("radius " + std::to_string(radius));
+        const int n = sphereSegmentsForRadius(radius);
+        EXPECT_EQ(n % 16, 0);
+        EXPECT_GE(n, kMinSphereSegments);
+        EXPECT_LE(n, kMaxSphereSegments);
+        EXPECT_GE(n, previous) << "a larger sphere never gets fewer segments";
+        previous = n;
+        if (n < kMaxSphereSegments) {
+            EXPECT_LE(sagitta(radius, n), kSphereSilhouetteTolerancePixels);
+        }
+        if (n > kMinSphereSegments) {
+            EXPECT_GT(sagitta(radius, n - 16), kSphereSilhouetteTolerancePixels) << "16 fewer would do";
+        }
+    }
+    // The benchmark's view (1280x720, distance 3, 40°: a 350-pixel radius) and its half-size frame.
+    EXPECT_EQ(sphereSegmentsForRadius(349.7), 64);
+    EXPECT_EQ(sphereSegmentsForRadius(174.9), 48);
+    // Degenerate radii: none or negative gets the fewest, NaN, infinite or absurd the most.
+    EXPECT_EQ(sphereSegmentsForRadius(0.0), kMinSphereSegments);
+    EXPECT_EQ(sphereSegmentsForRadius(-5.0), kMinSphereSegments);
+    EXPECT_EQ(sphereSegmentsForRadius(std::numeric_limits<double>::quiet_NaN()), kMaxSphereSegments);
+    EXPECT_EQ(sphereSegmentsForRadius(std::numeric_limits<double>::infinity()), kMaxSphereSegments);
+    EXPECT_EQ(sphereSegmentsForRadius(1e12), kMaxSphereSegments);
+}
+
+TEST(Mesh, SphereScreenRadiusIsTheSilhouetteConesProjection) {
+    // Distance 3, 40° vertical field of view, 720 pixels: tan(asin(1/3)) / tan(20°) · 360.
+    const double expected = (1.0 / std::sqrt(8.0)) / std::tan(kPi<double> / 9.0) * 360.0;
+    EXPECT_NEAR(sphereScreenRadius(3.0, 40.0 * kPi<double> / 180.0, 720), expected, 1e-9);
+    EXPECT_NEAR(expected, 349.7, 0.1);
+    // Twice the frame, twice the radius; farther, smaller.
+    EXPECT_NEAR(sphereScreenRadius(3.0, 0.7, 1440), 2.0 * sphereScreenRadius(3.0, 0.7, 720), 1e-9);
+    EXPECT_LT(sphereScreenRadius(6.0, 0.7, 720), sphereScreenRadius(3.0, 0.7, 720));
+    // The eye on or inside the sphere sees it fill everything; NaN distances too.
+    EXPECT_TRUE(std::isinf(sphereScreenRadius(1.0, 0.7, 720)));
+    EXPECT_TRUE(std::isinf(sphereScreenRadius(0.5, 0.7, 720)));
+    EXPECT_TRUE(std::isinf(sphereScreenRadius(std::numeric_limits<double>::quiet_NaN(), 0.7, 720)));
+    EXPECT_TRUE(std::isfinite(sphereScreenRadius(3.0, 0.0, 0)));
 }
 
 TEST(Mesh, SphereUvRepeatScalesUvs) {

@@ -5,10 +5,12 @@
 #include <burnish/core/shading/tonemap.h>
 #include <burnish/render/context.h>
 #include <burnish/render/gpu_resources.h>
+#include <burnish/render/mesh.h>
 #include <burnish/render/renderer.h>
 
 #include "renderer_fixture.h"
 
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -548,6 +550,45 @@ TEST_F(RendererTest, AnInteractiveFrameIsTheViewAtHalfSizeScaledUp) {
     target.interactive = false;
     ASSERT_TRUE(renderer().render(target).ok());
     EXPECT_EQ(fb->readRgbaFloat(), full);
+}
+
+// The sphere is drawn tessellated for its size on screen: coarser for a small or distant frame,
+// finer close up, the same for a frame and its supersampled reference; other meshes report 0.
+TEST_F(RendererTest, TheSphereIsTessellatedForItsSizeOnScreen) {
+    Scene scene = sampleScene();
+    scene.material.method = Method::Lean;
+    ASSERT_TRUE(renderer().setScene(scene).ok());
+    const auto expected = [&](const Scene& s, int height) {
+        return sphereSegmentsForRadius(sphereScreenRadius(double(glm::length(s.camera.position())),
+                                                          double(s.camera.fovYRadians()), height));
+    };
+    ASSERT_TRUE(renderer().renderToImage(kSize, kSize).ok());
+    EXPECT_EQ(renderer().lastSphereSegments(), expected(scene, kSize));
+    EXPECT_EQ(renderer().lastSphereSegments(), kMinSphereSegments);
+    auto big = renderer().renderToImage(256, 720);
+    ASSERT_TRUE(big.ok()) << big.error();
+    EXPECT_EQ(renderer().lastSphereSegments(), 64);
+    // Close up the silhouette needs more segments; a frame's reference draws the frame's sphere.
+    scene.camera.distance = 1.2f;
+    ASSERT_TRUE(renderer().setScene(scene).ok());
+    ASSERT_TRUE(renderer().renderToImage(256, 720).ok());
+    const int close = renderer().lastSphereSegments();
+    EXPECT_EQ(close, expected(scene, 720));
+    EXPECT_GT(close, 64);
+    ASSERT_TRUE(renderer().renderReference(256, 720, 2).ok());
+    EXPECT_EQ(renderer().lastSphereSegments(), close);
+    // Inside the sphere: the most, and the frame is still finite.
+    scene.camera.distance = 0.5f;
+    ASSERT_TRUE(renderer().setScene(scene).ok());
+    auto inside = renderer().renderToImage(kSize, kSize);
+    ASSERT_TRUE(inside.ok()) << inside.error();
+    EXPECT_EQ(renderer().lastSphereSegments(), kMaxSphereSegments);
+    for (float v : *inside)
+        ASSERT_TRUE(std::isfinite(v));
+    scene.mesh = MeshKind::Plane;
+    ASSERT_TRUE(renderer().setScene(scene).ok());
+    ASSERT_TRUE(renderer().renderToImage(kSize, kSize).ok());
+    EXPECT_EQ(renderer().lastSphereSegments(), 0);
 }
 
 TEST_F(RendererTest, BadInputsAreErrors) {

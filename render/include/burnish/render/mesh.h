@@ -32,6 +32,22 @@ struct MeshData {
 
 /// Unit-radius UV sphere; `uvRepeat` tiles the texture (u around, v pole to pole).
 MeshData makeSphere(int segments = 96, int rings = 48, float uvRepeat = 2.0f);
+
+/// Largest distance, in pixels, between the drawn sphere's silhouette and the true circle's.
+inline constexpr double kSphereSilhouetteTolerancePixels = 0.5;
+inline constexpr int kMinSphereSegments = 32;
+inline constexpr int kMaxSphereSegments = 256;
+/// Segments of the renderer's sphere (makeSphere's, rings half as many) when its silhouette is a
+/// circle `radiusPixels` in radius on screen: the fewest, in steps of 16, whose polygon keeps within
+/// kSphereSilhouetteTolerancePixels of the circle (its sagitta r(1 − cos(π/N))), at least
+/// kMinSphereSegments, at most kMaxSphereSegments (a non-finite radius gets the most). A finer sphere
+/// shows nothing more and costs shading: a rasteriser shades a triangle's edge blocks (llvmpipe's
+/// 4×4, a GPU's 2×2 quads) once for each triangle that crosses them.
+int sphereSegmentsForRadius(double radiusPixels);
+/// The screen radius, in pixels, of the unit sphere at the origin seen from `eyeDistance` with a
+/// vertical field of view of `fovYRadians` into a frame `heightPixels` tall: tan(asin(1/d)) /
+/// tan(fov/2) · height/2. Infinite with the eye on or inside the sphere.
+double sphereScreenRadius(double eyeDistance, double fovYRadians, int heightPixels);
 /// A square plane in XZ (y = 0, normal +y) of side `size`, UV tiled `uvRepeat` times: seen at a
 /// low angle it recedes into the distance and shows minification.
 MeshData makePlane(float size = 40.0f, float uvRepeat = 40.0f, int subdivisions = 1);

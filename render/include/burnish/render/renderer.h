@@ -96,6 +96,9 @@ public:
 
     /// Wall time of the last render()/renderToImage() draw, GPU work included (glFinish), in ms.
     double lastFrameMs() const;
+    /// Segments of the sphere the last frame drew (sphereSegmentsForRadius of its size on screen;
+    /// rings are half as many), 0 before any sphere was drawn or when the last mesh drawn was not it.
+    int lastSphereSegments() const;
     /// The current program's feature set and explain() text.
     const FeatureSet& features() const;
     std::string explainProgram();

@@ -38,6 +38,8 @@ struct OrbitCamera {
     /// Perspective projection for the aspect ratio; near and far planes bracket a scene of radius
     /// `sceneRadius` around the target.
     glm::mat4 projection(float aspect, float sceneRadius) const;
+    /// The vertical field of view the projection uses: fovDegrees within 1°..170°, in radians.
+    float fovYRadians() const;
 };
 
 struct DirectionalLight {

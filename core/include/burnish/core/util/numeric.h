@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 namespace burnish {
 
@@ -70,14 +71,27 @@ template <class D, class U = std::uint64_t> [[gnu::always_inline]] inline D log2
     const U bits = std::bit_cast<U>(x);
     // The biased exponent as a double, exactly: OR it into 2^52's mantissa and subtract 2^52.
     const D biased = std::bit_cast<D>((bits >> 52) | 0x4330000000000000ull) - 0x1p52;
-    D m = std::bit_cast<D>((bits & 0x000fffffffffffffull) | 0x3ff0000000000000ull); // [1, 2)
-    const auto high = m > 1.4142135623730951;
-    m = high ? 0.5 * m : m;
-    const D e = (high ? biased + 1.0 : biased) - 1023.0;
+    const U mBits = (bits & 0x000fffffffffffffull) | 0x3ff0000000000000ull; // m in [1, 2)
+    // m >= √2 is halved and the exponent raised by one, with masks rather than selects: GCC's
+    // if-conversion gave up on the selects and left evaluate's loops over this unvectorised. Halving
+    // m in [1, 2) is one off its exponent field, and e + 0.0 is e: the same bits as the selects.
+    U high;
+    if constexpr (std::is_same_v<U, std::uint64_t>)
+        high = U(0) - U(std::bit_cast<D>(mBits) > 1.4142135623730951);
+    else
+        high = (U)(std::bit_cast<D>(mBits) > 1.4142135623730951); // lanes of all ones or zeros
+    const D m = std::bit_cast<D>(mBits - (high & 0x0010000000000000ull));
+    const D e = (biased + std::bit_cast<D>(high & 0x3ff0000000000000ull)) - 1023.0;
     const D s = (m - 1.0) / (m + 1.0), s2 = s * s;
+    // Horner from 1/15 down to 1, written out.
     D series = D{} + 1.0 / 15;
-    for (const double c : {1.0 / 13, 1.0 / 11, 1.0 / 9, 1.0 / 7, 1.0 / 5, 1.0 / 3, 1.0})
-        series = c + s2 * series;
+    series = 1.0 / 13 + s2 * series;
+    series = 1.0 / 11 + s2 * series;
+    series = 1.0 / 9 + s2 * series;
+    series = 1.0 / 7 + s2 * series;
+    series = 1.0 / 5 + s2 * series;
+    series = 1.0 / 3 + s2 * series;
+    series = 1.0 + s2 * series;
     return e + (2.0 / kLn2<double>)*s * series;
 }
 

@@ -420,7 +420,7 @@ Status Renderer::Impl::prepareMesh() {
         return {};
     MeshData data;
     switch (scene.mesh) {
-    case MeshKind::Sphere:
+    case MeshKind::Sphere: // returned above: drawnMesh makes it for each frame's size
         break;
     case MeshKind::Plane:
         data = makePlane();

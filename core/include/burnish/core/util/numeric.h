@@ -83,7 +83,8 @@ template <class D, class U = std::uint64_t> [[gnu::always_inline]] inline D log2
     const D m = std::bit_cast<D>(mBits - (high & 0x0010000000000000ull));
     const D e = (biased + std::bit_cast<D>(high & 0x3ff0000000000000ull)) - 1023.0;
     const D s = (m - 1.0) / (m + 1.0), s2 = s * s;
-    // Horner from 1/15 down to 1, written out.
+    // Horner from 1/15 down to 1, written out as expNonPositive's: a loop over the coefficients here
+    // also kept the loops around log2Positive from vectorising (seen with objdump).
     D series = D{} + 1.0 / 15;
     series = 1.0 / 13 + s2 * series;
     series = 1.0 / 11 + s2 * series;

@@ -310,6 +310,78 @@ TEST(LobeMixture, ReductionIsTheReferenceGreedyMergeBitForBit) {
     EXPECT_EQ(cases, 2400);
 }
 
+// Four finest lobes of one power (a level-1 footprint), which the reduction decides in closed form
+// (the closest pair merges) where it can, are still the reference's lobes bit for bit: powers 1 to
+// 10^6, normals off an 8-bit grid (ties and near ties among the distances), steep normals at the
+// slope limit, equal normals, near-equal ones, exact ties, and patterns at the correlation clamp. It also
+// counts the footprints inside the closed form's domain (a clear closest pair, u >= 1e-3), so the sample
+// cannot drift to fallbacks only.
+TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    const double powers[] = {1.0, 8.0, 64.0, 256.0, 1024.0, 16384.0, 1e6};
+    auto code8 = [](float v) {
+        return float(std::lround((v * 0.5f + 0.5f) * 255.0f)) / 255.0f * 2.0f - 1.0f;
+    };
+    int cases = 0, distinctPairs = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        const double s = powers[size_t(trial) % std::size(powers)];
+        const int kind = (trial / int(std::size(powers))) % 6;
+        const double spread = kind == 0 ? 0.02 : kind == 1 ? 0.3 : 1.0;
+        std::array<glm::vec3, 4> normals;
+        const glm::dvec2 centre(0.3 * gauss(rng), 0.3 * gauss(rng));
+        for (size_t i = 0; i < 4; ++i) {
+            glm::dvec2 b = centre + spread * glm::dvec2(gauss(rng), gauss(rng));
+            if (kind == 3 && i == 3)
+                b = glm::dvec2(80.0 * (unit(rng) - 0.5), 80.0 * (unit(rng) - 0.5)); // steep
+            glm::vec3 n = glm::normalize(glm::vec3(float(b.x), float(b.y), 1.0f));
+            if (kind == 2 || kind == 4) n = glm::vec3(code8(n.x), code8(n.y), code8(n.z)); // 8-bit
+            if (kind == 4 && i == 2) n = normals[1];                                       // equal
+            if (kind == 5 && i % 2 == 1) // near-equal pairs: the same normal one float ulp apart
+                n = glm::vec3(std::nextafter(normals[i - 1].x, 2.0f), normals[i - 1].y, normals[i - 1].z);
+            normals[i] = n;
+        }
+        if (trial % 3 == 0) {
+            // Exact ties: two pairs at equal distances along different axes (a Pythagorean triple in
+            // dyadic slopes, n.z = 1 so the slopes are exact), computed through different roundings.
+            const std::array<glm::ivec3, 4> triples{{{3, 4, 5}, {5, 12, 13}, {8, 15, 17}, {7, 24, 25}}};
+            const glm::ivec3 t = triples[size_t(trial / 3) % triples.size()];
+            const float scale = std::ldexp(1.0f, -4 - (trial / 12) % 6), ox = float(trial % 7) / 8,
+                        oy = -0.25f;
+            normals = {glm::vec3(ox, oy, 1), glm::vec3(ox + scale * float(t.z), oy, 1),
+                       glm::vec3(ox + scale * float(t.x), oy + scale * float(t.y), 1),
+                       glm::vec3(ox - scale * float(t.y), oy - scale * float(t.x) * 3, 1)};
+            if (trial % 2) std::swap(normals[1], normals[2]);
+        }
+        if (trial % 50 == 0) // a diagonal pair far apart: the merged correlation at its clamp
+            normals = {glm::vec3(0, 0, 1), glm::normalize(glm::vec3(30, 30, 1)),
+                       glm::normalize(glm::vec3(-30, 31, 1)), glm::normalize(glm::vec3(31, -30, 1))};
+        std::vector<LobeMoments> lobes;
+        for (const glm::vec3& n : normals)
+            lobes.push_back(LobeMoments::ofNormal(n, s));
+        const double minVariance = 1.0 / s;
+        for (int k = 1; k <= kMaxMixtureLobes; ++k) {
+            const LobeMixture got = reduceLobes(lobes, k, minVariance);
+            const LobeMixture want = referenceReduction(lobes, k, minVariance);
+            ASSERT_EQ(got.count, want.count) << "trial " << trial << ", s " << s << ", k " << k;
+            ASSERT_EQ(std::memcmp(got.lobes.data(), want.lobes.data(), sizeof(got.lobes)), 0)
+                << "trial " << trial << ", s " << s << ", k " << k;
+            ++cases;
+        }
+        std::array<double, 6> d{};
+        size_t p = 0;
+        for (size_t i = 0; i < 4; ++i)
+            for (size_t j = i + 1; j < 4; ++j)
+                d[p++] =
+                    glm::distance(glm::dvec2(lobes[i].bx, lobes[i].by), glm::dvec2(lobes[j].bx, lobes[j].by));
+        std::sort(d.begin(), d.end());
+        distinctPairs += d[0] * d[0] * s / 4 >= 1e-3 && d[1] > d[0] * (1 + 1e-9);
+    }
+    EXPECT_EQ(cases, 16000);
+    EXPECT_GT(distinctPairs, 1500); // footprints whose closest pair the closed form can decide
+}
+
 TEST(LobeMixture, NdfKeepsItsEnergy) {
     // ∫ D(h) h_z dω_h = 1 for each lobe (the slope Gaussian's normalization), so for the mixture.
     const double t = std::tan(0.25);

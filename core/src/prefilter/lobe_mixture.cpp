@@ -15,8 +15,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <type_traits>
 
 namespace burnish {
@@ -91,12 +93,14 @@ public:
         const int n = std::min(int(count), kMaxMixtureLobes);
         if (n == 0) return;
         std::array<std::array<double, kMaxMixtureLobes>, kMaxMixtureLobes> score{};
-        for (int c = 0; c < n; ++c)
+        for (int c = 0; c < n; ++c) {
+            const glm::dvec2 mean = lobes[size_t(c)].mean();
             for (int slot = 0; slot < slots; ++slot)
                 score[size_t(c)][size_t(slot)] =
                     slot < m_count && m_lobes[size_t(slot)].offset > -std::numeric_limits<double>::infinity()
-                        ? scoreOf(slot, lobes[size_t(c)].mean())
+                        ? scoreOf(slot, mean)
                         : kEmptySlotScore;
+        }
         // Every injective map of the n child lobes into the slots (at most 4·3·2·1), in lexicographic
         // order, each total summed child by child: the first of the largest.
         InjectiveMap best{};
@@ -319,28 +323,139 @@ double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance)
 
 namespace {
 
+// The pairs (i, j), i < j, of n lobes packed row by row: (i, j) at rowStart[i] + j − i − 1, so a
+// scan meets them in the order of the full matrix's rows; index[i·n + j] is the position of
+// (min(i, j), max(i, j)) (i ≠ j) and pair[p] the pair at position p. Built once per n and thread: a
+// merge's bookkeeping reads positions instead of computing them.
+struct PairLayout {
+    std::vector<size_t> rowStart;
+    std::vector<std::uint32_t> index;
+    std::vector<std::array<std::uint32_t, 2>> pair;
+};
+
+const PairLayout& pairLayout(size_t n) {
+    thread_local std::vector<std::unique_ptr<PairLayout>> layouts;
+    if (layouts.size() <= n) layouts.resize(n + 1);
+    std::unique_ptr<PairLayout>& layout = layouts[n];
+    if (!layout) {
+        layout = std::make_unique<PairLayout>();
+        layout->rowStart.resize(n + 1);
+        for (size_t i = 0; i <= n; ++i)
+            layout->rowStart[i] = i * n - i * (i + 1) / 2;
+        layout->index.assign(n * n, 0);
+        layout->pair.resize(layout->rowStart[n]);
+        for (size_t i = 0; i < n; ++i)
+            for (size_t j = i + 1; j < n; ++j) {
+                const size_t p = layout->rowStart[i] + j - i - 1;
+                layout->index[i * n + j] = layout->index[j * n + i] = std::uint32_t(p);
+                layout->pair[p] = {std::uint32_t(i), std::uint32_t(j)};
+            }
+    }
+    return *layout;
+}
+
 // The index of the first of the smallest of c[0..count) (count a multiple of 4; finite or +∞
 // values, no NaN), with that value in `best`: what a scan that keeps a value only when it is
 // strictly below the best so far picks, without its branch per value (a reduction of 12 lobes scans
-// 66 pairs nine times, and the branch on each mispredicted). The minimum four at a time, then its
-// first occurrence.
+// 66 pairs nine times, and the branch on each mispredicted). Each lane keeps its smallest value and
+// where it first met it (a strictly smaller value replaces both), in one pass; of the lanes' minima
+// the smallest wins, ties to the earlier index: the first occurrence of the minimum.
 [[gnu::always_inline]] inline size_t firstCheapest(const double* c, size_t count, double& best) {
     simd::Double4 m;
     std::memcpy(&m, c, sizeof m);
+    simd::Int64x4 at{0, 1, 2, 3}, first = at;
     for (size_t i = 4; i < count; i += 4) {
         simd::Double4 v;
         std::memcpy(&v, c + i, sizeof v);
-        m = v < m ? v : m;
+        at += 4;
+        const simd::Int64x4 lower = v < m;
+        m = lower ? v : m;
+        first = lower ? at : first;
     }
-    const double m01 = m[1] < m[0] ? m[1] : m[0], m23 = m[3] < m[2] ? m[3] : m[2];
-    best = m23 < m01 ? m23 : m01;
-    for (size_t i = 0; i < count; i += 4) {
-        simd::Double4 v;
-        std::memcpy(&v, c + i, sizeof v);
-        const simd::Int64x4 hit = v == best;
-        if (hit[0] | hit[1] | hit[2] | hit[3]) return i + (hit[0] ? 0 : hit[1] ? 1 : hit[2] ? 2 : 3);
+    best = m[0];
+    std::int64_t index = first[0];
+    for (int lane = 1; lane < 4; ++lane)
+        if (m[lane] < best || (m[lane] == best && first[lane] < index)) best = m[lane], index = first[lane];
+    return size_t(index);
+}
+
+// Whether l is LobeMoments::ofNormal's lobe of a finest normal whose base power has 1/s = invS: weight
+// 1 and raw moments bbᵀ + I/s, computed as ofNormal computes them (so the test is exact).
+[[gnu::always_inline]] inline bool isFinestLobe(const LobeMoments& l, double invS) {
+    return l.w == 1.0 && l.mxx == l.bx * l.bx + invS && l.myy == l.by * l.by + invS && l.mxy == l.bx * l.by;
+}
+
+// reduceLobesInPlace's result for four finest lobes of one power (isFinestLobe with invS the floor
+// minVariance) and k >= 3, found without a logarithm; false (out untouched) where this cannot promise
+// the general path's choice bit for bit. Level 1 of a power-of-two map is millions of these.
+// Two finest lobes differ only in their means, so merging lobes i and j costs exactly log(1 + u_ij),
+// u_ij = |b_i − b_j|²·s/4 (det(Σ + ddᵀ/4) = det Σ·(1 + dᵀΣ⁻¹d/4) for Σ = I/s): the cheapest pair is the
+// closest. It declines when
+//  - the closest pair's computed cost could round above the next pair's: the gap between them is
+//    within 4δ, δ bounding a computed cost's error (log2Positive's 2e-14, and the raw moments'
+//    cancellation, |b|²·s ulps of a variance);
+//  - the closest pair's merged correlation reaches covariance's clamp, which raises its cost;
+//  - a pair is close enough (u < 1e-3) that a merge after the first could cost nothing
+//    (kNegligibleMergeCost), or δ is not small. Otherwise none can: a pair of the other two costs at
+//    least log(1 + u1), and the merged lobe with another at least f(u1) = ½[3 log(1 + 2u1/3) −
+//    2 log(1 + u1)] (the cost of its covariance alone; means apart cost more), f increasing from
+//    f(1e-3) = 1.67e-7: both above kNegligibleMergeCost·4 (the total weight) + 2δ for δ < 5e-8.
+// Then the closest pair merges into the lower index, as the general path merges it, and the lobes
+// take the canonical order.
+bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double invS, LobeMixture& out) {
+    if (k < 3) return false;
+    double bmax2 = 0.0;
+    for (const LobeMoments& l : lobes) {
+        if (!isFinestLobe(l, invS)) return false;
+        bmax2 = std::max(bmax2, l.bx * l.bx + l.by * l.by);
     }
-    return 0;
+    constexpr std::array<std::array<unsigned char, 2>, 6> kPairs{
+        {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
+    const double toU = 0.25 / invS;
+    double u1 = std::numeric_limits<double>::infinity(), u2 = u1;
+    size_t closest = 0;
+    for (size_t p = 0; p < kPairs.size(); ++p) {
+        const LobeMoments &a = lobes[kPairs[p][0]], &b = lobes[kPairs[p][1]];
+        const double dx = a.bx - b.bx, dy = a.by - b.by, u = (dx * dx + dy * dy) * toU;
+        if (u < u1)
+            u2 = u1, u1 = u, closest = p;
+        else if (u < u2)
+            u2 = u;
+    }
+    const double delta = 1e-13 * (1.0 + bmax2 / invS);
+    if (!(u1 >= 1e-3) || !(delta < 5e-8) || !std::isfinite(u2)) return false;
+    size_t n = 4;
+    if (k == 3) {
+        // The gap log(1 + u2) − log(1 + u1) >= (u2 − u1)/(1 + u2).
+        if (!((u2 - u1) / (1.0 + u2) > 4.0 * delta)) return false;
+        const size_t i = kPairs[closest][0], j = kPairs[closest][1];
+        const double dx = lobes[i].bx - lobes[j].bx, dy = lobes[i].by - lobes[j].by;
+        const double xx = invS + 0.25 * dx * dx, yy = invS + 0.25 * dy * dy, xy = 0.25 * dx * dy;
+        if (!(xy * xy < 0.998 * xx * yy)) return false; // the clamp is at 0.999² = 0.998001
+        lobes[i] += lobes[j];
+        std::copy(lobes.begin() + std::ptrdiff_t(j) + 1, lobes.end(), lobes.begin() + std::ptrdiff_t(j));
+        n = 3;
+    }
+    // Canonical order by a stable insertion sort on each lobe's mean computed once: canonicalLess is a
+    // strict weak order, so this is the order std::sort gives these few lobes (its insertion sort, also
+    // stable), with 2n divisions instead of 4 per comparison.
+    std::array<glm::dvec2, 4> mean;
+    for (size_t i = 0; i < n; ++i)
+        mean[i] = lobes[i].mean();
+    const auto less = [&](size_t a, size_t b) {
+        if (mean[a].x != mean[b].x) return mean[a].x < mean[b].x;
+        if (mean[a].y != mean[b].y) return mean[a].y < mean[b].y;
+        return lobes[a].w > lobes[b].w;
+    };
+    std::array<size_t, 4> order{0, 1, 2, 3};
+    for (size_t i = 1; i < n; ++i)
+        for (size_t j = i; j > 0 && less(order[j], order[j - 1]); --j)
+            std::swap(order[j], order[j - 1]);
+    out = LobeMixture{};
+    out.count = int(n);
+    for (size_t i = 0; i < n; ++i)
+        out.lobes[i] = lobes[order[i]];
+    return true;
 }
 
 // reduceLobes on the caller's vector (changed), with the pair costs in per-thread buffers: no
@@ -349,6 +464,9 @@ namespace {
 BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lobes, int k,
                                                    double minVariance) {
     k = std::clamp(k, 1, kMaxMixtureLobes);
+    if (LobeMixture fast;
+        lobes.size() == 4 && reduceFourFinest({lobes[0], lobes[1], lobes[2], lobes[3]}, k, minVariance, fast))
+        return fast;
     std::erase_if(lobes, [](const LobeMoments& l) { return !(l.w > 0.0); });
     double total = 0.0;
     for (const auto& l : lobes)
@@ -392,43 +510,34 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
         // first cheapest pair needs no test of which lobes remain.
         constexpr double kGone = std::numeric_limits<double>::infinity();
         thread_local std::vector<double> cost;
-        thread_local std::vector<size_t> rowStart;
         thread_local std::vector<char> alive;
         columns.assign(lobes, minVariance);
         row.resize(columns.w.size());
-        // The pairs (i, j), i < j, packed row by row: (i, j) at rowStart[i] + j − i − 1, so the scan
-        // meets them in the order of the full matrix's rows. The padding to whole Double4s is +∞,
-        // never the cheapest.
-        rowStart.resize(n + 1);
-        for (size_t i = 0; i <= n; ++i)
-            rowStart[i] = i * n - i * (i + 1) / 2;
-        const auto at = [&](size_t i, size_t j) { return rowStart[i] + j - i - 1; };
-        cost.assign((rowStart[n] + 3) / 4 * 4, kGone);
+        const PairLayout& layout = pairLayout(n);
+        cost.assign((layout.rowStart[n] + 3) / 4 * 4, kGone);
         alive.assign(n, 1);
         for (size_t i = 0; i + 1 < n; ++i) {
             columns.costsWith(i, i + 1, n - i - 1, false, minVariance, row);
             std::copy(row.begin() + std::ptrdiff_t(i + 1), row.begin() + std::ptrdiff_t(n),
-                      cost.begin() + std::ptrdiff_t(rowStart[i]));
+                      cost.begin() + std::ptrdiff_t(layout.rowStart[i]));
         }
         for (size_t remaining = n; remaining > 1; --remaining) {
             double best = kGone;
             const size_t first = firstCheapest(cost.data(), cost.size(), best);
             size_t bi = 0, bj = 0;
-            if (best < kGone) {
-                while (rowStart[bi + 1] <= first)
-                    ++bi;
-                bj = first - rowStart[bi] + bi + 1;
-            }
+            if (best < kGone) bi = layout.pair[first][0], bj = layout.pair[first][1];
             if (remaining <= size_t(k) && !(best <= kNegligibleMergeCost * total)) break;
             lobes[bi] += lobes[bj];
             columns.update(bi, lobes[bi], minVariance);
             alive[bj] = 0;
+            const std::uint32_t* gone = &layout.index[bj * n];
             for (size_t o = 0; o < n; ++o)
-                if (o != bj) cost[at(std::min(o, bj), std::max(o, bj))] = kGone;
+                if (o != bj) cost[gone[o]] = kGone;
             columns.costsWith(bi, 0, n, true, minVariance, row);
+            const std::uint32_t* merged = &layout.index[bi * n];
             for (size_t o = 0; o < n; ++o) {
                 if (!alive[o] || o == bi) continue;
-                cost[at(std::min(o, bi), std::max(o, bi))] = row[o];
+                cost[merged[o]] = row[o];
             }
         }
         size_t out = 0;
@@ -477,7 +586,26 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         const Level* child = level > 1 ? &out.m_levels.back() : nullptr;
         tbb::parallel_for(0, l.height, [&](int y) {
             std::vector<LobeMoments> lobes;
+            const int y0 = l.yChild[size_t(y)];
+            const bool rows2 = l.yChild[size_t(y) + 1] - y0 == 2;
             for (int x = 0; x < l.width; ++x) {
+                // Level 1's 2×2 footprints of one power, most of the build's texels: straight to the
+                // closed form, which decides nearly all of them (reduceFourFinest).
+                if (const int x0 = l.xChild[size_t(x)];
+                    !child && !texelPowers && rows2 && l.xChild[size_t(x) + 1] - x0 == 2) {
+                    const std::array<LobeMoments, 4> four{
+                        LobeMoments::ofNormal(finest.at(x0, y0), s),
+                        LobeMoments::ofNormal(finest.at(x0 + 1, y0), s),
+                        LobeMoments::ofNormal(finest.at(x0, y0 + 1), s),
+                        LobeMoments::ofNormal(finest.at(x0 + 1, y0 + 1), s)};
+                    LobeMixture m;
+                    if (!reduceFourFinest(four, out.m_k, out.m_minVariance, m)) {
+                        lobes.assign(four.begin(), four.end());
+                        m = reduceLobesInPlace(lobes, out.m_k, out.m_minVariance);
+                    }
+                    built.set(size_t(y) * size_t(l.width) + size_t(x), out.m_k, m);
+                    continue;
+                }
                 lobes.clear();
                 for (int j = l.yChild[size_t(y)]; j < l.yChild[size_t(y) + 1]; ++j)
                     for (int i = l.xChild[size_t(x)]; i < l.xChild[size_t(x) + 1]; ++i) {

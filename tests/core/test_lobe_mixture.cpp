@@ -220,7 +220,7 @@ TEST(LobeMixture, SameBitsOnOneThreadAndOnAll) {
 }
 
 // The reduction as its header states it, one mergeCost call per pair per step (no cost matrix, no
-// four-at-a-time costs): first every lobe under kMinLobeShare, the lightest first, gives its weight to
+// four-at-a-time costs): first every lobe under minLobeShare(k), the lightest first, gives its weight to
 // its cheapest partner (its mean and covariance kept); then the cheapest pair merges until k remain,
 // and then while a pair costs nothing; ties to the lower indices; canonical order.
 LobeMixture referenceReduction(std::vector<LobeMoments> lobes, int k, double minVariance) {
@@ -231,7 +231,8 @@ LobeMixture referenceReduction(std::vector<LobeMoments> lobes, int k, double min
     while (k > 1 && lobes.size() > 1) {
         size_t light = lobes.size();
         for (size_t i = 0; i < lobes.size(); ++i)
-            if (lobes[i].w < kMinLobeShare * total && (light == lobes.size() || lobes[i].w < lobes[light].w))
+            if (lobes[i].w < minLobeShare(k) * total &&
+                (light == lobes.size() || lobes[i].w < lobes[light].w))
                 light = i;
         if (light == lobes.size()) break;
         size_t partner = light == 0 ? 1 : 0;

@@ -278,6 +278,13 @@ struct LobeColumns {
                                        minVariance));
         }
     }
+    /// Lobe i of `count` removed: the lobes after it move down one place. The last place keeps its
+    /// old, finite values, which only lanes nobody reads compute with.
+    [[gnu::always_inline]] void erase(size_t i, size_t count) {
+        for (auto* c : {&w, &bx, &by, &mxx, &myy, &mxy, &wl})
+            std::copy(c->begin() + std::ptrdiff_t(i) + 1, c->begin() + std::ptrdiff_t(count),
+                      c->begin() + std::ptrdiff_t(i));
+    }
     /// Lobe i changed (a merge or an absorption): its columns and w·log det Σ.
     [[gnu::always_inline]] void update(size_t i, const LobeMoments& l, double minVariance) {
         set(i, l);
@@ -400,8 +407,8 @@ const PairLayout& pairLayout(size_t n) {
 //    least log(1 + u1), and the merged lobe with another at least f(u1) = ½[3 log(1 + 2u1/3) −
 //    2 log(1 + u1)] (the cost of its covariance alone; means apart cost more), f increasing from
 //    f(1e-3) = 1.67e-7: both above kNegligibleMergeCost·4 (the total weight) + 2δ for δ < 5e-8.
-// Then the closest pair merges into the lower index, as the general path merges it, and the lobes
-// take the canonical order.
+// No lobe is light (each holds 1/4, above every minLobeShare). Then the closest pair merges into the
+// lower index, as the general path merges it, and the lobes take the canonical order.
 bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double invS, LobeMixture& out) {
     if (k < 3) return false;
     double bmax2 = 0.0;
@@ -478,14 +485,19 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
     // whose mean and covariance stay as they are. A few steep outlier normals then keep their energy
     // without dragging a lobe's moments (a slope of 100 at 1/256 of a footprint would add 39 to a merged
     // variance).
+    bool absorbing = false; // the columns hold the lobes (assigned once, then kept in step)
+    const double share = minLobeShare(k);
     while (k > 1 && lobes.size() > 1) {
         size_t light = lobes.size();
         for (size_t i = 0; i < lobes.size(); ++i)
-            if (lobes[i].w < kMinLobeShare * total && (light == lobes.size() || lobes[i].w < lobes[light].w))
+            if (lobes[i].w < share * total && (light == lobes.size() || lobes[i].w < lobes[light].w))
                 light = i;
         if (light == lobes.size()) break;
-        columns.assign(lobes, minVariance);
-        row.resize(columns.w.size());
+        if (!absorbing) {
+            columns.assign(lobes, minVariance);
+            row.resize(columns.w.size());
+            absorbing = true;
+        }
         columns.costsWith(light, 0, lobes.size(), false, minVariance, row);
         size_t partnerIndex = light == 0 ? 1 : 0;
         double bestCost = std::numeric_limits<double>::infinity();
@@ -499,6 +511,8 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
         partner.mxx *= scale;
         partner.myy *= scale;
         partner.mxy *= scale;
+        columns.update(partnerIndex, partner, minVariance);
+        columns.erase(light, lobes.size());
         lobes.erase(lobes.begin() + std::ptrdiff_t(light));
     }
     // The cheapest pair until k remain, and then while a pair costs nothing (equal lobes: a flat

@@ -361,7 +361,7 @@ TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
         std::vector<LobeMoments> lobes;
         for (const glm::vec3& n : normals)
             lobes.push_back(LobeMoments::ofNormal(n, s));
-        const double minVariance = 1.0 / s;
+        const double minVariance = slopeInverseBasePower(s); // the fit's floor: each lobe's 1/s
         for (int k = 1; k <= kMaxMixtureLobes; ++k) {
             const LobeMixture got = reduceLobes(lobes, k, minVariance);
             const LobeMixture want = referenceReduction(lobes, k, minVariance);

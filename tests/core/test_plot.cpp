@@ -177,6 +177,51 @@ TEST_F(PlotTest, BadSeriesAndSizesAreErrors) {
     EXPECT_FALSE(renderPlot(spec).ok());
 }
 
+// Two points at the same place (LEAN and the mixture's K = 1 are the same lobe, so evaluate's error
+// against cost plot puts them on one spot) get both labels readable: the second moves below the first
+// instead of printing over it. The rows the labels ink number about the two labels' own rows added up;
+// printed over each other they would number those of the taller one.
+TEST_F(PlotTest, LabelsOfCoincidentPointsDoNotOverlap) {
+    auto specWith = [](const std::string& first, const std::string& second) {
+        PlotSpec spec;
+        spec.title = "Error against cost";
+        spec.x = {"cost", AxisScale::Log, {}, {}};
+        spec.y = {"error", AxisScale::Log, {}, {}};
+        for (size_t i = 0; i < 2; ++i) {
+            PlotSeries s;
+            s.name = i == 0 ? "a" : "b";
+            s.x = {1.0, 2.0, 4.0};
+            s.y = {0.5, 0.2, 0.05};
+            s.marker = MarkerShape::None;
+            s.pointLabels = {"", i == 0 ? first : second, ""};
+            spec.series.push_back(s);
+        }
+        spec.width = 640;
+        spec.height = 420;
+        return spec;
+    };
+    auto plain = renderPlot(specWith("", ""));
+    ASSERT_TRUE(plain.ok()) << plain.error();
+    // The rows where a plot differs from the unlabelled one: the rows its labels ink.
+    auto labelRows = [&](const std::string& first, const std::string& second) {
+        auto plot = renderPlot(specWith(first, second));
+        EXPECT_TRUE(plot.ok()) << plot.error();
+        int rows = 0;
+        for (int y = 0; y < plot->height; ++y) {
+            bool inked = false;
+            for (int x = 0; x < plot->width && !inked; ++x)
+                for (int c = 0; c < 3; ++c)
+                    inked = inked || plot->pixel(x, y)[c] != plain->pixel(x, y)[c];
+            rows += inked;
+        }
+        return rows;
+    };
+    const int lean = labelRows("lean", ""), mixture = labelRows("", "mixture-k1");
+    ASSERT_GT(lean, 5);
+    ASSERT_GT(mixture, 5);
+    EXPECT_GE(labelRows("lean", "mixture-k1"), lean + mixture - 1);
+}
+
 TEST_F(PlotTest, UnplaceablePointsAreSkippedNotFatal) {
     PlotSpec spec = sampleSpec();
     // Zero, negative, NaN and Inf cannot sit on a log axis; the rest of the plot still renders.

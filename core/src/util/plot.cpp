@@ -323,12 +323,32 @@ Result<PlotImage> renderPlot(const PlotSpec& spec) {
             if (ax.placeable(s.x[i]) && ay.placeable(s.y[i]))
                 drawMarker(img, ax.toPixel(s.x[i]), ay.toPixel(s.y[i]), s.marker, s.markerSize, s.color,
                            plotRoi);
+    // Point labels never overlap: one whose box would meet a label already drawn moves down a line,
+    // so coincident points (LEAN and the mixture's K = 1, which are the same lobe) list their labels
+    // one under the other instead of printing them over each other.
+    std::vector<TextBox> drawnLabels;
+    const int labelSize = fs - 4, lineStep = labelSize + 2;
     for (const auto& s : spec.series)
         for (size_t i = 0; i < s.pointLabels.size(); ++i) {
-            if (!ax.placeable(s.x[i]) || !ay.placeable(s.y[i])) continue;
+            if (!ax.placeable(s.x[i]) || !ay.placeable(s.y[i]) || s.pointLabels[i].empty()) continue;
             const int px = static_cast<int>(std::lround(ax.toPixel(s.x[i]))) + s.markerSize / 2 + 3;
-            const int py = static_cast<int>(std::lround(ay.toPixel(s.y[i]))) - s.markerSize / 2 - 1;
-            drawText(img, font, px, py, s.pointLabels[i], fs - 4, kBlack, AlignX::Left, AlignY::Baseline);
+            int py = static_cast<int>(std::lround(ay.toPixel(s.y[i]))) - s.markerSize / 2 - 1;
+            const TextBox extent = font.measure(s.pointLabels[i], labelSize); // about the origin
+            auto boxAt = [&](int y) {
+                return TextBox{px + extent.x0, px + extent.x1, y + extent.y0, y + extent.y1};
+            };
+            auto meets = [](const TextBox& a, const TextBox& b) { // with a pixel of air between them
+                return a.x0 <= b.x1 && b.x0 <= a.x1 && a.y0 <= b.y1 && b.y0 <= a.y1;
+            };
+            for (int tries = 0; tries < 16; ++tries) {
+                const TextBox box = boxAt(py);
+                if (std::none_of(drawnLabels.begin(), drawnLabels.end(),
+                                 [&](const TextBox& d) { return meets(box, d); }))
+                    break;
+                py += lineStep;
+            }
+            drawnLabels.push_back(boxAt(py));
+            drawText(img, font, px, py, s.pointLabels[i], labelSize, kBlack, AlignX::Left, AlignY::Baseline);
         }
 
     // Title, axis labels (the y label rotated to read bottom to top), legend.

@@ -314,9 +314,9 @@ TEST(LobeMixture, ReductionIsTheReferenceGreedyMergeBitForBit) {
 // Four finest lobes of one power (a level-1 footprint), which the reduction decides in closed form
 // (the closest pair merges) where it can, are still the reference's lobes bit for bit: powers 1 to
 // 10^6, normals off an 8-bit grid (ties and near ties among the distances), steep normals at the
-// slope limit, equal normals, near-equal ones, exact ties, and patterns at the correlation clamp. It also
-// counts the footprints inside the closed form's domain (a clear closest pair, u >= 1e-3), so the sample
-// cannot drift to fallbacks only.
+// slope limit, equal normals (two, or all four), near-equal ones, exact ties, and patterns at the
+// correlation clamp. It also counts the footprints inside the closed form's domain (a clear closest pair, u
+// >= 1e-3), so the sample cannot drift to fallbacks only.
 TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -328,7 +328,7 @@ TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
     int cases = 0, distinctPairs = 0;
     for (int trial = 0; trial < 4000; ++trial) {
         const double s = powers[size_t(trial) % std::size(powers)];
-        const int kind = (trial / int(std::size(powers))) % 6;
+        const int kind = (trial / int(std::size(powers))) % 7;
         const double spread = kind == 0 ? 0.02 : kind == 1 ? 0.3 : 1.0;
         std::array<glm::vec3, 4> normals;
         const glm::dvec2 centre(0.3 * gauss(rng), 0.3 * gauss(rng));
@@ -341,6 +341,11 @@ TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
             if (kind == 4 && i == 2) n = normals[1];                                       // equal
             if (kind == 5 && i % 2 == 1) // near-equal pairs: the same normal one float ulp apart
                 n = glm::vec3(std::nextafter(normals[i - 1].x, 2.0f), normals[i - 1].y, normals[i - 1].z);
+            if (kind == 6 && i == 0 &&
+                trial % 2) // steep: at high powers, merging equal lobes costs a rounding
+                n = glm::normalize(
+                    glm::vec3(float(80.0 * (unit(rng) - 0.5)), float(80.0 * (unit(rng) - 0.5)), 1.0f));
+            if (kind == 6 && i > 0) n = normals[0]; // all four equal: a flat or upsampled footprint
             normals[i] = n;
         }
         if (trial % 3 == 0) {
@@ -380,7 +385,7 @@ TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
         distinctPairs += d[0] * d[0] * s / 4 >= 1e-3 && d[1] > d[0] * (1 + 1e-9);
     }
     EXPECT_EQ(cases, 16000);
-    EXPECT_GT(distinctPairs, 1500); // footprints whose closest pair the closed form can decide
+    EXPECT_GT(distinctPairs, 1200); // footprints whose closest pair the closed form can decide
 }
 
 TEST(LobeMixture, NdfKeepsItsEnergy) {

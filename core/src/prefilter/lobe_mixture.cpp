@@ -409,7 +409,44 @@ const PairLayout& pairLayout(size_t n) {
 //    f(1e-3) = 1.67e-7: both above kNegligibleMergeCost·4 (the total weight) + 2δ for δ < 5e-8.
 // No lobe is light (each holds 1/4, above every minLobeShare). Then the closest pair merges into the
 // lower index, as the general path merges it, and the lobes take the canonical order.
+// reduceLobesInPlace's result for four bit-identical finest lobes a (a flat footprint, or the inside of
+// an upsampled map; no lobe is light, and the total weight is 4), for any k: the general path's merges
+// replayed with its own costs. Equal lobes merge at a
+// cost of exactly 0 (2a has a's mean and covariance to the bit), so (0, 1) merges first. Of the pairs left,
+// (0, 2) and (0, 3) cost c = mergeCost(2a, a), whose rounding may leave it 0 or not, and (2, 3) costs 0:
+//  - c = 0: (0, 2) comes first and lobe 0 becomes 2a + a; then (0, 3), costing c' = mergeCost(2a + a, a),
+//    merges if k = 1 or c' is negligible (it can be a rounding's worth above kNegligibleMergeCost with steep
+//    normals at a high power), leaving one lobe or two;
+//  - c > 0: (2, 3) comes first, giving 2a, and then 2a with 2a costs exactly 0: one lobe, 2a + 2a.
+void reduceFourEqual(const LobeMoments& a, int k, double minVariance, LobeMixture& out) {
+    std::array<LobeMoments, 4> lobes{a, a, a, a};
+    size_t n = 2;
+    lobes[0] += a;
+    if (mergeCost(lobes[0], a, minVariance) > 0.0) {
+        lobes[1] = a;
+        lobes[1] += a;
+        lobes[0] += lobes[1];
+        n = 1;
+    } else {
+        lobes[0] += a;
+        if (k == 1 || mergeCost(lobes[0], a, minVariance) <= kNegligibleMergeCost * 4.0) {
+            lobes[0] += a;
+            n = 1;
+        }
+    }
+    std::sort(lobes.begin(), lobes.begin() + std::ptrdiff_t(n), canonicalLess);
+    out = LobeMixture{};
+    out.count = int(n);
+    std::copy_n(lobes.begin(), n, out.lobes.begin());
+}
+
 bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double invS, LobeMixture& out) {
+    if (std::memcmp(&lobes[0], &lobes[1], sizeof(LobeMoments)) == 0 &&
+        std::memcmp(&lobes[0], &lobes[2], sizeof(LobeMoments)) == 0 &&
+        std::memcmp(&lobes[0], &lobes[3], sizeof(LobeMoments)) == 0 && isFinestLobe(lobes[0], invS)) {
+        reduceFourEqual(lobes[0], k, invS, out);
+        return true;
+    }
     if (k < 3) return false;
     double bmax2 = 0.0;
     for (const LobeMoments& l : lobes) {

@@ -411,9 +411,9 @@ const PairLayout& pairLayout(size_t n) {
 // lower index, as the general path merges it, and the lobes take the canonical order.
 // reduceLobesInPlace's result for four bit-identical finest lobes a (a flat footprint, or the inside of
 // an upsampled map; no lobe is light, and the total weight is 4), for any k: the general path's merges
-// replayed with its own costs. Equal lobes merge at a
-// cost of exactly 0 (2a has a's mean and covariance to the bit), so (0, 1) merges first. Of the pairs left,
-// (0, 2) and (0, 3) cost c = mergeCost(2a, a), whose rounding may leave it 0 or not, and (2, 3) costs 0:
+// replayed with its own costs. Equal lobes merge at a cost of exactly 0 (2a has a's mean and covariance
+// to the bit), so (0, 1) merges first. Of the pairs left, (0, 2) and (0, 3) cost c = mergeCost(2a, a),
+// whose rounding may leave it 0 or not, and (2, 3) costs 0:
 //  - c = 0: (0, 2) comes first and lobe 0 becomes 2a + a; then (0, 3), costing c' = mergeCost(2a + a, a),
 //    merges if k = 1 or c' is negligible (it can be a rounding's worth above kNegligibleMergeCost with steep
 //    normals at a high power), leaving one lobe or two;

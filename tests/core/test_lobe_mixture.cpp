@@ -315,8 +315,8 @@ TEST(LobeMixture, ReductionIsTheReferenceGreedyMergeBitForBit) {
 // (the closest pair merges) where it can, are still the reference's lobes bit for bit: powers 1 to
 // 10^6, normals off an 8-bit grid (ties and near ties among the distances), steep normals at the
 // slope limit, equal normals (two, or all four), near-equal ones, exact ties, and patterns at the
-// correlation clamp. It also counts the footprints inside the closed form's domain (a clear closest pair, u
-// >= 1e-3), so the sample cannot drift to fallbacks only.
+// correlation clamp. It also counts the footprints inside the closed form's domain (a clear closest
+// pair, u >= 1e-3), so the sample cannot drift to fallbacks only.
 TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> unit(0.0, 1.0);

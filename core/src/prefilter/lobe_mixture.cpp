@@ -38,6 +38,16 @@ bool canonicalLess(const LobeMoments& a, const LobeMoments& b) {
     return a.w > b.w;
 }
 
+// The first n of `lobes` (n <= kMaxMixtureLobes) in canonical order, as a mixture: how every reduction
+// hands back its lobes.
+LobeMixture canonicalMixture(LobeMoments* lobes, size_t n) {
+    std::sort(lobes, lobes + n, canonicalLess);
+    LobeMixture out;
+    out.count = int(n);
+    std::copy_n(lobes, n, out.lobes.begin());
+    return out;
+}
+
 using InjectiveMap = std::array<unsigned char, kMaxMixtureLobes>;
 
 // The injective maps of n children into `slots` slots (1 <= n <= slots <= kMaxMixtureLobes), in
@@ -434,10 +444,7 @@ void reduceFourEqual(const LobeMoments& a, int k, double minVariance, LobeMixtur
             n = 1;
         }
     }
-    std::sort(lobes.begin(), lobes.begin() + std::ptrdiff_t(n), canonicalLess);
-    out = LobeMixture{};
-    out.count = int(n);
-    std::copy_n(lobes.begin(), n, out.lobes.begin());
+    out = canonicalMixture(lobes.data(), n);
 }
 
 bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double invS, LobeMixture& out) {
@@ -596,12 +603,7 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
             if (alive[i]) lobes[out++] = lobes[i];
         lobes.resize(out);
     }
-    std::sort(lobes.begin(), lobes.end(), canonicalLess);
-    LobeMixture out;
-    out.count = int(lobes.size());
-    for (size_t i = 0; i < lobes.size(); ++i)
-        out.lobes[i] = lobes[i];
-    return out;
+    return canonicalMixture(lobes.data(), lobes.size());
 }
 
 } // namespace
@@ -637,26 +639,7 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         const Level* child = level > 1 ? &out.m_levels.back() : nullptr;
         tbb::parallel_for(0, l.height, [&](int y) {
             std::vector<LobeMoments> lobes;
-            const int y0 = l.yChild[size_t(y)];
-            const bool rows2 = l.yChild[size_t(y) + 1] - y0 == 2;
             for (int x = 0; x < l.width; ++x) {
-                // Level 1's 2×2 footprints of one power, most of the build's texels: straight to the
-                // closed form, which decides nearly all of them (reduceFourFinest).
-                if (const int x0 = l.xChild[size_t(x)];
-                    !child && !texelPowers && rows2 && l.xChild[size_t(x) + 1] - x0 == 2) {
-                    const std::array<LobeMoments, 4> four{
-                        LobeMoments::ofNormal(finest.at(x0, y0), s),
-                        LobeMoments::ofNormal(finest.at(x0 + 1, y0), s),
-                        LobeMoments::ofNormal(finest.at(x0, y0 + 1), s),
-                        LobeMoments::ofNormal(finest.at(x0 + 1, y0 + 1), s)};
-                    LobeMixture m;
-                    if (!reduceFourFinest(four, out.m_k, out.m_minVariance, m)) {
-                        lobes.assign(four.begin(), four.end());
-                        m = reduceLobesInPlace(lobes, out.m_k, out.m_minVariance);
-                    }
-                    built.set(size_t(y) * size_t(l.width) + size_t(x), out.m_k, m);
-                    continue;
-                }
                 lobes.clear();
                 for (int j = l.yChild[size_t(y)]; j < l.yChild[size_t(y) + 1]; ++j)
                     for (int i = l.xChild[size_t(x)]; i < l.xChild[size_t(x) + 1]; ++i) {

@@ -3,6 +3,7 @@
 #include <burnish/core/bake/bake.h>
 #include <burnish/core/env/sampling.h>
 #include <burnish/core/prefilter/detail.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/shading/sh.h>
 #include <burnish/core/util/low_discrepancy.h>
 #include <burnish/render/cubemap.h>
@@ -197,7 +198,7 @@ CpuBake cpuBake(const MaterialSettings& m, int largestLevel, std::function<bool(
         for (float g : *m.glossMap)
             maxPower = std::max(maxPower, m.glossEncoding.power(g));
     }
-    b.mixtureMinVariance = slopeInverseBasePower(maxPower);
+    b.mixtureMinVariance = mixtureBaseVariance(maxPower, options.params.mixtureLobes);
     return b;
 }
 
@@ -313,7 +314,7 @@ struct Renderer::Impl {
     }
     std::map<TextureRole, GpuBaked> baked;
     int bakes = 0;
-    // The mixture's covariance floor: 1/s of the narrowest authored lobe (MixturePyramid's).
+    // The mixture's covariance floor: the narrowest authored lobe's base variance (MixturePyramid's).
     double mixtureMinVariance = 1.0 / 1024.0;
     // The reference's finest normals and authored gloss, level 0 only.
     std::shared_ptr<const NormalMap> finestFor;

@@ -153,7 +153,7 @@ uniform int uMixtureLobes;
 #else
 #define MIXTURE_LOBE_COUNT clamp(uMixtureLobes, 1, kMaxMixtureLobes)
 #endif
-uniform float uMixtureMinVariance; // 1/s of the narrowest authored lobe
+uniform float uMixtureMinVariance; // the narrowest authored lobe's base variance (mixtureBaseVariance)
 uniform sampler2D uMixtureWeights;
 uniform sampler2D uMixtureLobe0;
 uniform sampler2D uMixtureLobe1;

@@ -67,11 +67,12 @@ TEST(LobeMixture, TwoTiltCheckerGivesTwoLobesWithBothTiltsAndWeights) {
     EXPECT_NEAR(m.lobes[1].mean().x, t, 1e-6);
     EXPECT_NEAR(m.lobes[0].w / m.totalWeight(), 0.25, 1e-12);
     EXPECT_NEAR(m.lobes[1].w / m.totalWeight(), 0.75, 1e-12);
-    // Each lobe is as narrow as the base lobe: no spread between the two tilts leaks in.
+    // Each lobe is as narrow as the base lobe (two or more lobes: 1/(s + 2)): no spread between the two
+    // tilts leaks in.
     for (int i = 0; i < 2; ++i) {
         const auto c = m.lobes[size_t(i)].covariance(two.minVariance());
-        EXPECT_NEAR(c[0], 1.0 / s, 1e-9);
-        EXPECT_NEAR(c[1], 1.0 / s, 1e-9);
+        EXPECT_NEAR(c[0], 1.0 / (s + 2.0), 1e-9);
+        EXPECT_NEAR(c[1], 1.0 / (s + 2.0), 1e-9);
     }
     // One lobe holds both: its x variance carries the spread of the tilts (as LEAN's).
     const MixturePyramid one = MixturePyramid::build(b.pyramid, s, 1);
@@ -90,25 +91,43 @@ TEST(LobeMixture, GroovesGiveAnAnisotropicLobeAlongTheGrooveNormal) {
     EXPECT_NEAR(c[1], 1.0 / 512.0, 1e-12);
 }
 
+TEST(LobeMixture, BaseLobePeaksAsTheBlinnPhongLobeFromTwoLobes) {
+    // The normalised Blinn-Phong lobe peaks at (s + 2)/2π. Two or more lobes give each finest normal the
+    // Gaussian of that peak; one lobe keeps LEAN's, s/2π (3 % low at s = 64).
+    for (const double s : {1.0, 64.0, 256.0, 1e6}) {
+        const glm::dvec3 n(0.0, 0.0, 1.0);
+        const double blinnPhongPeak = (s + 2.0) / (2.0 * kPi<double>);
+        for (int k = 2; k <= kMaxMixtureLobes; ++k) {
+            const double v = mixtureBaseVariance(s, k);
+            EXPECT_NEAR(slopeGaussianNdf(n, {0.0, 0.0}, {v, v, 0.0}) / blinnPhongPeak, 1.0, 1e-12) << s;
+        }
+        const double lean = slopeInverseBasePower(s);
+        EXPECT_EQ(mixtureBaseVariance(s, 1), lean);
+        EXPECT_NEAR(slopeGaussianNdf(n, {0.0, 0.0}, {lean, lean, 0.0}) / blinnPhongPeak, s / (s + 2.0),
+                    1e-12);
+    }
+}
+
 TEST(LobeMixture, FlatMapGivesTheBasePowerForEveryK) {
     for (const double s : {1.0, 256.0, 1e6}) {
         auto b = build(mapOf(16, 16, [](int, int) { return glm::vec3(0.0f, 0.0f, 1.0f); }));
         for (int k = 1; k <= kMaxMixtureLobes; ++k) {
             const MixturePyramid mp = MixturePyramid::build(b.pyramid, s, k);
+            // One lobe is LEAN's, of variance 1/s; two or more lobes carry 1/(s + 2).
+            const double v = k == 1 ? 1.0 / s : 1.0 / (s + 2.0);
             for (int level = 1; level < mp.levelCount(); ++level) {
                 const LobeMixture& m = mp.at(level, 0, 0);
                 for (int i = 0; i < m.count; ++i) {
                     const auto c = m.lobes[size_t(i)].covariance(mp.minVariance());
-                    EXPECT_NEAR(c[0] * s, 1.0, 1e-12) << "s " << s << " k " << k << " level " << level;
-                    EXPECT_NEAR(c[1] * s, 1.0, 1e-12);
+                    EXPECT_NEAR(c[0] / v, 1.0, 1e-12) << "s " << s << " k " << k << " level " << level;
+                    EXPECT_NEAR(c[1] / v, 1.0, 1e-12);
                     EXPECT_EQ(c[2], 0.0);
                     EXPECT_EQ(m.lobes[size_t(i)].mean().x, 0.0);
                 }
-                // Equal lobes cost nothing to merge, and every K holds the same NDF.
+                // Equal lobes cost nothing to merge, and every K holds the base lobe's NDF.
                 const glm::dvec3 h = glm::normalize(glm::dvec3(0.01, 0.02, 1.0));
-                EXPECT_NEAR(mixtureNdf(m, h, mp.minVariance()),
-                            slopeGaussianNdf(h, {0.0, 0.0}, {1.0 / s, 1.0 / s, 0.0}),
-                            1e-9 * slopeGaussianNdf(h, {0.0, 0.0}, {1.0 / s, 1.0 / s, 0.0}) + 1e-300);
+                EXPECT_NEAR(mixtureNdf(m, h, mp.minVariance()), slopeGaussianNdf(h, {0.0, 0.0}, {v, v, 0.0}),
+                            1e-9 * slopeGaussianNdf(h, {0.0, 0.0}, {v, v, 0.0}) + 1e-300);
             }
         }
     }
@@ -193,9 +212,10 @@ TEST(LobeMixture, ExtremesStayFinite) {
         }
     }
     // A NaN normal counts as a flat one.
-    const LobeMoments nan = LobeMoments::ofNormal(glm::vec3(std::nanf(""), 0.0f, 1.0f), 64.0);
+    const LobeMoments nan =
+        LobeMoments::ofNormal(glm::vec3(std::nanf(""), 0.0f, 1.0f), mixtureBaseVariance(64.0, 3));
     EXPECT_EQ(nan.bx, 0.0);
-    EXPECT_EQ(nan.mxx, 1.0 / 64.0);
+    EXPECT_EQ(nan.mxx, 1.0 / 66.0);
 }
 
 TEST(LobeMixture, SameBitsOnOneThreadAndOnAll) {
@@ -363,10 +383,11 @@ TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
         if (trial % 50 == 0) // a diagonal pair far apart: the merged correlation at its clamp
             normals = {glm::vec3(0, 0, 1), glm::normalize(glm::vec3(30, 30, 1)),
                        glm::normalize(glm::vec3(-30, 31, 1)), glm::normalize(glm::vec3(31, -30, 1))};
+        // The fit's floor: each lobe's base variance (that of K >= 2; K = 1 sums whatever it gets).
+        const double minVariance = mixtureBaseVariance(s, kMaxMixtureLobes);
         std::vector<LobeMoments> lobes;
         for (const glm::vec3& n : normals)
-            lobes.push_back(LobeMoments::ofNormal(n, s));
-        const double minVariance = slopeInverseBasePower(s); // the fit's floor: each lobe's 1/s
+            lobes.push_back(LobeMoments::ofNormal(n, minVariance));
         for (int k = 1; k <= kMaxMixtureLobes; ++k) {
             const LobeMixture got = reduceLobes(lobes, k, minVariance);
             const LobeMixture want = referenceReduction(lobes, k, minVariance);

@@ -147,12 +147,14 @@ TEST(MixtureMethod, FlatMapStoresTheBasePowerForEveryK) {
             for (int mip = 0; mip < 5; ++mip) {
                 const LobeMixture m = storedMixture(out, k, mip, 0);
                 ASSERT_GE(m.count, 1);
+                // K = 1 stores LEAN's variance 1/s, two or more lobes 1/(s + 2).
+                const double v = k == 1 ? 1.0 / s : 1.0 / (s + 2.0);
                 for (int i = 0; i < m.count; ++i) {
                     const auto c = m.lobes[size_t(i)].covariance(1e-300);
-                    // Float storage of 1/s · 1/sM: a float's rounding of the power.
-                    EXPECT_NEAR(c[0] * s, 1.0, 1e-6) << "s " << s << " k " << k << " mip " << mip;
-                    EXPECT_NEAR(c[1] * s, 1.0, 1e-6);
-                    EXPECT_NEAR(c[2] * s, 0.0, 1e-6);
+                    // Float storage of v · 1/sM: a float's rounding of the power.
+                    EXPECT_NEAR(c[0] / v, 1.0, 1e-6) << "s " << s << " k " << k << " mip " << mip;
+                    EXPECT_NEAR(c[1] / v, 1.0, 1e-6);
+                    EXPECT_NEAR(c[2] / v, 0.0, 1e-6);
                     EXPECT_NEAR(m.lobes[size_t(i)].mean().x, 0.0, 1e-6);
                 }
             }
@@ -169,10 +171,11 @@ TEST(MixtureMethod, FlatMapStoresTheBasePowerIn8BitAndHalfFloat) {
     const float stored = lobe.mips[0].texels[2];
     const double scale = lobe.decode[2].scale;
     const double eight = std::round(double(stored) * 255.0) / 255.0 * scale;
-    EXPECT_NEAR(eight * s, 1.0, scale * s / 255.0);
+    const double v = 1.0 / (s + 2.0); // three lobes' base variance
+    EXPECT_NEAR(eight / v, 1.0, scale / v / 255.0);
     // Half keeps 11 significant bits of the stored value.
     const double asHalf = double(float(Imath::half(stored))) * scale;
-    EXPECT_NEAR(asHalf * s, 1.0, 1.0 / 1024.0);
+    EXPECT_NEAR(asHalf / v, 1.0, 1.0 / 1024.0);
 }
 
 TEST(MixtureMethod, SteepOutliersNanTexelsAndOddSizesStayFinite) {

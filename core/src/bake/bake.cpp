@@ -371,7 +371,8 @@ void mixtureRows(const RowPlan& plan, int k, int y, int width, const std::array<
             const double s = o.authoredGloss
                                  ? o.encoding.power((*o.authoredGloss)[size_t(y) * size_t(width) + size_t(x)])
                                  : o.basePower;
-            const LobeMoments l = LobeMoments::ofNormal((*plan.finestMap).at(x, y), s);
+            const LobeMoments l =
+                LobeMoments::ofNormal((*plan.finestMap).at(x, y), mixtureBaseVariance(s, mix.lobeCount()));
             const int own = mix.finestLobe(x, y);
             for (int i = 0; i < kMaxMixtureLobes; ++i) {
                 const bool mine = i == own;

@@ -199,15 +199,15 @@ void bilinearTaps(int i, int size, int parentSize, BorderMode border, std::array
 
 } // namespace
 
-LobeMoments LobeMoments::ofNormal(const glm::vec3& n, double s) {
+LobeMoments LobeMoments::ofNormal(const glm::vec3& n, double v) {
     const glm::dvec2 b = finestSlope(n);
-    const double bx = b.x, by = b.y, invS = slopeInverseBasePower(s);
+    const double bx = b.x, by = b.y;
     LobeMoments l;
     l.w = 1.0;
     l.bx = bx;
     l.by = by;
-    l.mxx = bx * bx + invS;
-    l.myy = by * by + invS;
+    l.mxx = bx * bx + v;
+    l.myy = by * by + v;
     l.mxy = bx * by;
     return l;
 }
@@ -396,21 +396,21 @@ const PairLayout& pairLayout(size_t n) {
     return size_t(index);
 }
 
-// Whether l is LobeMoments::ofNormal's lobe of a finest normal whose base power has 1/s = invS: weight
-// 1 and raw moments bbᵀ + I/s, computed as ofNormal computes them (so the test is exact).
-[[gnu::always_inline]] inline bool isFinestLobe(const LobeMoments& l, double invS) {
-    return l.w == 1.0 && l.mxx == l.bx * l.bx + invS && l.myy == l.by * l.by + invS && l.mxy == l.bx * l.by;
+// Whether l is LobeMoments::ofNormal's lobe of a finest normal of base variance v: weight 1 and raw
+// moments bbᵀ + vI, computed as ofNormal computes them (so the test is exact).
+[[gnu::always_inline]] inline bool isFinestLobe(const LobeMoments& l, double v) {
+    return l.w == 1.0 && l.mxx == l.bx * l.bx + v && l.myy == l.by * l.by + v && l.mxy == l.bx * l.by;
 }
 
-// reduceLobesInPlace's result for four finest lobes of one power (isFinestLobe with invS the floor
-// minVariance) and k >= 3, found without a logarithm; false (out untouched) where this cannot promise
-// the general path's choice bit for bit. Level 1 of a power-of-two map is millions of these.
+// reduceLobesInPlace's result for four finest lobes of one power (isFinestLobe with v the floor
+// minVariance, their base variance) and k >= 3, found without a logarithm; false (out untouched) where this
+// cannot promise the general path's choice bit for bit. Level 1 of a power-of-two map is millions of these.
 // Two finest lobes differ only in their means, so merging lobes i and j costs exactly log(1 + u_ij),
-// u_ij = |b_i − b_j|²·s/4 (det(Σ + ddᵀ/4) = det Σ·(1 + dᵀΣ⁻¹d/4) for Σ = I/s): the cheapest pair is the
+// u_ij = |b_i − b_j|²/(4v) (det(Σ + ddᵀ/4) = det Σ·(1 + dᵀΣ⁻¹d/4) for Σ = vI): the cheapest pair is the
 // closest. It declines when
 //  - the closest pair's computed cost could round above the next pair's: the gap between them is
 //    within 4δ, δ bounding a computed cost's error (log2Positive's 2e-14, and the raw moments'
-//    cancellation, |b|²·s ulps of a variance);
+//    cancellation, |b|²/v ulps of a variance);
 //  - the closest pair's merged correlation reaches covariance's clamp, which raises its cost;
 //  - a pair is close enough (u < 1e-3) that a merge after the first could cost nothing
 //    (kNegligibleMergeCost), or δ is not small. Otherwise none can: a pair of the other two costs at
@@ -447,22 +447,22 @@ void reduceFourEqual(const LobeMoments& a, int k, double minVariance, LobeMixtur
     out = canonicalMixture(lobes.data(), n);
 }
 
-bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double invS, LobeMixture& out) {
+bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double v, LobeMixture& out) {
     if (std::memcmp(&lobes[0], &lobes[1], sizeof(LobeMoments)) == 0 &&
         std::memcmp(&lobes[0], &lobes[2], sizeof(LobeMoments)) == 0 &&
-        std::memcmp(&lobes[0], &lobes[3], sizeof(LobeMoments)) == 0 && isFinestLobe(lobes[0], invS)) {
-        reduceFourEqual(lobes[0], k, invS, out);
+        std::memcmp(&lobes[0], &lobes[3], sizeof(LobeMoments)) == 0 && isFinestLobe(lobes[0], v)) {
+        reduceFourEqual(lobes[0], k, v, out);
         return true;
     }
     if (k < 3) return false;
     double bmax2 = 0.0;
     for (const LobeMoments& l : lobes) {
-        if (!isFinestLobe(l, invS)) return false;
+        if (!isFinestLobe(l, v)) return false;
         bmax2 = std::max(bmax2, l.bx * l.bx + l.by * l.by);
     }
     constexpr std::array<std::array<unsigned char, 2>, 6> kPairs{
         {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
-    const double toU = 0.25 / invS;
+    const double toU = 0.25 / v;
     double u1 = std::numeric_limits<double>::infinity(), u2 = u1;
     size_t closest = 0;
     for (size_t p = 0; p < kPairs.size(); ++p) {
@@ -473,7 +473,7 @@ bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double invS, Lobe
         else if (u < u2)
             u2 = u;
     }
-    const double delta = 1e-13 * (1.0 + bmax2 / invS);
+    const double delta = 1e-13 * (1.0 + bmax2 / v);
     if (!(u1 >= 1e-3) || !(delta < 5e-8) || !std::isfinite(u2)) return false;
     size_t n = 4;
     if (k == 3) {
@@ -481,7 +481,7 @@ bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double invS, Lobe
         if (!((u2 - u1) / (1.0 + u2) > 4.0 * delta)) return false;
         const size_t i = kPairs[closest][0], j = kPairs[closest][1];
         const double dx = lobes[i].bx - lobes[j].bx, dy = lobes[i].by - lobes[j].by;
-        const double xx = invS + 0.25 * dx * dx, yy = invS + 0.25 * dy * dy, xy = 0.25 * dx * dy;
+        const double xx = v + 0.25 * dx * dx, yy = v + 0.25 * dy * dy, xy = 0.25 * dx * dy;
         if (!(xy * xy < 0.998 * xx * yy)) return false; // the clamp is at 0.999² = 0.998001
         lobes[i] += lobes[j];
         std::copy(lobes.begin() + std::ptrdiff_t(j) + 1, lobes.end(), lobes.begin() + std::ptrdiff_t(j));
@@ -623,11 +623,12 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         for (double p : *texelPowers)
             maxPower = std::max(maxPower, p);
     }
-    out.m_minVariance = slopeInverseBasePower(maxPower);
+    out.m_minVariance = mixtureBaseVariance(maxPower, out.m_k);
     const int last =
         lastLevel >= 0 ? std::min(lastLevel, pyramid.levelCount() - 1) : pyramid.levelCount() - 1;
     const NormalMap& finest = pyramid.finest();
     const size_t K = size_t(out.m_k);
+    const double baseVariance = mixtureBaseVariance(s, out.m_k); // every finest lobe's, without texelPowers
     for (int level = 1; level <= last; ++level) {
         const PyramidLevel& l = pyramid.level(level);
         Level built;
@@ -644,10 +645,13 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
                 for (int j = l.yChild[size_t(y)]; j < l.yChild[size_t(y) + 1]; ++j)
                     for (int i = l.xChild[size_t(x)]; i < l.xChild[size_t(x) + 1]; ++i) {
                         if (!child) {
-                            const double p =
-                                texelPowers ? (*texelPowers)[size_t(j) * size_t(finest.width) + size_t(i)]
-                                            : s;
-                            lobes.push_back(LobeMoments::ofNormal(finest.at(i, j), p));
+                            const double v =
+                                texelPowers
+                                    ? mixtureBaseVariance(
+                                          (*texelPowers)[size_t(j) * size_t(finest.width) + size_t(i)],
+                                          out.m_k)
+                                    : baseVariance;
+                            lobes.push_back(LobeMoments::ofNormal(finest.at(i, j), v));
                             continue;
                         }
                         const size_t t = size_t(j) * size_t(child->width) + size_t(i);
@@ -723,7 +727,8 @@ std::array<LobeMoments, kMaxMixtureLobes> MixturePyramid::storedTexel(const Norm
                                                                       int y, double finestPower) const {
     std::array<LobeMoments, kMaxMixtureLobes> out{}; // empty slots store zero moments
     if (k == 0) {
-        out[size_t(finestLobe(x, y))] = LobeMoments::ofNormal(finest.at(x, y), finestPower); // weight 1
+        out[size_t(finestLobe(x, y))] = // weight 1
+            LobeMoments::ofNormal(finest.at(x, y), mixtureBaseVariance(finestPower, m_k));
         return out;
     }
     // From the level's own storage (LobeMixture::totalWeight's sum).

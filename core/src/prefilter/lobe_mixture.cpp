@@ -359,7 +359,8 @@ const PairLayout& pairLayout(size_t n) {
         layout->rowStart.resize(n + 1);
         for (size_t i = 0; i <= n; ++i)
             layout->rowStart[i] = i * n - i * (i + 1) / 2;
-        layout->index.assign(n * n, 0);
+        // The diagonal (i, i) points just past the pairs, at a slot that holds +∞ between merges.
+        layout->index.assign(n * n, std::uint32_t(layout->rowStart[n]));
         layout->pair.resize(layout->rowStart[n]);
         for (size_t i = 0; i < n; ++i)
             for (size_t j = i + 1; j < n; ++j) {
@@ -569,10 +570,12 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
         constexpr double kGone = std::numeric_limits<double>::infinity();
         thread_local std::vector<double> cost;
         thread_local std::vector<char> alive;
-        columns.assign(lobes, minVariance);
+        // After absorptions the columns already hold the lobes, each w·log det Σ the same bits as
+        // assign's (scalar and lanes do the same operations), and finite values past them.
+        if (!absorbing) columns.assign(lobes, minVariance);
         row.resize(columns.w.size());
         const PairLayout& layout = pairLayout(n);
-        cost.assign((layout.rowStart[n] + 3) / 4 * 4, kGone);
+        cost.assign((layout.rowStart[n] + 4) / 4 * 4, kGone); // the pairs and the diagonal's slot
         alive.assign(n, 1);
         for (size_t i = 0; i + 1 < n; ++i) {
             columns.costsWith(i, i + 1, n - i - 1, false, minVariance, row);
@@ -588,15 +591,15 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
             lobes[bi] += lobes[bj];
             columns.update(bi, lobes[bi], minVariance);
             alive[bj] = 0;
+            // Without a branch per lobe (whether it is alive was a coin toss the predictor lost).
             const std::uint32_t* gone = &layout.index[bj * n];
             for (size_t o = 0; o < n; ++o)
-                if (o != bj) cost[gone[o]] = kGone;
+                cost[gone[o]] = kGone;
             columns.costsWith(bi, 0, n, true, minVariance, row);
             const std::uint32_t* merged = &layout.index[bi * n];
-            for (size_t o = 0; o < n; ++o) {
-                if (!alive[o] || o == bi) continue;
-                cost[merged[o]] = row[o];
-            }
+            for (size_t o = 0; o < n; ++o)
+                cost[merged[o]] = alive[o] ? row[o] : kGone;
+            cost[merged[bi]] = kGone; // the diagonal's slot took row[bi], which is garbage
         }
         size_t out = 0;
         for (size_t i = 0; i < n; ++i)

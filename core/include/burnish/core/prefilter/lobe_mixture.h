@@ -38,7 +38,9 @@ namespace burnish {
 /// before any pair merges (k >= 2). Measured on 27 real maps (core/bench/mixture_study.py, 324 cases per
 /// K): against the 1/64 of every K before, the mean ratio to LEAN's error drops (K = 2: 0.572 -> 0.569,
 /// K = 3: 0.449 -> 0.447, K = 4: 0.391 -> 0.388) and fewer cases leave the energy band; 1/8 of the
-/// footprint for K = 3 overshoots the energy (up to 1.30) and errs more.
+/// footprint for K = 3 overshoots the energy (up to 1.30) and errs more. Rechecked with the base variance
+/// 1/(s + 2) at K = 3 (mean ratio, cases worse than LEAN, cases outside the band): 1/(6K) 0.405, 6, 43;
+/// 1/(8K) 0.384, 4, 45; 1/(12K) 0.377, 4, 53.
 inline constexpr double minLobeShare(int k) {
     return 1.0 / (8.0 * double(k));
 }

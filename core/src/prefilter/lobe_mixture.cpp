@@ -84,7 +84,8 @@ class LobeScorer {
 public:
     /// The first `count` of `lobes` (a mixture's slots).
     LobeScorer(const LobeMoments* lobes, int count, double minVariance)
-        : m_count(count) {
+        : m_count(count)
+        , m_minVariance(minVariance) {
         for (int i = 0; i < m_count; ++i) {
             const LobeMoments& l = lobes[size_t(i)];
             const auto c = l.covariance(minVariance);
@@ -97,18 +98,22 @@ public:
     /// Puts a child's lobes (the first `count` of its `slots` stored ones) into the slots of this
     /// mixture's lobes: the assignment of child lobes to distinct slots 0..slots−1 (the lobe count K, at
     /// least count) with the largest total score (an empty slot scores kEmptySlotScore, below any lobe's);
-    /// ties to the first in lexicographic order. Empty slots get empty lobes; count becomes the last used
-    /// slot + 1.
+    /// ties to the first in lexicographic order. A child lobe's score for a slot is its expected
+    /// log-likelihood under the slot's lobe (crossScoreOf): the whole lobe, its spread too, not only its
+    /// mean, so a broad child lobe goes to a broad slot rather than to a narrow one that sits at its
+    /// mean, where filtering would smear that narrow cluster. Empty slots get empty lobes; count becomes
+    /// the last used slot + 1.
     void reorder(LobeMoments* lobes, unsigned char& count, int slots) const {
         const int n = std::min(int(count), kMaxMixtureLobes);
         if (n == 0) return;
         std::array<std::array<double, kMaxMixtureLobes>, kMaxMixtureLobes> score{};
         for (int c = 0; c < n; ++c) {
             const glm::dvec2 mean = lobes[size_t(c)].mean();
+            const auto cov = lobes[size_t(c)].covariance(m_minVariance);
             for (int slot = 0; slot < slots; ++slot)
                 score[size_t(c)][size_t(slot)] =
                     slot < m_count && m_lobes[size_t(slot)].offset > -std::numeric_limits<double>::infinity()
-                        ? scoreOf(slot, mean)
+                        ? crossScoreOf(slot, mean, cov)
                         : kEmptySlotScore;
         }
         // Every injective map of the n child lobes into the slots (at most 4·3·2·1), in lexicographic
@@ -153,12 +158,24 @@ private:
         return l.offset - 0.5 * e;
     }
 
+    // E[log(w N(x; μ, Σ))] over x ~ N(b, C), up to a constant: log w − ½ log det Σ
+    // − ½[(b − μ)ᵀΣ⁻¹(b − μ) + tr(Σ⁻¹C)] (C: xx, yy, xy).
+    double crossScoreOf(int slot, const glm::dvec2& b, const std::array<double, 3>& c) const {
+        const Lobe& l = m_lobes[size_t(slot)];
+        const glm::dvec2 d = b - l.mean;
+        const double e = (d.x * d.x * l.yy + d.y * d.y * l.xx - 2.0 * d.x * d.y * l.xy + l.yy * c[0] +
+                          l.xx * c[1] - 2.0 * l.xy * c[2]) /
+                         l.det;
+        return l.offset - 0.5 * e;
+    }
+
     struct Lobe {
         glm::dvec2 mean{0.0};
         double xx = 1.0, yy = 1.0, xy = 0.0, det = 1.0, offset = 0.0;
     };
     std::array<Lobe, kMaxMixtureLobes> m_lobes{};
     int m_count = 0;
+    double m_minVariance = 0.0;
 };
 
 glm::dvec2 LobeMoments::mean() const {

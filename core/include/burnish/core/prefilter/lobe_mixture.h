@@ -16,7 +16,8 @@
 // absorbed first (their weight goes to the cheapest partner, whose shape stays): no lobe is left with a junk
 // mean, and a few steep outlier normals keep their energy without dragging a lobe's moments as they drag
 // LEAN's. Lobes are then put in a canonical order (by mean slope, x then y). Last, top-down, each texel's
-// lobes move to the slots of the parent lobes they belong to most (the assignment of largest likelihood), so
+// lobes move to the slots of the parent lobes they belong to most (the assignment of largest expected
+// log-likelihood of each whole lobe, its spread too, under the slot's lobe as filtered), so
 // the texels under one parent and the levels between give one cluster one slot, and filtering between texels
 // and mips merges like with like.
 #pragma once

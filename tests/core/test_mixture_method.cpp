@@ -26,7 +26,6 @@
 #include <iterator>
 #include <limits>
 #include <random>
-#include <tuple>
 #include <utility>
 
 using namespace burnish;
@@ -404,6 +403,35 @@ TEST(MixtureMethod, BetweenTexelsAgreesWithABruteForceSumOnATinyMap) {
     }
 }
 
+namespace {
+
+// Between texels of test map `name` at base power s and mip `mip`, the K = 3 mixture's relative L1 must
+// stay under `limit` times LEAN's (both printed).
+void expectBetweenTexelsUnder(const std::string& name, double s, int mip, double limit) {
+    auto map = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/" + name);
+    ASSERT_TRUE(map) << map.error();
+    EvaluateOptions o;
+    o.basePowers = {s};
+    o.methods = {Method::Lean, Method::Mixture};
+    o.mixtureLobes = {3};
+    o.firstMip = mip;
+    o.lastMip = mip;
+    o.betweenTexels = true;
+    auto r = evaluateMethods(*map, o);
+    ASSERT_TRUE(r) << r.error();
+    double lean = -1.0, mixture = -1.0;
+    for (const MipError& e : r->errors)
+        if (e.betweenTexels) (e.method == Method::Lean ? lean : mixture) = e.relativeL1;
+    ASSERT_GT(lean, 0.0);
+    ASSERT_GE(mixture, 0.0);
+    std::printf("[measured] %s s = %g mip %d between texels: relative L1 LEAN %.4f, mixture K=3 %.4f "
+                "(%.3f of LEAN)\n",
+                name.c_str(), s, mip, lean, mixture, mixture / lean);
+    EXPECT_LT(mixture, limit * lean) << name << " s " << s << " mip " << mip;
+}
+
+} // namespace
+
 TEST(MixtureMethod, BetweenTexelsSlotsFollowTheLevelAboveAsFiltered) {
     // Rendering samples between texels, where bilinear filtering merges the lobes of one slot of four
     // texels. On a diamond tread plate, whose diamonds straddle the texels of every level, slots
@@ -411,30 +439,8 @@ TEST(MixtureMethod, BetweenTexelsSlotsFollowTheLevelAboveAsFiltered) {
     // cluster in one slot across parents: the mixture's error between texels at s = 256 is then
     // under 0.43 of LEAN's at mip 2 and 0.31 at mip 3 (measured 0.366 and 0.264; against the one
     // parent 0.494 and 0.366).
-    auto map = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/trak-treadplate1_nm.png");
-    ASSERT_TRUE(map) << map.error();
-    EvaluateOptions o;
-    o.basePowers = {256.0};
-    o.methods = {Method::Lean, Method::Mixture};
-    o.mixtureLobes = {3};
-    o.firstMip = 2;
-    o.lastMip = 3;
-    o.betweenTexels = true;
-    auto r = evaluateMethods(*map, o);
-    ASSERT_TRUE(r) << r.error();
-    for (const auto& [mip, limit] : {std::pair{2, 0.43}, std::pair{3, 0.31}}) {
-        double lean = -1.0, mixture = -1.0;
-        for (const MipError& e : r->errors) {
-            if (!e.betweenTexels || e.mip != mip) continue;
-            (e.method == Method::Lean ? lean : mixture) = e.relativeL1;
-        }
-        ASSERT_GT(lean, 0.0);
-        ASSERT_GE(mixture, 0.0);
-        std::printf("[measured] trak-treadplate1 s = 256 mip %d between texels: relative L1 LEAN %.4f, "
-                    "mixture K=3 %.4f (%.3f of LEAN)\n",
-                    mip, lean, mixture, mixture / lean);
-        EXPECT_LT(mixture, limit * lean) << "mip " << mip;
-    }
+    expectBetweenTexelsUnder("trak-treadplate1_nm.png", 256.0, 2, 0.43);
+    expectBetweenTexelsUnder("trak-treadplate1_nm.png", 256.0, 3, 0.31);
 }
 
 TEST(MixtureMethod, BetweenTexelsSlotsExplainWholeChildLobes) {
@@ -443,29 +449,8 @@ TEST(MixtureMethod, BetweenTexelsSlotsExplainWholeChildLobes) {
     // of smearing a narrow cluster whose mean it happens to sit on. Between texels at mip 4 the mixture
     // (K = 3) errs 0.307 of LEAN's on the tread plate at s = 64 and 0.358 on rust at s = 1024; scored
     // by the mean alone 0.352 and 0.399.
-    for (const auto& [name, power, limit] :
-         {std::tuple{"trak-treadplate1_nm.png", 64.0, 0.33}, std::tuple{"trak-rust1_nm.png", 1024.0, 0.38}}) {
-        auto map = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/" + name);
-        ASSERT_TRUE(map) << map.error();
-        EvaluateOptions o;
-        o.basePowers = {power};
-        o.methods = {Method::Lean, Method::Mixture};
-        o.mixtureLobes = {3};
-        o.firstMip = 4;
-        o.lastMip = 4;
-        o.betweenTexels = true;
-        auto r = evaluateMethods(*map, o);
-        ASSERT_TRUE(r) << r.error();
-        double lean = -1.0, mixture = -1.0;
-        for (const MipError& e : r->errors)
-            if (e.betweenTexels) (e.method == Method::Lean ? lean : mixture) = e.relativeL1;
-        ASSERT_GT(lean, 0.0);
-        ASSERT_GE(mixture, 0.0);
-        std::printf("[measured] %s s = %g mip 4 between texels: relative L1 LEAN %.4f, mixture K=3 %.4f "
-                    "(%.3f of LEAN)\n",
-                    name, power, lean, mixture, mixture / lean);
-        EXPECT_LT(mixture, limit * lean) << name;
-    }
+    expectBetweenTexelsUnder("trak-treadplate1_nm.png", 64.0, 4, 0.33);
+    expectBetweenTexelsUnder("trak-rust1_nm.png", 1024.0, 4, 0.38);
 }
 
 TEST(MixtureMethod, DdsExportIsHalfFloatWithTheWholeChain) {

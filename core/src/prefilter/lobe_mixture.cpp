@@ -420,23 +420,6 @@ const PairLayout& pairLayout(size_t n) {
     return l.w == 1.0 && l.mxx == l.bx * l.bx + v && l.myy == l.by * l.by + v && l.mxy == l.bx * l.by;
 }
 
-// reduceLobesInPlace's result for four finest lobes of one power (isFinestLobe with v the floor
-// minVariance, their base variance) and k >= 3, found without a logarithm; false (out untouched) where this
-// cannot promise the general path's choice bit for bit. Level 1 of a power-of-two map is millions of these.
-// Two finest lobes differ only in their means, so merging lobes i and j costs exactly log(1 + u_ij),
-// u_ij = |b_i − b_j|²/(4v) (det(Σ + ddᵀ/4) = det Σ·(1 + dᵀΣ⁻¹d/4) for Σ = vI): the cheapest pair is the
-// closest. It declines when
-//  - the closest pair's computed cost could round above the next pair's: the gap between them is
-//    within 4δ, δ bounding a computed cost's error (log2Positive's 2e-14, and the raw moments'
-//    cancellation, |b|²/v ulps of a variance);
-//  - the closest pair's merged correlation reaches covariance's clamp, which raises its cost;
-//  - a pair is close enough (u < 1e-3) that a merge after the first could cost nothing
-//    (kNegligibleMergeCost), or δ is not small. Otherwise none can: a pair of the other two costs at
-//    least log(1 + u1), and the merged lobe with another at least f(u1) = ½[3 log(1 + 2u1/3) −
-//    2 log(1 + u1)] (the cost of its covariance alone; means apart cost more), f increasing from
-//    f(1e-3) = 1.67e-7: both above kNegligibleMergeCost·4 (the total weight) + 2δ for δ < 5e-8.
-// No lobe is light (each holds 1/4, above every minLobeShare). Then the closest pair merges into the
-// lower index, as the general path merges it, and the lobes take the canonical order.
 // reduceLobesInPlace's result for four bit-identical finest lobes a (a flat footprint, or the inside of
 // an upsampled map; no lobe is light, and the total weight is 4), for any k: the general path's merges
 // replayed with its own costs. Equal lobes merge at a cost of exactly 0 (2a has a's mean and covariance
@@ -465,6 +448,24 @@ void reduceFourEqual(const LobeMoments& a, int k, double minVariance, LobeMixtur
     out = canonicalMixture(lobes.data(), n);
 }
 
+// reduceLobesInPlace's result for four finest lobes of one power (isFinestLobe with v the floor
+// minVariance, their base variance) and k >= 3, or four bit-identical ones for any k (reduceFourEqual),
+// found without a logarithm; false (out untouched) where this cannot promise the general path's choice
+// bit for bit. Level 1 of a power-of-two map is millions of these.
+// Two finest lobes differ only in their means, so merging lobes i and j costs exactly log(1 + u_ij),
+// u_ij = |b_i − b_j|²/(4v) (det(Σ + ddᵀ/4) = det Σ·(1 + dᵀΣ⁻¹d/4) for Σ = vI): the cheapest pair is the
+// closest. It declines when
+//  - the closest pair's computed cost could round above the next pair's: the gap between them is
+//    within 4δ, δ bounding a computed cost's error (log2Positive's 2e-14, and the raw moments'
+//    cancellation, |b|²/v ulps of a variance);
+//  - the closest pair's merged correlation reaches covariance's clamp, which raises its cost;
+//  - a pair is close enough (u < 1e-3) that a merge after the first could cost nothing
+//    (kNegligibleMergeCost), or δ is not small. Otherwise none can: a pair of the other two costs at
+//    least log(1 + u1), and the merged lobe with another at least f(u1) = ½[3 log(1 + 2u1/3) −
+//    2 log(1 + u1)] (the cost of its covariance alone; means apart cost more), f increasing from
+//    f(1e-3) = 1.67e-7: both above kNegligibleMergeCost·4 (the total weight) + 2δ for δ < 5e-8.
+// No lobe is light (each holds 1/4, above every minLobeShare). Then the closest pair merges into the
+// lower index, as the general path merges it, and the lobes take the canonical order.
 bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double v, LobeMixture& out) {
     if (std::memcmp(&lobes[0], &lobes[1], sizeof(LobeMoments)) == 0 &&
         std::memcmp(&lobes[0], &lobes[2], sizeof(LobeMoments)) == 0 &&

@@ -139,6 +139,10 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     cmd->add_option("--lobes", spec->lobes,
                     "Mixture lobes per texel, 1..4 (--method mixture; default: as many as the preset stores, "
                     "3 in the mixture preset; 1 is LEAN)");
+    cmd->add_flag("--shaded-fit", spec->shadedFit,
+                  "Fit the mixture's lobes to the shaded ground truth as well as to their moments (--method "
+                  "mixture): a closer highlight on mips 2 and up, for final exports; the bake takes tens "
+                  "of times longer (see README)");
     cmd->add_option("--mips", spec->mips,
                     "Mip levels written, N >= 1 (default all, down to 1x1; more than the chain holds is "
                     "clamped, with a note in the --json summary)");

@@ -38,6 +38,7 @@ struct EvaluateCliOptions {
     std::string border = "wrap";
     double toksvigMapPower = 100.0;
     std::vector<int> lobes{kDefaultMixtureLobes};
+    bool shadedFit = false;
     bool json = false;
     bool force = false;
     NormalMapCliOptions normalMap;
@@ -77,6 +78,7 @@ int runEvaluate(const EvaluateCliOptions& o) {
     options.evaluate.betweenTexels = o.betweenTexels;
     options.evaluate.params.toksvigMapPower = o.toksvigMapPower;
     options.evaluate.mixtureLobes = o.lobes;
+    options.evaluate.params.mixtureShadedFit = o.shadedFit;
     if (!o.methods.empty()) {
         options.evaluate.methods.clear();
         for (const auto& name : o.methods) {
@@ -186,6 +188,9 @@ const CommandRegistration registration{
             ->delimiter(',')
             ->check(CLI::Range(1, 4))
             ->type_name("LIST");
+        sub->add_flag("--shaded-fit", o->shadedFit,
+                      "Fit the mixture's lobes to the shaded ground truth as well as to the moments (the "
+                      "bake's --shaded-fit): its rows, and its bake time, are the refined fit's.");
         sub->add_flag("--json", o->json, "Print the report as JSON on stdout instead of Markdown.");
         sub->add_flag(
             "--force", o->force,

@@ -55,6 +55,7 @@ constexpr int kBenchWarmupFrames = 2;
 struct RenderCliOptions {
     std::string input;
     int lobes = kDefaultMixtureLobes;
+    bool shadedFit = false;
     std::string out;
     std::string sample = "hammered";
     int sampleSize = 256;
@@ -174,6 +175,7 @@ Result<Scene> buildScene(const RenderCliOptions& o) {
         m.method = *method;
     }
     m.methodParams.mixtureLobes = o.lobes;
+    m.methodParams.mixtureShadedFit = o.shadedFit;
     m.kernel = o.kernel == "box"        ? FilterKernel::Box
                : o.kernel == "gaussian" ? FilterKernel::Gaussian
                                         : FilterKernel::Tent;
@@ -654,6 +656,9 @@ const CommandRegistration registration{
                         "Lobes per texel of --method mixture, 1..4 (default 3; 1 is LEAN).")
             ->check(CLI::Range(1, 4))
             ->type_name("K");
+        sub->add_flag("--shaded-fit", o->shadedFit,
+                      "--method mixture: its lobes also fitted to the shaded ground truth, as burnish bake "
+                      "--shaded-fit (a slower bake).");
         sub->add_option("--kernel", o->kernel,
                         "Per-mip filter of the moments the bake stores, as burnish bake --kernel: box, "
                         "tent (default) or gaussian.")

@@ -62,6 +62,7 @@ BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc) {
     if (doc.preset().findParameter("metallic"))
         spec.metallic = s.materialClass == MaterialClass::Metal ? 1.0 : 0.0;
     spec.force = s.exportSettings.overwrite;
+    spec.shadedFit = s.method == Method::Mixture && s.exportSettings.shadedFit;
     return spec;
 }
 
@@ -139,6 +140,9 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
     m_output->setPlaceholderText("output folder");
     auto* browseButton = new QPushButton("Browse…", this);
     m_overwrite = new QCheckBox("Replace an existing set (still all-or-nothing)", this);
+    m_shadedFit = new QCheckBox("Fit the mixture to the shaded truth (closer highlights, slower bake)", this);
+    m_shadedFit->setToolTip("The mixture's lobes on mips 2 and up refined against the ground truth itself "
+                            "(burnish bake --shaded-fit): tens of times the moment fit's bake time.");
     m_result = new QLabel(this);
     m_result->setWordWrap(true);
     m_result->setTextInteractionFlags(Qt::TextSelectableByMouse);
@@ -150,6 +154,7 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
     form->addRow("Format", m_format);
     form->addRow("DDS compression", m_compression);
     form->addRow("Mip levels", m_mips);
+    form->addRow("", m_shadedFit);
     auto* outRow = new QHBoxLayout;
     outRow->addWidget(m_output, 1);
     outRow->addWidget(browseButton);
@@ -183,6 +188,8 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
         m_compression->setEnabled(dds);
         if (!dds) m_compression->setCurrentIndex(0);
     });
+    // Kept at once: a document change before the bake redraws the dialog from the settings.
+    connect(m_shadedFit, &QCheckBox::clicked, this, [this] { commitSettings(); });
     connect(m_doc, &MaterialDocument::changed, this, &BakeDialog::refresh);
 
     connect(m_runner, &BakeRunner::progress, this, [this](double fraction, const QString& stage) {
@@ -234,6 +241,8 @@ void BakeDialog::refresh() {
     m_mips->setValue(s.exportSettings.mips);
     if (!m_output->hasFocus()) m_output->setText(s.exportSettings.outputFolder);
     m_overwrite->setChecked(s.exportSettings.overwrite);
+    m_shadedFit->setChecked(s.exportSettings.shadedFit);
+    m_shadedFit->setEnabled(s.method == Method::Mixture);
 }
 
 void BakeDialog::browse() {
@@ -254,6 +263,7 @@ void BakeDialog::commitSettings() {
     e.mips = m_mips->value();
     e.outputFolder = m_output->text().trimmed();
     e.overwrite = m_overwrite->isChecked();
+    e.shadedFit = m_shadedFit->isChecked();
     m_doc->setExportSettings(e);
 }
 

@@ -89,6 +89,7 @@ private:
     QSpinBox* m_mips;
     QLineEdit* m_output;
     QCheckBox* m_overwrite;
+    QCheckBox* m_shadedFit;
     QLabel* m_result;
     QPushButton* m_bake;
     BakeRunner* m_runner;

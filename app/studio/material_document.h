@@ -37,6 +37,7 @@ struct ExportSettings {
     int mips = 0;        // mip levels written; 0 = the whole chain
     QString outputFolder;
     bool overwrite = false;
+    bool shadedFit = false; // the mixture's lobes also fitted to the shaded truth (bake --shaded-fit)
     friend bool operator==(const ExportSettings&, const ExportSettings&) = default;
 };
 

@@ -205,7 +205,8 @@ std::string projectToJson(const MaterialSettings& s, const QString& projectFile,
           {"compression", e.compression.isEmpty() ? Json(nullptr) : Json(e.compression.toStdString())},
           {"mips", e.mips},
           {"outputFolder", relativePath(e.outputFolder, folder)},
-          {"overwrite", e.overwrite}}},
+          {"overwrite", e.overwrite},
+          {"shadedFit", e.shadedFit}}},
         {"environment",
          {{"source", environmentSourceName(s.environment.choice)},
           // Kept when another source is chosen, as the settings keep it (the panel offers it again).
@@ -325,7 +326,8 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
     }
 
     const Reader ex(*exportJson, where + " export");
-    if (Status st = ex.known({"format", "compression", "mips", "outputFolder", "overwrite"}); !st)
+    if (Status st = ex.known({"format", "compression", "mips", "outputFolder", "overwrite", "shadedFit"});
+        !st)
         return Error{st.error()};
     const auto format = ex.string("format", true, true);
     const auto compression = ex.string("compression", true, true);
@@ -333,6 +335,9 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
     const auto outputFolder = ex.string("outputFolder", true, true);
     const Json* overwrite = ex.get("overwrite", true);
     if (overwrite && !overwrite->is_boolean()) ex.fail("overwrite", "true or false");
+    // Projects written before the shaded fit existed bake the moment fit.
+    const Json* shadedFit = ex.get("shadedFit", false);
+    if (shadedFit && !shadedFit->is_boolean()) ex.fail("shadedFit", "true or false");
     if (mips && *mips != std::floor(*mips)) ex.fail("mips", "a whole number");
     if (ex.error()) return *ex.error();
     s.exportSettings.format = format ? QString::fromStdString(*format) : QString();
@@ -340,6 +345,7 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
     s.exportSettings.mips = int(*mips);
     s.exportSettings.outputFolder = absolute(outputFolder);
     s.exportSettings.overwrite = overwrite->get<bool>();
+    s.exportSettings.shadedFit = shadedFit && shadedFit->get<bool>();
 
     // Projects written before the environment was saved light the viewport with the defaults.
     if (const Json* environment = top.get("environment", false)) {

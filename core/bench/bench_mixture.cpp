@@ -4,12 +4,13 @@
 //                         directions) of LEAN and of the mixture for K = 1..4 on every map of
 //                         BURNISH_BENCH_MAPS (a folder of normal maps; default the checkout's
 //                         ../shared/data/normal-maps), mips 1-4, base power s: a table on stdout
-//   BM_MixtureRefine/<s>  an experiment, not a method: does fitting each texel's K = 3 lobes to the
-//                         shaded ground truth itself pay? Up to 64 texels per map and mip (an even
-//                         grid), each fitted mixture refined by Levenberg-Marquardt (Eigen, numerical
-//                         derivatives) on a training direction set (half angles 1-40 deg every
-//                         1.5 deg, 16 azimuths), then measured on the default 49 directions; a table
-//                         of LEAN, fitted and refined relative L1 and energy, and ms per texel
+//   BM_MixtureRefine/<s>  the experiment behind --shaded-fit (eval/mixture_refine.h, which trains on
+//                         several views with analytic derivatives): does fitting each texel's K = 3 lobes to
+//                         the shaded ground truth itself pay? Up to 64 texels per map and mip (an even grid),
+//                         each fitted mixture refined by Levenberg-Marquardt (Eigen, numerical derivatives)
+//                         on a training direction set (half angles 1-40 deg every 1.5 deg, 16 azimuths), then
+//                         measured on the default 49 directions; a table of LEAN, fitted and refined relative
+//                         L1 and energy, and ms per texel
 // Run: build/core/burnish_bench --benchmark_filter=Mixture
 #include <burnish/core/eval/evaluate.h>
 #include <burnish/core/prefilter/lobe_mixture.h>

@@ -8,7 +8,7 @@
 #
 #   core/bench/screen_error.sh BURNISH MAP [POWER] [SAMPLES] [METHODS]
 #
-# METHODS defaults to naive,lean,mixture; the reference's own noise (as the same ratio) is printed
+# METHODS defaults to naive,lean,mixture (mixture-shaded: the mixture with --shaded-fit); the reference's own noise (as the same ratio) is printed
 # beside each row: an error not well above it is noise. A second table gives the shimmer of a slow
 # orbit at distance 4 (`render --sequence 8`, 0.5° a frame, mean |ΔY| of linear HDR luminance per
 # pixel between frames) for each method and the reference.
@@ -23,6 +23,9 @@ common=(--metal --specular 0.9 --fresnel none --power "$power" --size 256x256 --
 # Camera yaw 30°, pitch 30°: the direction to the camera is (0.433, 0.5, 0.75); mirrored in the plane.
 plane=(--mesh plane --pitch 30 --light-dir=-0.433,0.5,-0.75)
 sphere=(--mesh sphere)
+
+# A method's render arguments: mixture-shaded is the mixture fitted to the shaded truth too.
+method_args() { if [ "$1" = mixture-shaded ]; then echo "--method mixture --shaded-fit"; else echo "--method $1"; fi; }
 
 field() { python3 -c "import json,sys; j=json.load(sys.stdin); print(' '.join('%.4f' % j[k] for k in sys.argv[1:]))" "$@"; }
 
@@ -40,7 +43,7 @@ for mesh in plane sphere; do
     noise=""
     for m in "${list[@]}"; do
       if [ "$mesh" = plane ]; then extra=("${plane[@]}"); else extra=("${sphere[@]}"); fi
-      read -r l1 energy n < <("$bin" render "$map" --method "$m" --distance "$distance" "${extra[@]}" \
+      read -r l1 energy n < <("$bin" render "$map" $(method_args "$m") --distance "$distance" "${extra[@]}" \
                                 "${common[@]}" 2>/dev/null | field relative_l1 energy_ratio reference_noise_l1)
       row+=" $l1 ($energy) |"
       noise=$n
@@ -62,7 +65,7 @@ for mesh in plane sphere; do
   reference=""
   for m in "${list[@]}"; do
     if [ "$mesh" = plane ]; then extra=("${plane[@]}"); else extra=("${sphere[@]}"); fi
-    read -r mine theirs < <("$bin" render "$map" --method "$m" --distance 4 "${extra[@]}" --metal \
+    read -r mine theirs < <("$bin" render "$map" $(method_args "$m") --distance 4 "${extra[@]}" --metal \
         --specular 0.9 --fresnel none --power "$power" --size 256x256 --uv-scale 2 --sequence 8 \
         --reference "$samples" --json 2>/dev/null | field method_mean reference_mean)
     row+=" $mine |"

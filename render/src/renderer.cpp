@@ -119,13 +119,15 @@ struct BakeKey {
     double basePower = 0.0;
     std::string encoding;
     int mixtureLobes = 0;
+    bool mixtureShadedFit = false;
     int largestLevel = 0; // the levels above it are not baked (BakeOptions::largestLevel)
     FilterKernel kernel = FilterKernel::Tent;
 
     bool operator==(const BakeKey& o) const {
         return normalMap == o.normalMap && glossMap == o.glossMap && method == o.method &&
                toksvigMapPower == o.toksvigMapPower && basePower == o.basePower && encoding == o.encoding &&
-               mixtureLobes == o.mixtureLobes && largestLevel == o.largestLevel && kernel == o.kernel;
+               mixtureLobes == o.mixtureLobes && mixtureShadedFit == o.mixtureShadedFit &&
+               largestLevel == o.largestLevel && kernel == o.kernel;
     }
 };
 
@@ -137,6 +139,7 @@ BakeKey bakeKeyOf(const MaterialSettings& m, int largestLevel) {
                    m.basePower,
                    m.glossEncoding.name(),
                    m.method == Method::Mixture ? m.methodParams.mixtureLobes : 0,
+                   m.method == Method::Mixture && m.methodParams.mixtureShadedFit,
                    largestLevel,
                    m.kernel};
 }

@@ -597,3 +597,29 @@ TEST(CliBake, OpenImageIOLoadsOnlyWhenAFormatNeedsIt) {
 }
 
 } // namespace
+
+TEST(CliBake, ShadedFitRefinesTheMixtureAndIsRecorded) {
+    TempDir dir;
+    writeNormalMap(dir / "bumps.png");
+    const std::string common =
+        "bake " + quote((dir / "bumps.png").string()) + " --preset mixture --power 256 --out ";
+    ASSERT_EQ(runBurnish(common + quote((dir / "moments").string())).exitCode, 0);
+    const auto r = runBurnish(common + quote((dir / "shaded").string()) + " --shaded-fit");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto manifest =
+        nlohmann::json::parse(burnish::readFile((dir / "shaded" / "bake.json").string()).value());
+    EXPECT_EQ(manifest["options"]["shadedFit"], true);
+    const auto plain =
+        nlohmann::json::parse(burnish::readFile((dir / "moments" / "bake.json").string()).value());
+    EXPECT_EQ(plain["options"]["shadedFit"], false);
+    // The lobes differ (mips 2 and up are refined); the set's files are the same.
+    EXPECT_EQ(listFolder(dir / "moments"), listFolder(dir / "shaded"));
+    EXPECT_NE(burnish::readFile((dir / "moments" / "bumps_mixture-lobe0.exr").string()).value(),
+              burnish::readFile((dir / "shaded" / "bumps_mixture-lobe0.exr").string()).value());
+    // Only the mixture has lobes to refine.
+    const auto lean = runBurnish("bake " + quote((dir / "bumps.png").string()) +
+                                 " --preset lean --shaded-fit --out " + quote((dir / "lean").string()));
+    EXPECT_NE(lean.exitCode, 0);
+    EXPECT_NE(lean.err.find("--shaded-fit applies to --method mixture only"), std::string::npos) << lean.err;
+    EXPECT_FALSE(fs::exists(dir / "lean"));
+}

@@ -1,6 +1,7 @@
 #include <burnish/core/bake/bake.h>
 
 #include <burnish/core/bake/base_variance.h>
+#include <burnish/core/eval/mixture_refine.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/util/simd.h>
 
@@ -645,8 +646,11 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
             for (size_t i = 0; i < powers->size(); ++i)
                 (*powers)[i] = options.encoding.power((*options.authoredGloss)[i]);
         }
-        mixture.emplace(MixturePyramid::build(pyramid, options.basePower, lobes, levels - 1,
-                                              powers ? &*powers : nullptr));
+        const std::vector<double>* texelPowers = powers ? &*powers : nullptr;
+        mixture.emplace(
+            options.params.mixtureShadedFit
+                ? buildShadedMixture(pyramid, options.basePower, lobes, levels - 1, texelPowers)
+                : MixturePyramid::build(pyramid, options.basePower, lobes, levels - 1, texelPowers));
     }
     RowPlan plan(options, base ? &*base : nullptr, mixture ? &*mixture : nullptr, out.textures, scales);
     plan.finestMap = &map;

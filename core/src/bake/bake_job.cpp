@@ -83,6 +83,10 @@ Status resolveLobes(const BakeJobSpec& spec, BakeJob& job) {
     if (job.bake.roles)
         for (TextureRole r : *job.bake.roles)
             if (isMixtureLobeRole(r)) stored = std::max(stored, mixtureLobeIndex(r) + 1);
+    if (spec.shadedFit && job.method != Method::Mixture)
+        return Error{fmt::format("--shaded-fit applies to --method mixture only (the method is {})",
+                                 methodName(job.method))};
+    job.bake.params.mixtureShadedFit = spec.shadedFit;
     if (!spec.lobes) {
         if (job.method == Method::Mixture && stored > 0) job.bake.params.mixtureLobes = stored;
         return {};
@@ -497,7 +501,10 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
         {"allow8bit", job.spec.allowEightBit},
         {"allowImplausible", job.spec.allowImplausible}};
     if (detailRecord) record.options["detailFade"] = {detailRecord->fadeStartMip, detailRecord->fadeEndMip};
-    if (job.method == Method::Mixture) record.options["lobes"] = job.bake.params.mixtureLobes;
+    if (job.method == Method::Mixture) {
+        record.options["lobes"] = job.bake.params.mixtureLobes;
+        record.options["shadedFit"] = job.bake.params.mixtureShadedFit;
+    }
     record.diagnostics = map->diagnostics;
     record.detail = detailRecord;
 
@@ -664,7 +671,9 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
                     s = Error{at + ": 'lobes' must be an integer"};
                 else
                     spec.lobes = value.get<int>();
-            } else if (key == "detail")
+            } else if (key == "shaded-fit")
+                s = flag(spec.shadedFit);
+            else if (key == "detail")
                 s = optStr(spec.detail);
             else if (key == "detail-fade")
                 s = optStr(spec.detailFade);
@@ -675,12 +684,13 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
             else if (key == "allow-8bit")
                 s = flag(spec.allowEightBit);
             else
-                s = Error{at + ": unknown field '" + key +
-                          "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
-                          "border, "
-                          "green, layout, encoding, metallic, mips, lobes, detail, detail-fade, force, "
-                          "allow-implausible, "
-                          "allow-8bit)"};
+                s = Error{
+                    at + ": unknown field '" + key +
+                    "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
+                    "border, "
+                    "green, layout, encoding, metallic, mips, lobes, shaded-fit, detail, detail-fade, force, "
+                    "allow-implausible, "
+                    "allow-8bit)"};
             if (!s) return Error{s.error()};
         }
         if (j.contains("input") && !isSampleBakeInput(spec.input)) spec.input = rebase(spec.input);

@@ -2,6 +2,7 @@
 
 #include "lobe_values.h"
 
+#include <burnish/core/eval/mixture_refine.h>
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/shading/ndf.h>
@@ -593,7 +594,10 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             if (v.method != Method::Mixture || v.lobes < 2) continue;
             if (cancelled()) return Error{std::string(kCancelledMessage)};
             auto& mix = mixturePyramids[size_t(v.lobes)];
-            if (!mix) mix.emplace(MixturePyramid::build(pyramid, s, v.lobes, -1, texelPowers));
+            if (!mix)
+                mix.emplace(options.params.mixtureShadedFit
+                                ? buildShadedMixture(pyramid, s, v.lobes, -1, texelPowers)
+                                : MixturePyramid::build(pyramid, s, v.lobes, -1, texelPowers));
             mixtures[m] = &*mix;
         }
         // Lobes of every variant at every evaluated mip.

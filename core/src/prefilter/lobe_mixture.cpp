@@ -634,7 +634,8 @@ LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVarianc
 }
 
 MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int k, int lastLevel,
-                                     const std::vector<double>* texelPowers) {
+                                     const std::vector<double>* texelPowers,
+                                     const std::function<void(MixturePyramid&)>& refine) {
     MixturePyramid out;
     out.m_k = std::clamp(k, 1, kMaxMixtureLobes);
     // The narrowest lobe any finest texel brings: its covariance floor.
@@ -685,6 +686,7 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         });
         out.m_levels.push_back(std::move(built));
     }
+    if (refine) refine(out);
     // Top-down, each texel's lobes take the slots of the lobes they belong to most in the level above
     // as a GPU samples it at the texel's centre: its parents' lobes bilinearly filtered, slot by slot.
     // That reference varies smoothly across texels, whichever parent they fall under, so
@@ -775,6 +777,11 @@ void MixturePyramid::releaseLevel(int k) {
 LobeMixture MixturePyramid::at(int level, int x, int y) const {
     const Level& l = m_levels[size_t(level - 1)];
     return l.get(size_t(y) * size_t(l.width) + size_t(x), m_k);
+}
+
+void MixturePyramid::replace(int level, int x, int y, const LobeMixture& mixture) {
+    Level& l = m_levels[size_t(level - 1)];
+    l.set(size_t(y) * size_t(l.width) + size_t(x), m_k, mixture);
 }
 
 LobeMixture MixturePyramid::Level::get(size_t texel, int k) const {

@@ -62,6 +62,8 @@ struct BakeJobSpec {
     std::optional<int> mips;
     /// The mixture's lobes per texel (1..4; absent = as many as the preset's files store).
     std::optional<int> lobes;
+    /// The mixture's lobes also fitted to the shaded ground truth (MethodParams::mixtureShadedFit).
+    bool shadedFit = false;
     /// Detail normal map baked beside the method's textures (detail.h), and its fade "START:END".
     std::optional<std::string> detail;
     std::optional<std::string> detailFade;

@@ -29,6 +29,7 @@
 #include <glm/vec3.hpp>
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <new>
 #include <vector>
@@ -117,8 +118,12 @@ public:
     /// texelPowers, row-major), each level above from its children's lobes, up to level `lastLevel`
     /// (the pyramid's last when < 0; 0 builds no level); in parallel over rows, the same result on any thread
     /// count. k is clamped to [1, kMaxMixtureLobes].
+    ///
+    /// `refine`, when given, runs once every level's lobes are fitted and before they take their slots:
+    /// it may replace any texel's lobes (replace), as the shaded fit does (eval/mixture_refine.h).
     static MixturePyramid build(const NormalPyramid& pyramid, double s, int k, int lastLevel = -1,
-                                const std::vector<double>* texelPowers = nullptr);
+                                const std::vector<double>* texelPowers = nullptr,
+                                const std::function<void(MixturePyramid&)>& refine = {});
 
     /// Levels 0..lastLevel (level 0 included in the count).
     int levelCount() const { return int(m_levels.size()) + 1; }
@@ -126,6 +131,9 @@ public:
     double minVariance() const { return m_minVariance; }
     /// Texel (x, y) of level `level` (1 <= level < levelCount()).
     LobeMixture at(int level, int x, int y) const;
+    /// Replaces texel (x, y) of level `level`'s lobes (at most lobeCount() of them). Safe from
+    /// parallel threads on distinct texels.
+    void replace(int level, int x, int y, const LobeMixture& mixture);
     /// The lobe index a finest texel's own lobe takes at level 0: that of the lobe of its level-1
     /// parent it belongs to most (the largest w_i N(b; b_i, Σ_i)), so trilinear filtering between levels 0
     /// and 1 merges a normal into its own cluster. 0 without a level 1.

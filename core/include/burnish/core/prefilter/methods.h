@@ -193,6 +193,9 @@ struct MethodParams {
     double toksvigMapPower = 100.0;
     /// Lobes per texel of the mixture (1..kMaxMixtureLobes of lobe_mixture.h; 1 is LEAN).
     int mixtureLobes = kDefaultMixtureLobes;
+    /// The mixture's lobes also fitted to the shaded ground truth (eval/mixture_refine.h): a
+    /// closer highlight, at many times the moment fit's bake time (for final exports).
+    bool mixtureShadedFit = false;
 };
 
 /// The mixture's lobe textures for K lobes: MixtureLobe0..MixtureLobe(K−1).

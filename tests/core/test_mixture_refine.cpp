@@ -44,15 +44,18 @@ NormalMap cropOf(const std::string& name, int size) {
     return mapOf(size, size, [&](int x, int y) { return map->at(x, y); });
 }
 
-double squaredError(const LobeMixture& m, const std::vector<DirectionPair>& dirs,
-                    const std::vector<double>& truth, double v) {
+double objective(const LobeMixture& m, const std::vector<DirectionPair>& dirs,
+                 const std::vector<double>& truth, double v) {
     const DecodedMixture d = decodeMixture(m, v);
-    double sum = 0.0;
+    double sum = 0.0, total = 0.0;
     for (size_t i = 0; i < dirs.size(); ++i) {
         const double e = mixtureValue(d, dirs[i].l, dirs[i].h) - truth[i];
         sum += e * e;
+        total += e;
     }
-    return sum;
+    // The fit's objective: the pairs' squared errors and the energy's.
+    const double energy = kShadedFitEnergyWeight * total / std::sqrt(double(dirs.size()));
+    return sum + energy * energy;
 }
 
 // Every lobe finite, its variances at least the base variance v, and the texel's weight `total`.
@@ -136,8 +139,8 @@ TEST(ShadedFit, NeverRaisesTheTrainingErrorAndKeepsTheWeight) {
                     for (const DirectionPair& d : dirs)
                         truth.push_back(groundTruthTexel(b.pyramid, level, x, y, s, d));
                     const LobeMixture refined = refineMixtureToTruth(fitted, dirs, truth, mp.minVariance());
-                    const double before = squaredError(fitted, dirs, truth, mp.minVariance());
-                    const double after = squaredError(refined, dirs, truth, mp.minVariance());
+                    const double before = objective(fitted, dirs, truth, mp.minVariance());
+                    const double after = objective(refined, dirs, truth, mp.minVariance());
                     EXPECT_LE(after, before * (1.0 + 1e-12)) << "s " << s << " level " << level;
                     expectSound(refined, mp.minVariance(), fitted.totalWeight());
                     lowered += after < 0.9 * before;

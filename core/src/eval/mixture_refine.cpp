@@ -27,6 +27,9 @@ constexpr int kFirstRefinedLevel = 2;
 // times the cost.
 constexpr int kMaxEvaluations = 16;
 
+// The energy's residual: kShadedFitEnergyWeight/√n times the sum of the pairs' errors.
+constexpr double kEnergyWeight = kShadedFitEnergyWeight;
+
 double radiansOf(double deg) {
     return deg * kPiD / 180.0;
 }
@@ -67,9 +70,11 @@ struct ShadedResiduals {
     int lobes = 0;
     double v = 0.0;     // the base variance
     double scale = 1.0; // 1 / the mean truth
+    double energyWeight = 0.0;
 
     int inputs() const { return 6 * lobes; }
-    int values() const { return int(directions->size()); }
+    // One residual a pair, and the energy's: energyWeight/√n times their sum.
+    int values() const { return int(directions->size()) + 1; }
 
     std::array<LobeState, kMaxMixtureLobes> decode(const Eigen::VectorXd& p) const {
         std::array<LobeState, kMaxMixtureLobes> out{};
@@ -113,6 +118,8 @@ struct ShadedResiduals {
             const double e = (m - (*truth)[k]) * scale;
             r[Eigen::Index(k)] = std::isfinite(e) ? e : 1e150;
         }
+        const Eigen::Index n = Eigen::Index(directions->size());
+        r[n] = energyWeight / std::sqrt(double(n)) * r.head(n).sum();
         return 0;
     }
 
@@ -155,6 +162,8 @@ struct ShadedResiduals {
             for (int i = 0; i < lobes; ++i)
                 jac(row, 6 * i) = state[size_t(i)].share * (value[size_t(i)] - m) * scale;
         }
+        const Eigen::Index n = Eigen::Index(directions->size());
+        jac.row(n) = energyWeight / std::sqrt(double(n)) * jac.topRows(n).colwise().sum();
         return 0;
     }
 };
@@ -333,7 +342,8 @@ LobeMixture refineMixtureToTruth(const LobeMixture& fitted, const std::vector<Di
     residuals.lobes = n;
     residuals.v = v;
     residuals.scale = 1.0 / meanTruth;
-    Eigen::VectorXd r(Eigen::Index(directions.size()));
+    residuals.energyWeight = kEnergyWeight;
+    Eigen::VectorXd r(residuals.values());
     residuals(p, r);
     const double before = r.squaredNorm();
     if (!std::isfinite(before)) return fitted;

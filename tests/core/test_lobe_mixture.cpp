@@ -5,6 +5,7 @@
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/methods.h>
 
+#include "box_pyramid_of.h"
 #include "normal_map_of.h"
 
 #include <glm/geometric.hpp>
@@ -27,16 +28,8 @@ namespace {
 
 using test::mapOf;
 
-struct Built {
-    std::shared_ptr<NormalMap> map;
-    NormalPyramid pyramid;
-};
-
-Built build(NormalMap map) {
-    auto shared = std::make_shared<NormalMap>(std::move(map));
-    NormalPyramid p = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
-    return {shared, std::move(p)};
-}
+using test::build;
+using test::Built;
 
 bool allFinite(const LobeMixture& m, double minVariance) {
     for (int i = 0; i < m.count; ++i) {

@@ -7,6 +7,7 @@
 #include <burnish/core/eval/mixture_refine.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 
+#include "box_pyramid_of.h"
 #include "normal_map_of.h"
 
 #include <glm/geometric.hpp>
@@ -26,16 +27,8 @@ namespace {
 
 using test::mapOf;
 
-struct Built {
-    std::shared_ptr<NormalMap> map;
-    NormalPyramid pyramid;
-};
-
-Built build(NormalMap map) {
-    auto shared = std::make_shared<NormalMap>(std::move(map));
-    NormalPyramid p = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
-    return {shared, std::move(p)};
-}
+using test::build;
+using test::Built;
 
 // The top-left size×size texels of a test map.
 NormalMap cropOf(const std::string& name, int size) {

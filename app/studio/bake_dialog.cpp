@@ -142,7 +142,8 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
     m_overwrite = new QCheckBox("Replace an existing set (still all-or-nothing)", this);
     m_shadedFit = new QCheckBox("Fit the mixture to the shaded truth (closer highlights, slower bake)", this);
     m_shadedFit->setToolTip("The mixture's lobes on mips 2 and up refined against the ground truth itself "
-                            "(burnish bake --shaded-fit): tens of times the moment fit's bake time.");
+                            "(burnish bake --shaded-fit): closer highlights at texel centres, about the "
+                            "same between texels, and tens of times the moment fit's bake time.");
     m_result = new QLabel(this);
     m_result->setWordWrap(true);
     m_result->setTextInteractionFlags(Qt::TextSelectableByMouse);

@@ -221,15 +221,7 @@ TEST(LobeMixture, SameBitsOnOneThreadAndOnAll) {
         tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
         one = MixturePyramid::build(b.pyramid, 256.0, 3, 3);
     }
-    for (int level = 1; level <= 3; ++level) {
-        const PyramidLevel& l = b.pyramid.level(level);
-        for (int y = 0; y < l.height; ++y)
-            for (int x = 0; x < l.width; ++x) {
-                const LobeMixture &a = all.at(level, x, y), &o = one.at(level, x, y);
-                ASSERT_EQ(a.count, o.count);
-                ASSERT_EQ(std::memcmp(a.lobes.data(), o.lobes.data(), sizeof(a.lobes)), 0);
-            }
-    }
+    EXPECT_TRUE(test::sameLobesBitForBit(all, one, b.pyramid, 3));
 }
 
 // The reduction as its header states it, one mergeCost call per pair per step (no cost matrix, no

@@ -21,10 +21,6 @@ namespace burnish {
 
 namespace {
 
-double radians(double deg) {
-    return deg * kPi<double> / 180.0;
-}
-
 struct Accumulator {
     double absError = 0.0;
     double method = 0.0;

@@ -16,8 +16,6 @@ namespace burnish {
 
 namespace {
 
-constexpr double kPiD = kPi<double>;
-
 // Level 1 keeps its moment fit: K lobes for four normals are close to exact, and refined they
 // erred more on evaluate's pairs than fitted (tread plate, s = 256: 0.0066 -> 0.0100).
 constexpr int kFirstRefinedLevel = 2;
@@ -30,22 +28,14 @@ constexpr int kMaxEvaluations = 16;
 // The energy's residual: kShadedFitEnergyWeight/√n times the sum of the pairs' errors.
 constexpr double kEnergyWeight = kShadedFitEnergyWeight;
 
-double radiansOf(double deg) {
-    return deg * kPiD / 180.0;
-}
-
-// The light for view v mirrored about h, or nothing (z < 0) when it lies below the horizon limit.
+// The light for view v mirrored about h (below the horizon where its z is negative).
 glm::dvec3 mirrored(const glm::dvec3& v, const glm::dvec3& h) {
     return 2.0 * glm::dot(v, h) * h - v;
 }
 
-// One lobe's parameters: log share (before normalising), mean slope, and the Cholesky factor
-// L = [[a, 0], [b, c]] of its covariance above the base variance: Σ = v·I + LLᵀ.
-struct LobeParams {
-    double share, mx, my, a, b, c;
-};
-
-// What the residuals and their derivatives need of one lobe.
+// What the residuals and their derivatives need of one lobe, decoded from its six parameters: log
+// share (before normalising), mean slope, and the Cholesky factor L = [[a, 0], [b, c]] of its
+// covariance above the base variance: Σ = v·I + LLᵀ.
 struct LobeState {
     double share = 0.0;
     double mx = 0.0, my = 0.0;
@@ -92,7 +82,7 @@ struct ShadedResiduals {
             const double sxx = v + s.a * s.a, syy = v + s.b * s.b + s.c * s.c, sxy = s.a * s.b;
             const double det = sxx * syy - sxy * sxy; // >= v² > 0
             s.ixx = syy / det, s.iyy = sxx / det, s.ixy = -sxy / det;
-            s.coef = 1.0 / (2.0 * kPiD * std::sqrt(det));
+            s.coef = 1.0 / (2.0 * kPi<double> * std::sqrt(det));
             const glm::dvec3 u(s.mx, s.my, 1.0);
             s.invLen = 1.0 / glm::length(u);
             s.n = u * s.invLen;
@@ -176,8 +166,8 @@ glm::dvec3 halfOfSlope(double tx, double ty) {
 // A light/view pair for half vector h: the view 30° from the normal across the lobe's azimuth
 // mirrored about h, or the view along h itself where that light falls below 3° above the horizon.
 DirectionPair pairForHalf(const glm::dvec3& h) {
-    const double minLz = std::sin(radiansOf(3.0));
-    const double tv = radiansOf(30.0);
+    const double minLz = std::sin(radians(3.0));
+    const double tv = radians(30.0);
     const glm::dvec3 v(0.0, std::sin(tv), std::cos(tv));
     glm::dvec3 l = mirrored(v, h);
     if (l.z >= minLz) return {glm::normalize(l), v, h};
@@ -285,18 +275,18 @@ std::vector<DirectionPair> shadedFitDirections() {
                                     19.0, 24.0, 30.0, 37.0, 45.0, 55.0};
     static const double kViews[] = {10.0, 35.0, 60.0};
     constexpr int kAzimuths = 12;
-    const double minLz = std::sin(radiansOf(3.0));
+    const double minLz = std::sin(radians(3.0));
     std::vector<DirectionPair> out;
     int ring = 0;
     for (double thetaDeg : kRings) {
-        const double th = radiansOf(thetaDeg);
+        const double th = radians(thetaDeg);
         for (int j = 0; j < kAzimuths; ++j) {
             // Azimuths offset by 7° a ring, never on evaluate's multiples of 45°.
-            const double phi = radiansOf(15.0 + 30.0 * j + 7.0 * ring);
+            const double phi = radians(15.0 + 30.0 * j + 7.0 * ring);
             const glm::dvec3 h(std::sin(th) * std::cos(phi), std::sin(th) * std::sin(phi), std::cos(th));
             // The view by turns; where the light would fall below the horizon limit, the next lower.
             for (int view = (ring + j) % 3; view >= 0; --view) {
-                const double tv = radiansOf(kViews[view]);
+                const double tv = radians(kViews[view]);
                 const glm::dvec3 v(std::sin(tv), 0.0, std::cos(tv));
                 const glm::dvec3 l = mirrored(v, h);
                 if (l.z >= minLz) {
@@ -426,9 +416,8 @@ void refineMixturePyramid(MixturePyramid& mixture, const NormalPyramid& pyramid,
                         }
                         self(self, k - 1, i, j);
                         const std::vector<double>& child = sums[size_t(k - 1)];
-                        std::vector<double>& mine = sums[size_t(k)];
                         for (size_t d = 0; d < T; ++d)
-                            mine[d] += child[d];
+                            out[d] += child[d];
                     }
                 if (k >= kFirstRefinedLevel) refiner.refine(k, x, y, sums[size_t(k)].data());
             };

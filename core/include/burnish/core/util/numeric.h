@@ -16,6 +16,11 @@ template <class T> inline constexpr T kPi = T(3.14159265358979323846264338327950
 template <class T> inline constexpr T kInvPi = T(0.318309886183790671537767526745028724L);
 template <class T> inline constexpr T kLn2 = T(0.693147180559945309417232121458176568L);
 
+/// Degrees to radians, deg·π/180 (evaluate's direction sets and the shaded fit's training pairs).
+inline double radians(double deg) {
+    return deg * kPi<double> / 180.0;
+}
+
 /// Largest specular power any Burnish function produces or accepts; larger inputs are clamped.
 /// 1e9 keeps the normalized Blinn-Phong peak (n+2)/(2π) ≈ 1.6e8 far from float overflow and
 /// its reciprocal (a variance of 1e-9) a normal float.

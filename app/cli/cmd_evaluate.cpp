@@ -39,6 +39,7 @@ struct EvaluateCliOptions {
     double toksvigMapPower = 100.0;
     std::vector<int> lobes{kDefaultMixtureLobes};
     bool shadedFit = false;
+    std::string mixtureFiltering = "moments";
     bool json = false;
     bool force = false;
     NormalMapCliOptions normalMap;
@@ -79,6 +80,7 @@ int runEvaluate(const EvaluateCliOptions& o) {
     options.evaluate.params.toksvigMapPower = o.toksvigMapPower;
     options.evaluate.mixtureLobes = o.lobes;
     options.evaluate.params.mixtureShadedFit = o.shadedFit;
+    options.evaluate.mixtureFiltering = *parseMixtureFiltering(o.mixtureFiltering); // checked by CLI11
     if (!o.methods.empty()) {
         options.evaluate.methods.clear();
         for (const auto& name : o.methods) {
@@ -173,6 +175,13 @@ const CommandRegistration registration{
             "Also evaluate at texel corners, where rendering samples: the truth is the bilinear-weighted "
             "union of four footprints, each method its shader's value from bilinearly filtered textures "
             "(extra tables and JSON rows with between_texels).");
+        sub->add_option(
+               "--mixture-filtering", o->mixtureFiltering,
+               "How --between-texels filters the mixture: moments (hardware bilinear filtering of "
+               "its stored lobes, which merges each slot's lobes; default) or stochastic (filtering "
+               "after shading, as render --mixture-filtering stochastic draws it: the expected value "
+               "over its samples, each texel's own mixture shaded and weighted).")
+            ->check(CLI::IsMember({"moments", "stochastic"}));
         sub->add_option("--bake-runs", o->bakeRuns,
                         "Bake timings are the median of this many runs (default 3).")
             ->check(CLI::Range(1, 100));

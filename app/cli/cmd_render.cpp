@@ -56,6 +56,8 @@ struct RenderCliOptions {
     std::string input;
     int lobes = kDefaultMixtureLobes;
     bool shadedFit = false;
+    std::string mixtureFiltering = "moments";
+    int mixtureSamples = 16;
     std::string out;
     std::string sample = "hammered";
     int sampleSize = 256;
@@ -176,6 +178,8 @@ Result<Scene> buildScene(const RenderCliOptions& o) {
     }
     m.methodParams.mixtureLobes = o.lobes;
     m.methodParams.mixtureShadedFit = o.shadedFit;
+    m.mixtureFiltering = *parseMixtureFiltering(o.mixtureFiltering); // checked by CLI11
+    m.mixtureSamples = o.mixtureSamples;
     m.kernel = o.kernel == "box"        ? FilterKernel::Box
                : o.kernel == "gaussian" ? FilterKernel::Gaussian
                                         : FilterKernel::Tent;
@@ -659,6 +663,16 @@ const CommandRegistration registration{
         sub->add_flag("--shaded-fit", o->shadedFit,
                       "--method mixture: its lobes also fitted to the shaded ground truth, as burnish bake "
                       "--shaded-fit (a slower bake).");
+        sub->add_option(
+               "--mixture-filtering", o->mixtureFiltering,
+               "--method mixture: moments (hardware trilinear filtering of its stored lobes, which "
+               "merges each slot's lobes; default) or stochastic (filtering after shading: each pass "
+               "shades one texel of every pixel's trilinear footprint, and --mixture-samples passes "
+               "are averaged, as temporal anti-aliasing would).")
+            ->check(CLI::IsMember({"moments", "stochastic"}));
+        sub->add_option("--mixture-samples", o->mixtureSamples,
+                        "Passes averaged with --mixture-filtering stochastic (default 16).")
+            ->check(CLI::Range(1, 4096));
         sub->add_option("--kernel", o->kernel,
                         "Per-mip filter of the moments the bake stores, as burnish bake --kernel: box, "
                         "tent (default) or gaussian.")

@@ -3,14 +3,15 @@
 gathered into one table (Markdown on stdout, the rows as JSON with --json-out).
 
     core/bench/mixture_study.py BIN MAP... [--powers 64,256,1024] [--lobes 1,2,3,4] [--mips 1:4]
-                                [--dense] [--between] [--shaded-fit] [--json-out FILE]
+                                [--dense] [--between [--stochastic]] [--shaded-fit] [--json-out FILE]
 
 For every map, power and mip it reads LEAN's and each mixture-kK row's relative L1 and energy ratio
 and prints: per K the mean relative L1 over all (map, power, mip) cases next to LEAN's, the mean of
 the per-case ratio to LEAN, the worst ratio (a case where the mixture is worse than LEAN has a ratio
 above 1), the energy range, and the per-map worst ratio. `--dense` evaluates with 1° half-angle
 steps to 40° and 16 azimuths instead of the default 48 light/view pairs; `--shaded-fit` evaluates the
-mixture fitted to the shaded ground truth too (evaluate --shaded-fit). Bake and shading costs come from
+mixture fitted to the shaded ground truth too (evaluate --shaded-fit); `--stochastic` filters the mixture
+after shading between texels (evaluate --mixture-filtering stochastic). Bake and shading costs come from
 the first map's report. Figures only: nothing here passes or fails.
 """
 import argparse
@@ -22,7 +23,7 @@ import sys
 import tempfile
 
 
-def evaluate(binary, path, power, lobes, mips, dense, between, shaded=False):
+def evaluate(binary, path, power, lobes, mips, dense, between, shaded=False, stochastic=False):
     first, last = mips
     with tempfile.TemporaryDirectory() as out:
         cmd = [binary, "evaluate", path, "--power", str(power), "--methods", "lean,mixture",
@@ -34,6 +35,8 @@ def evaluate(binary, path, power, lobes, mips, dense, between, shaded=False):
             cmd += ["--between-texels"]
         if shaded:
             cmd += ["--shaded-fit"]
+        if stochastic:
+            cmd += ["--mixture-filtering", "stochastic"]
         run = subprocess.run(cmd, capture_output=True, text=True)
         if run.returncode != 0:
             print(f"skipped {path} s={power}: {run.stderr.strip().splitlines()[-1]}", file=sys.stderr)
@@ -66,6 +69,8 @@ def main():
     ap.add_argument("--between", action="store_true", help="also evaluate between texels (--between-texels)")
     ap.add_argument("--shaded-fit", action="store_true",
                     help="the mixture fitted to the shaded ground truth too (evaluate --shaded-fit)")
+    ap.add_argument("--stochastic", action="store_true",
+                    help="between texels, the mixture filtered after shading (evaluate --mixture-filtering stochastic)")
     ap.add_argument("--json-out")
     a = ap.parse_args()
     powers = [float(p) for p in a.powers.split(",")]
@@ -75,7 +80,7 @@ def main():
     rows, costs = [], None
     for path in a.maps:
         for s in powers:
-            report = evaluate(a.binary, path, s, lobes, mips, a.dense, a.between, a.shaded_fit)
+            report = evaluate(a.binary, path, s, lobes, mips, a.dense, a.between, a.shaded_fit, a.stochastic)
             if report is None:
                 continue
             if costs is None:

@@ -8,7 +8,8 @@
 #
 #   core/bench/screen_error.sh BURNISH MAP [POWER] [SAMPLES] [METHODS]
 #
-# METHODS defaults to naive,lean,mixture (mixture-shaded: the mixture with --shaded-fit); the reference's own noise (as the same ratio) is printed
+# METHODS defaults to naive,lean,mixture (mixture-shaded: the mixture with --shaded-fit;
+# mixture-stochastic: filtered after shading, --mixture-filtering stochastic with 64 passes averaged); the reference's own noise (as the same ratio) is printed
 # beside each row: an error not well above it is noise. A second table gives the shimmer of a slow
 # orbit at distance 4 (`render --sequence 8`, 0.5° a frame, mean |ΔY| of linear HDR luminance per
 # pixel between frames) for each method and the reference.
@@ -24,8 +25,15 @@ common=(--metal --specular 0.9 --fresnel none --power "$power" --size 256x256 --
 plane=(--mesh plane --pitch 30 --light-dir=-0.433,0.5,-0.75)
 sphere=(--mesh sphere)
 
-# A method's render arguments: mixture-shaded is the mixture fitted to the shaded truth too.
-method_args() { if [ "$1" = mixture-shaded ]; then echo "--method mixture --shaded-fit"; else echo "--method $1"; fi; }
+# A method's render arguments: mixture-shaded is the mixture fitted to the shaded truth too,
+# mixture-stochastic the mixture filtered after shading.
+method_args() {
+  case "$1" in
+    mixture-shaded) echo "--method mixture --shaded-fit" ;;
+    mixture-stochastic) echo "--method mixture --mixture-filtering stochastic --mixture-samples 64" ;;
+    *) echo "--method $1" ;;
+  esac
+}
 
 field() { python3 -c "import json,sys; j=json.load(sys.stdin); print(' '.join('%.4f' % j[k] for k in sys.argv[1:]))" "$@"; }
 

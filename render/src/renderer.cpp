@@ -351,6 +351,8 @@ struct Renderer::Impl {
     std::optional<Framebuffer> displayInteractive;
     std::optional<Framebuffer> accumulation;
     std::optional<Framebuffer> heatmapReference;
+    std::optional<Framebuffer> stochasticSum; // the passes of a stochastically filtered mixture, summed
+    int stochasticSample = 0;                 // the pass being drawn (uStochasticSample)
     bool heatmapReferenceValid = false;
     double lastMs = 0.0;
 
@@ -371,6 +373,8 @@ struct Renderer::Impl {
                              glm::vec2 jitterNdc, bool reference);
     Status drawMaterial(const FeatureSet& f, const Program& p, int width, int height, glm::vec2 jitterNdc,
                         bool reference, bool withBackground);
+    /// Adds the HDR target's colour, times `weight`, into `sum` (left bound).
+    void addHdrInto(Framebuffer& sum, float weight);
     Status accumulateReference(int width, int height, int samples, bool withBackground);
     void drawBackground(int width, int height, bool displayOutput);
     /// The cube the lighting reads for `kind` (the prefiltered one, or FIS's chain), when made.
@@ -381,6 +385,12 @@ struct Renderer::Impl {
     glm::mat4 cameraViewProjection(int width, int height) const;
     Status displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView);
     Status drawHdr(int width, int height, bool withBackground);
+    /// Whether the material is a mixture filtered after shading by a specialized program
+    /// (MaterialSettings::mixtureFiltering; the ubershader and the reference filter the moments).
+    bool stochasticMixture() const {
+        return !useUbershader && hasScene && scene.material.method == Method::Mixture &&
+               scene.material.mixtureFiltering == MixtureFiltering::Stochastic;
+    }
     Status drawFused(const RenderTarget& target);
     void setFaceCulling() const;
     void beginMaterialPass(const Framebuffer& target) const;
@@ -749,6 +759,9 @@ Result<const Program*> Renderer::Impl::materialProgram(const FeatureSet& f, bool
     if (!uber && f.method == Method::Mixture && !f.referenceMode)
         d.push_back({"MIXTURE_LOBES", std::to_string(std::clamp(scene.material.methodParams.mixtureLobes, 1,
                                                                 kMaxMixtureLobes))});
+    if (!uber && f.method == Method::Mixture && !f.referenceMode &&
+        scene.material.mixtureFiltering == MixtureFiltering::Stochastic)
+        d.push_back({"MIXTURE_STOCHASTIC", "1"});
     if (displayOutput) d.push_back({"DISPLAY_OUTPUT", "1"});
     return programs.get("material.vert", "material.frag", d);
 }
@@ -785,6 +798,7 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
     p.set("uToksvigFixedPower", float(m.methodParams.toksvigMapPower));
     p.set("uMixtureLobes", std::clamp(m.methodParams.mixtureLobes, 1, kMaxMixtureLobes));
     p.set("uMixtureMinVariance", float(mixtureMinVariance));
+    p.set("uStochasticSample", stochasticSample);
     p.set("uDetailUvScale", m.detailUvScale);
     if (m.normalMap)
         p.set("uNormalMapSize", glm::vec2(float(m.normalMap->width), float(m.normalMap->height)));
@@ -794,6 +808,7 @@ void Renderer::Impl::setMaterialUniforms(const Program& p, const FeatureSet& f, 
         const int unit = textureUnit(role);
         gpu.texture.bind(unit);
         p.set(std::string(textureSpec(role).sampler).c_str(), unit);
+        if (role == TextureRole::MixtureWeights) p.set("uMixtureLevels", gpu.texture.levels());
     };
     if (reference) {
         // The finest normals are stored signed: no decode.
@@ -850,6 +865,20 @@ Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int w
     return {};
 }
 
+void Renderer::Impl::addHdrInto(Framebuffer& sum, float weight) {
+    sum.bind();
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_ONE, GL_ONE);
+    glBlendEquation(GL_FUNC_ADD);
+    accumulate->use();
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, hdr->colorTexture());
+    accumulate->set("uSource", 0);
+    accumulate->set("uWeight", weight);
+    fullscreen->draw();
+    glDisable(GL_BLEND);
+}
+
 Status Renderer::Impl::accumulateReference(int width, int height, int samples, bool withBackground) {
     if (auto s = prepareFinest(); !s) return s;
     FeatureSet f = features;
@@ -869,17 +898,7 @@ Status Renderer::Impl::accumulateReference(int width, int height, int samples, b
         const glm::vec2 jitterNdc((jx - 0.5f) * 2.0f / float(width), (jy - 0.5f) * 2.0f / float(height));
         if (auto s = drawMaterial(f, **reference, width, height, jitterNdc, true, withBackground); !s)
             return s;
-        accumulation->bind();
-        glEnable(GL_BLEND);
-        glBlendFunc(GL_ONE, GL_ONE);
-        glBlendEquation(GL_FUNC_ADD);
-        accumulate->use();
-        glActiveTexture(GL_TEXTURE0);
-        glBindTexture(GL_TEXTURE_2D, hdr->colorTexture());
-        accumulate->set("uSource", 0);
-        accumulate->set("uWeight", 1.0f / float(samples));
-        fullscreen->draw();
-        glDisable(GL_BLEND);
+        addHdrInto(*accumulation, 1.0f / float(samples));
     }
     return {};
 }
@@ -932,8 +951,34 @@ Status Renderer::Impl::drawFused(const RenderTarget& target) {
 
 Status Renderer::Impl::drawHdr(int width, int height, bool withBackground) {
     if (!hasScene || !program) return Error{"no scene to render"};
-    if (auto s = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false, withBackground); !s)
-        return s;
+    if (!stochasticMixture()) {
+        stochasticSample = 0;
+        return drawMaterial(features, *program, width, height, glm::vec2(0.0f), false, withBackground);
+    }
+    // Filtering after shading: each pass shades one texel of each pixel's trilinear footprint (its
+    // own random numbers), and the passes' average converges to the filter applied to the shading,
+    // as temporal anti-aliasing accumulates it over frames. The average ends in the HDR target.
+    const int samples = std::clamp(scene.material.mixtureSamples, 1, kMaxReferenceSamples);
+    if (auto s = ensureTarget(stochasticSum, width, height, false); !s) return s;
+    stochasticSum->bind();
+    glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    for (int i = 0; i < samples; ++i) {
+        stochasticSample = i;
+        if (auto s = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false, withBackground);
+            !s)
+            return s;
+        addHdrInto(*stochasticSum, 1.0f / float(samples));
+    }
+    stochasticSample = 0;
+    hdr->bind();
+    glDisable(GL_DEPTH_TEST);
+    accumulate->use();
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, stochasticSum->colorTexture());
+    accumulate->set("uSource", 0);
+    accumulate->set("uWeight", 1.0f);
+    fullscreen->draw();
     return {};
 }
 
@@ -1085,6 +1130,14 @@ Status Renderer::render(const RenderTarget& target) {
     // A host context (the studio's) may leave a scissor on: the off-screen passes draw everything.
     glDisable(GL_SCISSOR_TEST);
     const DebugView view = impl.features.debugView;
+    if (view == DebugView::None && impl.stochasticMixture()) {
+        // The passes are averaged in HDR, then shown (the fused pass would average display values).
+        if (auto s = impl.drawHdr(target.width, target.height, true); !s) return s;
+        if (auto s = impl.displayPass(target, *impl.hdr, false); !s) return s;
+        glFinish();
+        impl.lastMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+        return {};
+    }
     if (view == DebugView::None) {
         if (auto s = impl.drawFused(target); !s) return s;
         glFinish();

@@ -160,6 +160,12 @@ uniform sampler2D uMixtureLobe1;
 uniform sampler2D uMixtureLobe2;
 uniform sampler2D uMixtureLobe3;
 uniform sampler2D uMixtureCross;
+#if defined(MIXTURE_STOCHASTIC)
+// Filtering after shading (MaterialSettings::mixtureFiltering): the pass's sample index and the
+// mixture textures' level count.
+uniform int uStochasticSample;
+uniform int uMixtureLevels;
+#endif
 #endif
 #if defined(HAS_DETAIL_MAP)
 uniform sampler2D uDetailMap; // core's bakeDetail: [x, y, 0, variance]
@@ -321,15 +327,28 @@ Lobe materialLobe(vec2 uv) {
             // Premultiplied moments, filtered by the hardware: same-index lobes merge exactly.
             lobe.mixtureLobes = MIXTURE_LOBE_COUNT;
             lobe.mixtureMinVariance = max(uMixtureMinVariance, kMinVariance);
-            lobe.mixtureWeights = sampleMap(uMixtureWeights, uv);
-            lobe.mixtureCross = sampleMap(uMixtureCross, uv);
-            lobe.mixtureLobe[0] = sampleMap(uMixtureLobe0, uv);
+#if defined(MIXTURE_STOCHASTIC)
+            // Filtering after shading: one texel of the trilinear footprint, picked with the
+            // probability of its weight (stochasticTexel), fetched unfiltered; the renderer averages
+            // the passes. The level of detail is the isotropic one of the GL specification.
+            ivec2 size0 = textureSize(uMixtureWeights, 0);
+            vec2 texels = uv * vec2(size0);
+            float rho2 = max(dot(dFdx(texels), dFdx(texels)), dot(dFdy(texels), dFdy(texels)));
+            ivec3 at = stochasticTexel(uv, 0.5 * log2(max(rho2, 1e-30)), size0, uMixtureLevels,
+                                       stochasticNumbers(uvec3(uvec2(gl_FragCoord.xy), uint(uStochasticSample))));
+#define MIXTURE_FETCH(map) texelFetch(map, at.xy, at.z)
+#else
+#define MIXTURE_FETCH(map) sampleMap(map, uv)
+#endif
+            lobe.mixtureWeights = MIXTURE_FETCH(uMixtureWeights);
+            lobe.mixtureCross = MIXTURE_FETCH(uMixtureCross);
+            lobe.mixtureLobe[0] = MIXTURE_FETCH(uMixtureLobe0);
             if (lobe.mixtureLobes > 1)
-                lobe.mixtureLobe[1] = sampleMap(uMixtureLobe1, uv);
+                lobe.mixtureLobe[1] = MIXTURE_FETCH(uMixtureLobe1);
             if (lobe.mixtureLobes > 2)
-                lobe.mixtureLobe[2] = sampleMap(uMixtureLobe2, uv);
+                lobe.mixtureLobe[2] = MIXTURE_FETCH(uMixtureLobe2);
             if (lobe.mixtureLobes > 3)
-                lobe.mixtureLobe[3] = sampleMap(uMixtureLobe3, uv);
+                lobe.mixtureLobe[3] = MIXTURE_FETCH(uMixtureLobe3);
             // Lobes above the count and lost weights carry nothing.
             for (int i = 0; i < kMaxMixtureLobes; ++i)
                 if (i >= lobe.mixtureLobes) lobe.mixtureWeights[i] = 0.0;

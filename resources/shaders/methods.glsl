@@ -193,3 +193,35 @@ float mixtureValue(vec4 weights, vec4 lobe[kMaxMixtureLobes], vec4 cross, int co
     }
     return h.z > 0.0 ? sum : 0.0;
 }
+
+// MixtureFiltering::Stochastic, filtering after shading (core's stochasticTexel, lobe_mixture.h): of
+// the texels that trilinear filtering of a texture of `levels` levels (level 0 size0 texels) blends at
+// uv with level of detail lod, the one that three uniform numbers xi in [0, 1) pick, each with the
+// probability of its filter weight; the texture repeats. Returns (x, y, level) for texelFetch.
+// Pharr et al. 2024, "Filtering After Shading With Stochastic Texture Filtering": filter importance sampling
+ivec3 stochasticTexel(vec2 uv, float lod, ivec2 size0, int levels, vec3 xi) {
+    levels = max(levels, 1);
+    float l = clamp(lod, 0.0, float(levels - 1));
+    float fl = floor(l);
+    int level = min(int(fl) + (xi.z < l - fl ? 1 : 0), levels - 1);
+    ivec2 size = max(ivec2(size0.x >> level, size0.y >> level), ivec2(1));
+    vec2 p = fract(uv) * vec2(size) - 0.5;
+    vec2 base = floor(p);
+    ivec2 at = ivec2(base) + ivec2(xi.x < p.x - base.x ? 1 : 0, xi.y < p.y - base.y ? 1 : 0);
+    return ivec3((at + size) % size, level);
+}
+
+// Three uniform numbers in [0, 1) from a pixel and a sample index (core's stochasticNumbers): each
+// word of the pcg3d hash of (x, y, sample), its top 24 bits.
+// Jarzynski & Olano 2020, "Hash Functions for GPU Rendering": pcg3d
+vec3 stochasticNumbers(uvec3 v) {
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    v ^= v >> 16u;
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    return vec3(v >> 8u) * (1.0 / 16777216.0);
+}

@@ -34,6 +34,8 @@
 #define TWIN_ISOTROPIC_NDF 21
 #define TWIN_MIXTURE_LOBE 22
 #define TWIN_MIXTURE_VALUE 23
+#define TWIN_STOCHASTIC_TEXEL 24
+#define TWIN_STOCHASTIC_NUMBERS 25
 // 30..38: the vec3 (RGB specular colour) overloads of brdf_fresnel.glsl, one per twin.
 #define TWIN_FRESNEL_RGB_FIRST 30
 #define TWIN_FRESNEL_RGB_LAST 38
@@ -145,6 +147,13 @@ vec4 twin(vec4 a, vec4 b) {
     // a = (w, wb.x, wb.y, wM.xx), b = (wM.yy, wM.xy, minVariance, _): the lobe's covariance and mean.x
     // (mean.y is the channel-swapped case, a.yz = (wb.y, wb.x), in the test)
     return vec4(mixtureLobeCovariance(a.x, a.yz, vec3(a.w, b.x, b.y), b.z), mixtureLobeMean(a.x, a.yz).x);
+#elif TWIN == TWIN_STOCHASTIC_TEXEL
+    // a = (uv, lod, levels), b = (xi, size0.x + 4096·size0.y): the texel and level picked
+    ivec3 t = stochasticTexel(a.xy, a.z, ivec2(int(b.w) % 4096, int(b.w) / 4096), int(a.w), b.xyz);
+    return vec4(vec3(t), 0.0);
+#elif TWIN == TWIN_STOCHASTIC_NUMBERS
+    // a = (x, y, sample, _): the three numbers of pixel (x, y) and that sample
+    return vec4(stochasticNumbers(uvec3(a.xyz)), 0.0);
 #elif TWIN == TWIN_MIXTURE_VALUE
     // a = (l, t), b = (h, minVariance): a four-lobe mixture spread by t, built as the test builds it;
     // its value with all four lobes and with the first two.

@@ -134,3 +134,37 @@ TEST(CliEvaluate, ConstantGlossMapEqualsItsPower) {
     EXPECT_EQ(lineCount(both.err), 1) << both.err;
     EXPECT_NE(both.err.find("--power or --gloss"), std::string::npos) << both.err;
 }
+
+TEST(CliEvaluate, MixtureFilteringStochasticIsRecordedAndChangesOnlyTheMixtureBetweenTexels) {
+    burnish::test::TempDir dir;
+    const std::string in = writeBumpyMap(dir);
+    auto run = [&](const std::string& filtering) {
+        auto r = runBurnish(
+            "evaluate " + in + " --out " + (dir / filtering).string() +
+            " --methods lean,mixture --between-texels --bake-runs 1 --json --mixture-filtering " + filtering);
+        EXPECT_EQ(r.exitCode, 0) << r.err;
+        return nlohmann::json::parse(r.out);
+    };
+    const auto moments = run("moments"), stochastic = run("stochastic");
+    EXPECT_EQ(moments["mixture_filtering"], "moments");
+    EXPECT_EQ(stochastic["mixture_filtering"], "stochastic");
+    ASSERT_EQ(moments["errors"].size(), stochastic["errors"].size());
+    int changed = 0;
+    for (size_t i = 0; i < moments["errors"].size(); ++i) {
+        const auto &a = moments["errors"][i], &b = stochastic["errors"][i];
+        const bool mixtureBetween = a["method"] == "mixture" && a["between_texels"] == true;
+        if (mixtureBetween)
+            changed += a["relative_l1"] != b["relative_l1"];
+        else
+            EXPECT_EQ(a["relative_l1"], b["relative_l1"]) << a.dump();
+    }
+    EXPECT_GT(changed, 0);
+    std::ifstream md(dir / "stochastic" / "evaluate.md");
+    std::stringstream ss;
+    ss << md.rdbuf();
+    EXPECT_NE(ss.str().find("filtered after shading"), std::string::npos);
+    auto bad =
+        runBurnish("evaluate " + in + " --out " + (dir / "bad").string() + " --mixture-filtering bilinear");
+    EXPECT_NE(bad.exitCode, 0);
+    EXPECT_NE(bad.err.find("--mixture-filtering"), std::string::npos) << bad.err;
+}

@@ -81,6 +81,30 @@ TEST(CliRender, WritesAPngOfTheRequestedSize) {
     EXPECT_GT(s.litFraction, kMinLitFraction);
 }
 
+TEST(CliRender, DrawsTheMixtureFilteredAfterShading) {
+    // --mixture-filtering stochastic: finite and lit, and one pass draws another image than sixteen
+    // averaged (each pass picks its own texels).
+    TempDir dir;
+    auto render = [&](int samples) {
+        const auto out = dir / ("st" + std::to_string(samples) + ".exr");
+        const CliResult r = runBurnish("render --sample-size 64 --size 64x64 --method mixture --uv-scale 4 "
+                                       "--mixture-filtering stochastic --mixture-samples " +
+                                       std::to_string(samples) + " --out " + shellQuote(out.string()));
+        EXPECT_EQ(r.exitCode, 0) << r.err;
+        auto image = burnish::readImage(out);
+        EXPECT_TRUE(image.ok()) << image.error();
+        return image.ok() ? *image : burnish::Image{};
+    };
+    const auto one = render(1), sixteen = render(16);
+    for (const auto* image : {&one, &sixteen}) {
+        const PixelStats s = stats(*image);
+        EXPECT_EQ(s.nonFinite, 0u);
+        EXPECT_GT(s.litFraction, kMinLitFraction);
+    }
+    ASSERT_EQ(one.pixels.size(), sixteen.pixels.size());
+    EXPECT_NE(one.pixels, sixteen.pixels);
+}
+
 TEST(CliRender, WritesAFiniteHdrExr) {
     TempDir dir;
     const auto out = dir / "sphere.exr";

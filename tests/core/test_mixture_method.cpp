@@ -25,7 +25,9 @@
 #include <functional>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <random>
+#include <set>
 #include <utility>
 
 using namespace burnish;
@@ -497,4 +499,176 @@ TEST(MixtureMethod, DdsExportIsHalfFloatWithTheWholeChain) {
     }
     EXPECT_LT(worst, 1.0 / 2048.0);
     fs::remove_all(dir);
+}
+
+TEST(MixtureMethod, StochasticFilteringBetweenTexelsIsTheMeanOfTheFourTexelsShading) {
+    // Filtering after shading (MixtureFiltering::Stochastic): at each corner the method's value is ¼ of
+    // each of the four texels' own mixture values, summed by brute force here; the truth as above.
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-0.7f, 0.7f);
+    const NormalMap map = mapOf(8, 8, [&](int, int) { return glm::vec3(u(rng), u(rng), 1.0f); });
+    EvaluateOptions o;
+    o.basePowers = {64.0};
+    o.methods = {Method::Mixture};
+    o.mixtureLobes = {3};
+    o.firstMip = 1;
+    o.lastMip = 2;
+    o.betweenTexels = true;
+    o.mixtureFiltering = MixtureFiltering::Stochastic;
+    auto r = evaluateMethods(map, o);
+    ASSERT_TRUE(r) << r.error();
+    const auto shared = std::make_shared<NormalMap>(map);
+    const NormalPyramid pyramid = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
+    const MixturePyramid mixture = MixturePyramid::build(pyramid, 64.0, 3);
+    for (int mip = 1; mip <= 2; ++mip) {
+        const PyramidLevel& level = pyramid.level(mip);
+        double abs = 0.0, truthSum = 0.0, valueSum = 0.0;
+        for (const DirectionPair& d : r->directions)
+            for (int y = 0; y < level.height; ++y)
+                for (int x = 0; x < level.width; ++x) {
+                    double truth = 0.0, value = 0.0;
+                    for (int c = 0; c < 4; ++c) {
+                        const int xi = (x + (c & 1)) % level.width, yi = (y + (c >> 1)) % level.height;
+                        truth += 0.25 * groundTruthTexel(pyramid, mip, xi, yi, 64.0, d);
+                        LobeMixture own;
+                        for (const LobeMoments& l : mixture.storedTexel(map, mip, xi, yi, 64.0))
+                            if (l.w > 0.0) own.lobes[size_t(own.count++)] = l;
+                        value += 0.25 * mixtureValue(own, d.l, d.h, mixture.minVariance());
+                    }
+                    abs += std::abs(value - truth);
+                    truthSum += truth;
+                    valueSum += value;
+                }
+        bool found = false;
+        for (const MipError& e : r->errors)
+            if (e.betweenTexels && e.mip == mip) {
+                found = true;
+                EXPECT_NEAR(e.relativeL1, abs / truthSum, 1e-9 * abs / truthSum) << "mip " << mip;
+                EXPECT_NEAR(e.energyRatio, valueSum / truthSum, 1e-9) << "mip " << mip;
+            }
+        EXPECT_TRUE(found);
+    }
+}
+
+TEST(MixtureMethod, StochasticFilteringBeatsMomentFilteringBetweenTexelsOnARealMap) {
+    // The tread plate's bevels: slot-wise merging of the stored moments blurs them between texels;
+    // shading each texel and averaging does not (K = 3, s = 256, mip 3; figures printed).
+    auto map = loadNormalMap(std::string(BURNISH_TEST_DATA_DIR) + "/trak-treadplate1_nm.png");
+    ASSERT_TRUE(map) << map.error();
+    EvaluateOptions o;
+    o.basePowers = {256.0};
+    o.methods = {Method::Mixture};
+    o.mixtureLobes = {3};
+    o.firstMip = 3;
+    o.lastMip = 3;
+    o.betweenTexels = true;
+    double aligned = -1.0;
+    std::array<double, 2> between{-1.0, -1.0};
+    for (const MixtureFiltering f : {MixtureFiltering::Moments, MixtureFiltering::Stochastic}) {
+        o.mixtureFiltering = f;
+        auto r = evaluateMethods(*map, o);
+        ASSERT_TRUE(r) << r.error();
+        for (const MipError& e : r->errors) {
+            if (!e.betweenTexels)
+                aligned = e.relativeL1;
+            else
+                between[size_t(f)] = e.relativeL1;
+        }
+    }
+    std::printf(
+        "[measured] trak-treadplate1 s = 256 mip 3, K = 3: aligned %.4f, between texels moments %.4f, "
+        "stochastic %.4f\n",
+        aligned, between[0], between[1]);
+    ASSERT_GT(aligned, 0.0);
+    EXPECT_LT(between[1], 0.6 * between[0]);
+    EXPECT_LT(between[1], 1.5 * aligned);
+}
+
+TEST(MixtureMethod, StochasticTexelPicksEachTexelWithItsFilterWeight) {
+    // Every pick of a fine grid of xi, counted: each texel of the trilinear footprint comes up with
+    // its weight (bilinear weights in each of the two levels around lod, times the level's weight),
+    // to the grid's resolution.
+    constexpr int kGrid = 40;
+    const glm::ivec2 size0(16, 8);
+    const int levels = 5; // 16x8, 8x4, 4x2, 2x1, 1x1
+    struct Case {
+        glm::vec2 uv;
+        float lod;
+    };
+    for (const Case& c : {Case{{0.3f, 0.55f}, 1.3f}, Case{{0.01f, 0.99f}, 0.6f}, Case{{-2.7f, 5.2f}, 2.5f},
+                          Case{{0.5f, 0.5f}, -1.0f}, Case{{0.2f, 0.8f}, 9.0f}}) {
+        std::map<std::array<int, 3>, double> expected, counted;
+        const float l = std::clamp(c.lod, 0.0f, float(levels - 1));
+        const int lower = int(std::floor(l));
+        const double upper = l - float(lower);
+        for (int level = lower; level <= std::min(lower + 1, levels - 1); ++level) {
+            const double wl = level == lower ? 1.0 - upper : upper;
+            const glm::ivec2 size = glm::max(glm::ivec2(size0.x >> level, size0.y >> level), glm::ivec2(1));
+            const double px = (c.uv.x - std::floor(c.uv.x)) * size.x - 0.5,
+                         py = (c.uv.y - std::floor(c.uv.y)) * size.y - 0.5;
+            const double bx = std::floor(px), by = std::floor(py), fx = px - bx, fy = py - by;
+            for (int j = 0; j < 2; ++j)
+                for (int i = 0; i < 2; ++i) {
+                    const int x = ((int(bx) + i) % size.x + size.x) % size.x;
+                    const int y = ((int(by) + j) % size.y + size.y) % size.y;
+                    expected[{x, y, level}] += wl * (i ? fx : 1.0 - fx) * (j ? fy : 1.0 - fy);
+                }
+        }
+        for (int a = 0; a < kGrid; ++a)
+            for (int b = 0; b < kGrid; ++b)
+                for (int e = 0; e < kGrid; ++e) {
+                    const glm::vec3 xi((float(a) + 0.5f) / kGrid, (float(b) + 0.5f) / kGrid,
+                                       (float(e) + 0.5f) / kGrid);
+                    const StochasticTexel t = stochasticTexel(c.uv, c.lod, size0, levels, xi);
+                    counted[{t.x, t.y, t.level}] += 1.0 / (kGrid * kGrid * kGrid);
+                }
+        for (const auto& [texel, p] : counted)
+            EXPECT_TRUE(expected.count(texel)) << "picked a texel outside the footprint: " << texel[0] << ", "
+                                               << texel[1] << ", level " << texel[2];
+        for (const auto& [texel, w] : expected)
+            EXPECT_NEAR(counted[texel], w, 3.0 / kGrid)
+                << "uv " << c.uv.x << ", " << c.uv.y << " lod " << c.lod << " texel " << texel[0] << ", "
+                << texel[1] << ", level " << texel[2];
+    }
+    // A 1x1 texture, a NaN level of detail and non-finite uv pick a texel inside the texture.
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    const StochasticTexel one = stochasticTexel({0.7f, 0.2f}, 3.0f, {1, 1}, 1, {0.9f, 0.9f, 0.9f});
+    EXPECT_EQ(one.x, 0);
+    EXPECT_EQ(one.y, 0);
+    EXPECT_EQ(one.level, 0);
+    const StochasticTexel odd = stochasticTexel({nan, inf}, nan, {5, 3}, 3, {0.5f, 0.5f, 0.5f});
+    EXPECT_GE(odd.x, 0);
+    EXPECT_LT(odd.x, 5);
+    EXPECT_GE(odd.y, 0);
+    EXPECT_LT(odd.y, 3);
+    EXPECT_EQ(odd.level, 0);
+}
+
+TEST(MixtureMethod, StochasticNumbersAreUniformAndDifferPerPixelAndSample) {
+    double sum = 0.0, sumSquares = 0.0;
+    int n = 0;
+    std::set<std::array<float, 3>> seen;
+    for (unsigned y = 0; y < 32; ++y)
+        for (unsigned x = 0; x < 32; ++x)
+            for (unsigned s = 0; s < 4; ++s) {
+                const glm::vec3 xi = stochasticNumbers({x, y, s});
+                for (int i = 0; i < 3; ++i) {
+                    ASSERT_GE(xi[i], 0.0f);
+                    ASSERT_LT(xi[i], 1.0f);
+                    sum += xi[i];
+                    sumSquares += double(xi[i]) * xi[i];
+                    ++n;
+                }
+                seen.insert({xi.x, xi.y, xi.z});
+            }
+    EXPECT_EQ(seen.size(), size_t(32 * 32 * 4)); // no two pixels or samples alike
+    EXPECT_NEAR(sum / n, 0.5, 0.01);
+    EXPECT_NEAR(sumSquares / n - (sum / n) * (sum / n), 1.0 / 12.0, 0.005); // a uniform's variance
+    EXPECT_EQ(stochasticNumbers({3u, 4u, 5u}), stochasticNumbers({3u, 4u, 5u}));
+}
+
+TEST(MixtureMethod, MixtureFilteringNamesRoundTrip) {
+    for (const MixtureFiltering f : {MixtureFiltering::Moments, MixtureFiltering::Stochastic})
+        EXPECT_EQ(parseMixtureFiltering(mixtureFilteringName(f)), f);
+    EXPECT_FALSE(parseMixtureFiltering("bilinear"));
 }

@@ -33,6 +33,7 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,8 @@ enum Twin {
     kTwinIsotropicNdf = 21,
     kTwinMixtureLobe = 22,
     kTwinMixtureValue = 23,
+    kTwinStochasticTexel = 24,
+    kTwinStochasticNumbers = 25,
     kTwinFresnelRgbFirst = 30,
 };
 
@@ -747,6 +750,64 @@ TEST_F(Twins, MixtureLobeDecodeAndValue) {
                                          0.0, 0.0};
         },
         {kExp, kExp, kExp, kExp}, 2);
+}
+
+TEST_F(Twins, StochasticTexelAndNumbers) {
+    // Filtering after shading's pick: the same texel and level in core and GLSL, bit for bit (the
+    // arguments keep clear of the decision boundaries, where an FMA could tip a comparison), and the
+    // same pcg3d numbers (integer arithmetic: exact).
+    constexpr Tolerance kExact{0.0, 1.0};
+    std::vector<Args> args;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    const std::array<glm::ivec2, 4> sizes{glm::ivec2(1, 1), glm::ivec2(16, 8), glm::ivec2(5, 3),
+                                          glm::ivec2(512, 512)};
+    for (const glm::ivec2 size : sizes) {
+        const int levels = 1 + int(std::floor(std::log2(float(std::max(size.x, size.y)))));
+        for (int i = 0; i < 200; ++i) {
+            const glm::vec2 uv(3.0f * unit(rng) - 1.0f, 3.0f * unit(rng) - 1.0f);
+            const float lod = 12.0f * unit(rng) - 2.0f;
+            args.push_back(Args{uv.x, uv.y, lod, float(levels), unit(rng), unit(rng), unit(rng),
+                                float(size.x + 4096 * size.y)});
+        }
+    }
+    // Keep the comparisons (xi against a fraction) clear of ties: drop arguments within 1e-4 of one.
+    std::erase_if(args, [](const Args& a) {
+        const int levels = int(a[3]);
+        const float l = std::clamp(a[2], 0.0f, float(levels - 1));
+        if (std::abs(a[6] - (l - std::floor(l))) < 1e-4f) return true;
+        const glm::ivec2 size0(int(a[7]) % 4096, int(a[7]) / 4096);
+        for (int level = 0; level < levels; ++level) {
+            const glm::ivec2 size = glm::max(glm::ivec2(size0.x >> level, size0.y >> level), glm::ivec2(1));
+            const float px = (a[0] - std::floor(a[0])) * float(size.x) - 0.5f;
+            const float py = (a[1] - std::floor(a[1])) * float(size.y) - 0.5f;
+            if (std::abs(a[4] - (px - std::floor(px))) < 1e-4f ||
+                std::abs(a[5] - (py - std::floor(py))) < 1e-4f)
+                return true;
+        }
+        return false;
+    });
+    ASSERT_GT(args.size(), 500u);
+    expectTwin(
+        "stochasticTexel", kTwinStochasticTexel, args,
+        [](const Args& a) {
+            const StochasticTexel t = stochasticTexel(
+                {a[0], a[1]}, a[2], {int(a[7]) % 4096, int(a[7]) / 4096}, int(a[3]), {a[4], a[5], a[6]});
+            return std::array<double, 4>{double(t.x), double(t.y), double(t.level), 0.0};
+        },
+        {kExact, kExact, kExact, kExact}, 3);
+    std::vector<Args> pixels;
+    for (const unsigned x : {0u, 1u, 7u, 640u, 1919u})
+        for (const unsigned y : {0u, 3u, 719u, 1079u})
+            for (const unsigned sample : {0u, 1u, 15u, 4095u})
+                pixels.push_back(Args{float(x), float(y), float(sample), 0.0f, 0.0f, 0.0f, 0.0f, 0.0f});
+    expectTwin(
+        "stochasticNumbers", kTwinStochasticNumbers, pixels,
+        [](const Args& a) {
+            const glm::vec3 xi = stochasticNumbers({unsigned(a[0]), unsigned(a[1]), unsigned(a[2])});
+            return std::array<double, 4>{xi.x, xi.y, xi.z, 0.0};
+        },
+        {kExact, kExact, kExact, kExact}, 3);
 }
 
 } // namespace

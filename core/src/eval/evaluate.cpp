@@ -293,12 +293,37 @@ std::array<size_t, 4> cornerTexels(const PyramidLevel& level, int x, int y, Bord
 void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, size_t mi,
                   const std::vector<EvaluatedVariant>& variants,
                   const std::vector<const MixturePyramid*>& mixtures, const AuthoredPowers* authored,
-                  const std::vector<double>* texelPowers, double s, const MethodParams& params, Pass& pass) {
+                  const std::vector<double>* texelPowers, double s, const MethodParams& params,
+                  MixtureFiltering filtering, Pass& pass) {
     const PyramidLevel& level = pyramid.level(k);
     const BorderMode border = pyramid.options().border;
     const size_t n = size_t(level.width) * size_t(level.height);
     for (size_t m = 0; m < variants.size(); ++m) {
         const MixturePyramid* mix = mixtures[m];
+        // A stored texel of the mixture (its lobes over its total weight, in their slots).
+        auto stored = [&](const MixturePyramid& mixture, size_t t) {
+            const int xi = int(t % size_t(level.width)), yi = int(t / size_t(level.width));
+            const double p =
+                k == 0 && texelPowers ? (*texelPowers)[size_t(yi) * size_t(map.width) + size_t(xi)] : s;
+            return mixture.storedTexel(map, k, xi, yi, p);
+        };
+        if (mix && filtering == MixtureFiltering::Stochastic) {
+            // Filtering after shading: the corner's value is ¼ of each of its four texels' mixture values.
+            std::vector<DecodedMixture> texels(n);
+            std::vector<std::array<size_t, 4>> corners(n);
+            tbb::parallel_for(0, level.height, [&](int y) {
+                for (int x = 0; x < level.width; ++x) {
+                    const size_t t = size_t(y) * size_t(level.width) + size_t(x);
+                    LobeMixture own;
+                    for (const LobeMoments& l : stored(*mix, t))
+                        if (l.w > 0.0) own.lobes[size_t(own.count++)] = l;
+                    texels[t] = decodeMixture(own, mix->minVariance());
+                    corners[t] = cornerTexels(level, x, y, border);
+                }
+            });
+            pass.betweenTables[m][mi] = LobeTable::ofBlends(texels, corners, {0.25, 0.25, 0.25, 0.25});
+            continue;
+        }
         if (mix) {
             std::vector<DecodedMixture> out(n);
             tbb::parallel_for(0, level.height, [&](int y) {
@@ -307,13 +332,9 @@ void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, siz
                     const auto t = cornerTexels(level, x, y, border);
                     std::array<LobeMoments, kMaxMixtureLobes> sum{};
                     for (size_t c = 0; c < 4; ++c) {
-                        const int xi = int(t[c] % size_t(level.width)), yi = int(t[c] / size_t(level.width));
-                        const double p = k == 0 && texelPowers
-                                             ? (*texelPowers)[size_t(yi) * size_t(map.width) + size_t(xi)]
-                                             : s;
-                        const auto stored = mix->storedTexel(map, k, xi, yi, p);
-                        for (size_t i = 0; i < stored.size(); ++i)
-                            sum[i] += stored[i].scaled(0.25);
+                        const auto lobes = stored(*mix, t[c]);
+                        for (size_t i = 0; i < lobes.size(); ++i)
+                            sum[i] += lobes[i].scaled(0.25);
                     }
                     LobeMixture filtered;
                     for (const LobeMoments& l : sum)
@@ -618,7 +639,8 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             for (int k = firstMip; k <= lastMip; ++k) {
                 if (cancelled()) return Error{std::string(kCancelledMessage)};
                 betweenLevel(map, pyramid, k, size_t(k - firstMip), variants, mixtures,
-                             authored ? &*authored : nullptr, texelPowers, s, options.params, pass);
+                             authored ? &*authored : nullptr, texelPowers, s, options.params,
+                             options.mixtureFiltering, pass);
             }
         }
         if (options.errorMaps) {

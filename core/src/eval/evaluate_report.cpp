@@ -211,7 +211,11 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
                 md << "Between texels (at each texel's corner: the truth is the bilinear-weighted union of "
                       "the four "
                       "footprints, each method what its shader computes from bilinearly filtered "
-                      "textures):\n\n";
+                      "textures"
+                   << (r.options.mixtureFiltering == MixtureFiltering::Stochastic
+                           ? "; the mixture filtered after shading, stochastic filtering's expected value"
+                           : "")
+                   << "):\n\n";
             md << "Relative L1 error against the ground truth" << (between ? " between texels" : "")
                << ":\n\n"
                << errors.render() << "\nEnergy ratio" << (between ? " between texels" : "") << ":\n\n"
@@ -253,6 +257,7 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
     j["azimuths"] = r.options.azimuths;
     j["horizon_deg"] = r.options.horizonDeg;
     j["directions"] = r.result.directions.size();
+    j["mixture_filtering"] = mixtureFilteringName(r.options.mixtureFiltering);
     j["base_powers"] = r.options.basePowers;
     if (r.options.texelPowers) {
         const auto& p = *r.options.texelPowers;

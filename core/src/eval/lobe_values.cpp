@@ -147,6 +147,29 @@ LobeTable LobeTable::of(const std::vector<DecodedMixture>& mixtures) {
     return t;
 }
 
+LobeTable LobeTable::ofBlends(const std::vector<DecodedMixture>& texels,
+                              const std::vector<std::array<size_t, 4>>& at,
+                              const std::array<double, 4>& weights) {
+    LobeTable t;
+    t.kind = Kind::Gaussian;
+    t.count = at.size();
+    int lobes = 1; // slots per texel of the blend
+    for (const DecodedMixture& m : texels)
+        lobes = std::max(lobes, m.count);
+    t.slots = 4 * lobes;
+    resizeGaussian(t, size_t(t.slots) * t.count);
+    for (size_t i = 0; i < t.count; ++i)
+        for (size_t c = 0; c < 4; ++c) {
+            const DecodedMixture& m = texels[at[i][c]];
+            for (int s = 0; s < m.count; ++s) {
+                const DecodedMixture::Lobe& l = m.lobes[size_t(s)];
+                putGaussian(t, (c * size_t(lobes) + size_t(s)) * t.count + i, weights[c] * l.share, l.mean,
+                            l.cov, l.normal);
+            }
+        }
+    return t;
+}
+
 void lobeValues(const LobeTable& table, size_t begin, size_t end, const DirectionPair& d, double* out) {
     if (table.kind == LobeTable::Kind::BlinnPhong)
         blinnPhongValues(table, begin, end - begin, d, out);

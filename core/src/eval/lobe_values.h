@@ -8,6 +8,7 @@
 #include <burnish/core/eval/evaluate.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -31,6 +32,12 @@ struct LobeTable {
 
     static LobeTable of(const std::vector<TexelLobe>& lobes);
     static LobeTable of(const std::vector<DecodedMixture>& mixtures);
+    /// Filtering after shading: point i is the blend of the mixtures texels[at[i][c]] with weights
+    /// weights[c] (Σ weights[c]·mixture value), each of their lobes a slot of its own with its share
+    /// times its texel's weight.
+    static LobeTable ofBlends(const std::vector<DecodedMixture>& texels,
+                              const std::vector<std::array<size_t, 4>>& at,
+                              const std::array<double, 4>& weights);
 };
 
 /// out[i] = the value of lobe begin + i for direction pair d, i < end − begin.

@@ -178,6 +178,43 @@ private:
     double m_minVariance = 0.0;
 };
 
+const char* mixtureFilteringName(MixtureFiltering filtering) {
+    return filtering == MixtureFiltering::Stochastic ? "stochastic" : "moments";
+}
+
+std::optional<MixtureFiltering> parseMixtureFiltering(std::string_view name) {
+    if (name == "moments") return MixtureFiltering::Moments;
+    if (name == "stochastic") return MixtureFiltering::Stochastic;
+    return std::nullopt;
+}
+
+StochasticTexel stochasticTexel(glm::vec2 uv, float lod, glm::ivec2 size0, int levels, glm::vec3 xi) {
+    levels = std::max(levels, 1);
+    const float l = lod == lod ? std::clamp(lod, 0.0f, float(levels - 1)) : 0.0f; // NaN: level 0
+    const float fl = std::floor(l);
+    const int level = std::min(int(fl) + (xi.z < l - fl ? 1 : 0), levels - 1);
+    const glm::ivec2 size = glm::max(glm::ivec2(size0.x >> level, size0.y >> level), glm::ivec2(1));
+    // The repeat wrap first (GLSL's fract), so the texel index stays small; non-finite uv is 0.
+    const float u = std::isfinite(uv.x) ? uv.x - std::floor(uv.x) : 0.0f;
+    const float v = std::isfinite(uv.y) ? uv.y - std::floor(uv.y) : 0.0f;
+    const float px = u * float(size.x) - 0.5f, py = v * float(size.y) - 0.5f;
+    const float bx = std::floor(px), by = std::floor(py);
+    const int x = int(bx) + (xi.x < px - bx ? 1 : 0), y = int(by) + (xi.y < py - by ? 1 : 0);
+    return {(x + size.x) % size.x, (y + size.y) % size.y, level};
+}
+
+glm::vec3 stochasticNumbers(glm::uvec3 v) {
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    v ^= v >> 16u;
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    return glm::vec3(v >> 8u) * (1.0f / 16777216.0f);
+}
+
 glm::dvec2 LobeMoments::mean() const {
     return w > 0.0 ? glm::dvec2(bx / w, by / w) : glm::dvec2(0.0);
 }

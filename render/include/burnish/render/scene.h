@@ -7,6 +7,7 @@
 #include <burnish/core/env/cube.h>
 #include <burnish/core/env/prefilter.h>
 #include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_map.h>
 #include <burnish/core/prefilter/normal_pyramid.h>
@@ -91,6 +92,12 @@ struct MaterialSettings {
     VisibilityTerm visibility = VisibilityTerm::None;
     bool diffuseAa = false;
     SpecularAa specularAa = SpecularAa::None;
+    /// How the mixture's textures are filtered: their moments by the hardware (lobes of one slot
+    /// merge), or after shading (MixtureFiltering::Stochastic: each pass shades one texel of the
+    /// trilinear footprint per pixel, and `mixtureSamples` passes are averaged, as temporal
+    /// anti-aliasing would). The ubershader always filters the moments.
+    MixtureFiltering mixtureFiltering = MixtureFiltering::Moments;
+    int mixtureSamples = 16; // passes averaged under MixtureFiltering::Stochastic, 1..kMaxReferenceSamples
 
     /// Sets the base power from a gloss value in glossEncoding (clamped to [0, 1]).
     void setGloss(double gloss) { basePower = glossEncoding.power(gloss); }

@@ -20,6 +20,7 @@
 // matches a mixture of very different powers (test_evaluate.cpp measures both).
 #pragma once
 
+#include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_map.h>
 #include <burnish/core/prefilter/normal_pyramid.h>
@@ -71,6 +72,10 @@ struct EvaluateOptions {
     /// gloss averaged in the gloss encoding, blackops, for the others). Reported as extra rows with
     /// betweenTexels set.
     bool betweenTexels = false;
+    /// How the mixture is filtered between texels (betweenTexels): its lobes merged slot by slot as
+    /// bilinear filtering merges the stored moments, or filtered after shading (stochastic filtering's
+    /// expected value: ¼ of each of the four texels' mixture values at a corner).
+    MixtureFiltering mixtureFiltering = MixtureFiltering::Moments;
     /// Authored power per finest texel (row-major, the map's texel count, each in (0, 1e9]). When
     /// set, it replaces basePowers: the evaluation runs once, and results carry the arithmetic
     /// mean of the powers as their basePower label.

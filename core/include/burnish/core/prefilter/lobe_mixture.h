@@ -25,6 +25,8 @@
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_pyramid.h>
 
+#include <glm/ext/vector_int2.hpp>
+#include <glm/ext/vector_uint3.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -32,6 +34,8 @@
 #include <functional>
 #include <memory>
 #include <new>
+#include <optional>
+#include <string_view>
 #include <vector>
 
 namespace burnish {
@@ -59,6 +63,41 @@ inline constexpr double minLobeShare(int k) {
 inline double mixtureBaseVariance(double s, int k) {
     return k <= 1 ? slopeInverseBasePower(s) : 1.0 / (std::max(clampPower(s), kMinBasePower) + 2.0);
 }
+
+/// How a renderer filters the mixture's textures between texels and mips.
+enum class MixtureFiltering {
+    /// Hardware bilinear and trilinear filtering of the stored moments: the lobes of one slot of the
+    /// texels (and mips) around the sample merge into one lobe before shading.
+    Moments,
+    /// Filtering after shading: each sample shades the lobes of one texel of the bilinear (and
+    /// trilinear) footprint, picked with the probability of its filter weight, so the expected value is
+    /// the filter applied to the shaded values (mixtureValue of each texel), where no lobes merge. A
+    /// frame is noisy; averaged over samples or frames (temporal anti-aliasing) it converges.
+    // Pharr et al. 2024, "Filtering After Shading With Stochastic Texture Filtering": filter importance
+    // sampling
+    Stochastic,
+};
+/// "moments" or "stochastic".
+const char* mixtureFilteringName(MixtureFiltering filtering);
+/// The filtering named "moments" or "stochastic"; nothing for another name.
+std::optional<MixtureFiltering> parseMixtureFiltering(std::string_view name);
+
+/// The texel a sample shades under MixtureFiltering::Stochastic: its column, row and mip level.
+struct StochasticTexel {
+    int x = 0, y = 0, level = 0;
+};
+/// Filtering after shading's pick (the GLSL twin in methods.glsl, in float as the shader computes
+/// it): of the texels that trilinear filtering of a texture of `levels` levels, level 0 `size0`
+/// texels (each level half the last, at least 1), blends at uv with level of detail lod, the one of
+/// three uniform numbers xi in [0, 1): the upper of the two levels around lod when xi.z < its fraction,
+/// then the right texel of the bilinear pair when xi.x < the horizontal fraction, the lower one when
+/// xi.y < the vertical one: each texel with the probability of its filter weight. The textures repeat.
+// Pharr et al. 2024, "Filtering After Shading With Stochastic Texture Filtering": filter importance sampling
+StochasticTexel stochasticTexel(glm::vec2 uv, float lod, glm::ivec2 size0, int levels, glm::vec3 xi);
+/// Three uniform numbers in [0, 1) (multiples of 2^-24) from a pixel and a sample index: the pcg3d hash
+/// of (x, y, sample), each word's top 24 bits (the GLSL twin stochasticNumbers in methods.glsl).
+// Jarzynski & Olano 2020, "Hash Functions for GPU Rendering": pcg3d
+glm::vec3 stochasticNumbers(glm::uvec3 v);
 
 /// One lobe as premultiplied raw moments: w (a weight, here finest texels), w·b and w·M with
 /// M = Σ + bbᵀ (xx, yy, xy). Adding two is merging them with exact moments.

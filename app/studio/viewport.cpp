@@ -443,6 +443,13 @@ Result<render::Scene> Viewport::scene() {
     scene.exposure = m_view.exposure;
     scene.debugView = m_view.debugView;
     scene.material = std::move(material).value();
+    if (m_view.filterAfterShading) {
+        // Passes averaged per frame, as the reference side's: a few while moving, all at rest.
+        scene.material.mixtureFiltering = MixtureFiltering::Stochastic;
+        scene.material.mixtureSamples = m_engine->moving
+                                            ? std::min(kMovingReferenceSamples, m_view.referenceSamples)
+                                            : m_view.referenceSamples;
+    }
     applyEnvironment(m_doc->settings().environment, scene);
     return scene;
 }
@@ -680,6 +687,11 @@ void Viewport::setRightSide(const SplitSide& side) {
 
 void Viewport::setReferenceSamples(int samples) {
     m_view.referenceSamples = std::clamp(samples, 1, kMaxReferenceSamples);
+    changed(false);
+}
+
+void Viewport::setFilterAfterShading(bool on) {
+    m_view.filterAfterShading = on;
     changed(false);
 }
 

@@ -54,6 +54,9 @@ struct ViewSettings {
     float splitPosition = 0.5f; // the divider, as a fraction of the width from the left
     SplitSide right;
     int referenceSamples = 16; // samples per pixel of the reference side at rest (1..4096)
+    /// The mixture filtered after shading (render::MaterialSettings::mixtureFiltering, stochastic):
+    /// at rest the average of referenceSamples passes, while the camera moves of a few.
+    bool filterAfterShading = false;
 };
 
 /// The live shimmer meter: mean |ΔY'| per object pixel between consecutive auto-orbit frames
@@ -100,6 +103,7 @@ public:
     void setSplitPosition(float fraction); // clamped to [0.05, 0.95]
     void setRightSide(const SplitSide& side);
     void setReferenceSamples(int samples); // clamped to 1..4096
+    void setFilterAfterShading(bool on);
     void orbit(float yawDegrees, float pitchDegrees);
 
     /// Auto-orbit: the camera turns kOrbitDegreesPerFrame per frame and the shimmer meter runs.

@@ -111,6 +111,13 @@ ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
     for (Method m : allMethods())
         m_methodB->addItem(qs(methodName(m)), int(m));
     m_methodB->addItem(QString("reference (%1 spp)").arg(v.referenceSamples), -1);
+    m_afterShading = new QCheckBox("filter after shading", this);
+    m_afterShading->setToolTip(
+        "The mixture filtered after shading (stochastic texture filtering): each pass shades one texel "
+        "of every pixel's footprint, and the passes are averaged (the reference's count at rest, a few "
+        "while the camera moves), so neighbouring texels' lobes are never merged. Closer to the truth "
+        "between texels and mips; grainy while the camera moves. What an engine with temporal "
+        "anti-aliasing draws; the exported textures are the same.");
     m_orbit = new QCheckBox("auto-orbit", this);
     m_orbit->setToolTip("Turn the camera slowly and measure the shimmer of A and B");
     m_shimmer = new QLabel("shimmer: —", this);
@@ -134,6 +141,7 @@ ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
     controls->addWidget(m_debug);
     controls->addWidget(group({m_split, caption("A", this), m_methodA}, this));
     controls->addWidget(group({caption("B", this), m_methodB}, this));
+    controls->addWidget(m_afterShading);
     controls->addWidget(m_orbit);
     controls->addWidget(group({m_shimmer, m_frame}, this));
     auto* layout = new QVBoxLayout(this);
@@ -168,6 +176,9 @@ ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
     });
     connect(m_methodB, &QComboBox::activated, this, &ViewportPanel::chooseMethodB);
     connect(m_orbit, &QCheckBox::toggled, this, [this](bool on) { m_viewport->setAutoOrbit(on); });
+    connect(m_afterShading, &QCheckBox::toggled, this, [this](bool on) {
+        if (!m_syncing) m_viewport->setFilterAfterShading(on);
+    });
     connect(m_viewport, &Viewport::viewChanged, this, &ViewportPanel::syncFromView);
     connect(m_viewport, &Viewport::shimmerChanged, this, &ViewportPanel::updateShimmer);
     connect(m_viewport, &Viewport::frameRendered, this,
@@ -202,7 +213,17 @@ void ViewportPanel::syncFromView() {
     m_split->setChecked(v.split);
     m_methodB->setCurrentIndex(m_methodB->findData(v.right.reference ? -1 : int(v.right.method)));
     m_orbit->setChecked(m_viewport->autoOrbit());
+    m_afterShading->setChecked(v.filterAfterShading);
+    syncAfterShading();
     m_syncing = false;
+}
+
+void ViewportPanel::syncAfterShading() {
+    // Only the mixture has lobes to filter after shading: A's method, or B's when the split shows it.
+    const ViewSettings& v = m_viewport->viewSettings();
+    const bool mixture = m_doc->settings().method == Method::Mixture ||
+                         (v.split && !v.right.reference && v.right.method == Method::Mixture);
+    m_afterShading->setEnabled(mixture);
 }
 
 void ViewportPanel::syncFromDocument() {
@@ -210,6 +231,7 @@ void ViewportPanel::syncFromDocument() {
     for (Method m : m_doc->availableMethods())
         m_methodA->addItem(qs(methodName(m)), int(m));
     m_methodA->setCurrentIndex(m_methodA->findData(int(m_doc->settings().method)));
+    syncAfterShading();
 }
 
 void ViewportPanel::chooseMesh(int index) {

@@ -34,6 +34,7 @@ public:
     QComboBox* debugCombo() const { return m_debug; }
     QCheckBox* splitCheck() const { return m_split; }
     QCheckBox* orbitCheck() const { return m_orbit; }
+    QCheckBox* afterShadingCheck() const { return m_afterShading; }
     QSlider* distanceSlider() const { return m_distance; }
     QLabel* shimmerLabel() const { return m_shimmer; }
     QLabel* frameLabel() const { return m_frame; }
@@ -51,6 +52,7 @@ protected:
 private:
     void syncFromView();
     void syncFromDocument();
+    void syncAfterShading(); // enabled while A or B draws the mixture
     void chooseMesh(int index);
     void chooseMethodB(int index);
     void updateShimmer();
@@ -64,6 +66,7 @@ private:
     QComboBox* m_debug;
     QCheckBox* m_split;
     QCheckBox* m_orbit;
+    QCheckBox* m_afterShading;
     QSlider* m_distance;
     QSlider* m_exposure;
     QSlider* m_azimuth;

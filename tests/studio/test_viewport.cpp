@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <QApplication>
+#include <QCheckBox>
 #include <QImage>
 #include <QSignalSpy>
 #include <QTest>
@@ -418,6 +419,40 @@ TEST(Viewport, ShimmerMeterReadsAfterAutoOrbitFrames) {
     // A view change other than the orbit starts the meter again.
     t.view.setExposure(1.0f);
     EXPECT_FALSE(t.view.shimmer().has_value());
+}
+
+TEST(Viewport, TheMixtureFilteredAfterShadingDrawsAndTheCheckFollowsTheMethod) {
+    // The panel's "filter after shading" is enabled while A (or B) draws the mixture, and the view
+    // then draws the stochastic filtering's average: lit, another image than the moment-filtered one
+    // (the sample's lobes differ between texels), and back to it when turned off.
+    MaterialDocument doc;
+    auto* panel = new ViewportPanel(&doc);
+    panel->resize(kWidth, kHeight + 80);
+    panel->show();
+    QApplication::processEvents();
+    QCheckBox* check = panel->afterShadingCheck();
+    EXPECT_FALSE(check->isEnabled());      // the default method, variance-to-gloss
+    ASSERT_TRUE(doc.setPreset("mixture")); // the preset that stores the mixture's lobes
+    ASSERT_TRUE(doc.setMethod(Method::Mixture));
+    EXPECT_TRUE(check->isEnabled());
+    Viewport* view = panel->viewport();
+    view->setDistance(kFarDistance);
+    view->setReferenceSamples(4); // a few passes: this checks the wiring, not the convergence
+    auto grab = [&] {
+        QImage image = view->grabFrame().convertToFormat(QImage::Format_RGB32);
+        EXPECT_EQ(view->lastError(), QString());
+        return image;
+    };
+    const QImage moments = grab();
+    check->setChecked(true);
+    EXPECT_TRUE(view->viewSettings().filterAfterShading);
+    const QImage after = grab();
+    const int w = after.width();
+    EXPECT_GT(lumaStats(after, 0, w).stddev, 5.0);
+    EXPECT_GT(meanAbsDiff(moments, after, 0, w), 1e-3);
+    check->setChecked(false);
+    EXPECT_LT(meanAbsDiff(moments, grab(), 0, w), 1e-9);
+    delete panel;
 }
 
 TEST(Viewport, MainWindowShowsTheRenderedViewport) {

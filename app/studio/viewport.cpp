@@ -444,11 +444,11 @@ Result<render::Scene> Viewport::scene() {
     scene.debugView = m_view.debugView;
     scene.material = std::move(material).value();
     if (m_view.filterAfterShading) {
-        // Passes averaged per frame, as the reference side's: a few while moving, all at rest.
+        // At rest the reference side's count of passes averaged; while the camera moves one pass, drawn
+        // as any frame (half size when full frames are slow): grainy, as an engine's frame before its
+        // temporal anti-aliasing.
         scene.material.mixtureFiltering = MixtureFiltering::Stochastic;
-        scene.material.mixtureSamples = m_engine->moving
-                                            ? std::min(kMovingReferenceSamples, m_view.referenceSamples)
-                                            : m_view.referenceSamples;
+        scene.material.mixtureSamples = m_engine->moving ? 1 : m_view.referenceSamples;
     }
     applyEnvironment(m_doc->settings().environment, scene);
     return scene;

@@ -55,7 +55,7 @@ struct ViewSettings {
     SplitSide right;
     int referenceSamples = 16; // samples per pixel of the reference side at rest (1..4096)
     /// The mixture filtered after shading (render::MaterialSettings::mixtureFiltering, stochastic):
-    /// at rest the average of referenceSamples passes, while the camera moves of a few.
+    /// at rest the average of referenceSamples passes, while the camera moves one pass.
     bool filterAfterShading = false;
 };
 

@@ -114,7 +114,7 @@ ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
     m_afterShading = new QCheckBox("filter after shading", this);
     m_afterShading->setToolTip(
         "The mixture filtered after shading (stochastic texture filtering): each pass shades one texel "
-        "of every pixel's footprint, and the passes are averaged (the reference's count at rest, a few "
+        "of every pixel's footprint, and the passes are averaged (the reference's count at rest, one "
         "while the camera moves), so neighbouring texels' lobes are never merged. Closer to the truth "
         "between texels and mips; grainy while the camera moves. What an engine with temporal "
         "anti-aliasing draws; the exported textures are the same.");

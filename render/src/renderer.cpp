@@ -391,6 +391,11 @@ struct Renderer::Impl {
         return !useUbershader && hasScene && scene.material.method == Method::Mixture &&
                scene.material.mixtureFiltering == MixtureFiltering::Stochastic;
     }
+    /// The passes a stochastically filtered frame averages (MaterialSettings::mixtureSamples). One
+    /// pass is drawn as any frame is (the fused display pass, the interactive half size).
+    int stochasticPasses() const {
+        return std::clamp(scene.material.mixtureSamples, 1, kMaxReferenceSamples);
+    }
     Status drawFused(const RenderTarget& target);
     void setFaceCulling() const;
     void beginMaterialPass(const Framebuffer& target) const;
@@ -951,14 +956,13 @@ Status Renderer::Impl::drawFused(const RenderTarget& target) {
 
 Status Renderer::Impl::drawHdr(int width, int height, bool withBackground) {
     if (!hasScene || !program) return Error{"no scene to render"};
-    if (!stochasticMixture()) {
-        stochasticSample = 0;
+    stochasticSample = 0;
+    if (!stochasticMixture() || stochasticPasses() == 1)
         return drawMaterial(features, *program, width, height, glm::vec2(0.0f), false, withBackground);
-    }
     // Filtering after shading: each pass shades one texel of each pixel's trilinear footprint (its
     // own random numbers), and the passes' average converges to the filter applied to the shading,
     // as temporal anti-aliasing accumulates it over frames. The average ends in the HDR target.
-    const int samples = std::clamp(scene.material.mixtureSamples, 1, kMaxReferenceSamples);
+    const int samples = stochasticPasses();
     if (auto s = ensureTarget(stochasticSum, width, height, false); !s) return s;
     stochasticSum->bind();
     glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
@@ -1130,7 +1134,7 @@ Status Renderer::render(const RenderTarget& target) {
     // A host context (the studio's) may leave a scissor on: the off-screen passes draw everything.
     glDisable(GL_SCISSOR_TEST);
     const DebugView view = impl.features.debugView;
-    if (view == DebugView::None && impl.stochasticMixture()) {
+    if (view == DebugView::None && impl.stochasticMixture() && impl.stochasticPasses() > 1) {
         // The passes are averaged in HDR, then shown (the fused pass would average display values).
         if (auto s = impl.drawHdr(target.width, target.height, true); !s) return s;
         if (auto s = impl.displayPass(target, *impl.hdr, false); !s) return s;

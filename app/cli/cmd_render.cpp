@@ -518,10 +518,16 @@ int runCompare(Renderer& renderer, const Scene& scene, int width, int height, co
     bar.finish();
     if (!report) return fail(report.error());
     std::string method(methodName(scene.material.method));
-    if (scene.material.method == Method::Mixture)
-        method += "-k" + std::to_string(scene.material.methodParams.mixtureLobes);
+    const bool mixture = scene.material.method == Method::Mixture;
+    const bool stochastic = mixture && scene.material.mixtureFiltering == MixtureFiltering::Stochastic;
+    if (mixture) method += "-k" + std::to_string(scene.material.methodParams.mixtureLobes);
     if (o.json) {
         nlohmann::json j{{"method", method},
+                         {"mixture_filtering",
+                          mixture ? nlohmann::json(mixtureFilteringName(scene.material.mixtureFiltering))
+                                  : nlohmann::json(nullptr)},
+                         {"mixture_samples", stochastic ? nlohmann::json(scene.material.mixtureSamples)
+                                                        : nlohmann::json(nullptr)},
                          {"mesh", meshKindName(scene.mesh)},
                          {"distance", scene.camera.distance},
                          {"width", report->width},
@@ -534,6 +540,8 @@ int runCompare(Renderer& renderer, const Scene& scene, int width, int height, co
         std::printf("%s\n", j.dump(2).c_str());
         return 0;
     }
+    if (stochastic)
+        method += " (filtered after shading, " + std::to_string(scene.material.mixtureSamples) + " passes)";
     std::printf(
         "%s on the %s at distance %g, %dx%d, against the %d-sample reference (linear HDR luminance over "
         "the %lld pixels the object covers, silhouette dropped):\n"

@@ -227,6 +227,21 @@ TEST(CliRender, ComparePrintsTheScreenErrorAgainstTheReference) {
         EXPECT_TRUE(std::isfinite(v) && v >= 0.0) << key << " = " << v;
     }
     EXPECT_GT(parsed.at("energy_ratio").get<double>(), 0.0);
+    EXPECT_EQ(parsed.at("mixture_filtering").get<std::string>(), "moments");
+    EXPECT_TRUE(parsed.at("mixture_samples").is_null());
+    // Filtered after shading: recorded with its passes; LEAN (no mixture) records neither.
+    const CliResult st =
+        runBurnish(scene + "--method mixture --mixture-filtering stochastic --mixture-samples 3 --json");
+    ASSERT_EQ(st.exitCode, 0) << st.err;
+    const auto stochastic = nlohmann::json::parse(st.out, nullptr, false);
+    ASSERT_FALSE(stochastic.is_discarded()) << st.out;
+    EXPECT_EQ(stochastic.at("mixture_filtering").get<std::string>(), "stochastic");
+    EXPECT_EQ(stochastic.at("mixture_samples").get<int>(), 3);
+    const CliResult leanJson = runBurnish(scene + "--method lean --json");
+    ASSERT_EQ(leanJson.exitCode, 0) << leanJson.err;
+    const auto lean = nlohmann::json::parse(leanJson.out, nullptr, false);
+    ASSERT_FALSE(lean.is_discarded()) << leanJson.out;
+    EXPECT_TRUE(lean.at("mixture_filtering").is_null());
     const CliResult text = runBurnish(scene + "--method lean");
     ASSERT_EQ(text.exitCode, 0) << text.err;
     EXPECT_NE(text.out.find("relative L1 "), std::string::npos) << text.out;

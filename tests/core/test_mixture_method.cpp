@@ -343,6 +343,49 @@ TEST(MixtureMethod, PresetStoresThreeLobesAndLobesMustMatchIt) {
     fs::remove_all(dir);
 }
 
+namespace {
+
+// The method's value for pair d at the corner shared by four texels of level `mip`: (x, y), (x+1, y),
+// (x, y+1), (x+1, y+1), wrapping.
+using CornerValue =
+    std::function<double(int mip, const std::array<glm::ivec2, 4>& texels, const DirectionPair& d)>;
+
+// Evaluate's between-texel rows of mips 1..2 of `r` (one method) against a brute-force sum: at each
+// corner the truth is ¼ of each of the four footprints' mean at base power 64, the method's value
+// `value`.
+void expectBetweenTexelsBruteForce(const NormalPyramid& pyramid, const EvaluationResult& r,
+                                   const CornerValue& value) {
+    for (int mip = 1; mip <= 2; ++mip) {
+        const PyramidLevel& level = pyramid.level(mip);
+        double abs = 0.0, truthSum = 0.0, valueSum = 0.0;
+        for (const DirectionPair& d : r.directions)
+            for (int y = 0; y < level.height; ++y)
+                for (int x = 0; x < level.width; ++x) {
+                    std::array<glm::ivec2, 4> texels;
+                    double truth = 0.0;
+                    for (int c = 0; c < 4; ++c) {
+                        texels[size_t(c)] = {(x + (c & 1)) % level.width, (y + (c >> 1)) % level.height};
+                        truth += 0.25 * groundTruthTexel(pyramid, mip, texels[size_t(c)].x,
+                                                         texels[size_t(c)].y, 64.0, d);
+                    }
+                    const double v = value(mip, texels, d);
+                    abs += std::abs(v - truth);
+                    truthSum += truth;
+                    valueSum += v;
+                }
+        bool found = false;
+        for (const MipError& e : r.errors)
+            if (e.betweenTexels && e.mip == mip) {
+                found = true;
+                EXPECT_NEAR(e.relativeL1, abs / truthSum, 1e-9 * abs / truthSum) << "mip " << mip;
+                EXPECT_NEAR(e.energyRatio, valueSum / truthSum, 1e-9) << "mip " << mip;
+            }
+        EXPECT_TRUE(found);
+    }
+}
+
+} // namespace
+
 TEST(MixtureMethod, BetweenTexelsAgreesWithABruteForceSumOnATinyMap) {
     // At each texel's corner the truth is ¼ of each of the four footprints' mean, the method's value
     // its lobe from the averaged moments (LEAN) or the averaged stored lobes (the mixture).
@@ -359,34 +402,14 @@ TEST(MixtureMethod, BetweenTexelsAgreesWithABruteForceSumOnATinyMap) {
     ASSERT_TRUE(r) << r.error();
     const auto shared = std::make_shared<NormalMap>(map);
     const NormalPyramid pyramid = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
-    for (int mip = 1; mip <= 2; ++mip) {
-        const PyramidLevel& level = pyramid.level(mip);
-        double abs = 0.0, truthSum = 0.0, valueSum = 0.0;
-        for (const DirectionPair& d : r->directions)
-            for (int y = 0; y < level.height; ++y)
-                for (int x = 0; x < level.width; ++x) {
-                    std::array<NormalMoments, 4> moments;
-                    double truth = 0.0;
-                    for (int c = 0; c < 4; ++c) {
-                        const int xi = (x + (c & 1)) % level.width, yi = (y + (c >> 1)) % level.height;
-                        truth += 0.25 * groundTruthTexel(pyramid, mip, xi, yi, 64.0, d);
-                        moments[size_t(c)] = pyramid.boxMoments(mip, xi, yi);
-                    }
-                    const double value = methodValue(
-                        methodLobeBetween(Method::Lean, moments, {64.0, 64.0, 64.0, 64.0}, {}), d);
-                    abs += std::abs(value - truth);
-                    truthSum += truth;
-                    valueSum += value;
-                }
-        bool found = false;
-        for (const MipError& e : r->errors)
-            if (e.betweenTexels && e.mip == mip) {
-                found = true;
-                EXPECT_NEAR(e.relativeL1, abs / truthSum, 1e-9 * abs / truthSum) << "mip " << mip;
-                EXPECT_NEAR(e.energyRatio, valueSum / truthSum, 1e-9) << "mip " << mip;
-            }
-        EXPECT_TRUE(found);
-    }
+    // LEAN's lobe from the four texels' averaged moments.
+    expectBetweenTexelsBruteForce(
+        pyramid, *r, [&](int mip, const std::array<glm::ivec2, 4>& texels, const DirectionPair& d) {
+            std::array<NormalMoments, 4> moments;
+            for (size_t c = 0; c < 4; ++c)
+                moments[c] = pyramid.boxMoments(mip, texels[c].x, texels[c].y);
+            return methodValue(methodLobeBetween(Method::Lean, moments, {64.0, 64.0, 64.0, 64.0}, {}), d);
+        });
     // The mixture between texels: finite, and K = 1 equal to LEAN there too.
     o.methods = {Method::Lean, Method::Mixture};
     o.mixtureLobes = {1, 3};
@@ -520,34 +543,17 @@ TEST(MixtureMethod, StochasticFilteringBetweenTexelsIsTheMeanOfTheFourTexelsShad
     const auto shared = std::make_shared<NormalMap>(map);
     const NormalPyramid pyramid = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
     const MixturePyramid mixture = MixturePyramid::build(pyramid, 64.0, 3);
-    for (int mip = 1; mip <= 2; ++mip) {
-        const PyramidLevel& level = pyramid.level(mip);
-        double abs = 0.0, truthSum = 0.0, valueSum = 0.0;
-        for (const DirectionPair& d : r->directions)
-            for (int y = 0; y < level.height; ++y)
-                for (int x = 0; x < level.width; ++x) {
-                    double truth = 0.0, value = 0.0;
-                    for (int c = 0; c < 4; ++c) {
-                        const int xi = (x + (c & 1)) % level.width, yi = (y + (c >> 1)) % level.height;
-                        truth += 0.25 * groundTruthTexel(pyramid, mip, xi, yi, 64.0, d);
-                        LobeMixture own;
-                        for (const LobeMoments& l : mixture.storedTexel(map, mip, xi, yi, 64.0))
-                            if (l.w > 0.0) own.lobes[size_t(own.count++)] = l;
-                        value += 0.25 * mixtureValue(own, d.l, d.h, mixture.minVariance());
-                    }
-                    abs += std::abs(value - truth);
-                    truthSum += truth;
-                    valueSum += value;
-                }
-        bool found = false;
-        for (const MipError& e : r->errors)
-            if (e.betweenTexels && e.mip == mip) {
-                found = true;
-                EXPECT_NEAR(e.relativeL1, abs / truthSum, 1e-9 * abs / truthSum) << "mip " << mip;
-                EXPECT_NEAR(e.energyRatio, valueSum / truthSum, 1e-9) << "mip " << mip;
+    expectBetweenTexelsBruteForce(
+        pyramid, *r, [&](int mip, const std::array<glm::ivec2, 4>& texels, const DirectionPair& d) {
+            double value = 0.0;
+            for (const glm::ivec2& t : texels) {
+                LobeMixture own;
+                for (const LobeMoments& l : mixture.storedTexel(map, mip, t.x, t.y, 64.0))
+                    if (l.w > 0.0) own.lobes[size_t(own.count++)] = l;
+                value += 0.25 * mixtureValue(own, d.l, d.h, mixture.minVariance());
             }
-        EXPECT_TRUE(found);
-    }
+            return value;
+        });
 }
 
 TEST(MixtureMethod, StochasticFilteringBeatsMomentFilteringBetweenTexelsOnARealMap) {

@@ -324,7 +324,8 @@ Lobe materialLobe(vec2 uv) {
 #endif
 #if UBERSHADER || METHOD == METHOD_MIXTURE
         if (IS_METHOD(METHOD_MIXTURE)) {
-            // Premultiplied moments, filtered by the hardware: same-index lobes merge exactly.
+            // Premultiplied moments, filtered by the hardware: same-index lobes merge exactly (with
+            // MIXTURE_STOCHASTIC one texel of the footprint, fetched unfiltered: see below).
             lobe.mixtureLobes = MIXTURE_LOBE_COUNT;
             lobe.mixtureMinVariance = max(uMixtureMinVariance, kMinVariance);
 #if defined(MIXTURE_STOCHASTIC)

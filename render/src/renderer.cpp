@@ -373,8 +373,9 @@ struct Renderer::Impl {
                              glm::vec2 jitterNdc, bool reference);
     Status drawMaterial(const FeatureSet& f, const Program& p, int width, int height, glm::vec2 jitterNdc,
                         bool reference, bool withBackground);
-    /// Adds the HDR target's colour, times `weight`, into `sum` (left bound).
-    void addHdrInto(Framebuffer& sum, float weight);
+    /// Draws `source`'s colour times `weight` into `target` (left bound): added to what it holds
+    /// (`add`, for the averages of several passes) or replacing it (a copy).
+    void drawWeighted(Framebuffer& target, const Framebuffer& source, float weight, bool add);
     Status accumulateReference(int width, int height, int samples, bool withBackground);
     void drawBackground(int width, int height, bool displayOutput);
     /// The cube the lighting reads for `kind` (the prefiltered one, or FIS's chain), when made.
@@ -870,14 +871,18 @@ Status Renderer::Impl::drawMaterial(const FeatureSet& f, const Program& p, int w
     return {};
 }
 
-void Renderer::Impl::addHdrInto(Framebuffer& sum, float weight) {
-    sum.bind();
-    glEnable(GL_BLEND);
-    glBlendFunc(GL_ONE, GL_ONE);
-    glBlendEquation(GL_FUNC_ADD);
+void Renderer::Impl::drawWeighted(Framebuffer& target, const Framebuffer& source, float weight, bool add) {
+    target.bind();
+    if (add) {
+        glEnable(GL_BLEND);
+        glBlendFunc(GL_ONE, GL_ONE);
+        glBlendEquation(GL_FUNC_ADD);
+    } else {
+        glDisable(GL_BLEND);
+    }
     accumulate->use();
     glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, hdr->colorTexture());
+    glBindTexture(GL_TEXTURE_2D, source.colorTexture());
     accumulate->set("uSource", 0);
     accumulate->set("uWeight", weight);
     fullscreen->draw();
@@ -903,7 +908,7 @@ Status Renderer::Impl::accumulateReference(int width, int height, int samples, b
         const glm::vec2 jitterNdc((jx - 0.5f) * 2.0f / float(width), (jy - 0.5f) * 2.0f / float(height));
         if (auto s = drawMaterial(f, **reference, width, height, jitterNdc, true, withBackground); !s)
             return s;
-        addHdrInto(*accumulation, 1.0f / float(samples));
+        drawWeighted(*accumulation, *hdr, 1.0f / float(samples), true);
     }
     return {};
 }
@@ -972,17 +977,10 @@ Status Renderer::Impl::drawHdr(int width, int height, bool withBackground) {
         if (auto s = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false, withBackground);
             !s)
             return s;
-        addHdrInto(*stochasticSum, 1.0f / float(samples));
+        drawWeighted(*stochasticSum, *hdr, 1.0f / float(samples), true);
     }
     stochasticSample = 0;
-    hdr->bind();
-    glDisable(GL_DEPTH_TEST);
-    accumulate->use();
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, stochasticSum->colorTexture());
-    accumulate->set("uSource", 0);
-    accumulate->set("uWeight", 1.0f);
-    fullscreen->draw();
+    drawWeighted(*hdr, *stochasticSum, 1.0f, false);
     return {};
 }
 
@@ -1158,13 +1156,7 @@ Status Renderer::render(const RenderTarget& target) {
             if (auto s = impl.accumulateReference(target.width, target.height, samples, false); !s) return s;
             if (auto s = ensureTarget(impl.heatmapReference, target.width, target.height, false); !s)
                 return s;
-            impl.heatmapReference->bind();
-            glActiveTexture(GL_TEXTURE0);
-            glBindTexture(GL_TEXTURE_2D, impl.accumulation->colorTexture());
-            impl.accumulate->use();
-            impl.accumulate->set("uSource", 0);
-            impl.accumulate->set("uWeight", 1.0f);
-            impl.fullscreen->draw();
+            impl.drawWeighted(*impl.heatmapReference, *impl.accumulation, 1.0f, false);
             impl.heatmapReferenceValid = true;
             if (auto s = impl.drawHdr(target.width, target.height, false); !s) return s;
         }

@@ -97,7 +97,7 @@ struct MaterialSettings {
     /// trilinear footprint per pixel, and `mixtureSamples` passes are averaged, as temporal
     /// anti-aliasing would). The ubershader always filters the moments.
     MixtureFiltering mixtureFiltering = MixtureFiltering::Moments;
-    int mixtureSamples = 16; // passes averaged under MixtureFiltering::Stochastic, 1..kMaxReferenceSamples
+    int mixtureSamples = 16; // passes averaged under MixtureFiltering::Stochastic, 1..4096
 
     /// Sets the base power from a gloss value in glossEncoding (clamped to [0, 1]).
     void setGloss(double gloss) { basePower = glossEncoding.power(gloss); }

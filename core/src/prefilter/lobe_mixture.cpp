@@ -535,12 +535,24 @@ bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double v, LobeMix
         if (!isFinestLobe(l, v)) return false;
         bmax2 = std::max(bmax2, l.bx * l.bx + l.by * l.by);
     }
+    // Bit-identical lobes (an 8-bit map's equal neighbours, an upsampled map's flat runs: a third of
+    // level 1 of a resized map): group[i] is the first lobe lobe i equals.
+    std::array<size_t, 4> group{0, 1, 2, 3};
+    bool identical = false;
+    for (size_t i = 1; i < 4; ++i)
+        for (size_t j = 0; j < i; ++j)
+            if (std::memcmp(&lobes[j], &lobes[i], sizeof(LobeMoments)) == 0) {
+                group[i] = group[j];
+                identical = true;
+                break;
+            }
     constexpr std::array<std::array<unsigned char, 2>, 6> kPairs{
         {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
     const double toU = 0.25 / v;
     double u1 = std::numeric_limits<double>::infinity(), u2 = u1;
     size_t closest = 0;
     for (size_t p = 0; p < kPairs.size(); ++p) {
+        if (group[kPairs[p][0]] == group[kPairs[p][1]]) continue; // the same lobe twice
         const LobeMoments &a = lobes[kPairs[p][0]], &b = lobes[kPairs[p][1]];
         const double dx = a.bx - b.bx, dy = a.by - b.by, u = (dx * dx + dy * dy) * toU;
         if (u < u1)
@@ -549,9 +561,31 @@ bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double v, LobeMix
             u2 = u;
     }
     const double delta = 1e-13 * (1.0 + bmax2 / v);
-    if (!(u1 >= 1e-3) || !(delta < 5e-8) || !std::isfinite(u2)) return false;
     size_t n = 4;
-    if (k == 3) {
+    if (identical) {
+        // Two equal lobes merge at a cost of exactly 0 (2a has a's mean and covariance to the bit, as
+        // in reduceFourEqual), every other pair (u >= 1e-3, δ small) well above kNegligibleMergeCost·4:
+        // the general path merges equal pairs first, in the pairs' order, each into its lower index,
+        // and then, k >= 3 lobes being left, only what costs nothing. A pair of equal lobes is one
+        // merge; of three (i1 < i2 < i3) (i1, i2) merges first, and then 2a with a costs
+        // c = mergeCost(2a, a), which rounding leaves 0 or not: it merges if negligible.
+        if (!(u1 >= 1e-3) || !(delta < 5e-8)) return false;
+        std::array<bool, 4> alive{true, true, true, true};
+        std::array<int, 4> merged{};
+        for (size_t i = 1; i < 4; ++i) {
+            const size_t g = group[i];
+            if (g == i) continue;
+            if (merged[g]++ == 0 || mergeCost(lobes[g], lobes[i], v) <= kNegligibleMergeCost * 4.0) {
+                lobes[g] += lobes[i];
+                alive[i] = false;
+            }
+        }
+        n = 0;
+        for (size_t i = 0; i < 4; ++i)
+            if (alive[i]) lobes[n++] = lobes[i];
+    } else if (!(u1 >= 1e-3) || !(delta < 5e-8) || !std::isfinite(u2)) {
+        return false;
+    } else if (k == 3) {
         // The gap log(1 + u2) − log(1 + u1) >= (u2 − u1)/(1 + u2).
         if (!((u2 - u1) / (1.0 + u2) > 4.0 * delta)) return false;
         const size_t i = kPairs[closest][0], j = kPairs[closest][1];

@@ -305,6 +305,13 @@ Viewport::Viewport(MaterialDocument* doc, QWidget* parent)
         m_engine->moving = autoOrbit();
         requestUpdate();
     });
+    // At rest a mixture filtered after shading is drawn a pass a frame, each frame showing the average
+    // so far (RenderTarget::progressive), so the view answers between passes; the renderer starts
+    // again by itself when anything drawn changes.
+    m_passTimer = new QTimer(this);
+    m_passTimer->setSingleShot(true);
+    m_passTimer->setInterval(0);
+    connect(m_passTimer, &QTimer::timeout, this, &Viewport::requestUpdate);
     connect(m_doc, &MaterialDocument::changed, this, [this] {
         m_dabPending = false; // the frame this requests shows every dab so far
         m_dabFrameRequested = false;
@@ -444,9 +451,9 @@ Result<render::Scene> Viewport::scene() {
     scene.debugView = m_view.debugView;
     scene.material = std::move(material).value();
     if (m_view.filterAfterShading) {
-        // At rest the reference side's count of passes averaged; while the camera moves one pass, drawn
-        // as any frame (half size when full frames are slow): grainy, as an engine's frame before its
-        // temporal anti-aliasing.
+        // At rest the reference side's count of passes averaged, added a pass a frame (drawInto);
+        // while the camera moves one pass, drawn as any frame (half size when full frames are slow):
+        // grainy, as an engine's frame before its temporal anti-aliasing.
         scene.material.mixtureFiltering = MixtureFiltering::Stochastic;
         scene.material.mixtureSamples = m_engine->moving ? 1 : m_view.referenceSamples;
     }
@@ -469,6 +476,8 @@ void Viewport::drawInto(unsigned framebuffer, int width, int height) {
     // While the camera moves and full frames are slower than 60 a second, half-size frames (a quarter
     // of the fragments); the rest timer's frame is the full one.
     left.interactive = e.moving && m_fullFrameMs > kInteractiveAboveMs;
+    // A pass a frame at rest, except beside the reference, which each frame would draw whole again.
+    left.progressive = !m_grabbing && !(m_view.split && m_view.right.reference);
     render::RenderTarget right = left;
     if (m_view.split) {
         // The divider's column in pixels: the left side gets [0, splitX), the right [splitX, width).
@@ -498,6 +507,9 @@ void Viewport::drawInto(unsigned framebuffer, int width, int height) {
         return;
     }
     showBaking(e.a->bakePending() || (m_view.split && e.b->bakePending()));
+    // A progressive frame short of its passes: the next one once the events queued are handled.
+    if (!e.a->progressiveDone() || (m_view.split && !m_view.right.reference && !e.b->progressiveDone()))
+        m_passTimer->start();
     m_frameMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     if (!left.interactive) m_fullFrameMs = m_frameMs;
     setError({});
@@ -563,11 +575,17 @@ void Viewport::meter() {
 }
 
 QImage Viewport::grabFrame() {
-    if (m_glSurface) {
-        // The widget must exist on screen for its context; grabFramebuffer() renders a fresh frame.
-        return m_glSurface->grabFramebuffer();
-    }
-    return m_imageSurface->render();
+    m_grabbing = true;
+    // The widget must exist on screen for its context; grabFramebuffer() renders a fresh frame.
+    QImage frame = m_glSurface ? m_glSurface->grabFramebuffer() : m_imageSurface->render();
+    m_grabbing = false;
+    return frame;
+}
+
+int Viewport::progressivePasses() const {
+    const Engine& e = *m_engine;
+    if (!m_view.filterAfterShading || !e.a) return 0;
+    return e.a->progressivePasses();
 }
 
 std::optional<QPointF> Viewport::uvAt(QPoint widgetPos) {

@@ -115,8 +115,12 @@ public:
     std::optional<ShimmerReading> shimmer() const { return m_shimmer; }
     void resetShimmer();
 
-    /// Renders a fresh frame and returns it as shown (both sides of a split, without the labels).
+    /// Renders a fresh frame and returns it as shown (both sides of a split, without the labels). A
+    /// mixture filtered after shading is drawn with all its passes, not a pass a frame.
     QImage grabFrame();
+    /// The passes in the average side A shows of a mixture filtered after shading at rest, which grows
+    /// by one a frame up to the reference's count (0 when the view filters no mixture after shading).
+    int progressivePasses() const;
     /// The texture coordinate under a widget position: (u, v) wrapped into [0, 1)² as the renderer
     /// samples the maps (v = 0 at the bottom row of the image: image pixel (u·width, (1 − v)·height)),
     /// or nothing off the object or when nothing can be drawn. Reads back a UV pass of the whole
@@ -208,6 +212,8 @@ private:
     QTimer* m_bakingTimer = nullptr; // reads the bake's progress into the label while it shows
     QTimer* m_orbitTimer = nullptr;
     QTimer* m_restTimer = nullptr;
+    QTimer* m_passTimer = nullptr;    // the next pass of a progressive frame, once events are handled
+    bool m_grabbing = false;          // grabFrame's frame: every pass at once
     QTimer* m_dabTimer = nullptr;     // throttles redraws during a stroke (kDabRedrawIntervalMs)
     bool m_dabPending = false;        // a dab arrived while m_dabTimer ran: redraw when it fires
     bool m_dabFrameRequested = false; // a dab redraw is requested and not drawn yet

@@ -353,6 +353,12 @@ struct Renderer::Impl {
     std::optional<Framebuffer> heatmapReference;
     std::optional<Framebuffer> stochasticSum; // the passes of a stochastically filtered mixture, summed
     int stochasticSample = 0;                 // the pass being drawn (uStochasticSample)
+    // Progressive frames (RenderTarget::progressive): the passes so far, summed, of the scene and
+    // size they were drawn for; whether the last render() was such a frame.
+    std::optional<Framebuffer> progressiveSum;
+    std::optional<Scene> progressiveScene;
+    int progressiveCount = 0;
+    bool progressiveLast = false;
     bool heatmapReferenceValid = false;
     double lastMs = 0.0;
 
@@ -386,6 +392,9 @@ struct Renderer::Impl {
     glm::mat4 cameraViewProjection(int width, int height) const;
     Status displayPass(const RenderTarget& target, const Framebuffer& source, bool dataView);
     Status drawHdr(int width, int height, bool withBackground);
+    /// The next pass of a progressive frame added to the average of the passes before (from the
+    /// first when the scene or the size changed), that average in the HDR target.
+    Status drawProgressive(int width, int height);
     /// Whether the material is a mixture filtered after shading by a specialized program
     /// (MaterialSettings::mixtureFiltering; the ubershader and the reference filter the moments).
     bool stochasticMixture() const {
@@ -984,6 +993,29 @@ Status Renderer::Impl::drawHdr(int width, int height, bool withBackground) {
     return {};
 }
 
+Status Renderer::Impl::drawProgressive(int width, int height) {
+    if (!hasScene || !program) return Error{"no scene to render"};
+    const bool carryOn = progressiveCount > 0 && progressiveScene && *progressiveScene == scene &&
+                         progressiveSum && progressiveSum->width() == width &&
+                         progressiveSum->height() == height;
+    if (!carryOn) {
+        progressiveScene = scene;
+        progressiveCount = 0;
+    }
+    if (progressiveCount < stochasticPasses()) {
+        // Pass i is drawHdr's pass i: the same random numbers, so the average converges to its image.
+        stochasticSample = progressiveCount;
+        const Status drawn = drawMaterial(features, *program, width, height, glm::vec2(0.0f), false, true);
+        stochasticSample = 0;
+        if (!drawn) return drawn;
+        if (auto s = ensureTarget(progressiveSum, width, height, false); !s) return s;
+        drawWeighted(*progressiveSum, *hdr, 1.0f, progressiveCount > 0);
+        ++progressiveCount;
+    }
+    drawWeighted(*hdr, *progressiveSum, 1.0f / float(progressiveCount), false);
+    return {};
+}
+
 // Scene::environmentBackground: the environment in each pixel's view direction, from the background's
 // own cube or level 0 of the lighting's, drawn into the bound material target after its clear and
 // before the mesh (no depth written, so the mesh covers it). Nothing without an environment map.
@@ -1108,6 +1140,14 @@ void Renderer::setMaxTextureSize(int size) {
     m_impl->maxTextureSize = std::max(size, 0);
 }
 
+bool Renderer::progressiveDone() const {
+    return !m_impl->progressiveLast || m_impl->progressiveCount >= m_impl->stochasticPasses();
+}
+
+int Renderer::progressivePasses() const {
+    return m_impl->progressiveCount;
+}
+
 bool Renderer::bakePending() const {
     return m_impl->drawingStale;
 }
@@ -1132,9 +1172,16 @@ Status Renderer::render(const RenderTarget& target) {
     // A host context (the studio's) may leave a scissor on: the off-screen passes draw everything.
     glDisable(GL_SCISSOR_TEST);
     const DebugView view = impl.features.debugView;
+    impl.progressiveLast = false;
     if (view == DebugView::None && impl.stochasticMixture() && impl.stochasticPasses() > 1) {
-        // The passes are averaged in HDR, then shown (the fused pass would average display values).
-        if (auto s = impl.drawHdr(target.width, target.height, true); !s) return s;
+        // The passes are averaged in HDR, then shown (the fused pass would average display values):
+        // all of them now, or the next one added to those of the calls before (progressive).
+        if (target.progressive && !target.interactive) {
+            if (auto s = impl.drawProgressive(target.width, target.height); !s) return s;
+            impl.progressiveLast = true;
+        } else if (auto s = impl.drawHdr(target.width, target.height, true); !s) {
+            return s;
+        }
         if (auto s = impl.displayPass(target, *impl.hdr, false); !s) return s;
         glFinish();
         impl.lastMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();

@@ -168,6 +168,70 @@ TEST_F(RendererTest, StochasticMixtureFilteringConvergesAndMatchesMomentsOnAFlat
     EXPECT_LT(errorMany, 1.02 * errorMerged);
 }
 
+TEST_F(RendererTest, ProgressiveStochasticFramesAddAPassACallUntilTheWholeAverage) {
+    // RenderTarget::progressive: a pass a call, the average of the calls so far shown, ending at the
+    // image of all passes at once (the same random numbers: within a code of it, the sums' rounding);
+    // a changed scene or size starts again, the same scene set again carries on.
+    Scene scene = sampleScene(SampleMapKind::Brushed, 128);
+    scene.mesh = MeshKind::Plane;
+    scene.camera.pitchDegrees = 12.0f;
+    scene.material.uvScale = 4.0f;
+    scene.light.direction = {-0.5f, 0.15f, -0.85f};
+    scene.material.method = Method::Mixture;
+    scene.material.mixtureFiltering = MixtureFiltering::Stochastic;
+    constexpr int kPasses = 6;
+    scene.material.mixtureSamples = kPasses;
+    ASSERT_TRUE(renderer().setScene(scene).ok());
+    auto fb = Framebuffer::create(kSize, kSize, ColorFormat::Rgba8, false);
+    ASSERT_TRUE(fb.ok()) << fb.error();
+    RenderTarget target{fb->id(), kSize, kSize};
+    ASSERT_TRUE(renderer().render(target).ok());
+    EXPECT_TRUE(renderer().progressiveDone()); // not a progressive frame
+    const std::vector<std::uint8_t> whole = fb->readRgba8();
+    auto largestDifference = [&](const std::vector<std::uint8_t>& a) {
+        int largest = 0;
+        for (size_t i = 0; i < a.size(); ++i)
+            largest = std::max(largest, std::abs(int(a[i]) - int(whole[i])));
+        return largest;
+    };
+    target.progressive = true;
+    std::vector<int> differences;
+    for (int pass = 1; pass <= kPasses; ++pass) {
+        ASSERT_TRUE(renderer().setScene(scene).ok()); // as the studio sets it before every frame
+        ASSERT_TRUE(renderer().render(target).ok());
+        EXPECT_EQ(renderer().progressivePasses(), pass);
+        EXPECT_EQ(renderer().progressiveDone(), pass == kPasses);
+        differences.push_back(largestDifference(fb->readRgba8()));
+    }
+    EXPECT_GT(differences.front(), 8); // one pass is grainy
+    EXPECT_LE(differences.back(), 1);  // all of them: the image drawn at once
+    // Every pass in: the average again, no more passes.
+    ASSERT_TRUE(renderer().render(target).ok());
+    EXPECT_EQ(renderer().progressivePasses(), kPasses);
+    EXPECT_TRUE(renderer().progressiveDone());
+    EXPECT_LE(largestDifference(fb->readRgba8()), 1);
+    // A changed setting starts again; the same scene set again carries on.
+    scene.camera.yawDegrees += 1.0f;
+    ASSERT_TRUE(renderer().setScene(scene).ok());
+    ASSERT_TRUE(renderer().render(target).ok());
+    EXPECT_EQ(renderer().progressivePasses(), 1);
+    EXPECT_FALSE(renderer().progressiveDone());
+    ASSERT_TRUE(renderer().setScene(Scene(scene)).ok());
+    ASSERT_TRUE(renderer().render(target).ok());
+    EXPECT_EQ(renderer().progressivePasses(), 2);
+    // Another size starts again.
+    auto smaller = Framebuffer::create(kSize / 2, kSize / 2, ColorFormat::Rgba8, false);
+    ASSERT_TRUE(smaller.ok()) << smaller.error();
+    RenderTarget small{smaller->id(), kSize / 2, kSize / 2};
+    small.progressive = true;
+    ASSERT_TRUE(renderer().render(small).ok());
+    EXPECT_EQ(renderer().progressivePasses(), 1);
+    // An interactive frame is one pass drawn whole, whatever it asks.
+    small.interactive = true;
+    ASSERT_TRUE(renderer().render(small).ok());
+    EXPECT_TRUE(renderer().progressiveDone());
+}
+
 TEST_F(RendererTest, DisplayImageIsInUnitRange) {
     Scene scene = sampleScene();
     ASSERT_TRUE(renderer().setScene(scene).ok());

@@ -14,6 +14,7 @@
 
 #include <QApplication>
 #include <QCheckBox>
+#include <QElapsedTimer>
 #include <QImage>
 #include <QSignalSpy>
 #include <QTest>
@@ -452,6 +453,57 @@ TEST(Viewport, TheMixtureFilteredAfterShadingDrawsAndTheCheckFollowsTheMethod) {
     EXPECT_GT(meanAbsDiff(moments, after, 0, w), 1e-3);
     check->setChecked(false);
     EXPECT_LT(meanAbsDiff(moments, grab(), 0, w), 1e-9);
+    delete panel;
+}
+
+TEST(Viewport, AtRestTheMixtureFilteredAfterShadingAddsAPassAFrame) {
+    // The view shows the average so far and asks for the next frame itself, up to the reference's
+    // count of passes; a change of view starts again from one pass.
+    MaterialDocument doc;
+    auto* panel = new ViewportPanel(&doc);
+    panel->resize(kWidth, kHeight + 80);
+    panel->show();
+    ASSERT_TRUE(doc.setPreset("mixture"));
+    ASSERT_TRUE(doc.setMethod(Method::Mixture));
+    Viewport* view = panel->viewport();
+    view->setReferenceSamples(4);
+    panel->afterShadingCheck()->setChecked(true);
+    // Frames drawn by the event loop alone (each pass once the events before it are handled), with
+    // the passes each frame shows.
+    std::vector<int> frames;
+    QObject::connect(view, &Viewport::frameRendered, view,
+                     [&] { frames.push_back(view->progressivePasses()); });
+    auto passesSeen = [&] {
+        frames.clear();
+        QElapsedTimer clock;
+        clock.start();
+        while (clock.elapsed() < 30000 && (frames.empty() || frames.back() < 4))
+            QApplication::processEvents(QEventLoop::AllEvents, 20);
+        return frames;
+    };
+    EXPECT_EQ(passesSeen(), (std::vector<int>{1, 2, 3, 4}));
+    EXPECT_EQ(view->lastError(), QString());
+    view->setDistance(view->viewSettings().distance * 1.1f);
+    EXPECT_EQ(passesSeen(), (std::vector<int>{1, 2, 3, 4}));
+    // Nothing more is drawn once every pass is in.
+    frames.clear();
+    for (int i = 0; i < 20; ++i)
+        QApplication::processEvents(QEventLoop::AllEvents, 10);
+    EXPECT_TRUE(frames.empty());
+    EXPECT_EQ(view->progressivePasses(), 4);
+    // Beside the reference, which each frame would draw whole again, every pass in one frame.
+    SplitSide reference;
+    reference.reference = true;
+    view->setRightSide(reference);
+    view->setSplit(true);
+    view->setDistance(view->viewSettings().distance * 1.1f); // a view side A has not drawn yet
+    frames.clear();
+    for (int i = 0; i < 30 && frames.empty(); ++i)
+        QApplication::processEvents(QEventLoop::AllEvents, 20);
+    for (int i = 0; i < 20; ++i)
+        QApplication::processEvents(QEventLoop::AllEvents, 10);
+    EXPECT_EQ(frames.size(), 1u);
+    EXPECT_EQ(view->lastError(), QString());
     delete panel;
 }
 

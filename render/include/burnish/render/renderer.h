@@ -33,6 +33,15 @@ struct RenderTarget {
     /// frame when the camera rests. Debug views and the reference ignore it.
     bool interactive = false;
 
+    /// The frame at rest of a mixture filtered after shading (MaterialSettings::mixtureFiltering
+    /// Stochastic, more than one pass), drawn a pass a call: each call adds the next of the scene's
+    /// mixtureSamples passes to the average of the calls before and shows that average, as long as
+    /// the scene as drawn (every setting, the maps, and the inputs a background bake is still
+    /// replacing) and the target's size stay the same; anything else starts again from the first
+    /// pass. Once every pass is in, a call shows the average again. progressiveDone() tells the
+    /// caller whether to call again. Other materials, debug views and interactive frames ignore it.
+    bool progressive = false;
+
     bool hasScissor() const { return scissorWidth > 0 && scissorHeight > 0; }
 };
 
@@ -89,6 +98,11 @@ public:
     /// Whether the last setScene draws the last baked material because the requested one is still
     /// baking in the background.
     bool bakePending() const;
+    /// False while the last render() drew a progressive frame (RenderTarget::progressive) whose
+    /// average holds fewer passes than the scene's mixtureSamples: another call adds the next.
+    bool progressiveDone() const;
+    /// The passes in the last progressive frame's average (0 before any).
+    int progressivePasses() const;
     /// The fraction done of the background bake running for the requested material (0 when none
     /// runs, or the running one was withdrawn and is stopping).
     double bakeProgress() const;

@@ -41,18 +41,24 @@ struct OrbitCamera {
     glm::mat4 projection(float aspect, float sceneRadius) const;
     /// The vertical field of view the projection uses: fovDegrees within 1°..170°, in radians.
     float fovYRadians() const;
+
+    friend bool operator==(const OrbitCamera&, const OrbitCamera&) = default;
 };
 
 struct DirectionalLight {
     glm::vec3 direction{0.4f, 0.7f, 0.6f}; // towards the light; normalized when used
     glm::vec3 color{1.0f};                 // linear
     float intensity = 1.0f; // in the π light units: a white Lambert facing it shows `intensity`
+
+    friend bool operator==(const DirectionalLight&, const DirectionalLight&) = default;
 };
 
 struct PointLight {
     glm::vec3 position{0.0f, 2.0f, 2.0f};
     glm::vec3 color{1.0f};
     float intensity = 4.0f; // radiance scale at distance 1 (inverse-square falloff)
+
+    friend bool operator==(const PointLight&, const PointLight&) = default;
 };
 
 /// A specular colour texture: linear F0, RGB floats, row-major, top row first.
@@ -101,6 +107,8 @@ struct MaterialSettings {
 
     /// Sets the base power from a gloss value in glossEncoding (clamped to [0, 1]).
     void setGloss(double gloss) { basePower = glossEncoding.power(gloss); }
+
+    friend bool operator==(const MaterialSettings&, const MaterialSettings&) = default;
 };
 
 /// Where an environment's radiance comes from.
@@ -139,6 +147,8 @@ struct EnvironmentMap {
     /// same source when larger than faceSize (kBackdropFaceSize for a display); otherwise (and for
     /// a Cube source) the background is level 0 of the cube the lighting reads.
     int backgroundFaceSize = 0;
+
+    friend bool operator==(const EnvironmentMap&, const EnvironmentMap&) = default;
 };
 
 /// The background's face size for a display (the studio, `burnish render --env-background`): sharp
@@ -178,6 +188,8 @@ struct Scene {
 
     /// The feature set the renderer compiles for this scene.
     FeatureSet features() const;
+
+    friend bool operator==(const Scene&, const Scene&) = default;
 };
 
 } // namespace burnish::render

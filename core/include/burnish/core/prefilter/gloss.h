@@ -71,6 +71,8 @@ public:
     double maxPower() const;
     bool increasesWithPower() const;
 
+    friend bool operator==(const GlossEncoding&, const GlossEncoding&) = default;
+
 private:
     GlossEncoding(GlossKind kind, double nMin, double nMax, std::string name, std::string formula);
     /// value() of the log-power kind: g = log2(n/nMin)/log2(nMax/nMin), n clamped to the range with

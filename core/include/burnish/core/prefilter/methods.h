@@ -196,6 +196,8 @@ struct MethodParams {
     /// The mixture's lobes also fitted to the shaded ground truth (eval/mixture_refine.h): a
     /// closer highlight, at many times the moment fit's bake time (for final exports).
     bool mixtureShadedFit = false;
+
+    friend bool operator==(const MethodParams&, const MethodParams&) = default;
 };
 
 /// The mixture's lobe textures for K lobes: MixtureLobe0..MixtureLobe(K−1).

@@ -119,6 +119,19 @@ TEST_F(RendererTest, OneLobeMixtureDrawsLeanAndMoreLobesComeCloserToTheReference
     EXPECT_LT(meanAbsLuminanceError(three, *reference), meanAbsLuminanceError(lean, *reference));
 }
 
+// The brushed sample's mixture (moment-filtered) on a plane seen at a low angle, lit from behind and
+// tiled four times: highlights spread over many texels and mips.
+Scene brushedMixturePlane(int mapSize) {
+    Scene scene = sampleScene(SampleMapKind::Brushed, mapSize);
+    scene.mesh = MeshKind::Plane;
+    scene.camera.pitchDegrees = 12.0f;
+    scene.camera.distance = 3.0f;
+    scene.material.uvScale = 4.0f;
+    scene.light.direction = {-0.5f, 0.15f, -0.85f};
+    scene.material.method = Method::Mixture;
+    return scene;
+}
+
 TEST_F(RendererTest, StochasticMixtureFilteringConvergesAndMatchesMomentsOnAFlatMap) {
     // Filtering after shading (MaterialSettings::mixtureFiltering): on a flat map every texel holds the
     // same lobes, so whichever texel a pixel shades, the image is the moment-filtered one. On a bumpy
@@ -140,13 +153,7 @@ TEST_F(RendererTest, StochasticMixtureFilteringConvergesAndMatchesMomentsOnAFlat
     ASSERT_GT(mean, 0.0);
     EXPECT_LT(meanAbsLuminanceError(stochastic, moments), 2e-3 * mean);
 
-    Scene scene = sampleScene(SampleMapKind::Brushed, 256);
-    scene.mesh = MeshKind::Plane;
-    scene.camera.pitchDegrees = 12.0f;
-    scene.camera.distance = 3.0f;
-    scene.material.uvScale = 4.0f;
-    scene.light.direction = {-0.5f, 0.15f, -0.85f};
-    scene.material.method = Method::Mixture;
+    Scene scene = brushedMixturePlane(256);
     const auto merged = hdr(scene);
     scene.material.mixtureFiltering = MixtureFiltering::Stochastic;
     scene.material.mixtureSamples = 1;
@@ -172,12 +179,7 @@ TEST_F(RendererTest, ProgressiveStochasticFramesAddAPassACallUntilTheWholeAverag
     // RenderTarget::progressive: a pass a call, the average of the calls so far shown, ending at the
     // image of all passes at once (the same random numbers: within a code of it, the sums' rounding);
     // a changed scene or size starts again, the same scene set again carries on.
-    Scene scene = sampleScene(SampleMapKind::Brushed, 128);
-    scene.mesh = MeshKind::Plane;
-    scene.camera.pitchDegrees = 12.0f;
-    scene.material.uvScale = 4.0f;
-    scene.light.direction = {-0.5f, 0.15f, -0.85f};
-    scene.material.method = Method::Mixture;
+    Scene scene = brushedMixturePlane(128);
     scene.material.mixtureFiltering = MixtureFiltering::Stochastic;
     constexpr int kPasses = 6;
     scene.material.mixtureSamples = kPasses;

@@ -1012,6 +1012,8 @@ Status Renderer::Impl::drawProgressive(int width, int height) {
         drawWeighted(*progressiveSum, *hdr, 1.0f, progressiveCount > 0);
         ++progressiveCount;
     }
+    // Another call (a meter's image, a grab) may have left the HDR target another size since.
+    if (auto s = ensureTarget(hdr, width, height, true); !s) return s;
     drawWeighted(*hdr, *progressiveSum, 1.0f / float(progressiveCount), false);
     return {};
 }

@@ -207,7 +207,9 @@ TEST_F(RendererTest, ProgressiveStochasticFramesAddAPassACallUntilTheWholeAverag
     }
     EXPECT_GT(differences.front(), 8); // one pass is grainy
     EXPECT_LE(differences.back(), 1);  // all of them: the image drawn at once
-    // Every pass in: the average again, no more passes.
+    // Every pass in: the average again, no more passes, also after an image of another size (a
+    // meter's) drawn in between.
+    ASSERT_TRUE(renderer().renderToImage(kSize / 4, kSize / 4, ImageKind::Hdr).ok());
     ASSERT_TRUE(renderer().render(target).ok());
     EXPECT_EQ(renderer().progressivePasses(), kPasses);
     EXPECT_TRUE(renderer().progressiveDone());

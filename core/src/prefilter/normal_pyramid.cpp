@@ -402,14 +402,6 @@ KernelTaps kernelTaps(FilterKernel kernel) {
     return {0, {1, 0, 0, 0, 0}};
 }
 
-NormalMoments NormalMoments::ofNormal(const glm::vec3& n) {
-    NormalMoments m;
-    m.mean = n;
-    const float z = std::max(n.z, kMinSlopeZ);
-    m.slope = glm::vec2(n.x / z, n.y / z);
-    return m;
-}
-
 NormalMoments combineMoments(const NormalMoments* moments, const double* weights, size_t count) {
     RawMoments<> raw;
     for (size_t i = 0; i < count; ++i)

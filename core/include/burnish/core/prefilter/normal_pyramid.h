@@ -67,8 +67,15 @@ struct NormalMoments {
                 slopeCov[2] + slope.x * slope.y};
     }
 
-    /// Moments of a single unit normal.
-    static NormalMoments ofNormal(const glm::vec3& n);
+    /// Moments of a single unit normal. Inline: the mixture's bake reads each finest normal's slope
+    /// three times (its fit, its lobe's slot, its texels), 48 million calls for a 4096² map.
+    static NormalMoments ofNormal(const glm::vec3& n) {
+        NormalMoments m;
+        m.mean = n;
+        const float z = std::max(n.z, kMinSlopeZ);
+        m.slope = glm::vec2(n.x / z, n.y / z);
+        return m;
+    }
 };
 
 /// Weighted combination of footprints (weights >= 0, not all 0).

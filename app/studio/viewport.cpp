@@ -582,6 +582,11 @@ QImage Viewport::grabFrame() {
     return frame;
 }
 
+bool Viewport::addingPasses() const {
+    const Engine& e = *m_engine;
+    return m_view.filterAfterShading && e.a && !e.a->progressiveDone();
+}
+
 int Viewport::progressivePasses() const {
     const Engine& e = *m_engine;
     if (!m_view.filterAfterShading || !e.a) return 0;

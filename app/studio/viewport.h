@@ -121,6 +121,8 @@ public:
     /// The passes in the average side A shows of a mixture filtered after shading at rest, which grows
     /// by one a frame up to the reference's count (0 when the view filters no mixture after shading).
     int progressivePasses() const;
+    /// Whether side A's last frame added a pass to an average that still lacks some.
+    bool addingPasses() const;
     /// The texture coordinate under a widget position: (u, v) wrapped into [0, 1)² as the renderer
     /// samples the maps (v = 0 at the bottom row of the image: image pixel (u·width, (1 − v)·height)),
     /// or nothing off the object or when nothing can be drawn. Reads back a UV pass of the whole

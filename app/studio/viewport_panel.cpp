@@ -181,8 +181,15 @@ ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
     });
     connect(m_viewport, &Viewport::viewChanged, this, &ViewportPanel::syncFromView);
     connect(m_viewport, &Viewport::shimmerChanged, this, &ViewportPanel::updateShimmer);
-    connect(m_viewport, &Viewport::frameRendered, this,
-            [this](double ms) { m_frame->setText(QString("%1 ms").arg(ms, 0, 'f', 1)); });
+    connect(m_viewport, &Viewport::frameRendered, this, [this](double ms) {
+        QString text = QString("%1 ms").arg(ms, 0, 'f', 1);
+        // A frame of the mixture filtered after shading at rest: how far its average has come.
+        if (m_viewport->addingPasses())
+            text += QString(" · pass %1/%2")
+                        .arg(m_viewport->progressivePasses())
+                        .arg(m_viewport->viewSettings().referenceSamples);
+        m_frame->setText(text);
+    });
     connect(m_doc, &MaterialDocument::changed, this, &ViewportPanel::syncFromDocument);
     syncFromDocument();
     syncFromView();

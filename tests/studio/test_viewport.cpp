@@ -16,6 +16,7 @@
 #include <QCheckBox>
 #include <QElapsedTimer>
 #include <QImage>
+#include <QLabel>
 #include <QSignalSpy>
 #include <QTest>
 
@@ -473,6 +474,16 @@ TEST(Viewport, AtRestTheMixtureFilteredAfterShadingAddsAPassAFrame) {
     std::vector<int> frames;
     QObject::connect(view, &Viewport::frameRendered, view,
                      [&] { frames.push_back(view->progressivePasses()); });
+    // The panel's frame readout (updated first, connected first) says how far the average has come
+    // while passes are added.
+    QStringList readouts;
+    QObject::connect(view, &Viewport::frameRendered, view, [&] {
+        for (const QLabel* label : panel->findChildren<QLabel*>())
+            if (label->text().endsWith(" ms") || label->text().contains(" ms · pass")) {
+                readouts << label->text();
+                break;
+            }
+    });
     auto passesSeen = [&] {
         frames.clear();
         QElapsedTimer clock;
@@ -483,6 +494,9 @@ TEST(Viewport, AtRestTheMixtureFilteredAfterShadingAddsAPassAFrame) {
     };
     EXPECT_EQ(passesSeen(), (std::vector<int>{1, 2, 3, 4}));
     EXPECT_EQ(view->lastError(), QString());
+    ASSERT_EQ(readouts.size(), 4);
+    EXPECT_TRUE(readouts[1].endsWith(" ms · pass 2/4")) << readouts[1].toStdString();
+    EXPECT_TRUE(readouts[3].endsWith(" ms")) << readouts[3].toStdString(); // every pass in
     view->setDistance(view->viewSettings().distance * 1.1f);
     EXPECT_EQ(passesSeen(), (std::vector<int>{1, 2, 3, 4}));
     // Nothing more is drawn once every pass is in.

@@ -342,14 +342,7 @@ struct LobeColumns {
                                        minVariance));
         }
     }
-    /// Lobe i of `count` removed: the lobes after it move down one place. The last place keeps its
-    /// old, finite values, which only lanes nobody reads compute with.
-    [[gnu::always_inline]] void erase(size_t i, size_t count) {
-        for (auto* c : {&w, &bx, &by, &mxx, &myy, &mxy, &wl})
-            std::copy(c->begin() + std::ptrdiff_t(i) + 1, c->begin() + std::ptrdiff_t(count),
-                      c->begin() + std::ptrdiff_t(i));
-    }
-    /// Lobe i changed (a merge or an absorption): its columns and w·log det Σ.
+    /// Lobe i changed (a merge): its columns and w·log det Σ.
     [[gnu::always_inline]] void update(size_t i, const LobeMoments& l, double minVariance) {
         set(i, l);
         wl[i] = weightedLogDet(l, minVariance);
@@ -399,6 +392,89 @@ private:
 
 double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance) {
     return mergeCostOf(a, weightedLogDet(a, minVariance), b, weightedLogDet(b, minVariance), minVariance);
+}
+
+namespace {
+
+// The lobes of one squared-error reduction as columns: each lobe's weight, mean, covariance
+// (LobeMoments::covariance: positive definite) and overlap with itself, w²/(4π√det Σ). With weights
+// of 1 to 2^24 finest texels and det Σ at least minVariance²·(1 − 0.999²), every cost stays far
+// inside a double's range.
+struct IseColumns {
+    std::vector<double> w, mx, my, xx, yy, xy, self;
+
+    void resize(size_t n) {
+        for (auto* c : {&w, &mx, &my, &xx, &yy, &xy, &self})
+            c->resize(n);
+    }
+    void set(size_t i, const LobeMoments& l, double minVariance) {
+        const glm::dvec2 m = l.mean();
+        const auto c = l.covariance(minVariance);
+        w[i] = l.w;
+        mx[i] = m.x, my[i] = m.y;
+        xx[i] = c[0], yy[i] = c[1], xy[i] = c[2];
+        self[i] = w[i] * w[i] / (4.0 * kPi<double> * std::sqrt(c[0] * c[1] - c[2] * c[2]));
+    }
+};
+
+// ∫ wx·N(x; bx, Σx) · wy·N(x; by, Σy) dx = wx·wy·N(d; 0, S), d = bx − by, S = Σx + Σy (xx, yy, xy).
+// No branch and no call (expNonPositive), so that the loops over it vectorise.
+[[gnu::always_inline]] inline double overlapOf(double wxy, double dx, double dy, double sxx, double syy,
+                                               double sxy) {
+    const double inv = 1.0 / (sxx * syy - sxy * sxy);
+    const double e = (dx * dx * syy + dy * dy * sxx - 2.0 * dx * dy * sxy) * inv;
+    return wxy * (1.0 / (2.0 * kPi<double>)) * std::sqrt(inv) * expNonPositive(-0.5 * e);
+}
+
+// The columns' arrays, read through pointers that alias nothing written (loads the loops can hoist).
+struct IseView {
+    const double* __restrict w, * __restrict mx, * __restrict my, * __restrict xx, * __restrict yy, * __restrict xy, * __restrict self;
+    explicit IseView(const IseColumns& c)
+        : w(c.w.data())
+        , mx(c.mx.data())
+        , my(c.my.data())
+        , xx(c.xx.data())
+        , yy(c.yy.data())
+        , xy(c.xy.data())
+        , self(c.self.data()) {}
+};
+
+// iseMergeCost of lobes a and b of the columns: the merge m's weight w, and Σm = fa·Σa + fb·Σb +
+// fa·fb·ddᵀ (fa = wa/w, fb = wb/w, d = ba − bb: the exact moments), then ⟨a,a⟩ + ⟨b,b⟩ + 2⟨a,b⟩ −
+// 2(⟨a,m⟩ + ⟨b,m⟩) + ⟨m,m⟩ with ba − bm = fb·d and bb − bm = −fa·d. The same bits for (b, a) as for
+// (a, b): every sum is of two terms that swap, the negations are exact. Rounding below 0 gives 0.
+[[gnu::always_inline]] inline double iseCostOf(const IseView& c, size_t a, size_t b) {
+    const double w = c.w[a] + c.w[b], invW = 1.0 / w, fa = c.w[a] * invW, fb = c.w[b] * invW;
+    const double dx = c.mx[a] - c.mx[b], dy = c.my[a] - c.my[b];
+    const double mxx = fa * c.xx[a] + fb * c.xx[b] + fa * fb * dx * dx;
+    const double myy = fa * c.yy[a] + fb * c.yy[b] + fa * fb * dy * dy;
+    const double mxy = fa * c.xy[a] + fb * c.xy[b] + fa * fb * dx * dy;
+    const double self = w * w * (1.0 / (4.0 * kPi<double>)) * std::sqrt(1.0 / (mxx * myy - mxy * mxy));
+    const double ab =
+        overlapOf(c.w[a] * c.w[b], dx, dy, c.xx[a] + c.xx[b], c.yy[a] + c.yy[b], c.xy[a] + c.xy[b]);
+    const double am = overlapOf(c.w[a] * w, fb * dx, fb * dy, c.xx[a] + mxx, c.yy[a] + myy, c.xy[a] + mxy);
+    const double bm =
+        overlapOf(c.w[b] * w, -(fa * dx), -(fa * dy), c.xx[b] + mxx, c.yy[b] + myy, c.xy[b] + mxy);
+    const double cost = (c.self[a] + c.self[b]) + 2.0 * ab - 2.0 * (am + bm) + self;
+    return cost > 0.0 ? cost : 0.0;
+}
+
+// The costs of lobe i with lobes begin..end−1 into out[begin..end).
+BURNISH_AVX2_CLONES void iseCostRow(const IseColumns& columns, size_t i, size_t begin, size_t end,
+                                    double* __restrict out) {
+    const IseView c(columns);
+    for (size_t j = begin; j < end; ++j)
+        out[j] = iseCostOf(c, i, j);
+}
+
+} // namespace
+
+double iseMergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance) {
+    IseColumns c;
+    c.resize(2);
+    c.set(0, a, minVariance);
+    c.set(1, b, minVariance);
+    return iseCostOf(IseView(c), 0, 1);
 }
 
 namespace {
@@ -520,8 +596,8 @@ void reduceFourEqual(const LobeMoments& a, int k, double minVariance, LobeMixtur
 //    least log(1 + u1), and the merged lobe with another at least f(u1) = ½[3 log(1 + 2u1/3) −
 //    2 log(1 + u1)] (the cost of its covariance alone; means apart cost more), f increasing from
 //    f(1e-3) = 1.67e-7: both above kNegligibleMergeCost·4 (the total weight) + 2δ for δ < 5e-8.
-// No lobe is light (each holds 1/4, above every minLobeShare). Then the closest pair merges into the
-// lower index, as the general path merges it, and the lobes take the canonical order.
+// Then the closest pair merges into the lower index, as the general path merges it, and the lobes take
+// the canonical order.
 bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double v, LobeMixture& out) {
     if (std::memcmp(&lobes[0], &lobes[1], sizeof(LobeMoments)) == 0 &&
         std::memcmp(&lobes[0], &lobes[2], sizeof(LobeMoments)) == 0 &&
@@ -633,41 +709,6 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
         total += l.w;
     thread_local LobeColumns columns;
     thread_local std::vector<double> row;
-    // Lobes too light to carry a cluster of their own go first (k >= 2: one lobe is the exact sum), the
-    // lightest first: their weight is absorbed by the cheapest partner (the first of the lowest mergeCost),
-    // whose mean and covariance stay as they are. A few steep outlier normals then keep their energy
-    // without dragging a lobe's moments (a slope of 100 at 1/256 of a footprint would add 39 to a merged
-    // variance).
-    bool absorbing = false; // the columns hold the lobes (assigned once, then kept in step)
-    const double share = minLobeShare(k);
-    while (k > 1 && lobes.size() > 1) {
-        size_t light = lobes.size();
-        for (size_t i = 0; i < lobes.size(); ++i)
-            if (lobes[i].w < share * total && (light == lobes.size() || lobes[i].w < lobes[light].w))
-                light = i;
-        if (light == lobes.size()) break;
-        if (!absorbing) {
-            columns.assign(lobes, minVariance);
-            row.resize(columns.w.size());
-            absorbing = true;
-        }
-        columns.costsWith(light, 0, lobes.size(), false, minVariance, row);
-        size_t partnerIndex = light == 0 ? 1 : 0;
-        double bestCost = std::numeric_limits<double>::infinity();
-        for (size_t j = 0; j < lobes.size(); ++j)
-            if (j != light && row[j] < bestCost) bestCost = row[j], partnerIndex = j;
-        LobeMoments& partner = lobes[partnerIndex];
-        const double scale = (partner.w + lobes[light].w) / partner.w;
-        partner.w += lobes[light].w;
-        partner.bx *= scale;
-        partner.by *= scale;
-        partner.mxx *= scale;
-        partner.myy *= scale;
-        partner.mxy *= scale;
-        columns.update(partnerIndex, partner, minVariance);
-        columns.erase(light, lobes.size());
-        lobes.erase(lobes.begin() + std::ptrdiff_t(light));
-    }
     // The cheapest pair until k remain, and then while a pair costs nothing (equal lobes: a flat
     // footprint keeps one lobe, not k copies), with the pair costs kept in a matrix: a merge
     // recomputes only the merged lobe's row.
@@ -678,9 +719,7 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
         constexpr double kGone = std::numeric_limits<double>::infinity();
         thread_local std::vector<double> cost;
         thread_local std::vector<char> alive;
-        // After absorptions the columns already hold the lobes, each w·log det Σ the same bits as
-        // assign's (scalar and lanes do the same operations), and finite values past them.
-        if (!absorbing) columns.assign(lobes, minVariance);
+        columns.assign(lobes, minVariance);
         row.resize(columns.w.size());
         const PairLayout& layout = pairLayout(n);
         cost.assign((layout.rowStart[n] + 4) / 4 * 4, kGone); // the pairs and the diagonal's slot
@@ -729,10 +768,78 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
     return canonicalMixture(lobes.data(), lobes.size());
 }
 
+// reduceLobes by MergeCriterion::SquaredError: the cheapest pair (iseCostOf, iseMergeCost's bits)
+// merges until k remain and then while a pair costs a negligible part of its own lobes'
+// overlaps (equal lobes), with the costs kept in a matrix of which a merge recomputes the merged lobe's row.
+LobeMixture reduceLobesBySquaredError(std::vector<LobeMoments>& lobes, int k, double minVariance) {
+    std::erase_if(lobes, [](const LobeMoments& l) { return !(l.w > 0.0); });
+    const size_t n = lobes.size();
+    if (n > 1) {
+        constexpr double kGone = std::numeric_limits<double>::infinity();
+        thread_local IseColumns columns;
+        thread_local std::vector<double> cost, row;
+        thread_local std::vector<char> alive;
+        columns.resize(n);
+        for (size_t i = 0; i < n; ++i)
+            columns.set(i, lobes[i], minVariance);
+        const PairLayout& layout = pairLayout(n);
+        cost.assign((layout.rowStart[n] + 4) / 4 * 4, kGone); // the pairs and the diagonal's slot
+        row.resize(n);
+        alive.assign(n, 1);
+        for (size_t i = 0; i + 1 < n; ++i) {
+            iseCostRow(columns, i, i + 1, n, row.data());
+            std::copy(row.begin() + std::ptrdiff_t(i + 1), row.begin() + std::ptrdiff_t(n),
+                      cost.begin() + std::ptrdiff_t(layout.rowStart[i]));
+        }
+        for (size_t remaining = n; remaining > 1; --remaining) {
+            double best = kGone;
+            const size_t first = firstCheapest(cost.data(), cost.size(), best);
+            size_t bi = 0, bj = 0;
+            if (best < kGone) {
+                bi = layout.pair[first][0], bj = layout.pair[first][1];
+            } else {
+                // Every cost +∞ (overflow): not with a pyramid's finite lobes. The first two lobes left
+                // merge, so that at most k remain all the same.
+                while (!alive[bi])
+                    ++bi;
+                for (bj = bi + 1; !alive[bj]; ++bj) {
+                }
+            }
+            if (remaining <= size_t(k) &&
+                !(best <= kNegligibleMergeCost * (columns.self[bi] + columns.self[bj])))
+                break;
+            lobes[bi] += lobes[bj];
+            columns.set(bi, lobes[bi], minVariance);
+            alive[bj] = 0;
+            const std::uint32_t* gone = &layout.index[bj * n];
+            for (size_t o = 0; o < n; ++o)
+                cost[gone[o]] = kGone;
+            iseCostRow(columns, bi, 0, n, row.data());
+            const std::uint32_t* merged = &layout.index[bi * n];
+            for (size_t o = 0; o < n; ++o)
+                cost[merged[o]] = alive[o] ? row[o] : kGone;
+            cost[merged[bi]] = kGone; // the diagonal's slot took row[bi]
+        }
+        size_t out = 0;
+        for (size_t i = 0; i < n; ++i)
+            if (alive[i]) lobes[out++] = lobes[i];
+        lobes.resize(out);
+    }
+    return canonicalMixture(lobes.data(), lobes.size());
+}
+
+// reduceLobes on the caller's vector. k = 1 is the exact sum under either criterion.
+LobeMixture reduceLobesWith(std::vector<LobeMoments>& lobes, int k, double minVariance,
+                            MergeCriterion criterion) {
+    if (criterion == MergeCriterion::SquaredError && k > 1)
+        return reduceLobesBySquaredError(lobes, k, minVariance);
+    return reduceLobesInPlace(lobes, k, minVariance);
+}
+
 } // namespace
 
-LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance) {
-    return reduceLobesInPlace(lobes, k, minVariance);
+LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance, MergeCriterion criterion) {
+    return reduceLobesWith(lobes, k, minVariance, criterion);
 }
 
 MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int k, int lastLevel,
@@ -762,6 +869,7 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
         built.lobes.reset(static_cast<LobeMoments*>(::operator new(sizeof(LobeMoments) * texels * K)));
         built.counts.reset(static_cast<unsigned char*>(::operator new(texels)));
         const Level* child = level > 1 ? &out.m_levels.back() : nullptr;
+        const MergeCriterion criterion = mixtureCriterion(level);
         tbb::parallel_for(0, l.height, [&](int y) {
             std::vector<LobeMoments> lobes;
             for (int x = 0; x < l.width; ++x) {
@@ -783,7 +891,7 @@ MixturePyramid MixturePyramid::build(const NormalPyramid& pyramid, double s, int
                                      &child->lobes[t * K] + child->counts[t]);
                     }
                 built.set(size_t(y) * size_t(l.width) + size_t(x), out.m_k,
-                          reduceLobesInPlace(lobes, out.m_k, out.m_minVariance));
+                          reduceLobesWith(lobes, out.m_k, out.m_minVariance, criterion));
             }
         });
         out.m_levels.push_back(std::move(built));

@@ -10,16 +10,17 @@
 // stored textures) merges them with exact moments and keeps their energy.
 //
 // The fit is hierarchical and deterministic: level 0 has one lobe per finest normal; each texel
-// above reduces the lobes of its children (up to 4K of them) to K by merging, again and again, the
-// pair whose merge loses the least information (Runnalls' bound on the KL divergence of the
-// merge), and equal lobes always merge. Lobes whose share of the footprint falls below minLobeShare(K) are
-// absorbed first (their weight goes to the cheapest partner, whose shape stays): no lobe is left with a junk
-// mean, and a few steep outlier normals keep their energy without dragging a lobe's moments as they drag
-// LEAN's. Lobes are then put in a canonical order (by mean slope, x then y). Last, top-down, each texel's
-// lobes move to the slots of the parent lobes they belong to most (the assignment of largest expected
-// log-likelihood of each whole lobe, its spread too, under the slot's lobe as filtered), so
-// the texels under one parent and the levels between give one cluster one slot, and filtering between texels
-// and mips merges like with like.
+// above reduces the lobes of its children (up to 4K of them) to K by merging (exact moments), again and
+// again, the cheapest pair, and equal lobes always merge. Level 1 prices a merge by the information it
+// loses (Runnalls' bound on the KL divergence); the levels above by the squared error it makes in the
+// lobes' sum (mixtureCriterion), under which a few light lobes strewn over steep slopes gather in a
+// wide lobe of their own instead of widening the main ones: steep outlier normals keep their energy,
+// where they reflect, without dragging a lobe's moments as they drag LEAN's, and every lobe's mean is
+// its normals' own. Lobes are then put in a canonical order (by mean slope, x then y). Last, top-down,
+// each texel's lobes move to the slots of the parent lobes they belong to most (the assignment of largest
+// expected log-likelihood of each whole lobe, its spread too, under the slot's lobe as filtered), so the
+// texels under one parent and the levels between give one cluster one slot, and filtering between texels and
+// mips merges like with like.
 #pragma once
 
 #include <burnish/core/prefilter/methods.h>
@@ -39,17 +40,6 @@
 #include <vector>
 
 namespace burnish {
-
-/// Lobes holding less than this share of their footprint, an eighth of an average lobe's 1/k, are absorbed
-/// before any pair merges (k >= 2). Measured on 27 real maps (core/bench/mixture_study.py, 324 cases per
-/// K): against the 1/64 of every K before, the mean ratio to LEAN's error drops (K = 2: 0.572 -> 0.569,
-/// K = 3: 0.449 -> 0.447, K = 4: 0.391 -> 0.388) and fewer cases leave the energy band; 1/8 of the
-/// footprint for K = 3 overshoots the energy (up to 1.30) and errs more. Rechecked with the base variance
-/// 1/(s + 2) at K = 3 (mean ratio, cases worse than LEAN, cases outside the band): 1/(6K) 0.405, 6, 43;
-/// 1/(8K) 0.384, 4, 45; 1/(12K) 0.377, 4, 53.
-inline constexpr double minLobeShare(int k) {
-    return 1.0 / (8.0 * double(k));
-}
 
 /// The slope variance of a finest normal's lobe of Blinn-Phong power s (clamped as slopeInverseBasePower
 /// clamps it) in a mixture of k lobes: LEAN's 1/s for k = 1, so that one lobe is LEAN's exactly; for
@@ -143,11 +133,42 @@ struct LobeMixture {
 // Runnalls 2007, "Kullback-Leibler Approach to Gaussian Mixture Reduction", eq. 21
 double mergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance);
 
-/// Reduces `lobes` (any number) to at most k (1..kMaxMixtureLobes): first, for k >= 2, every lobe
-/// whose share of the total is below minLobeShare(k) gives its weight to its cheapest partner, then the
-/// cheapest pair is merged (exact moments) until k remain; ties go to the lower indices. The total
-/// weight is kept; k = 1 is the exact sum, LEAN's moments. Canonical order.
-LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance);
+/// The integral squared error (in slope space) between lobes a and b and their merge m (exact moments):
+/// ∫ (a + b − m)² = ⟨a,a⟩ + ⟨b,b⟩ + 2⟨a,b⟩ − 2⟨a,m⟩ − 2⟨b,m⟩ + ⟨m,m⟩, each lobe its weight times its
+/// Gaussian, ⟨x,y⟩ = wx·wy·N(bx − by; 0, Σx + Σy). At least 0; 0 for equal lobes.
+// Williams & Maybeck 2003, "Cost-Function-Based Gaussian Mixture Reduction for Target Tracking": integral
+// squared error
+double iseMergeCost(const LobeMoments& a, const LobeMoments& b, double minVariance);
+
+/// How a reduction picks the pair it merges next.
+enum class MergeCriterion {
+    /// The smallest mergeCost (Runnalls' bound on the KL divergence).
+    KullbackLeibler,
+    /// The smallest iseMergeCost (the integral squared error).
+    SquaredError,
+};
+
+/// The criterion MixturePyramid reduces level `level` (>= 1) by: Runnalls' at level 1, where every lobe is a
+/// finest normal's own, all as wide as the base lobe (there the two criteria pick alike: the same figures
+/// on 27 real maps, and Runnalls' has closed forms that make level 1 fast); the squared error above, where
+/// the lobes are fitted clusters of all widths. On noisy maps Runnalls' merges widen the main lobes and
+/// dim the highlight (asphalt_01 at s = 1024, mip 4: 50 % of the energy kept); the squared error counts
+/// a merge by how much it changes the lobes' heights, which for light lobes far apart is little, so the
+/// scattered normals gather in a wide lobe of their own and the main lobes keep their shape (79 %, and
+/// the error 0.59 -> 0.26). Measured on 27 real maps, K = 3 (core/bench/mixture_study.py, 324 cases): the
+/// mean ratio to LEAN's error 0.384 -> 0.336, cases worse than LEAN 4 -> 1, cases outside the energy band
+/// [0.97, 1.03] 45 -> 34; the squared error from level 3 only gave 0.351, 4 and 41.
+inline MergeCriterion mixtureCriterion(int level) {
+    return level <= 1 ? MergeCriterion::KullbackLeibler : MergeCriterion::SquaredError;
+}
+
+/// Reduces `lobes` (any number) to at most k (1..kMaxMixtureLobes): the cheapest pair under `criterion`
+/// is merged (exact moments) until k remain, and then while a pair costs a negligible amount (equal
+/// lobes: 1e-9 of the total weight for Runnalls' cost, of the pair's overlaps with themselves for the
+/// squared error); ties go to the lower indices. The total weight is kept; k = 1 is the exact sum,
+/// LEAN's moments. Canonical order.
+LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance,
+                        MergeCriterion criterion = MergeCriterion::KullbackLeibler);
 
 /// The lobes of the levels above the finest of a normal map's box pyramid (the footprints of
 /// NormalPyramid). Level 0 is one lobe per finest normal and is not stored.

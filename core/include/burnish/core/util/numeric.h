@@ -111,7 +111,7 @@ inline constexpr double kExpFlushBelow = -707.0;
 /// then hold k), ln2 in two parts so r is exact (Cody & Waite 1980); e^r by its Taylor series to
 /// r^13, whose truncation is below 5e-18; then 2^k from its bits. Within 1e-15 relative of
 /// std::exp (tested). NaN gives a meaningless finite value: clamp first.
-inline double expNonPositive(double x) {
+[[gnu::always_inline]] inline double expNonPositive(double x) {
     constexpr double kLog2e = 1.4426950408889634;
     constexpr double kLn2Hi = 0x1.62e42fefa3800p-1; // ln 2 to 43 bits: k·kLn2Hi is exact
     constexpr double kLn2Lo = 0x1.ef35793c76730p-45;

@@ -215,19 +215,33 @@ glm::vec3 stochasticNumbers(glm::uvec3 v) {
     return glm::vec3(v >> 8u) * (1.0f / 16777216.0f);
 }
 
-glm::dvec2 LobeMoments::mean() const {
-    return w > 0.0 ? glm::dvec2(bx / w, by / w) : glm::dvec2(0.0);
+namespace {
+
+// LobeMoments::mean and covariance, always inlined: the squared-error reduction's AVX2 copy reads them
+// for every merge, and a call from it into the default copy's code cost a fifth of its time.
+[[gnu::always_inline]] inline glm::dvec2 meanOf(const LobeMoments& l) {
+    return l.w > 0.0 ? glm::dvec2(l.bx / l.w, l.by / l.w) : glm::dvec2(0.0);
 }
 
-std::array<double, 3> LobeMoments::covariance(double minVariance) const {
-    if (!(w > 0.0)) return {minVariance, minVariance, 0.0};
-    const glm::dvec2 b = mean();
-    double xx = mxx / w - b.x * b.x, yy = myy / w - b.y * b.y, xy = mxy / w - b.x * b.y;
+[[gnu::always_inline]] inline std::array<double, 3> covarianceOf(const LobeMoments& l, double minVariance) {
+    if (!(l.w > 0.0)) return {minVariance, minVariance, 0.0};
+    const glm::dvec2 b = meanOf(l);
+    double xx = l.mxx / l.w - b.x * b.x, yy = l.myy / l.w - b.y * b.y, xy = l.mxy / l.w - b.x * b.y;
     xx = xx > minVariance ? xx : minVariance; // also NaN → minVariance
     yy = yy > minVariance ? yy : minVariance;
     const double limit = kMaxCorrelation * std::sqrt(xx * yy);
     xy = std::isfinite(xy) ? std::clamp(xy, -limit, limit) : 0.0;
     return {xx, yy, xy};
+}
+
+} // namespace
+
+glm::dvec2 LobeMoments::mean() const {
+    return meanOf(*this);
+}
+
+std::array<double, 3> LobeMoments::covariance(double minVariance) const {
+    return covarianceOf(*this, minVariance);
 }
 
 namespace {
@@ -407,9 +421,15 @@ struct IseColumns {
         for (auto* c : {&w, &mx, &my, &xx, &yy, &xy, &self})
             c->resize(n);
     }
-    void set(size_t i, const LobeMoments& l, double minVariance) {
-        const glm::dvec2 m = l.mean();
-        const auto c = l.covariance(minVariance);
+    /// Lobe i of `count` removed: the lobes after it move down one place.
+    void erase(size_t i, size_t count) {
+        for (auto* c : {&w, &mx, &my, &xx, &yy, &xy, &self})
+            std::copy(c->begin() + std::ptrdiff_t(i) + 1, c->begin() + std::ptrdiff_t(count),
+                      c->begin() + std::ptrdiff_t(i));
+    }
+    [[gnu::always_inline]] void set(size_t i, const LobeMoments& l, double minVariance) {
+        const glm::dvec2 m = meanOf(l);
+        const auto c = covarianceOf(l, minVariance);
         w[i] = l.w;
         mx[i] = m.x, my[i] = m.y;
         xx[i] = c[0], yy[i] = c[1], xy[i] = c[2];
@@ -771,59 +791,57 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
 // reduceLobes by MergeCriterion::SquaredError: the cheapest pair (iseCostOf, iseMergeCost's bits)
 // merges until k remain and then while a pair costs a negligible part of its own lobes'
 // overlaps (equal lobes), with the costs kept in a matrix of which a merge recomputes the merged lobe's row.
-LobeMixture reduceLobesBySquaredError(std::vector<LobeMoments>& lobes, int k, double minVariance) {
+BURNISH_AVX2_CLONES LobeMixture reduceLobesBySquaredError(std::vector<LobeMoments>& lobes, int k,
+                                                          double minVariance) {
     std::erase_if(lobes, [](const LobeMoments& l) { return !(l.w > 0.0); });
-    const size_t n = lobes.size();
-    if (n > 1) {
+    size_t m = lobes.size(); // the lobes left, in order: a merged-away lobe leaves its place
+    if (m > 1) {
         constexpr double kGone = std::numeric_limits<double>::infinity();
+        // The packed pair costs of m lobes (pairLayout(m)), and +∞ up to a multiple of four.
+        const auto packedSize = [](size_t count) { return (pairLayout(count).rowStart[count] + 4) / 4 * 4; };
         thread_local IseColumns columns;
-        thread_local std::vector<double> cost, row;
-        thread_local std::vector<char> alive;
-        columns.resize(n);
-        for (size_t i = 0; i < n; ++i)
+        thread_local std::vector<double> cost, next, row;
+        columns.resize(m);
+        for (size_t i = 0; i < m; ++i)
             columns.set(i, lobes[i], minVariance);
-        const PairLayout& layout = pairLayout(n);
-        cost.assign((layout.rowStart[n] + 4) / 4 * 4, kGone); // the pairs and the diagonal's slot
-        row.resize(n);
-        alive.assign(n, 1);
-        for (size_t i = 0; i + 1 < n; ++i) {
-            iseCostRow(columns, i, i + 1, n, row.data());
-            std::copy(row.begin() + std::ptrdiff_t(i + 1), row.begin() + std::ptrdiff_t(n),
-                      cost.begin() + std::ptrdiff_t(layout.rowStart[i]));
+        cost.assign(packedSize(m), kGone);
+        row.resize(m);
+        const PairLayout* layout = &pairLayout(m);
+        for (size_t i = 0; i + 1 < m; ++i) {
+            iseCostRow(columns, i, i + 1, m, row.data());
+            std::copy(row.begin() + std::ptrdiff_t(i + 1), row.begin() + std::ptrdiff_t(m),
+                      cost.begin() + std::ptrdiff_t(layout->rowStart[i]));
         }
-        for (size_t remaining = n; remaining > 1; --remaining) {
+        while (m > 1) {
             double best = kGone;
             const size_t first = firstCheapest(cost.data(), cost.size(), best);
-            size_t bi = 0, bj = 0;
-            if (best < kGone) {
-                bi = layout.pair[first][0], bj = layout.pair[first][1];
-            } else {
-                // Every cost +∞ (overflow): not with a pyramid's finite lobes. The first two lobes left
-                // merge, so that at most k remain all the same.
-                while (!alive[bi])
-                    ++bi;
-                for (bj = bi + 1; !alive[bj]; ++bj) {
-                }
-            }
-            if (remaining <= size_t(k) &&
-                !(best <= kNegligibleMergeCost * (columns.self[bi] + columns.self[bj])))
+            // Every cost +∞ (overflow) cannot happen with a pyramid's finite lobes: then the first two
+            // merge, so that at most k remain all the same.
+            const size_t bi = best < kGone ? layout->pair[first][0] : 0;
+            const size_t bj = best < kGone ? layout->pair[first][1] : 1;
+            if (m <= size_t(k) && !(best <= kNegligibleMergeCost * (columns.self[bi] + columns.self[bj])))
                 break;
             lobes[bi] += lobes[bj];
+            lobes.erase(lobes.begin() + std::ptrdiff_t(bj));
+            columns.erase(bj, m);
+            // The costs of the m − 1 lobes left: the old ones of every pair without bi or bj (bi < bj
+            // keeps its place, the lobes after bj move down one), then the merged lobe's row afresh.
+            const PairLayout* smaller = &pairLayout(m - 1);
+            next.assign(packedSize(m - 1), kGone);
+            for (size_t i = 0; i + 1 < m - 1; ++i) {
+                const size_t oi = i + (i >= bj);
+                for (size_t j = i + 1; j < m - 1; ++j)
+                    next[smaller->rowStart[i] + j - i - 1] = cost[layout->index[oi * m + j + (j >= bj)]];
+            }
+            --m;
+            layout = smaller;
             columns.set(bi, lobes[bi], minVariance);
-            alive[bj] = 0;
-            const std::uint32_t* gone = &layout.index[bj * n];
-            for (size_t o = 0; o < n; ++o)
-                cost[gone[o]] = kGone;
-            iseCostRow(columns, bi, 0, n, row.data());
-            const std::uint32_t* merged = &layout.index[bi * n];
-            for (size_t o = 0; o < n; ++o)
-                cost[merged[o]] = alive[o] ? row[o] : kGone;
-            cost[merged[bi]] = kGone; // the diagonal's slot took row[bi]
+            iseCostRow(columns, bi, 0, m, row.data());
+            const std::uint32_t* merged = &layout->index[bi * m];
+            for (size_t o = 0; o < m; ++o)
+                if (o != bi) next[merged[o]] = row[o];
+            std::swap(cost, next);
         }
-        size_t out = 0;
-        for (size_t i = 0; i < n; ++i)
-            if (alive[i]) lobes[out++] = lobes[i];
-        lobes.resize(out);
     }
     return canonicalMixture(lobes.data(), lobes.size());
 }

@@ -448,7 +448,13 @@ struct IseColumns {
 
 // The columns' arrays, read through pointers that alias nothing written (loads the loops can hoist).
 struct IseView {
-    const double* __restrict w, * __restrict mx, * __restrict my, * __restrict xx, * __restrict yy, * __restrict xy, * __restrict self;
+    const double* __restrict w;
+    const double* __restrict mx;
+    const double* __restrict my;
+    const double* __restrict xx;
+    const double* __restrict yy;
+    const double* __restrict xy;
+    const double* __restrict self;
     explicit IseView(const IseColumns& c)
         : w(c.w.data())
         , mx(c.mx.data())
@@ -462,7 +468,8 @@ struct IseView {
 // iseMergeCost of lobes a and b of the columns: the merge m's weight w, and Σm = fa·Σa + fb·Σb +
 // fa·fb·ddᵀ (fa = wa/w, fb = wb/w, d = ba − bb: the exact moments), then ⟨a,a⟩ + ⟨b,b⟩ + 2⟨a,b⟩ −
 // 2(⟨a,m⟩ + ⟨b,m⟩) + ⟨m,m⟩ with ba − bm = fb·d and bb − bm = −fa·d. The same bits for (b, a) as for
-// (a, b): every sum is of two terms that swap, the negations are exact. Rounding below 0 gives 0.
+// (a, b): every sum is of two terms that swap, the negations are exact. Rounding below 0 gives 0 (and
+// NaN, which finite lobes do not make, too: the scan for the cheapest pair reads no NaN).
 [[gnu::always_inline]] inline double iseCostOf(const IseView& c, size_t a, size_t b) {
     const double w = c.w[a] + c.w[b], invW = 1.0 / w, fa = c.w[a] * invW, fb = c.w[b] * invW;
     const double dx = c.mx[a] - c.mx[b], dy = c.my[a] - c.my[b];

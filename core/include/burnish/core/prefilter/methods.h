@@ -53,7 +53,7 @@ enum class Method {
     /// premultiplied raw moments (w, w·b, w·M) so hardware filtering merges same-index lobes with
     /// exact moments. K = 1 stores LEAN's B and M. Stores: K + 2 RGBA16 textures.
     /// Shader: Σ_i w_i D_i(h) max(0, n_i·l), each D_i LEAN's slope-space Gaussian.
-    // Runnalls 2007 (merge cost) on Olano & Baker 2010's lobes
+    // Runnalls 2007 and Williams & Maybeck 2003 (merge costs) on Olano & Baker 2010's lobes
     Mixture,
 };
 

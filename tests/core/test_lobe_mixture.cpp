@@ -182,6 +182,35 @@ TEST(LobeMixture, SteepOutliersKeepTheirEnergyWithoutDraggingTheLobe) {
     }
 }
 
+// The squared-error cost: 0 for equal lobes, the same bits either way round (the reduction reads a
+// merged lobe's row both ways), never negative, and finite from one finest texel to a 4096² footprint,
+// from power 1 to 10^6 and from flat to steep slopes (±100, the slope limit), correlated lobes too.
+TEST(LobeMixture, SquaredErrorCostIsFiniteSymmetricAndZeroForEqualLobes) {
+    const auto lobe = [](double w, glm::dvec2 b, double vx, double vy, double c) {
+        return LobeMoments{
+            w, w * b.x, w * b.y, w * (vx + b.x * b.x), w * (vy + b.y * b.y), w * (c + b.x * b.y)};
+    };
+    int cases = 0;
+    for (const double s : {1.0, 64.0, 1e6}) {
+        const double v = mixtureBaseVariance(s, 3);
+        for (const double wa : {1.0, 16.0, 16777216.0})
+            for (const double wb : {1.0, 4096.0})
+                for (const glm::dvec2 ba : {glm::dvec2(0.0), glm::dvec2(100.0, -100.0), glm::dvec2(0.3, 0.1)})
+                    for (const glm::dvec2 bb :
+                         {glm::dvec2(0.0), glm::dvec2(-100.0, 100.0), glm::dvec2(0.3, 0.2)}) {
+                        const LobeMoments a = lobe(wa, ba, v, 4.0 * v, 1.9 * v);
+                        const LobeMoments b = lobe(wb, bb, 9.0 * v, v, -0.5 * v);
+                        const double ab = iseMergeCost(a, b, v), ba2 = iseMergeCost(b, a, v);
+                        ASSERT_TRUE(std::isfinite(ab)) << s << " " << wa << " " << wb;
+                        EXPECT_GE(ab, 0.0);
+                        EXPECT_EQ(std::memcmp(&ab, &ba2, sizeof ab), 0) << s << " " << wa << " " << wb;
+                        EXPECT_EQ(iseMergeCost(a, a, v), 0.0) << s << " " << wa;
+                        ++cases;
+                    }
+    }
+    EXPECT_EQ(cases, 162);
+}
+
 // A heavy narrow lobe among lighter ones (a footprint of a noisy map: most normals in one cluster, a
 // small cluster beside it, the rest strewn over steeper slopes). Reduced to 2..4 lobes by the squared
 // error, the main lobe keeps its weight, mean and spread exactly (the highlight keeps its height) and

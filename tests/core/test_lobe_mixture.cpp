@@ -211,6 +211,43 @@ TEST(LobeMixture, SquaredErrorCostIsFiniteSymmetricAndZeroForEqualLobes) {
     EXPECT_EQ(cases, 162);
 }
 
+// Slots go by the expected log-likelihood of each child lobe's normals, its weight times its lobe's:
+// a texel's heavy lobe takes the slot of the parent lobe it matches even where a light broad lobe of
+// scattered normals would rather have that slot. The parent (the top, 1×1) holds a flat lobe in slot 0
+// and a bevel at slope 0.4 in slot 1, equally heavy; the child holds a heavy flat lobe and a light broad
+// one centred at −0.1. Unweighted, the broad lobe's preference (31 for slot 0) outvotes the flat
+// lobe's (21), which would move the texel's main lobe into the bevel's slot; filtering with its
+// neighbours would then merge it with their bevels.
+TEST(LobeMixture, AHeavyLobeTakesTheSlotItMatchesBeforeALightBroadOne) {
+    auto b = build(mapOf(4, 2, [](int, int) { return glm::vec3(0.0f, 0.0f, 1.0f); }));
+    const double s = 256.0;
+    const auto lobe = [](double w, glm::dvec2 m, double v) {
+        return LobeMoments{w, w * m.x, w * m.y, w * (v + m.x * m.x), w * (v + m.y * m.y), w * m.x * m.y};
+    };
+    const double v = mixtureBaseVariance(s, 2);
+    const MixturePyramid mp = MixturePyramid::build(b.pyramid, s, 2, -1, nullptr, [&](MixturePyramid& p) {
+        LobeMixture top;
+        top.count = 2;
+        top.lobes[0] = lobe(4.0, {0.0, 0.0}, v);
+        top.lobes[1] = lobe(4.0, {0.4, 0.0}, v);
+        p.replace(2, 0, 0, top);
+        LobeMixture child;
+        child.count = 2;
+        child.lobes[0] = lobe(0.4, {-0.1, 0.0}, 0.1); // canonical order: by mean x
+        child.lobes[1] = lobe(3.6, {0.0, 0.0}, v);
+        p.replace(1, 0, 0, child);
+        LobeMixture bevel;
+        bevel.count = 1;
+        bevel.lobes[0] = lobe(4.0, {0.4, 0.0}, v);
+        p.replace(1, 1, 0, bevel);
+    });
+    const LobeMixture& m = mp.at(1, 0, 0);
+    ASSERT_EQ(m.count, 2);
+    EXPECT_EQ(m.lobes[0].w, 3.6); // the flat lobe in the flat slot
+    EXPECT_EQ(m.lobes[1].w, 0.4);
+    EXPECT_EQ(mp.at(1, 1, 0).lobes[1].w, 4.0); // the neighbour's bevel in the bevel slot
+}
+
 // A heavy narrow lobe among lighter ones (a footprint of a noisy map: most normals in one cluster, a
 // small cluster beside it, the rest strewn over steeper slopes). Reduced to 2..4 lobes by the squared
 // error, the main lobe keeps its weight, mean and spread exactly (the highlight keeps its height) and

@@ -187,9 +187,9 @@ TEST(ShadedFit, SameBitsOnOneThreadAndOnAll) {
 TEST(ShadedFit, ErrsLessThanTheMomentFitOnEvaluatesOwnPairs) {
     // Evaluate's default 48 pairs, none of which the fit trains on, on a 128² corner of the tread
     // plate at s = 256 (K = 3). Level 1 keeps its moment fit; from mip 2 up the shaded fit errs at
-    // most 0.6 of the moment fit's aligned, and less between texels at every mip, at most 0.9 of it over
-    // mips 2-4 together (between texels the refined lobes still merge by their moments; at mip 3 the gain
-    // is 3 %, measured).
+    // most 0.6 of the moment fit's aligned, and between texels at most 0.92 of it at every mip and 0.9
+    // over mips 2-4 together. (Until the moment fit merged by the squared error above level 1 the bound
+    // was 0.9 at every mip; the better moment fit leaves mip 3 at 0.911: 0.0933 against 0.1024.)
     const NormalMap map = cropOf("trak-treadplate1_nm.png", 128);
     const Rows fitted = evaluateMixture(map, 256.0, false);
     const Rows shaded = evaluateMixture(map, 256.0, true);
@@ -203,7 +203,7 @@ TEST(ShadedFit, ErrsLessThanTheMomentFitOnEvaluatesOwnPairs) {
                     mip, fitted.aligned[size_t(mip)], fitted.between[size_t(mip)],
                     shaded.aligned[size_t(mip)], shaded.between[size_t(mip)]);
         EXPECT_LT(shaded.aligned[size_t(mip)], 0.6 * fitted.aligned[size_t(mip)]) << "mip " << mip;
-        EXPECT_LT(shaded.between[size_t(mip)], fitted.between[size_t(mip)]) << "mip " << mip;
+        EXPECT_LT(shaded.between[size_t(mip)], 0.92 * fitted.between[size_t(mip)]) << "mip " << mip;
         shadedBetween += shaded.between[size_t(mip)];
         fittedBetween += fitted.between[size_t(mip)];
     }

@@ -18,9 +18,9 @@
 // where they reflect, without dragging a lobe's moments as they drag LEAN's, and every lobe's mean is
 // its normals' own. Lobes are then put in a canonical order (by mean slope, x then y). Last, top-down,
 // each texel's lobes move to the slots of the parent lobes they belong to most (the assignment of largest
-// expected log-likelihood of each whole lobe, its spread too, under the slot's lobe as filtered), so the
-// texels under one parent and the levels between give one cluster one slot, and filtering between texels and
-// mips merges like with like.
+// expected log-likelihood of each whole lobe's normals, its spread too, so weighted by its weight, under
+// the slot's lobe as filtered), so the texels under one parent and the levels between give one cluster
+// one slot, and filtering between texels and mips merges like with like.
 #pragma once
 
 #include <burnish/core/prefilter/methods.h>

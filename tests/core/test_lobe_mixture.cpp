@@ -424,6 +424,36 @@ TEST(LobeMixture, ReductionIsTheReferenceGreedyMergeBitForBit) {
     EXPECT_EQ(cases, 4800);
 }
 
+// A lobe count outside 1..kMaxMixtureLobes is clamped under either criterion: 12 scattered lobes asked
+// for 0, −3, kMaxMixtureLobes + 1 or 9 lobes give the bits of 1 and of kMaxMixtureLobes (the squared
+// error's reduction once merged only down to k, and its result overran the mixture's slots).
+TEST(LobeMixture, LobeCountOutsideItsRangeIsClamped) {
+    const double minVariance = 1.0 / 258.0;
+    std::vector<LobeMoments> lobes;
+    for (int i = 0; i < 12; ++i) {
+        const double a = 0.7 * i;
+        lobes.push_back(LobeMoments::ofNormal(
+            glm::normalize(glm::vec3(0.4f * float(std::cos(a)), 0.4f * float(std::sin(a)), 1.0f)),
+            minVariance));
+    }
+    for (MergeCriterion criterion : {MergeCriterion::KullbackLeibler, MergeCriterion::SquaredError}) {
+        const LobeMixture one = reduceLobes(lobes, 1, minVariance, criterion);
+        const LobeMixture most = reduceLobes(lobes, kMaxMixtureLobes, minVariance, criterion);
+        ASSERT_EQ(one.count, 1);
+        ASSERT_EQ(most.count, kMaxMixtureLobes);
+        for (int k : {0, -3}) {
+            const LobeMixture got = reduceLobes(lobes, k, minVariance, criterion);
+            ASSERT_EQ(got.count, 1) << "k " << k;
+            EXPECT_EQ(std::memcmp(got.lobes.data(), one.lobes.data(), sizeof(got.lobes)), 0) << "k " << k;
+        }
+        for (int k : {kMaxMixtureLobes + 1, 9}) {
+            const LobeMixture got = reduceLobes(lobes, k, minVariance, criterion);
+            ASSERT_EQ(got.count, kMaxMixtureLobes) << "k " << k;
+            EXPECT_EQ(std::memcmp(got.lobes.data(), most.lobes.data(), sizeof(got.lobes)), 0) << "k " << k;
+        }
+    }
+}
+
 // Four finest lobes of one power (a level-1 footprint), which the reduction decides in closed form
 // (the closest pair merges) where it can, are still the reference's lobes bit for bit: powers 1 to
 // 10^6, normals off an 8-bit grid (ties and near ties among the distances), steep normals at the

@@ -490,11 +490,14 @@ struct IseView {
     return cost > 0.0 ? cost : 0.0;
 }
 
-// The costs of lobe i with lobes begin..end−1 into out[begin..end).
+// The costs of lobe i with lobes begin..end−1 into out[begin..end), and with the lobes after them up to
+// a multiple of four (the columns' padding: finite lobes, costs nobody reads), so that the vectorised
+// loop leaves no scalar remainder: out and the columns hold end + 3 entries at least.
 BURNISH_AVX2_CLONES void iseCostRow(const IseColumns& columns, size_t i, size_t begin, size_t end,
                                     double* __restrict out) {
     const IseView c(columns);
-    for (size_t j = begin; j < end; ++j)
+    const size_t count = (end - begin + 3) / 4 * 4;
+    for (size_t j = begin; j < begin + count; ++j)
         out[j] = iseCostOf(c, i, j);
 }
 
@@ -804,6 +807,7 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
 // overlaps (equal lobes), with the costs kept in a matrix of which a merge recomputes the merged lobe's row.
 BURNISH_AVX2_CLONES LobeMixture reduceLobesBySquaredError(std::vector<LobeMoments>& lobes, int k,
                                                           double minVariance) {
+    k = std::clamp(k, 1, kMaxMixtureLobes);
     std::erase_if(lobes, [](const LobeMoments& l) { return !(l.w > 0.0); });
     size_t m = lobes.size(); // the lobes left, in order: a merged-away lobe leaves its place
     if (m > 1) {
@@ -812,11 +816,13 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesBySquaredError(std::vector<LobeMoment
         const auto packedSize = [](size_t count) { return (pairLayout(count).rowStart[count] + 4) / 4 * 4; };
         thread_local IseColumns columns;
         thread_local std::vector<double> cost, next, row;
-        columns.resize(m);
-        for (size_t i = 0; i < m; ++i)
-            columns.set(i, lobes[i], minVariance);
+        // Three columns of padding after the lobes (iseCostRow), copies of lobe 0; after a merge they
+        // and the column the erase leaves behind keep finite lobes.
+        columns.resize(m + 3);
+        for (size_t i = 0; i < m + 3; ++i)
+            columns.set(i, lobes[i < m ? i : 0], minVariance);
         cost.assign(packedSize(m), kGone);
-        row.resize(m);
+        row.resize(m + 3);
         const PairLayout* layout = &pairLayout(m);
         for (size_t i = 0; i + 1 < m; ++i) {
             iseCostRow(columns, i, i + 1, m, row.data());

@@ -166,7 +166,7 @@ inline MergeCriterion mixtureCriterion(int level) {
 /// is merged (exact moments) until k remain, and then while a pair costs a negligible amount (equal
 /// lobes: 1e-9 of the total weight for Runnalls' cost, of the pair's overlaps with themselves for the
 /// squared error); ties go to the lower indices. The total weight is kept; k = 1 is the exact sum,
-/// LEAN's moments. Canonical order.
+/// LEAN's moments. Canonical order. A k outside 1..kMaxMixtureLobes is taken as the nearest of them.
 LobeMixture reduceLobes(std::vector<LobeMoments> lobes, int k, double minVariance,
                         MergeCriterion criterion = MergeCriterion::KullbackLeibler);
 

@@ -7,8 +7,9 @@ gathered into one table (Markdown on stdout, the rows as JSON with --json-out).
 
 For every map, power and mip it reads LEAN's and each mixture-kK row's relative L1 and energy ratio
 and prints: per K the mean relative L1 over all (map, power, mip) cases next to LEAN's, the mean of
-the per-case ratio to LEAN, the worst ratio (a case where the mixture is worse than LEAN has a ratio
-above 1), the energy range, and the per-map worst ratio. `--dense` evaluates with 1° half-angle
+the per-case ratio to LEAN and its mean for each mip, the worst ratio (a case where the mixture is
+worse than LEAN has a ratio above 1), the energy range and how many cases' energy ratios lie outside
+[0.97, 1.03], and the per-map worst ratio. `--dense` evaluates with 1° half-angle
 steps to 40° and 16 azimuths instead of the default 48 light/view pairs; `--shaded-fit` evaluates the
 mixture fitted to the shaded ground truth too (evaluate --shaded-fit); `--stochastic` filters the mixture
 after shading between texels (evaluate --mixture-filtering stochastic). Bake and shading costs come from
@@ -47,15 +48,19 @@ def evaluate(binary, path, power, lobes, mips, dense, between, shaded=False, sto
 def summary(rows, lobes, suffix):
     """LEAN's and each K's row of the summary table, from the fields lean<suffix>, k<K><suffix> and
     their _energy ones (suffix "" for the aligned figures, "_between" between texels)."""
-    print("| method | mean rel. L1 | median | mean ratio to LEAN | worst ratio | cases worse than LEAN | energy min | energy max |")
-    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    mips = sorted({r["mip"] for r in rows})
+    print("| method | mean rel. L1 | median | mean ratio to LEAN | ratio, mips " + " / ".join(map(str, mips)) +
+          " | worst ratio | cases worse than LEAN | energy min | energy max | outside [0.97, 1.03] |")
+    print("| --- | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: |")
     for name, key in [("lean", "lean")] + [(f"mixture-k{k}", f"k{k}") for k in lobes]:
         v = [r[key + suffix] for r in rows]
         ratio = [r[key + suffix] / r["lean" + suffix] if r["lean" + suffix] > 0 else 1.0 for r in rows]
         en = [r[key + suffix + "_energy"] for r in rows]
         worse = sum(1 for x in ratio if x > 1.0)
+        outside = sum(1 for e in en if not 0.97 <= e <= 1.03)
+        by_mip = " / ".join(f"{statistics.mean(x for x, r in zip(ratio, rows) if r['mip'] == m):.2f}" for m in mips)
         print(f"| {name} | {statistics.mean(v):.4f} | {statistics.median(v):.4f} | {statistics.mean(ratio):.3f} | "
-              f"{max(ratio):.3f} | {worse} | {min(en):.3f} | {max(en):.3f} |")
+              f"{by_mip} | {max(ratio):.3f} | {worse} | {min(en):.3f} | {max(en):.3f} | {outside} |")
 
 
 def main():

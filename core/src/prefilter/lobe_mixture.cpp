@@ -374,10 +374,9 @@ struct LobeColumns {
     /// The merge costs of lobe i with lobes j (j0 <= j < j0 + 4·⌈count/4⌉) into out[j]: as
     /// mergeCostOf(lobe lo, wl[lo], lobe hi, wl[hi]) with (lo, hi) = (i, j), or with `byIndex` the
     /// pair in index order (min(i, j), max(i, j)), the order of the cost matrix. j = i gives garbage.
-    /// With `logDets`, each merged lobe's log det Σ into logDets[j] as well.
+    /// Each merged lobe's log det Σ into logDets[j] as well.
     [[gnu::always_inline]] void costsWith(size_t i, size_t j0, size_t count, bool byIndex, double minVariance,
-                                          std::vector<double>& out,
-                                          std::vector<double>* logDets = nullptr) const {
+                                          std::vector<double>& out, std::vector<double>& logDets) const {
         const simd::Double4 wi = D4(w[i]), bxi = D4(bx[i]), byi = D4(by[i]), mxxi = D4(mxx[i]),
                             myyi = D4(myy[i]), mxyi = D4(mxy[i]), wli = D4(wl[i]);
         for (size_t j = j0; j < j0 + count; j += 4) {
@@ -390,7 +389,7 @@ struct LobeColumns {
                                       std::int64_t(j + 3)};
             const simd::Int64x4 swap = byIndex ? index < std::int64_t(i) : simd::Int64x4{};
             store(out, j, costOfMerge(ww, ld, swap ? wlj : wli, swap ? wli : wlj));
-            if (logDets) store(*logDets, j, ld);
+            store(logDets, j, ld);
         }
     }
 
@@ -730,10 +729,9 @@ bool reduceFourFinest(std::array<LobeMoments, 4> lobes, int k, double v, LobeMix
 
 // reduceLobes on the caller's vector (changed), with the pair costs in per-thread buffers: no
 // allocation per texel once the buffers have grown. The costs are computed four pairs at a time
-// (LobeColumns), each bit for bit the scalar mergeCost.
+// (LobeColumns), each bit for bit the scalar mergeCost. k in 1..kMaxMixtureLobes (reduceLobesWith).
 BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lobes, int k,
                                                    double minVariance) {
-    k = std::clamp(k, 1, kMaxMixtureLobes);
     if (LobeMixture fast;
         lobes.size() == 4 && reduceFourFinest({lobes[0], lobes[1], lobes[2], lobes[3]}, k, minVariance, fast))
         return fast;
@@ -764,7 +762,7 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
         rowLogDet.resize(row.size());
         logDet.resize(cost.size());
         for (size_t i = 0; i + 1 < n; ++i) {
-            columns.costsWith(i, i + 1, n - i - 1, false, minVariance, row, &rowLogDet);
+            columns.costsWith(i, i + 1, n - i - 1, false, minVariance, row, rowLogDet);
             std::copy(row.begin() + std::ptrdiff_t(i + 1), row.begin() + std::ptrdiff_t(n),
                       cost.begin() + std::ptrdiff_t(layout.rowStart[i]));
             std::copy(rowLogDet.begin() + std::ptrdiff_t(i + 1), rowLogDet.begin() + std::ptrdiff_t(n),
@@ -786,7 +784,7 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
             const std::uint32_t* gone = &layout.index[bj * n];
             for (size_t o = 0; o < n; ++o)
                 cost[gone[o]] = kGone;
-            columns.costsWith(bi, 0, n, true, minVariance, row, &rowLogDet);
+            columns.costsWith(bi, 0, n, true, minVariance, row, rowLogDet);
             const std::uint32_t* merged = &layout.index[bi * n];
             for (size_t o = 0; o < n; ++o) {
                 cost[merged[o]] = alive[o] ? row[o] : kGone;
@@ -805,9 +803,9 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesInPlace(std::vector<LobeMoments>& lob
 // reduceLobes by MergeCriterion::SquaredError: the cheapest pair (iseCostOf, iseMergeCost's bits)
 // merges until k remain and then while a pair costs a negligible part of its own lobes'
 // overlaps (equal lobes), with the costs kept in a matrix of which a merge recomputes the merged lobe's row.
+// k in 2..kMaxMixtureLobes (reduceLobesWith).
 BURNISH_AVX2_CLONES LobeMixture reduceLobesBySquaredError(std::vector<LobeMoments>& lobes, int k,
                                                           double minVariance) {
-    k = std::clamp(k, 1, kMaxMixtureLobes);
     std::erase_if(lobes, [](const LobeMoments& l) { return !(l.w > 0.0); });
     size_t m = lobes.size(); // the lobes left, in order: a merged-away lobe leaves its place
     if (m > 1) {
@@ -863,9 +861,11 @@ BURNISH_AVX2_CLONES LobeMixture reduceLobesBySquaredError(std::vector<LobeMoment
     return canonicalMixture(lobes.data(), lobes.size());
 }
 
-// reduceLobes on the caller's vector. k = 1 is the exact sum under either criterion.
+// reduceLobes on the caller's vector, k clamped to 1..kMaxMixtureLobes. k = 1 is the exact sum under
+// either criterion.
 LobeMixture reduceLobesWith(std::vector<LobeMoments>& lobes, int k, double minVariance,
                             MergeCriterion criterion) {
+    k = std::clamp(k, 1, kMaxMixtureLobes);
     if (criterion == MergeCriterion::SquaredError && k > 1)
         return reduceLobesBySquaredError(lobes, k, minVariance);
     return reduceLobesInPlace(lobes, k, minVariance);

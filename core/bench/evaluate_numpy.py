@@ -21,6 +21,13 @@
 # and prints the largest relative difference of each figure from the C++ one.
 # Limits: 8-bit PNG/TGA/... as PIL reads them (L+A, RGB, RGBA), OpenGL green, wrap border, sizes
 # divisible by 2^last-mip (the power-of-two footprints); no --gloss, kernels or mixtures.
+#
+# Two references no bake can store, for judging how far a lobe fit could go on a map:
+#   --methods blurredF (F a number, e.g. blurred2,blurred16): every finest normal of the footprint
+#       kept, each shaded with power s/F instead of s (the truth itself with lobes sqrt(F) times wider):
+#       a fit that merges normals can only be blurrier than its footprint's normals are.
+#   --rings: the share of the sampled truth at each half-vector angle, per power and mip (where the
+#       energy figure comes from).
 
 import argparse
 import json
@@ -221,9 +228,11 @@ def evaluate(n, powers, first_mip, last_mip, methods):
     fx, fy, fz = (n[..., i].astype(np.float64) for i in range(3))
     mips = range(first_mip, last_mip + 1)
     out = {}
+    rings = {}
+    blurred = {m: float(m[len("blurred"):]) for m in methods if m.startswith("blurred")}
     for s in powers:
-        lobes = {(m, k): method_lobe(m, levels[k], s) for m in methods for k in mips}
-        acc = {key: [0.0, 0.0, 0.0] for key in lobes}   # sum |M - GT|, sum M, sum GT
+        lobes = {(m, k): method_lobe(m, levels[k], s) for m in methods if m not in blurred for k in mips}
+        acc = {(m, k): [0.0, 0.0, 0.0] for m in methods for k in mips}   # sum |M - GT|, sum M, sum GT
         for l, h in pairs:
             # Ground truth per finest texel, then summed over 2x2 blocks level by level.
             sums = blinn_phong(fx, fy, fz, s, h) * np.maximum(0.0, fx * l[0] + fy * l[1] + fz * l[2])
@@ -233,15 +242,28 @@ def evaluate(n, powers, first_mip, last_mip, methods):
                     sums = block_sum(sums)
                 if k >= first_mip:
                     truth[k] = sums / float(4 ** k)
+            theta = round(math.degrees(math.acos(min(1.0, h[2]))), 3)
+            for k in mips:
+                rings.setdefault((s, k), {}).setdefault(theta, 0.0)
+                rings[(s, k)][theta] += float(np.sum(truth[k]))
+            values = {}
+            for m, f in blurred.items():   # the truth's own sums with power s / f
+                b = blinn_phong(fx, fy, fz, s / f, h) * np.maximum(0.0, fx * l[0] + fy * l[1] + fz * l[2])
+                for k in range(0, last_mip + 1):
+                    if k > 0:
+                        b = block_sum(b)
+                    if k >= first_mip:
+                        values[(m, k)] = b / float(4 ** k)
             for (m, k), lobe in lobes.items():
-                value = method_value(lobe, l, h)
+                values[(m, k)] = method_value(lobe, l, h)
+            for (m, k), value in values.items():
                 a = acc[(m, k)]
                 a[0] += float(np.sum(np.abs(value - truth[k])))
                 a[1] += float(np.sum(value))
                 a[2] += float(np.sum(truth[k]))
         for (m, k), (err, msum, tsum) in acc.items():
             out[(m, s, k)] = (err / tsum, msum / tsum) if tsum > 0.0 else (0.0, 1.0)
-    return out, len(pairs), last_mip
+    return out, len(pairs), last_mip, rings
 
 
 def compare(results, path):
@@ -276,6 +298,7 @@ def main():
     ap.add_argument("--last-mip", type=int, default=4)
     ap.add_argument("--methods", default="naive,toksvig,lean,clean,vmf")
     ap.add_argument("--compare", metavar="EVALUATE_JSON")
+    ap.add_argument("--rings", action="store_true", help="print the share of the sampled truth per half-vector angle")
     args = ap.parse_args()
     methods = [m for m in args.methods.split(",") if m]
     for s in args.power:
@@ -285,7 +308,7 @@ def main():
     t0 = time.perf_counter()
     n = load_normals(args.map)
     t1 = time.perf_counter()
-    results, ndirs, last_mip = evaluate(n, args.power, args.first_mip, args.last_mip, methods)
+    results, ndirs, last_mip, rings = evaluate(n, args.power, args.first_mip, args.last_mip, methods)
     t2 = time.perf_counter()
 
     print(f"{args.map}: {n.shape[1]}x{n.shape[0]}, {ndirs} direction pairs, mips {args.first_mip}..{last_mip}")
@@ -296,6 +319,14 @@ def main():
         for m in methods:
             cells = "".join(f"{results[(m, s, k)][0]:>11.6f}{results[(m, s, k)][1]:>11.6f}" for k in mips)
             print(f"{m:<10}{cells}")
+    if args.rings:
+        for s in args.power:
+            print(f"\nbase power {s:g}: share of the sampled truth per half-vector angle (degrees)")
+            thetas = sorted(rings[(s, args.first_mip)])
+            print(f"{'mip':<10}" + "".join(f"{t:>9g}" for t in thetas))
+            for k in mips:
+                total = sum(rings[(s, k)].values())
+                print(f"{k:<10}" + "".join(f"{rings[(s, k)][t] / total:>9.3f}" for t in thetas))
     print(f"\nload: {t1 - t0:.3f} s; evaluation (pyramid, lobes, truth, errors): {t2 - t1:.3f} s")
     if args.compare:
         compare(results, args.compare)

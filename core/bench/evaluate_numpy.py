@@ -28,6 +28,14 @@
 #       a fit that merges normals can only be blurrier than its footprint's normals are.
 #   --rings: the share of the sampled truth at each half-vector angle, per power and mip (where the
 #       energy figure comes from).
+# And the floor the lobe mixture has to beat (issue 14's plain fit), for any K:
+#   --methods emK / hardemK (e.g. em3,hardem3): K slope-space Gaussians fitted to each footprint's
+#       finest slopes by expectation-maximisation, each slope a Gaussian of covariance I/s (so every
+#       lobe's covariance is its points' spread plus I/s), 30 iterations; soft responsibilities (em)
+#       or each slope to its most likely lobe (hardem). Deterministic start: the slopes in K equal
+#       groups by distance from the footprint's mean slope (core, skirt, steep tail; farthest-first
+#       centres made the noisy maps' fits far worse, picking outliers). Shaded as the mixture's shader does:
+#       sum_i w_i D_i(h) max(0, n_i.l), D_i the slope-space Gaussian, n_i = normalize(b_i, 1).
 
 import argparse
 import json
@@ -215,6 +223,73 @@ def method_value(lobe, l, h):
     return d * np.maximum(0.0, nx * l[0] + ny * l[1] + nz * l[2])
 
 
+EM_ITERATIONS = 30
+
+
+def em_fit(slopes, k, v, hard):
+    """K Gaussians fitted to each row of slopes (T, N, 2) by EM, each slope a Gaussian of covariance
+    v I: weights (T, K), means (T, K, 2), covariances (T, K, 2, 2)."""
+    t, n, _ = slopes.shape
+    k = min(k, n)
+    # Start: the slopes split into K equal groups by their distance from the footprint's mean slope
+    # (a core, a skirt, the steep tail), stable order so ties go to the lower index.
+    dist = ((slopes - slopes.mean(1, keepdims=True)) ** 2).sum(-1)
+    rank = np.argsort(np.argsort(dist, 1, kind="stable"), 1, kind="stable")   # T, N
+    resp = ((rank * k // n)[..., None] == np.arange(k)).astype(np.float64)   # T, N, K
+    eye = np.eye(2)
+    for it in range(EM_ITERATIONS + 1):
+        w = resp.sum(1)   # T, K
+        safe = np.where(w > 0.0, w, 1.0)
+        mean = np.einsum("tnk,tnd->tkd", resp, slopes) / safe[..., None]
+        d = slopes[:, :, None] - mean[:, None]   # T, N, K, 2
+        cov = np.einsum("tnk,tnkd,tnke->tkde", resp, d, d) / safe[..., None, None] + v * eye
+        if it == EM_ITERATIONS:
+            break
+        inv = np.linalg.inv(cov)
+        logdet = np.log(np.linalg.det(cov))
+        e = np.einsum("tnkd,tkde,tnke->tnk", d, inv, d) + v * np.trace(inv, axis1=-2, axis2=-1)[:, None]
+        score = np.where(w[:, None] > 0.0, np.log(safe / n)[:, None] - 0.5 * logdet[:, None] - 0.5 * e, -np.inf)
+        if hard:
+            resp = (np.argmax(score, 2)[..., None] == np.arange(k)).astype(np.float64)
+        else:
+            score = score - score.max(2, keepdims=True)
+            resp = np.exp(score)
+            resp /= resp.sum(2, keepdims=True)
+    return w / n, mean, cov
+
+
+def em_lobes(method, n, k_mip, s):
+    """The EM reference's lobes for mip k_mip (method emK or hardemK)."""
+    hard = method.startswith("hard")
+    k = int(method[len("hardem") if hard else len("em"):])
+    height, width = n.shape[:2]
+    f = 1 << k_mip
+    z = np.maximum(n[..., 2], F32(0.01))
+    b = np.stack([n[..., 0] / z, n[..., 1] / z], -1).astype(np.float64)
+    slopes = b.reshape(height // f, f, width // f, f, 2).transpose(0, 2, 1, 3, 4).reshape(-1, f * f, 2)
+    w, mean, cov = em_fit(slopes, k, 1.0 / s, hard)
+    return {"w": w, "mean": mean, "cov": cov, "shape": (height // f, width // f)}
+
+
+def em_value(lobes, l, h):
+    """sum_i w_i D_i(h) max(0, n_i.l) of the EM reference's lobes, one value per texel."""
+    w, mean, cov = lobes["w"], lobes["mean"], lobes["cov"]
+    value = np.zeros(w.shape[0])
+    if h[2] <= 0.0:
+        return value.reshape(lobes["shape"])
+    for i in range(w.shape[1]):
+        c = cov[:, i]
+        det = c[:, 0, 0] * c[:, 1, 1] - c[:, 0, 1] * c[:, 0, 1]
+        dx, dy = h[0] / h[2] - mean[:, i, 0], h[1] / h[2] - mean[:, i, 1]
+        e = (dx * dx * c[:, 1, 1] + dy * dy * c[:, 0, 0] - 2.0 * dx * dy * c[:, 0, 1]) / det
+        hz2 = h[2] * h[2]
+        d = np.exp(-0.5 * e) / (2.0 * math.pi * np.sqrt(det) * hz2 * hz2)
+        inv = 1.0 / np.sqrt(mean[:, i, 0] ** 2 + mean[:, i, 1] ** 2 + 1.0)
+        nl = (mean[:, i, 0] * l[0] + mean[:, i, 1] * l[1] + l[2]) * inv
+        value += np.where(w[:, i] > 0.0, w[:, i] * d * np.maximum(0.0, nl), 0.0)
+    return value.reshape(lobes["shape"])
+
+
 def evaluate(n, powers, first_mip, last_mip, methods):
     """Returns {(method, power, mip): (relative L1, energy)} and the direction count."""
     height, width = n.shape[:2]
@@ -230,8 +305,11 @@ def evaluate(n, powers, first_mip, last_mip, methods):
     out = {}
     rings = {}
     blurred = {m: float(m[len("blurred"):]) for m in methods if m.startswith("blurred")}
+    em = [m for m in methods if m.startswith("em") or m.startswith("hardem")]
     for s in powers:
-        lobes = {(m, k): method_lobe(m, levels[k], s) for m in methods if m not in blurred for k in mips}
+        lobes = {(m, k): method_lobe(m, levels[k], s)
+                 for m in methods if m not in blurred and m not in em for k in mips}
+        em_fits = {(m, k): em_lobes(m, n, k, s) for m in em for k in mips}
         acc = {(m, k): [0.0, 0.0, 0.0] for m in methods for k in mips}   # sum |M - GT|, sum M, sum GT
         for l, h in pairs:
             # Ground truth per finest texel, then summed over 2x2 blocks level by level.
@@ -256,6 +334,8 @@ def evaluate(n, powers, first_mip, last_mip, methods):
                         values[(m, k)] = b / float(4 ** k)
             for (m, k), lobe in lobes.items():
                 values[(m, k)] = method_value(lobe, l, h)
+            for (m, k), fit in em_fits.items():
+                values[(m, k)] = em_value(fit, l, h)
             for (m, k), value in values.items():
                 a = acc[(m, k)]
                 a[0] += float(np.sum(np.abs(value - truth[k])))

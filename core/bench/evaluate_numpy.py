@@ -268,26 +268,24 @@ def em_lobes(method, n, k_mip, s):
     b = np.stack([n[..., 0] / z, n[..., 1] / z], -1).astype(np.float64)
     slopes = b.reshape(height // f, f, width // f, f, 2).transpose(0, 2, 1, 3, 4).reshape(-1, f * f, 2)
     w, mean, cov = em_fit(slopes, k, 1.0 / s, hard)
-    return {"w": w, "mean": mean, "cov": cov, "shape": (height // f, width // f)}
+    lobes = []
+    for i in range(w.shape[1]):
+        bx, by = mean[:, i, 0], mean[:, i, 1]
+        c = (cov[:, i, 0, 0], cov[:, i, 1, 1], cov[:, i, 0, 1])
+        det = c[0] * c[1] - c[2] * c[2]   # at least (1/s)^2: every covariance has I/s added
+        inv = 1.0 / np.sqrt(bx * bx + by * by + 1.0)
+        lobes.append({"normal": [bx * inv, by * inv, inv], "bx": bx, "by": by, "cov": c, "det": det,
+                      "good": det > 0.0, "norm": (2.0 * math.pi) * np.sqrt(det)})
+    return {"w": w, "lobes": lobes, "shape": (height // f, width // f)}
 
 
 def em_value(lobes, l, h):
-    """sum_i w_i D_i(h) max(0, n_i.l) of the EM reference's lobes, one value per texel."""
-    w, mean, cov = lobes["w"], lobes["mean"], lobes["cov"]
-    value = np.zeros(w.shape[0])
-    if h[2] <= 0.0:
-        return value.reshape(lobes["shape"])
-    for i in range(w.shape[1]):
-        c = cov[:, i]
-        det = c[:, 0, 0] * c[:, 1, 1] - c[:, 0, 1] * c[:, 0, 1]
-        dx, dy = h[0] / h[2] - mean[:, i, 0], h[1] / h[2] - mean[:, i, 1]
-        e = (dx * dx * c[:, 1, 1] + dy * dy * c[:, 0, 0] - 2.0 * dx * dy * c[:, 0, 1]) / det
-        hz2 = h[2] * h[2]
-        d = np.exp(-0.5 * e) / (2.0 * math.pi * np.sqrt(det) * hz2 * hz2)
-        inv = 1.0 / np.sqrt(mean[:, i, 0] ** 2 + mean[:, i, 1] ** 2 + 1.0)
-        nl = (mean[:, i, 0] * l[0] + mean[:, i, 1] * l[1] + l[2]) * inv
-        value += np.where(w[:, i] > 0.0, w[:, i] * d * np.maximum(0.0, nl), 0.0)
-    return value.reshape(lobes["shape"])
+    """sum_i w_i D_i(h) max(0, n_i.l) of the EM reference's lobes (method_value's slope-space Gaussian
+    for each), one value per texel."""
+    w, value = lobes["w"], 0.0
+    for lobe, weight in zip(lobes["lobes"], w.T):
+        value = value + np.where(weight > 0.0, weight * method_value(lobe, l, h), 0.0)
+    return np.reshape(value, lobes["shape"])
 
 
 def evaluate(n, powers, first_mip, last_mip, methods):

@@ -20,7 +20,7 @@
 #   build/bin/burnish evaluate MAP --power S --methods naive,toksvig,lean,clean,vmf --out DIR
 # and prints the largest relative difference of each figure from the C++ one.
 # Limits: 8-bit PNG/TGA/... as PIL reads them (L+A, RGB, RGBA), OpenGL green, wrap border, sizes
-# divisible by 2^last-mip (the power-of-two footprints); no --gloss, kernels or mixtures.
+# divisible by 2^last-mip (the power-of-two footprints); no --gloss, kernels or the bake's lobe mixture.
 #
 # Two references no bake can store, for judging how far a lobe fit could go on a map:
 #   --methods blurredF (F a number, e.g. blurred2,blurred16): every finest normal of the footprint
@@ -28,7 +28,7 @@
 #       a fit that merges normals can only be blurrier than its footprint's normals are.
 #   --rings: the share of the sampled truth at each half-vector angle, per power and mip (where the
 #       energy figure comes from).
-# And the floor the lobe mixture has to beat (issue 14's plain fit), for any K:
+# And the plain fit the lobe mixture is measured against, for any K:
 #   --methods emK / hardemK (e.g. em3,hardem3): K slope-space Gaussians fitted to each footprint's
 #       finest slopes by expectation-maximisation, each slope a Gaussian of covariance I/s (so every
 #       lobe's covariance is its points' spread plus I/s), 30 iterations; soft responsibilities (em)
@@ -379,6 +379,16 @@ def main():
     ap.add_argument("--rings", action="store_true", help="print the share of the sampled truth per half-vector angle")
     args = ap.parse_args()
     methods = [m for m in args.methods.split(",") if m]
+    for m in methods:
+        for prefix, kind in (("blurred", float), ("hardem", int), ("em", int)):
+            if m.startswith(prefix):
+                try:
+                    ok = kind(m[len(prefix):]) > 0
+                except ValueError:
+                    ok = False
+                if not ok:
+                    sys.exit(f"method {m}: {prefix} takes a positive number, e.g. {prefix}{'2' if kind is float else '3'}")
+                break
     for s in args.power:
         if not (0.0 < s <= MAX_POWER):
             sys.exit(f"base power {s} is outside (0, 1e9]")

@@ -111,7 +111,9 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     auto outRoot = std::make_shared<std::string>();
 
     cmd->add_option("input", spec->input, "Tangent-space normal map (PNG, TGA, EXR, TIFF, DDS, ...)");
-    cmd->add_option("--preset", spec->preset, "Engine preset: a name listed below, or a preset FILE.json");
+    cmd->add_option("--preset", spec->preset,
+                    "Engine preset: a name listed below, or a preset FILE.json (default with --method "
+                    "toksvig-map, lean, clean or mixture: that method's own preset)");
     cmd->add_option("--method", spec->method,
                     "Prefiltering method (default: the preset's): " + joined(methodNames()));
     cmd->add_option("--out", spec->out, "Output folder (created if missing)");

@@ -80,6 +80,36 @@ TEST(BakeJob, ResolveNamesOptionsAsTheCommandLineSpellsThem) {
     EXPECT_FALSE(resolveBakeJob(spec));
 }
 
+// `burnish bake MAP --method mixture --out DIR` bakes into the mixture's own preset, as --method does for
+// every method with a built-in preset named after it (recorded as the job's preset); a method without
+// one still needs --preset, and the error says which methods pick their own.
+TEST(BakeJob, MethodAloneBakesIntoItsOwnPreset) {
+    test::TempDir dir;
+    for (const char* method : {"toksvig-map", "lean", "clean", "mixture"}) {
+        BakeJobSpec spec = specFor(dir.path());
+        spec.preset.clear();
+        spec.method = method;
+        const auto job = resolveBakeJob(spec);
+        ASSERT_TRUE(job) << method << ": " << job.error();
+        EXPECT_EQ(job->preset.name, method);
+        EXPECT_EQ(job->spec.preset, method);
+        EXPECT_EQ(std::string(methodName(job->method)), method);
+    }
+    for (const char* method : {"naive", "toksvig", "variance-to-gloss", "vmf"}) {
+        BakeJobSpec spec = specFor(dir.path());
+        spec.preset.clear();
+        spec.method = method;
+        const auto job = resolveBakeJob(spec);
+        ASSERT_FALSE(job) << method;
+        EXPECT_NE(job.error().find("no preset given"), std::string::npos) << job.error();
+        EXPECT_NE(job.error().find("own preset for: toksvig-map, lean, clean, mixture"), std::string::npos)
+            << job.error();
+    }
+    BakeJobSpec none = specFor(dir.path());
+    none.preset.clear();
+    EXPECT_FALSE(resolveBakeJob(none)) << "neither a preset nor a method";
+}
+
 TEST(BakeJob, ResolveTakesThePresetDefaultsAndTheInputStem) {
     test::TempDir dir;
     const auto job = resolveBakeJob(specFor(dir.path()));

@@ -120,14 +120,25 @@ Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
     if (spec.input.empty()) return Error{"no input normal map given"};
     if (spec.out.empty()) return Error{"no output folder given (--out DIR)"};
     if (spec.authoredGloss && spec.authoredGloss->empty()) return Error{"authored gloss: no values given"};
-    if (spec.preset.empty())
-        return Error{"no preset given (--preset P; known: " + joined(builtinPresetNames()) + ")"};
+    if (job.spec.preset.empty()) {
+        // A method with a built-in preset of its own (named after it: toksvig-map, lean, clean, mixture)
+        // bakes into that preset when none is named; bake.json records the preset so chosen.
+        std::vector<std::string> own;
+        for (const Preset& p : builtinPresets())
+            if (p.name == methodName(p.method)) {
+                own.push_back(p.name);
+                if (spec.method && *spec.method == p.name) job.spec.preset = p.name;
+            }
+        if (job.spec.preset.empty())
+            return Error{"no preset given (--preset P; known: " + joined(builtinPresetNames()) +
+                         "; --method alone picks the method's own preset for: " + joined(own) + ")"};
+    }
     if (isSampleBakeInput(spec.input)) {
         const auto kind = sampleMapFromName(spec.input.substr(kSampleInputPrefix.size()));
         if (!kind) return Error{"input '" + spec.input + "': " + kind.error()};
     }
 
-    auto preset = findPreset(spec.preset);
+    auto preset = findPreset(job.spec.preset);
     if (!preset) return Error{preset.error()};
     job.preset = std::move(preset.value());
 

@@ -140,7 +140,7 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                     "Metalness in [0, 1] for presets with a metallic channel (gltf, unity)");
     cmd->add_option("--lobes", spec->lobes,
                     "Mixture lobes per texel, 1..4 (--method mixture; default: as many as the preset stores, "
-                    "3 in the mixture preset; 1 is LEAN)");
+                    "3 in the mixture preset, whose lobe files mixture-lobe0..K-1 follow K; 1 is LEAN)");
     cmd->add_flag("--shaded-fit", spec->shadedFit,
                   "Fit the mixture's lobes to the shaded ground truth as well as to their moments (--method "
                   "mixture): a closer highlight on mips 2 and up, for final exports; the bake takes tens "

@@ -307,7 +307,7 @@ TEST(MixtureMethod, EvaluateReportsEveryKAndOneLobeIsLean) {
     EXPECT_FALSE(evaluateMethods(*loaded, o));
 }
 
-TEST(MixtureMethod, PresetStoresThreeLobesAndLobesMustMatchIt) {
+TEST(MixtureMethod, PresetStoresThreeLobesAndLobesRewritesItsLobeFiles) {
     const fs::path dir = fs::temp_directory_path() / ("burnish-mixture-" + std::to_string(::getpid()));
     fs::remove_all(dir);
     BakeJobSpec spec;
@@ -328,10 +328,47 @@ TEST(MixtureMethod, PresetStoresThreeLobesAndLobesMustMatchIt) {
         ASSERT_TRUE(image) << image.error();
         EXPECT_EQ(image->channels, 4);
     }
-    spec.lobes = 4;
-    auto four = resolveBakeJob(spec);
-    ASSERT_FALSE(four);
-    EXPECT_NE(four.error().find("stores 3 mixture lobes"), std::string::npos) << four.error();
+    // --lobes K rewrites the preset's lobe files to mixture-lobe0..K−1, where lobe files stood.
+    for (int k : {1, 2, 4}) {
+        spec.lobes = k;
+        spec.out = (dir / ("k" + std::to_string(k))).string();
+        auto other = resolveBakeJob(spec);
+        ASSERT_TRUE(other) << other.error();
+        EXPECT_EQ(other->bake.params.mixtureLobes, k);
+        std::vector<std::string> names;
+        for (const auto& f : other->preset.files)
+            names.push_back(f.name);
+        std::vector<std::string> want{"mixture-weights"};
+        for (int i = 0; i < k; ++i)
+            want.push_back("mixture-lobe" + std::to_string(i));
+        want.push_back("mixture-cross");
+        EXPECT_EQ(names, want) << "k " << k;
+        ASSERT_TRUE(runBakeJob(*other)) << "k " << k;
+        for (int i = 0; i < kMaxMixtureLobes; ++i)
+            EXPECT_EQ(
+                fs::exists(fs::path(spec.out) / ("trak-rust1_nm_mixture-lobe" + std::to_string(i) + ".exr")),
+                i < k)
+                << "k " << k << ", lobe " << i;
+    }
+    // A preset whose lobe files are laid out otherwise (here lobe 1's file renamed) must store K lobes.
+    {
+        std::ifstream in(std::string(BURNISH_SOURCE_DIR) + "/resources/presets/mixture.json");
+        std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const std::string from = "\"name\": \"mixture-lobe1\"";
+        const size_t at = text.find(from);
+        ASSERT_NE(at, std::string::npos);
+        text.replace(at, from.size(), "\"name\": \"second-lobe\"");
+        fs::create_directories(dir);
+        const fs::path custom = dir / "custom.json";
+        std::ofstream(custom) << text;
+        spec.preset = custom.string();
+        spec.lobes = 3;
+        ASSERT_TRUE(resolveBakeJob(spec)) << "its own count";
+        spec.lobes = 4;
+        auto four = resolveBakeJob(spec);
+        ASSERT_FALSE(four);
+        EXPECT_NE(four.error().find("stores 3 mixture lobes"), std::string::npos) << four.error();
+    }
     spec.preset = "lean";
     spec.lobes = 2;
     auto notMixture = resolveBakeJob(spec);

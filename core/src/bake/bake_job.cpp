@@ -76,8 +76,51 @@ std::string inputStem(const std::string& input) {
     return fs::path(input).stem().string();
 }
 
-// The mixture's lobe count: --lobes, or as many lobe textures as the preset's files store. A preset
-// that stores another count is refused (its files would drop or miss a lobe).
+// The name of lobe i's file and role in the mixture presets' layout: "mixture-lobe<i>".
+std::string mixtureLobeName(int i) {
+    return "mixture-lobe" + std::to_string(i);
+}
+
+// Rewrites a preset's mixture lobe files for `lobes` lobes when they are laid out as the built-in
+// mixture preset's: file i named mixture-lobe<i>, holding lobe i's four values alone, for i = 0..n−1
+// in a row of files. The files become mixture-lobe0..lobes−1, each as lobe 0's with its index, where
+// the old ones stood. Returns false, changing nothing, for any other layout.
+bool relayoutLobeFiles(Preset& preset, int lobes) {
+    std::vector<size_t> at;
+    for (size_t f = 0; f < preset.files.size(); ++f) {
+        bool any = false, all = true;
+        for (const PresetChannel& c : preset.files[f].channels) {
+            const auto role = roleFromName(c.role);
+            const bool lobe = c.kind == PresetChannel::Kind::Baked && role && isMixtureLobeRole(*role);
+            any = any || lobe;
+            all = all && lobe && c.role == mixtureLobeName(int(at.size()));
+        }
+        if (!any) continue;
+        if (!all || preset.files[f].name != mixtureLobeName(int(at.size())) ||
+            preset.files[f].channels.size() != 4 || (!at.empty() && at.back() + 1 != f))
+            return false;
+        at.push_back(f);
+    }
+    if (at.empty()) return false;
+    const PresetFile first = preset.files[at.front()];
+    std::vector<PresetFile> files(preset.files.begin(), preset.files.begin() + std::ptrdiff_t(at.front()));
+    for (int i = 0; i < lobes; ++i) {
+        PresetFile f = first;
+        f.name = mixtureLobeName(i);
+        if (f.description.rfind("lobe 0", 0) == 0)
+            f.description = "lobe " + std::to_string(i) + f.description.substr(6);
+        for (PresetChannel& c : f.channels)
+            c.role = mixtureLobeName(i);
+        files.push_back(std::move(f));
+    }
+    files.insert(files.end(), preset.files.begin() + std::ptrdiff_t(at.back() + 1), preset.files.end());
+    preset.files = std::move(files);
+    return true;
+}
+
+// The mixture's lobe count: --lobes, or as many lobe textures as the preset's files store. Another
+// count rewrites lobe files laid out as the mixture preset's (relayoutLobeFiles); a preset with any
+// other layout that stores another count is refused (its files would drop or miss a lobe).
 Status resolveLobes(const BakeJobSpec& spec, BakeJob& job) {
     int stored = 0;
     if (job.bake.roles)
@@ -96,6 +139,10 @@ Status resolveLobes(const BakeJobSpec& spec, BakeJob& job) {
                                  methodName(job.method))};
     if (*spec.lobes < 1 || *spec.lobes > kMaxMixtureLobes)
         return Error{fmt::format("--lobes {} must lie in 1..{}", *spec.lobes, kMaxMixtureLobes)};
+    if (stored > 0 && stored != *spec.lobes && relayoutLobeFiles(job.preset, *spec.lobes)) {
+        job.bake.roles = presetRoles(job.preset);
+        stored = *spec.lobes;
+    }
     if (stored > 0 && stored != *spec.lobes)
         return Error{fmt::format(
             "--lobes {}: preset '{}' stores {} mixture lobe{} (files mixture-lobe0..{}); "

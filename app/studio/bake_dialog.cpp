@@ -63,6 +63,8 @@ BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc) {
         spec.metallic = s.materialClass == MaterialClass::Metal ? 1.0 : 0.0;
     spec.force = s.exportSettings.overwrite;
     spec.shadedFit = s.method == Method::Mixture && s.exportSettings.shadedFit;
+    // The lobes the viewport draws; a preset laid out as the mixture's writes that many lobe files.
+    if (s.method == Method::Mixture) spec.lobes = s.mixtureLobes;
     return spec;
 }
 

@@ -323,6 +323,13 @@ Status MaterialDocument::setMethod(Method method) {
     return {};
 }
 
+void MaterialDocument::setMixtureLobes(int lobes) {
+    MaterialSettings s = m_settings;
+    s.mixtureLobes = std::clamp(lobes, 1, kMaxMixtureLobes);
+    if (s.mixtureLobes == m_settings.mixtureLobes) return;
+    push(s, m_maps, QString("Mixture lobes: %1").arg(s.mixtureLobes), kNoMerge);
+}
+
 Status MaterialDocument::setPreset(const QString& name) {
     const auto p = builtinPreset(name);
     if (!p) return Error{p.error()};
@@ -478,6 +485,8 @@ Status MaterialDocument::validate(const MaterialSettings& s) {
     if (!inUnitRange(s.specular)) return Error{"the specular colour must have channels in [0, 1]"};
     if (!inUnitRange(s.albedo)) return Error{"the albedo must have channels in [0, 1]"};
     if (!(s.gloss >= 0.0 && s.gloss <= 1.0)) return Error{"the gloss must lie in [0, 1]"};
+    if (s.mixtureLobes < 1 || s.mixtureLobes > kMaxMixtureLobes)
+        return Error{"the mixture's lobe count must lie in 1.." + std::to_string(kMaxMixtureLobes)};
     const ExportSettings& e = s.exportSettings;
     if (!e.format.isEmpty() && !exportFormatFromName(e.format.toStdString()))
         return Error{"export format '" + e.format.toStdString() + "' is not known"};

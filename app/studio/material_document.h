@@ -73,6 +73,9 @@ struct MaterialSettings {
     QString glossMapPath;
     QString detailMapPath;
     Method method = Method::VarianceToGloss;
+    /// The lobe mixture's lobes per texel, K in 1..kMaxMixtureLobes (with method mixture: the viewport's,
+    /// and the export's lobe files mixture-lobe0..K−1).
+    int mixtureLobes = kDefaultMixtureLobes;
     QString preset = "blackops";
     ExportSettings exportSettings;
     EnvironmentSettings environment;
@@ -147,6 +150,8 @@ public:
     void endMerge() { ++m_mergeEpoch; }
     /// Fails when the preset cannot store the method.
     Status setMethod(Method method);
+    /// The mixture's lobe count K (clamped to 1..kMaxMixtureLobes); kept with other methods.
+    void setMixtureLobes(int lobes);
     /// Switches preset keeping the base power (gloss re-encoded); the method is kept when the
     /// preset stores it, else the preset's default. Fails on an unknown preset.
     Status setPreset(const QString& name);

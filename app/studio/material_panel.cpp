@@ -14,6 +14,7 @@
 #include <QPushButton>
 #include <QSettings>
 #include <QSlider>
+#include <QSpinBox>
 #include <QVBoxLayout>
 
 #include <cmath>
@@ -145,6 +146,12 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
     m_method->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
     m_method->setMinimumContentsLength(10);
     m_method->setToolTip("Prefiltering method (those the preset can store)");
+    m_lobes = new QSpinBox(this);
+    m_lobes->setRange(1, kMaxMixtureLobes);
+    m_lobes->setKeyboardTracking(false); // commit on Enter or focus-out, not per keystroke
+    m_lobes->setObjectName("materialLobes");
+    m_lobes->setToolTip("Lobes per texel of the mixture (K): more keeps more of each footprint's highlight "
+                        "shape, at one more texture and lobe evaluation each; 1 is LEAN, 3 the default");
     m_class = new QComboBox(this);
     m_class->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
     m_class->setMinimumContentsLength(8);
@@ -180,9 +187,11 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
 
     auto* materialBox = new QGroupBox("Material", this);
     auto* form = new QFormLayout(materialBox);
+    m_form = form;
     form->setLabelAlignment(Qt::AlignRight);
     form->addRow("Preset", m_preset);
     form->addRow("Method", m_method);
+    form->addRow("Lobes", m_lobes);
     form->addRow("Class", m_class);
     form->addRow("Specular", m_specular);
     auto* specRow = new QHBoxLayout;
@@ -236,6 +245,9 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
     connect(m_method, &QComboBox::activated, this, [this](int i) {
         if (const Status st = m_doc->setMethod(Method(m_method->itemData(i).toInt())); !st)
             emit errorOccurred("Method", QString::fromStdString(st.error()));
+    });
+    connect(m_lobes, &QSpinBox::valueChanged, this, [this](int k) {
+        if (!m_refreshing) m_doc->setMixtureLobes(k);
     });
     connect(m_class, &QComboBox::activated, this,
             [this](int i) { m_doc->setMaterialClass(MaterialClass(m_class->itemData(i).toInt())); });
@@ -308,6 +320,8 @@ void MaterialPanel::refresh() {
         m_method->addItem(qs(methodName(m)), int(m));
     m_method->setCurrentIndex(m_method->findData(int(s.method)));
     m_method->setToolTip(qs(methodDescription(s.method)));
+    m_lobes->setValue(s.mixtureLobes);
+    m_form->setRowVisible(m_lobes, s.method == Method::Mixture);
 
     m_class->setCurrentIndex(m_class->findData(int(s.materialClass)));
     m_specular->setCurrentIndex(m_specular->findData(s.specularName));

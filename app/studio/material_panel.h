@@ -12,6 +12,8 @@
 class QCheckBox;
 class QComboBox;
 class QDoubleSpinBox;
+class QFormLayout;
+class QSpinBox;
 class QLabel;
 class QPushButton;
 class QSlider;
@@ -56,6 +58,8 @@ public:
     QComboBox* specularCombo() const { return m_specular; }
     QSlider* glossSlider() const { return m_glossSlider; }
     QDoubleSpinBox* glossSpin() const { return m_glossSpin; }
+    /// The mixture's lobe count K (its row shows while the method is the mixture).
+    QSpinBox* lobesSpin() const { return m_lobes; }
     MapSlotWidget* slotWidget(MapSlot slot) const;
 
     /// Loads a map into a slot (a file dialog when path is empty). False when it is not loaded: an
@@ -81,6 +85,8 @@ private:
     MaterialDocument* m_doc;
     QComboBox* m_preset;
     QComboBox* m_method;
+    QSpinBox* m_lobes;
+    QFormLayout* m_form;
     QComboBox* m_class;
     QComboBox* m_specular;
     QLabel* m_specularSwatch;

@@ -199,6 +199,7 @@ std::string projectToJson(const MaterialSettings& s, const QString& projectFile,
           {"gloss", relativePath(s.glossMapPath, folder)},
           {"detail", relativePath(s.detailMapPath, folder)}}},
         {"method", std::string(methodName(s.method))},
+        {"lobes", s.mixtureLobes},
         {"preset", s.preset.toStdString()},
         {"export",
          {{"format", e.format.isEmpty() ? Json(nullptr) : Json(e.format.toStdString())},
@@ -247,7 +248,7 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
                      "; this studio reads up to version " + std::to_string(kProjectVersion) + ")"};
 
     const Reader top(root, where);
-    if (Status st = top.known({"format", "version", "material", "maps", "method", "preset", "export",
+    if (Status st = top.known({"format", "version", "material", "maps", "method", "lobes", "preset", "export",
                                "environment", "layers", "autosaveOf"});
         !st)
         return Error{st.error()};
@@ -297,7 +298,12 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
     const auto method = top.string("method");
     const auto preset = top.string("preset");
     const auto autosaveOf = top.string("autosaveOf", false);
+    // Projects written before the lobe count was saved draw and export the default mixture.
+    std::optional<double> lobes;
+    if (top.get("lobes", false)) lobes = top.number("lobes", 1.0, double(kMaxMixtureLobes));
+    if (lobes && *lobes != std::floor(*lobes)) top.fail("lobes", "a whole number");
     if (top.error()) return *top.error();
+    s.mixtureLobes = lobes ? int(*lobes) : kDefaultMixtureLobes;
     const auto methodValue = methodFromName(*method);
     if (!methodValue) return Error{where + ": method: " + methodValue.error()};
     s.method = *methodValue;

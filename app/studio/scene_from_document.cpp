@@ -46,6 +46,7 @@ Result<render::MaterialSettings> SceneFromDocument::material(const MaterialDocum
     m.glossEncoding = doc.preset().encoding;
     m.basePower = doc.power();
     m.method = s.method;
+    m.methodParams.mixtureLobes = s.mixtureLobes;
     m.normalMap = maps.normal;
     m.detailMap = maps.detail;
 

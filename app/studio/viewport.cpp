@@ -785,6 +785,14 @@ void Viewport::setError(const QString& message) {
     emit errorChanged(message);
 }
 
+// A method's name in the view's labels; the mixture's with its lobe count.
+QString Viewport::methodLabel(Method method) const {
+    const QString name = qs(methodName(method));
+    if (method != Method::Mixture) return name;
+    const int k = m_doc->settings().mixtureLobes;
+    return QString("%1 (%2 lobe%3)").arg(name).arg(k).arg(k == 1 ? "" : "s");
+}
+
 // While a bake for the view runs on its worker, the view draws the last baked material: say so, with
 // what is being baked, until the frame that takes the bake in.
 void Viewport::showBaking(bool pending) {
@@ -793,7 +801,7 @@ void Viewport::showBaking(bool pending) {
         const double done =
             std::max(m_engine->a->bakeProgress(), m_view.split ? m_engine->b->bakeProgress() : 0.0);
         m_bakingLabel->setText(QString("baking %1 for %2×%3… %4%")
-                                   .arg(qs(methodName(m_doc->settings().method)))
+                                   .arg(methodLabel(m_doc->settings().method))
                                    .arg(map.width)
                                    .arg(map.height)
                                    .arg(int(std::floor(100.0 * std::clamp(done, 0.0, 1.0)))));
@@ -813,9 +821,9 @@ bool Viewport::bakingShown() const {
 }
 
 void Viewport::updateLabels() {
-    const QString a = qs(methodName(m_doc->settings().method));
+    const QString a = methodLabel(m_doc->settings().method);
     const QString b = m_view.right.reference ? QString("reference (%1 spp)").arg(m_view.referenceSamples)
-                                             : qs(methodName(m_view.right.method));
+                                             : methodLabel(m_view.right.method);
     m_labelA->setText("A: " + a);
     m_labelB->setText("B: " + b);
     m_labelA->adjustSize();

@@ -196,6 +196,7 @@ private:
     void setError(const QString& message);
     void layoutOverlays();
     void updateLabels();
+    QString methodLabel(Method method) const;
     void showBaking(bool pending);
     void meter();
 

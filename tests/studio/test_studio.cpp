@@ -8,6 +8,7 @@
 #include "material_panel.h"
 #include "paint_tool.h"
 #include "project.h"
+#include "scene_from_document.h"
 #include "studio_app.h"
 #include "texture_pane.h"
 
@@ -39,6 +40,7 @@
 #include <QSettings>
 #include <QSignalSpy>
 #include <QSlider>
+#include <QSpinBox>
 #include <QStandardPaths>
 #include <QStatusBar>
 #include <QTest>
@@ -230,6 +232,46 @@ TEST(MaterialPanel, PresetComboFiltersMethodsAndKeepsThePower) {
         EXPECT_TRUE(checkPresetMethod(doc.preset(), Method(panel.methodCombo()->itemData(i).toInt())));
 }
 
+// The mixture's lobe count K: a row of the Material panel while the method is the mixture, an undo
+// step, clamped to 1..4, drawn by the viewport's material and exported as that many lobe files.
+TEST(MaterialPanel, LobesRowSetsTheMixturesLobeCount) {
+    MaterialDocument doc;
+    MaterialPanel panel(&doc);
+    panel.show();
+    ASSERT_TRUE(doc.setPreset("mixture"));
+    ASSERT_EQ(doc.settings().method, Method::Mixture);
+    EXPECT_TRUE(panel.lobesSpin()->isVisible());
+    EXPECT_EQ(panel.lobesSpin()->value(), kDefaultMixtureLobes);
+    const int steps = doc.undoStack()->count();
+    panel.lobesSpin()->setValue(4);
+    EXPECT_EQ(doc.settings().mixtureLobes, 4);
+    EXPECT_EQ(doc.undoStack()->count(), steps + 1);
+    doc.setMixtureLobes(9);
+    EXPECT_EQ(doc.settings().mixtureLobes, kMaxMixtureLobes) << "clamped; the same count adds no step";
+    EXPECT_EQ(doc.undoStack()->count(), steps + 1);
+    doc.setMixtureLobes(0);
+    EXPECT_EQ(doc.settings().mixtureLobes, 1);
+    EXPECT_EQ(panel.lobesSpin()->value(), 1);
+    doc.undoStack()->undo();
+    EXPECT_EQ(doc.settings().mixtureLobes, 4);
+    EXPECT_EQ(panel.lobesSpin()->value(), 4);
+
+    SceneFromDocument scene;
+    const auto material = scene.material(doc);
+    ASSERT_TRUE(material) << material.error();
+    EXPECT_EQ(material->methodParams.mixtureLobes, 4);
+    const BakeJobSpec spec = bakeJobSpecFor(doc);
+    ASSERT_TRUE(spec.lobes);
+    EXPECT_EQ(*spec.lobes, 4);
+
+    ASSERT_TRUE(doc.setPreset("lean"));
+    EXPECT_FALSE(panel.lobesSpin()->isVisible()) << "only the mixture has lobes to count";
+    EXPECT_FALSE(bakeJobSpecFor(doc).lobes);
+    MaterialSettings bad = doc.settings();
+    bad.mixtureLobes = 5;
+    EXPECT_FALSE(MaterialDocument::validate(bad));
+}
+
 TEST(MaterialDocument, ASliderDragIsOneUndoStep) {
     MaterialDocument doc;
     doc.setGloss(0.1, true);
@@ -271,6 +313,7 @@ TEST(Project, SaveLoadRoundTripsEveryField) {
     doc->setAlbedo({0.5, 0.25, 0.125});
     doc->setGloss(0.4375);
     ASSERT_TRUE(doc->setMethod(Method::Vmf) || doc->setMethod(Method::VarianceToGloss));
+    doc->setMixtureLobes(2); // kept with another method, and the default is 3: the round trip must carry it
     doc->setExportSettings({"png16", "", 4, q(dir / "out"), true});
     EnvironmentSettings environment;
     environment.choice = EnvironmentChoice::File;
@@ -300,6 +343,7 @@ TEST(Project, SaveLoadRoundTripsEveryField) {
     EXPECT_EQ(json["environment"]["file"], "../sky.exr") << "relative to the project file";
     EXPECT_EQ(json["environment"]["lobe"], "phong");
     EXPECT_EQ(json["environment"]["background"], false);
+    EXPECT_EQ(json["lobes"], 2);
 
     TestWindow b;
     ASSERT_TRUE(b.window.openProject(file)) << b.messages.join("\n").toStdString();
@@ -322,6 +366,11 @@ TEST(Project, SaveLoadRoundTripsEveryField) {
     const auto parsed = parseProject(old.dump(), file);
     ASSERT_TRUE(parsed) << parsed.error();
     EXPECT_EQ(parsed->settings.environment, EnvironmentSettings{});
+    // ... and those written before the lobe count was saved with the default mixture.
+    old.erase("lobes");
+    const auto noLobes = parseProject(old.dump(), file);
+    ASSERT_TRUE(noLobes) << noLobes.error();
+    EXPECT_EQ(noLobes->settings.mixtureLobes, kDefaultMixtureLobes);
 }
 
 TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
@@ -392,6 +441,10 @@ TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
         {"wrong-type", {materialGloss("high"), "'gloss' must be a number in [0"}},
         {"newer", {withField("version", 2), "written by a newer Burnish (project version 2"}},
         {"unknown-preset", {withField("preset", "no-such-preset"), "preset 'no-such-preset' is not known"}},
+        {"lobes-zero", {withField("lobes", 0), "'lobes' must be a number in [1"}},
+        {"lobes-five", {withField("lobes", 5), "'lobes' must be a number in [1"}},
+        {"lobes-fractional", {withField("lobes", 2.5), "'lobes' must be a whole number"}},
+        {"lobes-text", {withField("lobes", "three"), "'lobes' must be a number in [1"}},
         {"missing-map",
          {[&] {
               auto j = nlohmann::json::parse(valid);

@@ -76,9 +76,9 @@ std::string inputStem(const std::string& input) {
     return fs::path(input).stem().string();
 }
 
-// The name of lobe i's file and role in the mixture presets' layout: "mixture-lobe<i>".
+// The name of lobe i's role ("mixture-lobe<i>"), and of its file in the mixture presets' layout.
 std::string mixtureLobeName(int i) {
-    return "mixture-lobe" + std::to_string(i);
+    return std::string(roleName(TextureRole(int(TextureRole::MixtureLobe0) + i)));
 }
 
 // Rewrites a preset's mixture lobe files for `lobes` lobes when they are laid out as the built-in
@@ -96,8 +96,9 @@ bool relayoutLobeFiles(Preset& preset, int lobes) {
             all = all && lobe && c.role == mixtureLobeName(int(at.size()));
         }
         if (!any) continue;
-        if (!all || preset.files[f].name != mixtureLobeName(int(at.size())) ||
-            preset.files[f].channels.size() != 4 || (!at.empty() && at.back() + 1 != f))
+        if (at.size() == size_t(kMaxMixtureLobes) || !all ||
+            preset.files[f].name != mixtureLobeName(int(at.size())) || preset.files[f].channels.size() != 4 ||
+            (!at.empty() && at.back() + 1 != f))
             return false;
         at.push_back(f);
     }

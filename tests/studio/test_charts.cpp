@@ -39,6 +39,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <map>
+#include <set>
 
 namespace burnish::studio {
 namespace {
@@ -318,6 +320,22 @@ TEST(ErrorCostChart, WorkerShowsOnePointPerMethodAndNaiveIsWorseThanLean) {
     // Storage as the cost axis: LEAN stores more per texel than the naive normal map.
     chart.setCostAxis(ErrorCostChart::CostAxis::BytesPerTexel);
     EXPECT_GT(chart.methodSeries(Method::Lean)->at(0).x(), chart.methodSeries(Method::Naive)->at(0).x());
+
+    // The mixture's point is the document's lobe count: another K is another evaluation.
+    auto mixtureLobes = [&] {
+        std::set<int> lobes;
+        for (const MipError& e : chart.report()->result.errors)
+            if (e.method == Method::Mixture) lobes.insert(e.lobes);
+        return lobes;
+    };
+    EXPECT_EQ(mixtureLobes(), std::set<int>{kDefaultMixtureLobes});
+    doc.setMixtureLobes(2);
+    chart.evaluateNow();
+    ASSERT_TRUE(updated.wait(kWorkerTimeoutMs));
+    ASSERT_NE(chart.report(), nullptr) << chart.statusText().toStdString();
+    EXPECT_EQ(mixtureLobes(), std::set<int>{2});
+    EXPECT_TRUE(chart.methodSeries(Method::Mixture)->name().startsWith("mixture (2 lobes)"))
+        << chart.methodSeries(Method::Mixture)->name().toStdString();
 }
 
 /// Loads the hammered sample at `size`² into `doc` through an 8-bit PNG written in `dir`.

@@ -201,7 +201,11 @@ bool ErrorCostChart::evaluatesByItself() const {
 }
 
 QString ErrorCostChart::evaluationKey() const {
-    return QString("%1 %2").arg(quintptr(m_doc->maps().normal.get())).arg(m_doc->power(), 0, 'g', 17);
+    // The mixture is evaluated with the document's lobe count: another K is another evaluation.
+    return QString("%1 %2 %3")
+        .arg(quintptr(m_doc->maps().normal.get()))
+        .arg(m_doc->power(), 0, 'g', 17)
+        .arg(m_doc->settings().mixtureLobes);
 }
 
 void ErrorCostChart::onDocumentChanged() {
@@ -226,6 +230,7 @@ void ErrorCostChart::evaluateNow() {
     EvaluationReportOptions options;
     options.evaluate.basePowers = {m_doc->power()};
     options.evaluate.methods = allMethods();
+    options.evaluate.mixtureLobes = {m_doc->settings().mixtureLobes};
     options.bakeRuns = kBakeRuns;
     options.inputName = m_doc->settings().normalMapPath.isEmpty()
                             ? std::string(kSampleName)
@@ -440,7 +445,12 @@ void ErrorCostChart::showMethods() {
             auto* s = new QScatterSeries;
             s->setObjectName(qs(methodName(e.method)));
             const bool current = e.method == m_doc->settings().method;
-            s->setName(qs(methodName(e.method)) + (current ? " (current)" : ""));
+            const QString name = e.method == Method::Mixture ? QString("%1 (%2 lobe%3)")
+                                                                   .arg(qs(methodName(e.method)))
+                                                                   .arg(e.lobes)
+                                                                   .arg(e.lobes == 1 ? "" : "s")
+                                                             : qs(methodName(e.method));
+            s->setName(name + (current ? " (current)" : ""));
             s->setMarkerSize(current ? 16.0 : 11.0);
             s->setColor(methodColour(e.method));
             s->setBorderColor(current ? QColor(Qt::white) : methodColour(e.method).darker(140));

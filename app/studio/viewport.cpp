@@ -2,6 +2,7 @@
 
 #include "scene_from_document.h"
 
+#include <burnish/core/eval/evaluate.h>
 #include <burnish/render/context.h>
 #include <burnish/render/gpu_resources.h>
 #include <burnish/render/mesh.h>
@@ -68,10 +69,6 @@ constexpr float kWheelStopsPerNotch = 0.25f;
 constexpr float kCoveredThreshold = 0.5f;
 // The divider's grab width in pixels.
 constexpr int kHandleWidth = 7;
-
-QString qs(std::string_view s) {
-    return QString::fromUtf8(s.data(), int(s.size()));
-}
 
 QSurfaceFormat viewportFormat() {
     QSurfaceFormat format = QSurfaceFormat::defaultFormat();
@@ -785,12 +782,10 @@ void Viewport::setError(const QString& message) {
     emit errorChanged(message);
 }
 
-// A method's name in the view's labels; the mixture's with its lobe count.
+// A method's name in the view's labels, as evaluate's reports name it: the mixture's with its K.
 QString Viewport::methodLabel(Method method) const {
-    const QString name = qs(methodName(method));
-    if (method != Method::Mixture) return name;
-    const int k = m_doc->settings().mixtureLobes;
-    return QString("%1 (%2 lobe%3)").arg(name).arg(k).arg(k == 1 ? "" : "s");
+    const int lobes = method == Method::Mixture ? m_doc->settings().mixtureLobes : 0;
+    return QString::fromStdString(variantLabel({method, FilterKernel::Box, lobes}));
 }
 
 // While a bake for the view runs on its worker, the view draws the last baked material: say so, with

@@ -445,12 +445,7 @@ void ErrorCostChart::showMethods() {
             auto* s = new QScatterSeries;
             s->setObjectName(qs(methodName(e.method)));
             const bool current = e.method == m_doc->settings().method;
-            const QString name = e.method == Method::Mixture ? QString("%1 (%2 lobe%3)")
-                                                                   .arg(qs(methodName(e.method)))
-                                                                   .arg(e.lobes)
-                                                                   .arg(e.lobes == 1 ? "" : "s")
-                                                             : qs(methodName(e.method));
-            s->setName(name + (current ? " (current)" : ""));
+            s->setName(QString::fromStdString(variantLabel(variantOf(e))) + (current ? " (current)" : ""));
             s->setMarkerSize(current ? 16.0 : 11.0);
             s->setColor(methodColour(e.method));
             s->setBorderColor(current ? QColor(Qt::white) : methodColour(e.method).darker(140));

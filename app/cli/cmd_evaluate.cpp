@@ -39,6 +39,8 @@ struct EvaluateCliOptions {
     double toksvigMapPower = 100.0;
     std::vector<int> lobes{kDefaultMixtureLobes};
     bool shadedFit = false;
+    bool energySplit = false;
+    double steepDeg = 45.0;
     std::string mixtureFiltering = "moments";
     bool json = false;
     bool force = false;
@@ -80,6 +82,8 @@ int runEvaluate(const EvaluateCliOptions& o) {
     options.evaluate.params.toksvigMapPower = o.toksvigMapPower;
     options.evaluate.mixtureLobes = o.lobes;
     options.evaluate.params.mixtureShadedFit = o.shadedFit;
+    options.evaluate.energySplit = o.energySplit;
+    options.evaluate.steepDeg = o.steepDeg;
     options.evaluate.mixtureFiltering = *parseMixtureFiltering(o.mixtureFiltering); // checked by CLI11
     if (!o.methods.empty()) {
         options.evaluate.methods.clear();
@@ -200,6 +204,15 @@ const CommandRegistration registration{
         sub->add_flag("--shaded-fit", o->shadedFit,
                       "Fit the mixture's lobes to the shaded ground truth as well as to the moments (the "
                       "bake's --shaded-fit): its rows, and its bake time, are the refined fit's.");
+        sub->add_flag(
+            "--energy-split", o->energySplit,
+            "Say where LEAN's energy goes, per power and mip: its energy ratio as the product of "
+            "three steps from the truth (one cosine for the footprint, one Gaussian's shape, the "
+            "steep normals' pull on the slope moments), beside the mixture's energy. Not with --gloss.");
+        sub->add_option("--steep-deg", o->steepDeg,
+                        "Tilt from the surface normal beyond which --energy-split counts a normal as steep "
+                        "(default 45).")
+            ->check(CLI::Range(0.001, 89.999));
         sub->add_flag("--json", o->json, "Print the report as JSON on stdout instead of Markdown.");
         sub->add_flag(
             "--force", o->force,

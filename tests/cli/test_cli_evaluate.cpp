@@ -168,3 +168,40 @@ TEST(CliEvaluate, MixtureFilteringStochasticIsRecordedAndChangesOnlyTheMixtureBe
     EXPECT_NE(bad.exitCode, 0);
     EXPECT_NE(bad.err.find("--mixture-filtering"), std::string::npos) << bad.err;
 }
+
+TEST(CliEvaluate, EnergySplitSaysWhereLeansEnergyGoes) {
+    burnish::test::TempDir dir;
+    const std::string in = writeBumpyMap(dir);
+    const std::string common =
+        "evaluate " + in + " --bake-runs 1 --power 256 --methods lean,mixture --energy-split";
+    auto r = runBurnish(common + " --steep-deg 20 --json --out " + (dir / "a").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["steep_deg"], 20.0);
+    ASSERT_EQ(j["lean_energy_split"].size(), 4u); // mips 1..4
+    for (const auto& e : j["lean_energy_split"]) {
+        for (const char* key : {"energy", "cosine", "shape", "steep", "steep_normals", "steep_truth"})
+            ASSERT_TRUE(e[key].is_number()) << e.dump();
+        const double product =
+            e["cosine"].get<double>() * e["shape"].get<double>() * e["steep"].get<double>();
+        EXPECT_NEAR(product, e["energy"].get<double>(), 1e-12) << e.dump();
+        // With σ = 0.25 slopes, about 1 normal in 4 tilts past 20°.
+        EXPECT_GT(e["steep_normals"].get<double>(), 0.1);
+        EXPECT_LT(e["steep_normals"].get<double>(), 0.5);
+    }
+    std::ifstream md(dir / "a" / "evaluate.md");
+    std::stringstream ss;
+    ss << md.rdbuf();
+    EXPECT_NE(ss.str().find("Where LEAN's energy goes"), std::string::npos);
+    EXPECT_NE(ss.str().find("| mixture-k3 energy |"), std::string::npos);
+
+    const std::string gloss = writeConstantGloss(dir, 0.5f);
+    auto withGloss = runBurnish("evaluate " + in + " --bake-runs 1 --methods lean --energy-split --gloss " +
+                                gloss + " --out " + (dir / "b").string());
+    EXPECT_NE(withGloss.exitCode, 0);
+    EXPECT_EQ(lineCount(withGloss.err), 1) << withGloss.err;
+    EXPECT_NE(withGloss.err.find("authored gloss"), std::string::npos) << withGloss.err;
+    auto badAngle = runBurnish(common + " --steep-deg 90 --out " + (dir / "c").string());
+    EXPECT_NE(badAngle.exitCode, 0);
+    EXPECT_NE(badAngle.err.find("--steep-deg"), std::string::npos) << badAngle.err;
+}

@@ -555,6 +555,10 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
         return Error{"view angle must lie in [0, 90) degrees"};
     const auto directions = evaluationDirections(options);
     if (directions.empty()) return Error{"no light direction lies above the horizon limit for these angles"};
+    if (options.energySplit && texelPowers)
+        return Error{"the energy split takes base powers, not authored gloss (each texel's own power)"};
+    if (options.energySplit && !(options.steepDeg > 0.0 && options.steepDeg < 90.0))
+        return Error{"the steep angle must lie in (0, 90) degrees"};
 
     // The pyramid only borrows the map for the duration of this call.
     const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
@@ -688,6 +692,12 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                     result.maps.push_back(errorMapOf(pass.texelAbs[m][mi], pass.texelTruth[mi], variants[m],
                                                      s, k, pyramid.level(k)));
             }
+        if (options.energySplit) {
+            auto split = leanEnergySplit(pyramid, s, firstMip, lastMip, directions, options.steepDeg,
+                                         options.params, cancelled);
+            if (cancelled()) return Error{std::string(kCancelledMessage)};
+            result.energySplits.insert(result.energySplits.end(), split.begin(), split.end());
+        }
     }
     // A flag raised during the last pass still wins: the caller asked for no result.
     if (cancelled()) return Error{std::string(kCancelledMessage)};

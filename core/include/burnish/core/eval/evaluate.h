@@ -80,6 +80,11 @@ struct EvaluateOptions {
     /// set, it replaces basePowers: the evaluation runs once, and results carry the arithmetic
     /// mean of the powers as their basePower label.
     std::optional<std::vector<double>> texelPowers;
+    /// Also say where LEAN's energy goes (LeanEnergySplit), per base power and mip, with the finest
+    /// normals tilted more than steepDeg (in (0, 90)) from the surface normal counted as steep. Not
+    /// with texelPowers.
+    bool energySplit = false;
+    double steepDeg = 45.0;
 };
 
 /// One light/view pair in tangent space.
@@ -135,8 +140,35 @@ inline EvaluatedVariant variantOf(const MipError& e) {
     return {e.method, e.kernel, e.lobes};
 }
 
+/// Where LEAN's energy goes at one base power and mip: its energy ratio Σ M / Σ GT over the texels
+/// and direction pairs, split into three steps from the ground truth to LEAN, each a ratio of sums of
+/// the same kind, whose product is the energy ratio:
+///   GT   = mean_i D_s(n_i·h)·max(0, n_i·l), the truth;
+///   GT_c = mean_i D_s(n_i·h)·max(0, n̄·l), the truth with LEAN's one cosine (n̄ its normal);
+///   G    = LEAN's slope-space Gaussian of the footprint's normals that are not steep (their mean and
+///          spread, with 1/s), shaded with n̄: LEAN as if the steep normals were not there (LEAN itself
+///          where every normal is steep);
+///   M    = LEAN.
+/// cosine = Σ GT_c / Σ GT (one cosine for the footprint), shape = Σ G / Σ GT_c (one Gaussian for the
+/// normals: its tails and peak against their own lobes, the steep normals' own light included), steep =
+/// Σ M / Σ G (the steep normals' pull on the slope moments: a few steep slopes widen the Gaussian and
+/// move its mean). A factor whose denominator is 0 is 1. steepNormals is the share of the map's finest
+/// normals that are steep; steepTruth their share of Σ GT.
+struct LeanEnergySplit {
+    double basePower = 0.0;
+    int mip = 0;
+    double energy = 1.0;
+    double cosine = 1.0;
+    double shape = 1.0;
+    double steep = 1.0;
+    double steepNormals = 0.0;
+    double steepTruth = 0.0;
+};
+
 struct EvaluationResult {
     std::vector<MipError> errors;
+    /// EvaluateOptions::energySplit: per base power and mip, in that order.
+    std::vector<LeanEnergySplit> energySplits;
     std::vector<ErrorMap> maps;
     std::vector<DirectionPair> directions;
     int firstMip = 0;
@@ -164,6 +196,14 @@ double methodValue(const TexelLobe& lobe, const DirectionPair& d);
 /// texels, equal weights. Not for the mixture (its lobes are not NormalMoments).
 TexelLobe methodLobeBetween(Method method, const std::array<NormalMoments, 4>& moments,
                             const std::array<double, 4>& powers, const MethodParams& params);
+
+/// LEAN's energy split (LeanEnergySplit) at base power s for mips firstMip..lastMip of a pyramid with
+/// box slope moments, over `directions`; normals tilted more than steepDeg are steep. Deterministic on
+/// any number of threads. `cancelled` (if set) is polled between mips: true returns what is done.
+std::vector<LeanEnergySplit> leanEnergySplit(const NormalPyramid& pyramid, double s, int firstMip,
+                                             int lastMip, const std::vector<DirectionPair>& directions,
+                                             double steepDeg, const MethodParams& params = {},
+                                             const std::function<bool()>& cancelled = {});
 
 /// Errors of every requested method, power and mip. Fails on bad options (no directions left,
 /// empty power list, non-positive power, mip range outside the map, texelPowers of the wrong size

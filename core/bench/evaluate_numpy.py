@@ -28,6 +28,10 @@
 #       a fit that merges normals can only be blurrier than its footprint's normals are.
 #   --rings: the share of the sampled truth at each half-vector angle, per power and mip (where the
 #       energy figure comes from).
+# --energy-split [--steep-deg 45]: where LEAN's energy goes (evaluate --energy-split, evaluate.h
+#   LeanEnergySplit): its energy ratio as cosine x shape x steep, from the truth, the truth with LEAN's
+#   one cosine, and the Gaussian of the normals tilted at most steep-deg weighted by their share; with
+#   --compare the largest relative difference from the C++ figures.
 # And the plain fit the lobe mixture is measured against, for any K:
 #   --methods emK / hardemK (e.g. em3,hardem3): K slope-space Gaussians fitted to each footprint's
 #       finest slopes by expectation-maximisation, each slope a Gaussian of covariance I/s (so every
@@ -288,6 +292,54 @@ def em_value(lobes, l, h):
     return np.reshape(value, lobes["shape"])
 
 
+def block_mean_stack(a, f):
+    """The aligned f x f blocks of a (H, W) as rows: (H/f * W/f, f*f), blocks row-major."""
+    h, w = a.shape
+    return a.reshape(h // f, f, w // f, f).transpose(0, 2, 1, 3).reshape(-1, f * f)
+
+
+def energy_split(n, levels, s, k, pairs, steep_deg):
+    """LeanEnergySplit for base power s at mip k (power-of-two box footprints): (energy, cosine, shape,
+    steep, steep normals' share, their share of the truth)."""
+    f = 1 << k
+    fx, fy, fz = (n[..., i].astype(np.float64) for i in range(3))
+    steep = fz < math.cos(math.radians(steep_deg))
+    lean = method_lobe("lean", levels[k], s) if k > 0 else method_lobe("lean", level0_moments(n), s)
+    # The slope moments of the normals that are not steep, per footprint (as the pyramid's slopes),
+    # rounded to float as NormalMoments holds them, then LEAN's lobe of them weighted by their share.
+    zs = np.maximum(fz, float(MIN_SLOPE_Z))
+    keep = block_mean_stack((~steep).astype(np.float64), f)
+    bx, by = block_mean_stack(fx / zs, f), block_mean_stack(fy / zs, f)
+    count = keep.sum(1)
+    safe = np.where(count > 0, count, 1.0)
+    mx, my = (keep * bx).sum(1) / safe, (keep * by).sum(1) / safe
+    c0 = np.maximum(0.0, (keep * bx * bx).sum(1) / safe - mx * mx)
+    c1 = np.maximum(0.0, (keep * by * by).sum(1) / safe - my * my)
+    c2 = (keep * bx * by).sum(1) / safe - mx * my
+    shape = lean["normal"][0].shape
+    m = {"bx": mx.astype(F32).reshape(shape), "by": my.astype(F32).reshape(shape),
+         "c0": c0.astype(F32).reshape(shape), "c1": c1.astype(F32).reshape(shape),
+         "c2": c2.astype(F32).reshape(shape)}
+    flat = method_lobe("lean", m, s)
+    flat["normal"] = lean["normal"]
+    share = (count / float(f * f)).reshape(shape)
+    sums = dict(truth=0.0, cosine=0.0, steep_truth=0.0, flat=0.0, lean=0.0)
+    nx, ny, nz = lean["normal"]
+    for l, h in pairs:
+        d = blinn_phong(fx, fy, fz, s, h)
+        dc = d * np.maximum(0.0, fx * l[0] + fy * l[1] + fz * l[2])
+        block = lambda a: block_mean_stack(a, f).mean(1).reshape(shape)
+        sums["truth"] += float(np.sum(block(dc)))
+        sums["cosine"] += float(np.sum(block(d) * np.maximum(0.0, nx * l[0] + ny * l[1] + nz * l[2])))
+        sums["steep_truth"] += float(np.sum(block(np.where(steep, dc, 0.0))))
+        sums["flat"] += float(np.sum(np.where(share > 0.0, share * method_value(flat, l, h), 0.0)))
+        sums["lean"] += float(np.sum(method_value(lean, l, h)))
+    ratio = lambda a, b: a / b if b > 0.0 else 1.0
+    return (ratio(sums["lean"], sums["truth"]), ratio(sums["cosine"], sums["truth"]),
+            ratio(sums["flat"], sums["cosine"]), ratio(sums["lean"], sums["flat"]), float(steep.mean()),
+            sums["steep_truth"] / sums["truth"] if sums["truth"] > 0.0 else 0.0)
+
+
 def evaluate(n, powers, first_mip, last_mip, methods):
     """Returns {(method, power, mip): (relative L1, energy)} and the direction count."""
     height, width = n.shape[:2]
@@ -344,7 +396,21 @@ def evaluate(n, powers, first_mip, last_mip, methods):
     return out, len(pairs), last_mip, rings
 
 
-def compare(results, path):
+def compare_split(splits, report, path):
+    ref = {(float(e["base_power"]), int(e["mip"])): e for e in report.get("lean_energy_split", [])}
+    keys = ("energy", "cosine", "shape", "steep", "steep_normals", "steep_truth")
+    worst = {key: 0.0 for key in keys}
+    for (s, k), values in splits.items():
+        if (s, k) not in ref:
+            print(f"  energy split, power {s:g} mip {k}: not in the C++ report (run it with --energy-split)")
+            continue
+        for key, v in zip(keys, values):
+            c = ref[(s, k)][key]
+            worst[key] = max(worst[key], abs(v - c) / abs(c) if c else abs(v))
+    print("energy split, max rel diff: " + ", ".join(f"{key} {w:.3e}" for key, w in worst.items()))
+
+
+def compare(results, path, splits=None):
     with open(path) as f:
         report = json.load(f)
     ref = {}
@@ -366,6 +432,8 @@ def compare(results, path):
         w[0], w[1], w[2] = max(w[0], dr), max(w[1], de), w[2] + 1
     for m, (dr, de, count) in worst.items():
         print(f"{m:<10}{dr:>20.3e}{de:>21.3e}  {count}")
+    if splits:
+        compare_split(splits, report, path)
 
 
 def main():
@@ -377,6 +445,8 @@ def main():
     ap.add_argument("--methods", default="naive,toksvig,lean,clean,vmf")
     ap.add_argument("--compare", metavar="EVALUATE_JSON")
     ap.add_argument("--rings", action="store_true", help="print the share of the sampled truth per half-vector angle")
+    ap.add_argument("--energy-split", action="store_true", help="where LEAN's energy goes (evaluate --energy-split)")
+    ap.add_argument("--steep-deg", type=float, default=45.0)
     args = ap.parse_args()
     methods = [m for m in args.methods.split(",") if m]
     for m in methods:
@@ -415,9 +485,22 @@ def main():
             for k in mips:
                 total = sum(rings[(s, k)].values())
                 print(f"{k:<10}" + "".join(f"{rings[(s, k)][t] / total:>9.3f}" for t in thetas))
+    splits = {}
+    if args.energy_split:
+        if not 0.0 < args.steep_deg < 90.0:
+            sys.exit(f"--steep-deg {args.steep_deg} is outside (0, 90)")
+        levels = pyramid(n, last_mip)
+        pairs = directions()
+        for s in args.power:
+            print(f"\nbase power {s:g}: where LEAN's energy goes (energy = cosine x shape x steep; "
+                  f"steep: tilted more than {args.steep_deg:g} deg)")
+            print(f"{'mip':<6}{'energy':>10}{'cosine':>10}{'shape':>10}{'steep':>10}{'steep n.':>10}{'steep GT':>11}")
+            for k in mips:
+                splits[(s, k)] = energy_split(n, levels, s, k, pairs, args.steep_deg)
+                print(f"{k:<6}" + "".join(f"{v:>10.4f}" for v in splits[(s, k)][:5]) + f"{splits[(s, k)][5]:>11.3e}")
     print(f"\nload: {t1 - t0:.3f} s; evaluation (pyramid, lobes, truth, errors): {t2 - t1:.3f} s")
     if args.compare:
-        compare(results, args.compare)
+        compare(results, args.compare, splits)
 
 
 if __name__ == "__main__":

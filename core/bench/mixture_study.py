@@ -3,7 +3,8 @@
 gathered into one table (Markdown on stdout, the rows as JSON with --json-out).
 
     core/bench/mixture_study.py BIN MAP... [--powers 64,256,1024] [--lobes 1,2,3,4] [--mips 1:4]
-                                [--dense] [--between [--stochastic]] [--shaded-fit] [--json-out FILE]
+                                [--dense] [--between [--stochastic]] [--shaded-fit] [--energy-split]
+                                [--json-out FILE]
 
 For every map, power and mip it reads LEAN's and each mixture-kK row's relative L1 and energy ratio
 and prints: per K the mean relative L1 over all (map, power, mip) cases next to LEAN's, the mean of
@@ -12,7 +13,9 @@ worse than LEAN has a ratio above 1), the energy range and how many cases' energ
 [0.97, 1.03], and the per-map worst ratio. `--dense` evaluates with 1° half-angle
 steps to 40° and 16 azimuths instead of the default 48 light/view pairs; `--shaded-fit` evaluates the
 mixture fitted to the shaded ground truth too (evaluate --shaded-fit); `--stochastic` filters the mixture
-after shading between texels (evaluate --mixture-filtering stochastic). Bake and shading costs come from
+after shading between texels (evaluate --mixture-filtering stochastic); `--energy-split` says where LEAN's
+energy goes (evaluate --energy-split: its energy ratio as cosine x shape x steep) beside each K's energy,
+per map, power and mip, and which step loses most how often. Bake and shading costs come from
 the first map's report. Figures only: nothing here passes or fails.
 """
 import argparse
@@ -24,7 +27,7 @@ import sys
 import tempfile
 
 
-def evaluate(binary, path, power, lobes, mips, dense, between, shaded=False, stochastic=False):
+def evaluate(binary, path, power, lobes, mips, dense, between, shaded=False, stochastic=False, split=False):
     first, last = mips
     with tempfile.TemporaryDirectory() as out:
         cmd = [binary, "evaluate", path, "--power", str(power), "--methods", "lean,mixture",
@@ -38,6 +41,8 @@ def evaluate(binary, path, power, lobes, mips, dense, between, shaded=False, sto
             cmd += ["--shaded-fit"]
         if stochastic:
             cmd += ["--mixture-filtering", "stochastic"]
+        if split:
+            cmd += ["--energy-split"]
         run = subprocess.run(cmd, capture_output=True, text=True)
         if run.returncode != 0:
             print(f"skipped {path} s={power}: {run.stderr.strip().splitlines()[-1]}", file=sys.stderr)
@@ -63,6 +68,42 @@ def summary(rows, lobes, suffix):
               f"{by_mip} | {max(ratio):.3f} | {worse} | {min(en):.3f} | {max(en):.3f} | {outside} |")
 
 
+def energy_split(rows, lobes, powers):
+    """Where LEAN's energy goes: per power a row per map and mip (LEAN's energy = cosine x shape x steep,
+    the share of steep normals, each K's energy), then how often each step is the largest loss."""
+    steps = ("cosine", "shape", "steep")
+    for s in powers:
+        rs = [r for r in rows if r["power"] == s and "split_steep" in r]
+        if not rs:
+            continue
+        print(f"\nWhere LEAN's energy goes at s = {s:g} (energy = cosine x shape x steep; steep: tilted more "
+              "than evaluate's --steep-deg, 45 deg):\n")
+        print("| map | steep normals | mip | LEAN energy | cosine | shape | steep | "
+              + " | ".join(f"k{k} energy" for k in lobes) + " |")
+        print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | " + " | ".join("---:" for _ in lobes) + " |")
+        for r in rs:
+            print(f"| {r['map']} | {100 * r['split_steep_normals']:.1f} % | {r['mip']} | {r['lean_energy']:.3f} | "
+                  + " | ".join(f"{r['split_' + k]:.3f}" for k in steps) + " | "
+                  + " | ".join(f"{r[f'k{k}_energy']:.3f}" for k in lobes) + " |")
+    rs = [r for r in rows if "split_steep" in r]
+    if not rs:
+        return
+    print("\nThe step that loses most (the smallest factor below 1), over every case:\n")
+    print("| LEAN's energy | cases | " + " | ".join(f"{k} loses most" for k in steps) + " | none below 0.97 |")
+    print("| --- | ---: | " + " | ".join("---:" for _ in steps) + " | ---: |")
+    for name, lo, hi in (("below 0.97", 0.0, 0.97), ("0.97 and above", 0.97, float("inf"))):
+        group = [r for r in rs if lo <= r["lean_energy"] < hi]
+        counts = {k: 0 for k in steps}
+        none = 0
+        for r in group:
+            worst = min(steps, key=lambda k: r["split_" + k])
+            if r["split_" + worst] < 0.97:
+                counts[worst] += 1
+            else:
+                none += 1
+        print(f"| {name} | {len(group)} | " + " | ".join(str(counts[k]) for k in steps) + f" | {none} |")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("binary")
@@ -76,6 +117,8 @@ def main():
                     help="the mixture fitted to the shaded ground truth too (evaluate --shaded-fit)")
     ap.add_argument("--stochastic", action="store_true",
                     help="between texels, the mixture filtered after shading (evaluate --mixture-filtering stochastic)")
+    ap.add_argument("--energy-split", action="store_true",
+                    help="where LEAN's energy goes, beside the mixture's (evaluate --energy-split)")
     ap.add_argument("--json-out")
     a = ap.parse_args()
     powers = [float(p) for p in a.powers.split(",")]
@@ -85,13 +128,15 @@ def main():
     rows, costs = [], None
     for path in a.maps:
         for s in powers:
-            report = evaluate(a.binary, path, s, lobes, mips, a.dense, a.between, a.shaded_fit, a.stochastic)
+            report = evaluate(a.binary, path, s, lobes, mips, a.dense, a.between, a.shaded_fit, a.stochastic,
+                              a.energy_split)
             if report is None:
                 continue
             if costs is None:
                 costs = report["costs"]
             by = {(e["variant"], e["mip"]): e for e in report["errors"] if not e.get("between_texels")}
             between = {(e["variant"], e["mip"]): e for e in report["errors"] if e.get("between_texels")}
+            split = {e["mip"]: e for e in report.get("lean_energy_split", [])}
             for mip in range(mips[0], mips[1] + 1):
                 lean = by.get(("lean", mip))
                 if lean is None:
@@ -105,6 +150,9 @@ def main():
                     if between:
                         row[f"k{k}_between"] = between[(f"mixture-k{k}", mip)]["relative_l1"]
                         row[f"k{k}_between_energy"] = between[(f"mixture-k{k}", mip)]["energy_ratio"]
+                if mip in split:
+                    for key in ("cosine", "shape", "steep", "steep_normals", "steep_truth"):
+                        row["split_" + key] = split[mip][key]
                 if between:
                     row["lean_between"] = between[("lean", mip)]["relative_l1"]
                     row["lean_between_energy"] = between[("lean", mip)]["energy_ratio"]
@@ -125,6 +173,8 @@ def main():
         worst = [max(r[f"k{k}"] / r["lean"] if r["lean"] > 0 else 1.0 for r in rs) for k in lobes]
         print(f"| {m} | {rs[0]['size']} | {statistics.mean(r['lean'] for r in rs):.4f} | "
               + " | ".join(f"{w:.3f}" for w in worst) + " |")
+    if a.energy_split:
+        energy_split(rows, lobes, powers)
     if a.between:
         print("\nBetween texels (--between-texels):\n")
         summary(rows, lobes, "_between")

@@ -111,8 +111,8 @@ TEST(EnergySplit, SteepOutliersAreWhereLeanLosesItAndTheMixtureKeepsIt) {
     EXPECT_LT(e.energy, 0.35);
     EXPECT_GT(e.cosine, 0.9); // LEAN's normal leans 6° towards the outlier
     EXPECT_LT(e.cosine, 1.1);
-    EXPECT_GT(e.shape, 0.95); // 15 flat normals as one base lobe: their light, and 1/15 more
-    EXPECT_LT(e.shape, 1.15);
+    EXPECT_GT(e.shape, 0.95); // the 15 flat normals as one base lobe of weight 15/16: their light
+    EXPECT_LT(e.shape, 1.05);
     const double mixture = energyOf(r, Method::Mixture, 256.0, 2);
     EXPECT_GT(mixture, 0.95);
     EXPECT_LT(mixture, 1.05);

@@ -76,6 +76,8 @@ std::vector<LeanEnergySplit> leanEnergySplit(const NormalPyramid& pyramid, doubl
                     }
                 const double inv = 1.0 / double(pyramid.footprintCount(k, x, y));
                 const TexelLobe lean = methodLobe(Method::Lean, pyramid.boxMoments(k, x, y), s, params);
+                // Weighted by their share: with no normal left it adds nothing.
+                const double share = count * inv;
                 TexelLobe withoutSteep = lean;
                 if (count > 0.0) {
                     NormalMoments m;
@@ -91,7 +93,7 @@ std::vector<LeanEnergySplit> leanEnergySplit(const NormalPyramid& pyramid, doubl
                     row.truth += sumDc[d] * inv;
                     row.oneCosine += sumD[d] * inv * std::max(0.0, glm::dot(normal, directions[d].l));
                     row.steepTruth += sumSteep[d] * inv;
-                    row.withoutSteep += methodValue(withoutSteep, directions[d]);
+                    if (share > 0.0) row.withoutSteep += share * methodValue(withoutSteep, directions[d]);
                     row.lean += methodValue(lean, directions[d]);
                 }
             }

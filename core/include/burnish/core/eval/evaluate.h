@@ -146,14 +146,15 @@ inline EvaluatedVariant variantOf(const MipError& e) {
 ///   GT   = mean_i D_s(n_i·h)·max(0, n_i·l), the truth;
 ///   GT_c = mean_i D_s(n_i·h)·max(0, n̄·l), the truth with LEAN's one cosine (n̄ its normal);
 ///   G    = LEAN's slope-space Gaussian of the footprint's normals that are not steep (their mean and
-///          spread, with 1/s), shaded with n̄: LEAN as if the steep normals were not there (LEAN itself
-///          where every normal is steep);
+///          spread, with 1/s), weighted by their share of the footprint and shaded with n̄: LEAN as if
+///          the steep normals neither reflected towards the sampled directions nor pulled on the
+///          moments (0 where every normal is steep);
 ///   M    = LEAN.
 /// cosine = Σ GT_c / Σ GT (one cosine for the footprint), shape = Σ G / Σ GT_c (one Gaussian for the
-/// normals: its tails and peak against their own lobes, the steep normals' own light included), steep =
-/// Σ M / Σ G (the steep normals' pull on the slope moments: a few steep slopes widen the Gaussian and
-/// move its mean). A factor whose denominator is 0 is 1. steepNormals is the share of the map's finest
-/// normals that are steep; steepTruth their share of Σ GT.
+/// normals that are not steep: its tails and peak against their own lobes; the steep normals' own light,
+/// steepTruth of the truth, counts here too), steep = Σ M / Σ G (the steep normals' pull on the slope
+/// moments: steep slopes widen the Gaussian and move its mean). A factor whose denominator is 0 is 1.
+/// steepNormals is the share of the map's finest normals that are steep; steepTruth their share of Σ GT.
 struct LeanEnergySplit {
     double basePower = 0.0;
     int mip = 0;

@@ -1,5 +1,7 @@
 // Where LEAN's energy goes (evaluate.h LeanEnergySplit): the three factors multiply to LEAN's energy
 // ratio, each names the loss it is built to name on maps made for it, and every figure stays finite.
+#include "random_normals.h"
+
 #include <burnish/core/eval/evaluate.h>
 #include <burnish/core/eval/evaluate_report.h>
 
@@ -14,14 +16,7 @@ using namespace burnish;
 
 namespace {
 
-std::vector<glm::vec3> gaussianSlopes(int count, double sigma, unsigned seed) {
-    std::mt19937 rng(seed);
-    std::normal_distribution<double> g(0.0, sigma);
-    std::vector<glm::vec3> n(static_cast<size_t>(count));
-    for (auto& v : n)
-        v = glm::vec3(glm::normalize(glm::dvec3(g(rng), g(rng), 1.0)));
-    return n;
-}
+using burnish::test::gaussianSlopes;
 
 // A flat map with one normal in every 4×4 block (its first texel) tilted by `tiltDeg` about y.
 NormalMap flatWithSteepOutliers(int size, double tiltDeg) {

@@ -1,3 +1,5 @@
+#include "random_normals.h"
+
 #include <burnish/core/eval/evaluate.h>
 
 #include <burnish/core/eval/approximations.h>
@@ -18,14 +20,7 @@ using namespace burnish;
 
 namespace {
 
-std::vector<glm::vec3> gaussianSlopes(int count, double sigma, unsigned seed) {
-    std::mt19937 rng(seed);
-    std::normal_distribution<double> g(0.0, sigma);
-    std::vector<glm::vec3> n(static_cast<size_t>(count));
-    for (auto& v : n)
-        v = glm::vec3(glm::normalize(glm::dvec3(g(rng), g(rng), 1.0)));
-    return n;
-}
+using burnish::test::gaussianSlopes;
 
 // Finest texel values are summed in a different order by the hierarchical evaluator than by the
 // direct loop: agreement to double rounding over a few thousand terms.

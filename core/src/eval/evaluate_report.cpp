@@ -190,7 +190,8 @@ std::string energySplitMarkdown(const EvaluationReport& r, double s) {
        << " % of the normals are steep, tilted more than " << formatNumber(r.options.steepDeg)
        << " deg): its energy ratio is the product of three steps from the truth. cosine: the truth with "
           "LEAN's one cosine max(0, n.l) for the footprint instead of each normal's own; shape: LEAN's "
-          "slope-space Gaussian of the normals that are not steep, weighted by their share, against that truth "
+          "slope-space Gaussian of the normals that are not steep, weighted by their share, against that "
+          "truth "
           "(one Gaussian's tails and peak against the normals' own lobes); steep: LEAN against that "
           "Gaussian (the steep normals' pull on the slope moments). A factor of 1 loses nothing.\n\n"
        << table.render() << "\n";

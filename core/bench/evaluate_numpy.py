@@ -335,8 +335,11 @@ def energy_split(n, levels, s, k, pairs, steep_deg):
         sums["flat"] += float(np.sum(np.where(share > 0.0, share * method_value(flat, l, h), 0.0)))
         sums["lean"] += float(np.sum(method_value(lean, l, h)))
     ratio = lambda a, b: a / b if b > 0.0 else 1.0
-    return (ratio(sums["lean"], sums["truth"]), ratio(sums["cosine"], sums["truth"]),
-            ratio(sums["flat"], sums["cosine"]), ratio(sums["lean"], sums["flat"]), float(steep.mean()),
+    # A step that sums to 0 is skipped (factor 1), as in the C++.
+    cosine_base = sums["cosine"] if sums["cosine"] > 0.0 else sums["truth"]
+    shape_base = sums["flat"] if sums["flat"] > 0.0 else cosine_base
+    return (ratio(sums["lean"], sums["truth"]), ratio(cosine_base, sums["truth"]),
+            ratio(shape_base, cosine_base), ratio(sums["lean"], shape_base), float(steep.mean()),
             sums["steep_truth"] / sums["truth"] if sums["truth"] > 0.0 else 0.0)
 
 

@@ -125,10 +125,19 @@ TEST(EnergySplit, ExtremesStayFiniteAndTheProductHolds) {
         expectFinite(e);
         EXPECT_NEAR(e.energy, energyOf(r, Method::Lean, e.basePower, e.mip),
                     1e-9 * std::max(e.energy, 1e-300));
-        if (e.cosine > 0.0 && e.shape > 0.0 && e.steep > 0.0) {
-            EXPECT_NEAR(e.cosine * e.shape * e.steep, e.energy, 1e-9 * e.energy);
-        }
+        EXPECT_NEAR(e.cosine * e.shape * e.steep, e.energy, 1e-9 * e.energy);
     }
+    // Every normal steep: the Gaussian without them is nothing, so that step is skipped and the steep
+    // normals take the whole loss.
+    const auto allSteep = evaluated(makeNormalMap(1, 1, {glm::normalize(glm::vec3(1.0f, 0.0f, 0.5f))}), {1.0},
+                                    0, 0, {Method::Lean});
+    ASSERT_EQ(allSteep.energySplits.size(), 1u);
+    const LeanEnergySplit& one = allSteep.energySplits.front();
+    expectFinite(one);
+    EXPECT_EQ(one.steepNormals, 1.0);
+    EXPECT_EQ(one.shape, 1.0);
+    EXPECT_GT(one.energy, 0.0);
+    EXPECT_NEAR(one.cosine * one.steep, one.energy, 1e-12 * one.energy);
     // Mip 0: one normal per footprint, so one cosine is each normal's own, up to LEAN's normal rebuilt
     // from the float slope (and, for grazing normals, from the slope clamped at n.z = kMinSlopeZ).
     const auto plain = evaluated(makeNormalMap(8, 8, gaussianSlopes(64, 0.3, 4)), {64.0}, 0, 0);

@@ -104,10 +104,15 @@ std::vector<LeanEnergySplit> leanEnergySplit(const NormalPyramid& pyramid, doubl
         LeanEnergySplit e;
         e.basePower = s;
         e.mip = k;
+        // A step whose result sums to 0 (one cosine facing away from every light, every normal steep)
+        // is skipped: its factor is 1 and the next step starts from the one before, so the product is
+        // the energy ratio whatever is 0.
+        const double cosineBase = total.oneCosine > 0.0 ? total.oneCosine : total.truth;
+        const double shapeBase = total.withoutSteep > 0.0 ? total.withoutSteep : cosineBase;
         e.energy = ratioOr1(total.lean, total.truth);
-        e.cosine = ratioOr1(total.oneCosine, total.truth);
-        e.shape = ratioOr1(total.withoutSteep, total.oneCosine);
-        e.steep = ratioOr1(total.lean, total.withoutSteep);
+        e.cosine = ratioOr1(cosineBase, total.truth);
+        e.shape = ratioOr1(shapeBase, cosineBase);
+        e.steep = ratioOr1(total.lean, shapeBase);
         e.steepNormals = map.normals.empty() ? 0.0 : double(steepCount) / double(map.normals.size());
         e.steepTruth = total.truth > 0.0 ? total.steepTruth / total.truth : 0.0;
         out.push_back(e);

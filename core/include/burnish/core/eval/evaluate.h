@@ -153,7 +153,9 @@ inline EvaluatedVariant variantOf(const MipError& e) {
 /// cosine = Σ GT_c / Σ GT (one cosine for the footprint), shape = Σ G / Σ GT_c (one Gaussian for the
 /// normals that are not steep: its tails and peak against their own lobes; the steep normals' own light,
 /// steepTruth of the truth, counts here too), steep = Σ M / Σ G (the steep normals' pull on the slope
-/// moments: steep slopes widen the Gaussian and move its mean). A factor whose denominator is 0 is 1.
+/// moments: steep slopes widen the Gaussian and move its mean). A step whose sum is 0 (GT_c: n̄ faces
+/// away from every light; G: every normal steep) is skipped, its factor 1, so that the product is the
+/// energy ratio in every case (every factor 1 where Σ GT = 0, as the energy).
 /// steepNormals is the share of the map's finest normals that are steep; steepTruth their share of Σ GT.
 struct LeanEnergySplit {
     double basePower = 0.0;

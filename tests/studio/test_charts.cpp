@@ -33,6 +33,7 @@
 #include <QScatterSeries>
 #include <QSet>
 #include <QSignalSpy>
+#include <QTableWidget>
 #include <QTest>
 #include <QThread>
 
@@ -317,6 +318,33 @@ TEST(ErrorCostChart, WorkerShowsOnePointPerMethodAndNaiveIsWorseThanLean) {
             EXPECT_GT(points[Method::Naive].y(), points[Method::Lean].y()) << "mip " << mip;
         }
     }
+    // The Energy kept tab: evaluate's energy split of LEAN per mip, beside the mixture's energy.
+    {
+        const EvaluationResult& result = chart.report()->result;
+        QTableWidget* energy = chart.energyTable();
+        ASSERT_EQ(result.energySplits.size(), size_t(result.lastMip - result.firstMip + 1));
+        ASSERT_EQ(energy->rowCount(), int(result.energySplits.size()));
+        EXPECT_EQ(energy->horizontalHeaderItem(5)->text(), "mixture-k3 keeps");
+        auto energyOf = [&](Method method, int mip) {
+            for (const MipError& e : result.errors)
+                if (e.method == method && e.mip == mip && e.kernel == FilterKernel::Box && !e.betweenTexels)
+                    return e.energyRatio;
+            return -1.0;
+        };
+        for (int r = 0; r < energy->rowCount(); ++r) {
+            const LeanEnergySplit& e = result.energySplits[size_t(r)];
+            EXPECT_EQ(energy->item(r, 0)->text().toInt(), e.mip);
+            EXPECT_NEAR(e.energy, energyOf(Method::Lean, e.mip), 1e-12 * e.energy)
+                << "LEAN's row, mip " << e.mip;
+            EXPECT_NEAR(e.cosine * e.shape * e.steep, e.energy, 1e-12 * e.energy);
+            const double shown[] = {e.energy, e.cosine, e.shape, e.steep, energyOf(Method::Mixture, e.mip)};
+            for (int c = 1; c <= 5; ++c) {
+                ASSERT_NE(energy->item(r, c), nullptr) << "row " << r << ", column " << c;
+                EXPECT_EQ(energy->item(r, c)->text(), QString::number(shown[c - 1], 'f', 3));
+            }
+        }
+    }
+
     // Storage as the cost axis: LEAN stores more per texel than the naive normal map.
     chart.setCostAxis(ErrorCostChart::CostAxis::BytesPerTexel);
     EXPECT_GT(chart.methodSeries(Method::Lean)->at(0).x(), chart.methodSeries(Method::Naive)->at(0).x());
@@ -336,6 +364,7 @@ TEST(ErrorCostChart, WorkerShowsOnePointPerMethodAndNaiveIsWorseThanLean) {
     EXPECT_EQ(mixtureLobes(), std::set<int>{2});
     EXPECT_TRUE(chart.methodSeries(Method::Mixture)->name().startsWith("mixture-k2"))
         << chart.methodSeries(Method::Mixture)->name().toStdString();
+    EXPECT_EQ(chart.energyTable()->horizontalHeaderItem(5)->text(), "mixture-k2 keeps");
 }
 
 /// Loads the hammered sample at `size`² into `doc` through an 8-bit PNG written in `dir`.

@@ -6,6 +6,7 @@
 #include <QComboBox>
 #include <QCoreApplication>
 #include <QHBoxLayout>
+#include <QHeaderView>
 #include <QLabel>
 #include <QLogValueAxis>
 #include <QPointer>
@@ -13,6 +14,7 @@
 #include <QPushButton>
 #include <QScatterSeries>
 #include <QSpinBox>
+#include <QTableWidget>
 #include <QThread>
 #include <QTimer>
 #include <QVBoxLayout>
@@ -116,6 +118,36 @@ ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
     methodsLayout->addWidget(m_status);
     addTab(methods, "Methods vs ground truth");
 
+    // Where the energy goes: evaluate's energy split of LEAN beside the mixture, per mip.
+    auto* energy = new QWidget(this);
+    m_energyStatus = new QLabel(energy);
+    m_energyStatus->setWordWrap(true);
+    m_energyTable = new QTableWidget(0, 6, energy);
+    m_energyTable->setObjectName("energyTable");
+    m_energyTable->setHorizontalHeaderLabels(
+        {"mip", "LEAN keeps", "one cosine", "one Gaussian", "steep normals", "mixture keeps"});
+    const QStringList tips{
+        "The mip level: its texels' footprints are 2^mip × 2^mip finest texels.",
+        "The share of the truth's highlight energy (at the evaluation's 48 light/view pairs) LEAN keeps: "
+        "the product of the next three columns.",
+        "The truth with LEAN's one cosine max(0, n̄·l) for the footprint instead of each normal's own.",
+        "One slope-space Gaussian for the footprint's normals that are not steep, against the normals' own "
+        "lobes: its tails and its peak (below 1: clusters of normals smeared into one broad lobe).",
+        "LEAN against that Gaussian: the steep normals' pull on the slope moments (their slopes widen the "
+        "Gaussian and move its mean; their own light rarely reaches the sampled directions).",
+        "The share the lobe mixture keeps, at the document's lobe count."};
+    for (int c = 0; c < tips.size(); ++c)
+        m_energyTable->horizontalHeaderItem(c)->setToolTip(tips[c]);
+    m_energyTable->verticalHeader()->hide();
+    m_energyTable->setEditTriggers(QAbstractItemView::NoEditTriggers);
+    m_energyTable->setSelectionMode(QAbstractItemView::NoSelection);
+    m_energyTable->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
+    m_energyTable->setMinimumHeight(140);
+    auto* energyLayout = new QVBoxLayout(energy);
+    energyLayout->addWidget(m_energyStatus);
+    energyLayout->addWidget(m_energyTable, 1);
+    addTab(energy, "Energy kept");
+
     auto* approx = new QWidget(this);
     m_approxView = new QChartView(approx);
     m_approxView->setRenderHint(QPainter::Antialiasing);
@@ -175,8 +207,8 @@ ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
     connect(QCoreApplication::instance(), &QCoreApplication::aboutToQuit, this,
             &ErrorCostChart::cancelAndJoinWorkers);
     connect(m_measureButton, &QPushButton::clicked, this, &ErrorCostChart::measureApproximationsNow);
-    connect(this, &QTabWidget::currentChanged, this, [this](int tab) {
-        if (tab == 1 && !m_approximations && !m_measuring) measureApproximationsNow();
+    connect(this, &QTabWidget::currentChanged, this, [this, approx](int tab) {
+        if (widget(tab) == approx && !m_approximations && !m_measuring) measureApproximationsNow();
     });
     showMethods();
     showApproximations();
@@ -231,6 +263,7 @@ void ErrorCostChart::evaluateNow() {
     options.evaluate.basePowers = {m_doc->power()};
     options.evaluate.methods = allMethods();
     options.evaluate.mixtureLobes = {m_doc->settings().mixtureLobes};
+    options.evaluate.energySplit = true; // the "Energy kept" tab
     options.bakeRuns = kBakeRuns;
     options.inputName = m_doc->settings().normalMapPath.isEmpty()
                             ? std::string(kSampleName)
@@ -480,6 +513,53 @@ void ErrorCostChart::showMethods() {
     attachAxes(chart, decadeAxis(ns ? "ns per lobe evaluation" : "bytes per texel", xLo, xHi),
                decadeAxis("relative L1 error", yLo, yHi));
     setChart(m_methodsView, chart);
+    showEnergy();
+}
+
+void ErrorCostChart::showEnergy() {
+    m_energyTable->setRowCount(0);
+    const std::vector<LeanEnergySplit> none;
+    const auto& rows = m_report ? m_report->result.energySplits : none;
+    if (rows.empty()) {
+        m_energyStatus->setText(
+            m_evaluating ? "evaluating…" : "Shows with the methods' evaluation (Methods vs ground truth).");
+        return;
+    }
+    const int lobes = m_report->options.mixtureLobes.empty() ? kDefaultMixtureLobes
+                                                             : m_report->options.mixtureLobes.front();
+    m_energyTable->horizontalHeaderItem(5)->setText(
+        QString::fromStdString(variantLabel({Method::Mixture, FilterKernel::Box, lobes}) + " keeps"));
+    m_energyStatus->setText(
+        QString(
+            "How much of the ground truth's highlight energy each method keeps at the evaluated light/view "
+            "pairs, base power %1 (1 keeps all of it; a cell more than 3 % away is marked). LEAN's share is "
+            "the product of three steps from the truth: one cosine for the footprint, one Gaussian for its "
+            "normals, and the steep normals' pull on that Gaussian (%2 % of this map's normals tilt more "
+            "than %3°). Hover a column's title for more.")
+            .arg(rows.front().basePower, 0, 'g', 4)
+            .arg(100.0 * rows.front().steepNormals, 0, 'f', 1)
+            .arg(m_report->options.steepDeg, 0, 'g', 3));
+    auto cell = [](double v) {
+        auto* item = new QTableWidgetItem(QString::number(v, 'f', 3));
+        item->setTextAlignment(Qt::AlignRight | Qt::AlignVCenter);
+        if (!(v >= 0.97 && v <= 1.03)) item->setBackground(QColor(120, 60, 30));
+        return item;
+    };
+    for (const LeanEnergySplit& e : rows) {
+        const int r = m_energyTable->rowCount();
+        m_energyTable->insertRow(r);
+        auto* mip = new QTableWidgetItem(QString::number(e.mip));
+        mip->setTextAlignment(Qt::AlignCenter);
+        m_energyTable->setItem(r, 0, mip);
+        m_energyTable->setItem(r, 1, cell(e.energy));
+        m_energyTable->setItem(r, 2, cell(e.cosine));
+        m_energyTable->setItem(r, 3, cell(e.shape));
+        m_energyTable->setItem(r, 4, cell(e.steep));
+        for (const MipError& x : m_report->result.errors)
+            if (x.method == Method::Mixture && x.lobes == lobes && !x.betweenTexels && x.mip == e.mip &&
+                x.basePower == e.basePower)
+                m_energyTable->setItem(r, 5, cell(x.energyRatio));
+    }
 }
 
 void ErrorCostChart::showApproximations() {

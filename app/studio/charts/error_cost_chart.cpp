@@ -128,7 +128,7 @@ ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
         {"mip", "LEAN keeps", "one cosine", "one Gaussian", "steep normals", "mixture keeps"});
     const QStringList tips{
         "The mip level: its texels' footprints are 2^mip × 2^mip finest texels.",
-        "The share of the truth's highlight energy (at the evaluation's 48 light/view pairs) LEAN keeps: "
+        "The share of the truth's highlight energy (at the evaluation's light/view pairs) LEAN keeps: "
         "the product of the next three columns.",
         "The truth with LEAN's one cosine max(0, n̄·l) for the footprint instead of each normal's own.",
         "One slope-space Gaussian for the footprint's normals that are not steep, against the normals' own "

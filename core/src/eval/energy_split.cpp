@@ -150,8 +150,8 @@ std::vector<LeanEnergySplit> leanEnergySplit(const NormalPyramid& pyramid, doubl
                                                 float(std::max(0.0, m[4] / count - my * my)),
                                                 float(m[5] / count - mx * my)};
                             withoutSteep = methodLobe(Method::Lean, moments, s, params);
-                            withoutSteep.normal =
-                                lean.normal; // LEAN's cosine: this step changes the NDF alone
+                            // LEAN's cosine: this step changes the NDF alone.
+                            withoutSteep.normal = lean.normal;
                         }
                         const glm::dvec3 normal(lean.normal);
                         for (size_t d = 0; d < nd; ++d) {

@@ -159,6 +159,8 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
     return report;
 }
 
+namespace {
+
 // Where LEAN's energy goes at base power s (EvaluateOptions::energySplit), beside each evaluated
 // mixture's energy at the same mip; empty without a split.
 std::string energySplitMarkdown(const EvaluationReport& r, double s) {
@@ -191,12 +193,13 @@ std::string energySplitMarkdown(const EvaluationReport& r, double s) {
        << " deg): its energy ratio is the product of three steps from the truth. cosine: the truth with "
           "LEAN's one cosine max(0, n.l) for the footprint instead of each normal's own; shape: LEAN's "
           "slope-space Gaussian of the normals that are not steep, weighted by their share, against that "
-          "truth "
-          "(one Gaussian's tails and peak against the normals' own lobes); steep: LEAN against that "
+          "truth (one Gaussian's tails and peak against the normals' own lobes); steep: LEAN against that "
           "Gaussian (the steep normals' pull on the slope moments). A factor of 1 loses nothing.\n\n"
        << table.render() << "\n";
     return md.str();
 }
+
+} // namespace
 
 std::string evaluationMarkdown(const EvaluationReport& r) {
     std::ostringstream md;

@@ -202,7 +202,8 @@ TexelLobe methodLobeBetween(Method method, const std::array<NormalMoments, 4>& m
 
 /// LEAN's energy split (LeanEnergySplit) at base power s for mips firstMip..lastMip of a pyramid with
 /// box slope moments, over `directions`; normals tilted more than steepDeg are steep. Deterministic on
-/// any number of threads. `cancelled` (if set) is polled between mips: true returns what is done.
+/// any number of threads. `cancelled` (if set) is polled between batches of bands: true returns an empty
+/// list.
 std::vector<LeanEnergySplit> leanEnergySplit(const NormalPyramid& pyramid, double s, int firstMip,
                                              int lastMip, const std::vector<DirectionPair>& directions,
                                              double steepDeg, const MethodParams& params = {},

@@ -2,6 +2,8 @@
 // Gaussian of the footprint's normals that are not steep, and LEAN, summed over texels and direction
 // pairs per mip.
 #include <burnish/core/eval/evaluate.h>
+
+#include "band_batches.h"
 #include <burnish/core/shading/ndf.h>
 #include <burnish/core/util/numeric.h>
 
@@ -59,7 +61,7 @@ std::vector<LeanEnergySplit> leanEnergySplit(const NormalPyramid& pyramid, doubl
     // level above sums its children's (the pyramid nests), as evaluate's truth does.
     const int bands = pyramid.level(lastMip).height;
     std::vector<std::vector<SplitSums>> bandSums(size_t(bands), std::vector<SplitSums>(mips, SplitSums{}));
-    const int batches = std::min(bands, 32);
+    const int batches = bandBatches(bands);
     for (int b = 0; b < batches; ++b) {
         if (cancelled && cancelled()) return out;
         const int from = int(int64_t(bands) * b / batches), to = int(int64_t(bands) * (b + 1) / batches);

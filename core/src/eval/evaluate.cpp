@@ -1,5 +1,6 @@
 #include <burnish/core/eval/evaluate.h>
 
+#include "band_batches.h"
 #include "lobe_values.h"
 
 #include <burnish/core/eval/mixture_refine.h>
@@ -598,7 +599,7 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
     // Work is done a band at a time (evaluateBand), in batches so that progress and the cancel flag
     // are seen on this thread between them.
     const int bands = pyramid.level(lastMip).height;
-    const int batches = std::min(bands, 32);
+    const int batches = bandBatches(bands);
     const double totalSteps = double(basePowers.size()) * double(bands);
     double stepsDone = 0.0;
     for (double s : basePowers) {

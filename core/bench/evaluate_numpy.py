@@ -262,6 +262,14 @@ def em_fit(slopes, k, v, hard):
     return w / n, mean, cov
 
 
+def footprint_rows(a, f):
+    """The aligned f x f footprints of a (H, W) or (H, W, C) array as rows, footprints row-major:
+    (H/f * W/f, f*f) or (H/f * W/f, f*f, C)."""
+    h, w = a.shape[:2]
+    rest = a.shape[2:]
+    return a.reshape((h // f, f, w // f, f) + rest).swapaxes(1, 2).reshape((-1, f * f) + rest)
+
+
 def em_lobes(method, n, k_mip, s):
     """The EM reference's lobes for mip k_mip (method emK or hardemK)."""
     hard = method.startswith("hard")
@@ -270,7 +278,7 @@ def em_lobes(method, n, k_mip, s):
     f = 1 << k_mip
     z = np.maximum(n[..., 2], F32(0.01))
     b = np.stack([n[..., 0] / z, n[..., 1] / z], -1).astype(np.float64)
-    slopes = b.reshape(height // f, f, width // f, f, 2).transpose(0, 2, 1, 3, 4).reshape(-1, f * f, 2)
+    slopes = footprint_rows(b, f)
     w, mean, cov = em_fit(slopes, k, 1.0 / s, hard)
     lobes = []
     for i in range(w.shape[1]):
@@ -292,24 +300,18 @@ def em_value(lobes, l, h):
     return np.reshape(value, lobes["shape"])
 
 
-def block_mean_stack(a, f):
-    """The aligned f x f blocks of a (H, W) as rows: (H/f * W/f, f*f), blocks row-major."""
-    h, w = a.shape
-    return a.reshape(h // f, f, w // f, f).transpose(0, 2, 1, 3).reshape(-1, f * f)
-
-
 def energy_split(n, levels, s, k, pairs, steep_deg):
     """LeanEnergySplit for base power s at mip k (power-of-two box footprints): (energy, cosine, shape,
     steep, steep normals' share, their share of the truth)."""
     f = 1 << k
     fx, fy, fz = (n[..., i].astype(np.float64) for i in range(3))
     steep = fz < math.cos(math.radians(steep_deg))
-    lean = method_lobe("lean", levels[k], s) if k > 0 else method_lobe("lean", level0_moments(n), s)
+    lean = method_lobe("lean", levels[k], s)   # levels[0]: evaluate's level0_moments
     # The slope moments of the normals that are not steep, per footprint (as the pyramid's slopes),
     # rounded to float as NormalMoments holds them, then LEAN's lobe of them weighted by their share.
     zs = np.maximum(fz, float(MIN_SLOPE_Z))
-    keep = block_mean_stack((~steep).astype(np.float64), f)
-    bx, by = block_mean_stack(fx / zs, f), block_mean_stack(fy / zs, f)
+    keep = footprint_rows((~steep).astype(np.float64), f)
+    bx, by = footprint_rows(fx / zs, f), footprint_rows(fy / zs, f)
     count = keep.sum(1)
     safe = np.where(count > 0, count, 1.0)
     mx, my = (keep * bx).sum(1) / safe, (keep * by).sum(1) / safe
@@ -328,7 +330,7 @@ def energy_split(n, levels, s, k, pairs, steep_deg):
     for l, h in pairs:
         d = blinn_phong(fx, fy, fz, s, h)
         dc = d * np.maximum(0.0, fx * l[0] + fy * l[1] + fz * l[2])
-        block = lambda a: block_mean_stack(a, f).mean(1).reshape(shape)
+        block = lambda a: footprint_rows(a, f).mean(1).reshape(shape)
         sums["truth"] += float(np.sum(block(dc)))
         sums["cosine"] += float(np.sum(block(d) * np.maximum(0.0, nx * l[0] + ny * l[1] + nz * l[2])))
         sums["steep_truth"] += float(np.sum(block(np.where(steep, dc, 0.0))))
@@ -396,7 +398,7 @@ def evaluate(n, powers, first_mip, last_mip, methods):
                 a[2] += float(np.sum(truth[k]))
         for (m, k), (err, msum, tsum) in acc.items():
             out[(m, s, k)] = (err / tsum, msum / tsum) if tsum > 0.0 else (0.0, 1.0)
-    return out, len(pairs), last_mip, rings
+    return out, len(pairs), last_mip, rings, levels
 
 
 def compare_split(splits, report, path):
@@ -469,7 +471,7 @@ def main():
     t0 = time.perf_counter()
     n = load_normals(args.map)
     t1 = time.perf_counter()
-    results, ndirs, last_mip, rings = evaluate(n, args.power, args.first_mip, args.last_mip, methods)
+    results, ndirs, last_mip, rings, levels = evaluate(n, args.power, args.first_mip, args.last_mip, methods)
     t2 = time.perf_counter()
 
     print(f"{args.map}: {n.shape[1]}x{n.shape[0]}, {ndirs} direction pairs, mips {args.first_mip}..{last_mip}")
@@ -492,7 +494,6 @@ def main():
     if args.energy_split:
         if not 0.0 < args.steep_deg < 90.0:
             sys.exit(f"--steep-deg {args.steep_deg} is outside (0, 90)")
-        levels = pyramid(n, last_mip)
         pairs = directions()
         for s in args.power:
             print(f"\nbase power {s:g}: where LEAN's energy goes (energy = cosine x shape x steep; "

@@ -518,13 +518,16 @@ void ErrorCostChart::showMethods() {
 
 void ErrorCostChart::showEnergy() {
     m_energyTable->setRowCount(0);
-    const std::vector<LeanEnergySplit> none;
-    const auto& rows = m_report ? m_report->result.energySplits : none;
-    if (rows.empty()) {
+    if (!m_report || m_report->result.energySplits.empty()) {
         m_energyStatus->setText(
-            m_evaluating ? "evaluating…" : "Shows with the methods' evaluation (Methods vs ground truth).");
+            m_evaluating ? "evaluating…"
+                         : QString("Shows with the methods' evaluation, which starts by itself for maps up "
+                                   "to %1×%1 texels; "
+                                   "a larger map waits for Evaluate now on Methods vs ground truth.")
+                               .arg(std::lround(std::sqrt(double(kAutoEvaluateTexels)))));
         return;
     }
+    const std::vector<LeanEnergySplit>& rows = m_report->result.energySplits;
     const int lobes = m_report->options.mixtureLobes.empty() ? kDefaultMixtureLobes
                                                              : m_report->options.mixtureLobes.front();
     m_energyTable->horizontalHeaderItem(5)->setText(

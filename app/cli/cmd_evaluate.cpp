@@ -4,6 +4,7 @@
 #include "common.h"
 
 #include <burnish/core/bake/bake.h>
+#include <burnish/core/bake/presets.h>
 #include <burnish/core/eval/evaluate_report.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/prefilter/gloss.h>
@@ -42,6 +43,9 @@ struct EvaluateCliOptions {
     bool energySplit = false;
     double steepDeg = 45.0;
     std::string mixtureFiltering = "moments";
+    std::string brdf;
+    std::string preset;
+    bool floor = false;
     bool json = false;
     bool force = false;
     NormalMapCliOptions normalMap;
@@ -85,6 +89,15 @@ int runEvaluate(const EvaluateCliOptions& o) {
     options.evaluate.energySplit = o.energySplit;
     options.evaluate.steepDeg = o.steepDeg;
     options.evaluate.mixtureFiltering = *parseMixtureFiltering(o.mixtureFiltering); // checked by CLI11
+    // The BRDF: --brdf, else the --preset's engine's (GGX for the roughness presets), else Blinn-Phong.
+    if (!o.preset.empty()) {
+        const auto preset = findPreset(o.preset);
+        if (!preset) return fail("--preset: " + preset.error());
+        options.evaluate.brdf = glossBrdf(preset->encoding);
+    }
+    if (!o.brdf.empty()) options.evaluate.brdf = *brdfFromName(o.brdf); // checked by CLI11
+    options.evaluate.floor = o.floor;
+    options.evaluate.methods = methodsUnder(options.evaluate.brdf);
     if (!o.methods.empty()) {
         options.evaluate.methods.clear();
         for (const auto& name : o.methods) {
@@ -160,7 +173,8 @@ const CommandRegistration registration{
             ->check(CLI::Range(1, 360));
         sub->add_option("--methods", o->methods,
                         "Methods to evaluate, comma separated (default all: naive, toksvig, toksvig-map, "
-                        "variance-to-gloss, lean, clean, vmf, mixture).")
+                        "variance-to-gloss, lean, clean, vmf, mixture, fitted; under --brdf ggx all but "
+                        "the slope-space lean, clean and mixture).")
             ->delimiter(',')
             ->type_name("LIST");
         sub->add_option("--kernels", o->kernels,
@@ -213,6 +227,21 @@ const CommandRegistration registration{
                         "Tilt from the surface normal beyond which --energy-split counts a normal as steep "
                         "(default 45).")
             ->check(CLI::Range(0.001, 89.999));
+        sub->add_option("--brdf", o->brdf,
+                        "BRDF of the ground truth and of every lobe: blinn-phong (the reference texts' "
+                        "normalized Blinn-Phong NDF times n.l) or ggx (GGX D, height-correlated Smith "
+                        "visibility and n.l, as glTF engines shade; alpha^2 = 2/(s+2)). Default: the "
+                        "--preset's engine's (ggx for gltf, unreal, unity, godot, filament), else "
+                        "blinn-phong.")
+            ->check(CLI::IsMember({"blinn-phong", "ggx"}))
+            ->type_name("NAME");
+        sub->add_option("--preset", o->preset,
+                        "Engine preset (name or JSON file) whose BRDF the evaluation uses when --brdf is not "
+                        "given.")
+            ->type_name("NAME");
+        sub->add_flag("--floor", o->floor,
+                      "Also evaluate the one-lobe floor: per texel the best single isotropic roughness by a "
+                      "brute-force search (slow), as a row 'one-lobe floor' beside the fitted lobe.");
         sub->add_flag("--json", o->json, "Print the report as JSON on stdout instead of Markdown.");
         sub->add_flag(
             "--force", o->force,

@@ -314,9 +314,12 @@ void PaintTool::rebuildLive() {
                     .arg(s.gloss, 0, 'g', 17)
                     .arg(s.preset, qs(methodName(s.method)));
     BakeOptions options;
-    // LEAN and CLEAN store no gloss texture: the live view shows variance-to-gloss for them, which
-    // is also what the over-shine measure compares with.
-    options.method = hasTexture(s.method, TextureRole::Gloss) ? s.method : Method::VarianceToGloss;
+    // LEAN and CLEAN store no gloss texture, and the fitted lobe's gloss needs the footprint's shading
+    // (not the moments the live bake keeps per texel): the live view shows variance-to-gloss for them,
+    // which is also what the over-shine measure compares with. The 3D view draws the method itself.
+    options.method = hasTexture(s.method, TextureRole::Gloss) && s.method != Method::Fitted
+                         ? s.method
+                         : Method::VarianceToGloss;
     options.encoding = m_doc->preset().encoding;
     options.basePower = m_doc->power();
     options.authoredGloss = currentAuthored();

@@ -32,6 +32,14 @@
 #   LeanEnergySplit): its energy ratio as cosine x shape x steep, from the truth, the truth with LEAN's
 #   one cosine, and the Gaussian of the normals tilted at most steep-deg weighted by their share; with
 #   --compare the largest relative difference from the C++ figures.
+# --brdf ggx: the GGX truth of evaluate --brdf ggx (evaluate.h EvaluateOptions::brdf): each finest normal
+#   shaded by ggx_specular.h's term, D_GGX(n.h) V_SmithGGXCorrelated(n.l, n.v)/4 max(0, n.l) with
+#   alpha^2 = 2/(s+2) clamped to [kMinRoughness, 1] and n.v clamped to [1e-6, 1], against each isotropic
+#   method's one GGX lobe about its mean normal with the alpha of its power (naive, toksvig, vmf; lean and
+#   clean have no GGX form). With --methods floor: the one-lobe floor by an independent dense search
+#   (FLOOR_GRID alphas evenly in log alpha over [1e-3, 1] per texel, no refinement), which the C++
+#   fitted lobe and its --floor row are compared with (their rows must lie at or below it, to the grid's
+#   spacing).
 # And the plain fit the lobe mixture is measured against, for any K:
 #   --methods emK / hardemK (e.g. em3,hardem3): K slope-space Gaussians fitted to each footprint's
 #       finest slopes by expectation-maximisation, each slope a Gaussian of covariance I/s (so every
@@ -57,6 +65,10 @@ HORIZON_DEG = 3.0
 MAX_POWER = 1e9          # numeric.h kMaxPower
 MIN_BASE_POWER = 1e-6    # methods.h kMinBasePower
 MIN_SLOPE_Z = float(np.float32(0.01))  # normal_pyramid.h kMinSlopeZ (a float)
+MIN_COSINE = 1e-6        # numeric.h kMinCosine
+MIN_ROUGHNESS = math.sqrt(2.0 / (MAX_POWER + 2.0))  # numeric.h kMinRoughness
+FLOOR_GRID = 241
+BRDF = "blinn-phong"     # --brdf
 F32 = np.float32
 
 
@@ -88,6 +100,33 @@ def load_normals(path):
     inv = 1.0 / np.where(ok, length, 1.0)
     n = np.stack([np.where(ok, x * inv, 0.0), np.where(ok, y * inv, 0.0), np.where(ok, z * inv, 1.0)], -1)
     return n.astype(F32)
+
+
+def view():
+    tv = math.radians(VIEW_ANGLE_DEG)
+    return (math.sin(tv), 0.0, math.cos(tv))
+
+
+def ggx_alpha(power):
+    """ndf.h ggxAlphaFromPower, clamped as ggx_specular.h ggxSpecularAlpha."""
+    return np.clip(np.sqrt(2.0 / (np.clip(power, 0.0, MAX_POWER) + 2.0)), MIN_ROUGHNESS, 1.0)
+
+
+def ggx_term(nx, ny, nz, alpha, l, h):
+    """ggx_specular.h ggxSpecularTerm(n.h, n.l, n.v, alpha), alpha already clamped."""
+    v = view()
+    noh = nx * h[0] + ny * h[1] + nz * h[2]
+    nol = nx * l[0] + ny * l[1] + nz * l[2]
+    nov = nx * v[0] + ny * v[1] + nz * v[2]
+    a2 = alpha * alpha
+    c = np.where(noh > 0.0, np.minimum(noh, 1.0), 0.0)
+    d = (1.0 - c) * (1.0 + c) + c * c * a2
+    dd = a2 / (math.pi * d * d)
+    lc = np.where(nol > MIN_COSINE, np.minimum(nol, 1.0), MIN_COSINE)
+    vc = np.where(nov > MIN_COSINE, np.minimum(nov, 1.0), MIN_COSINE)
+    gv = lc * np.sqrt(vc * vc * (1.0 - a2) + a2)
+    gl = vc * np.sqrt(lc * lc * (1.0 - a2) + a2)
+    return np.where((noh > 0.0) & (nol > 0.0), dd * (0.5 / (gv + gl)) * lc, 0.0)
 
 
 def directions():
@@ -211,8 +250,10 @@ def blinn_phong(nx, ny, nz, power, h):
 
 
 def method_value(lobe, l, h):
-    """evaluate.cpp methodValue: the lobe's NDF times max(0, nbar.l)."""
+    """evaluate.cpp methodValue: the lobe's NDF times max(0, nbar.l) (under --brdf ggx: ggx_term)."""
     nx, ny, nz = lobe["normal"]
+    if BRDF == "ggx":
+        return ggx_term(nx, ny, nz, ggx_alpha(lobe["power"]), l, h)
     if "power" in lobe:
         d = blinn_phong(nx, ny, nz, lobe["power"], h)
     elif h[2] > 0.0:   # methods.cpp slopeGaussianNdf
@@ -363,12 +404,19 @@ def evaluate(n, powers, first_mip, last_mip, methods):
     em = [m for m in methods if m.startswith("em") or m.startswith("hardem")]
     for s in powers:
         lobes = {(m, k): method_lobe(m, levels[k], s)
-                 for m in methods if m not in blurred and m not in em for k in mips}
+                 for m in methods if m not in blurred and m not in em and m != "floor" for k in mips}
+        # The floor's candidates: per texel and candidate alpha, sum over pairs of |lobe - truth|.
+        floor_alphas = np.exp(np.linspace(math.log(1e-3), 0.0, FLOOR_GRID))
+        floor_err = {k: np.zeros((FLOOR_GRID,) + levels[k]["mx"].shape) for k in mips} if "floor" in methods else {}
+        floor_truth = {k: [] for k in floor_err}
         em_fits = {(m, k): em_lobes(m, n, k, s) for m in em for k in mips}
         acc = {(m, k): [0.0, 0.0, 0.0] for m in methods for k in mips}   # sum |M - GT|, sum M, sum GT
         for l, h in pairs:
             # Ground truth per finest texel, then summed over 2x2 blocks level by level.
-            sums = blinn_phong(fx, fy, fz, s, h) * np.maximum(0.0, fx * l[0] + fy * l[1] + fz * l[2])
+            if BRDF == "ggx":
+                sums = ggx_term(fx, fy, fz, ggx_alpha(s), l, h)
+            else:
+                sums = blinn_phong(fx, fy, fz, s, h) * np.maximum(0.0, fx * l[0] + fy * l[1] + fz * l[2])
             truth = {}
             for k in range(0, last_mip + 1):
                 if k > 0:
@@ -391,11 +439,22 @@ def evaluate(n, powers, first_mip, last_mip, methods):
                 values[(m, k)] = method_value(lobe, l, h)
             for (m, k), fit in em_fits.items():
                 values[(m, k)] = em_value(fit, l, h)
+            for k, err in floor_err.items():   # every candidate alpha about the mean normal (naive's)
+                lobe = method_lobe("naive", levels[k], s)
+                nx, ny, nz = lobe["normal"]
+                for i, a in enumerate(floor_alphas):
+                    v = ggx_term(nx, ny, nz, a, l, h) if BRDF == "ggx" else \
+                        blinn_phong(nx, ny, nz, 2.0 / (a * a) - 2.0, h) * np.maximum(0.0, nx * l[0] + ny * l[1] + nz * l[2])
+                    err[i] += np.abs(v - truth[k])
+                floor_truth[k].append(float(np.sum(truth[k])))
             for (m, k), value in values.items():
                 a = acc[(m, k)]
                 a[0] += float(np.sum(np.abs(value - truth[k])))
                 a[1] += float(np.sum(value))
                 a[2] += float(np.sum(truth[k]))
+        for k, err in floor_err.items():   # the per-texel minimum over the grid
+            tsum = sum(floor_truth[k])
+            acc[("floor", k)] = [float(np.sum(np.min(err, axis=0))), float("nan"), tsum]
         for (m, k), (err, msum, tsum) in acc.items():
             out[(m, s, k)] = (err / tsum, msum / tsum) if tsum > 0.0 else (0.0, 1.0)
     return out, len(pairs), last_mip, rings, levels
@@ -422,11 +481,23 @@ def compare(results, path, splits=None):
     for e in report["errors"]:
         if e.get("kernel", "box") == "box" and not e.get("between_texels") and not e.get("lobes"):
             ref[(e["method"], float(e["base_power"]), int(e["mip"]))] = (e["relative_l1"], e["energy_ratio"])
+    if report.get("brdf", "blinn-phong") != BRDF:
+        print(f"note: the C++ report is under --brdf {report.get('brdf', 'blinn-phong')}, this run under {BRDF}")
+    # The NumPy floor (a dense grid) against the C++ fitted lobe and one-lobe floor: C++ <= NumPy + spacing.
+    for (m, s, k), (rl1, _) in results.items():
+        if m != "floor":
+            continue
+        for name in ("fitted", "one-lobe floor"):
+            if (name, s, k) in ref:
+                print(f"  power {s:g} mip {k}: NumPy grid floor {rl1:.6f}, C++ {name} {ref[(name, s, k)][0]:.6f} "
+                      f"(ratio {ref[(name, s, k)][0] / rl1:.4f})")
     print(f"\nAgainst {path} (C++ evaluation_seconds {report.get('evaluation_seconds', float('nan')):.3f}, "
           f"{report.get('directions')} directions):")
     print(f"{'method':<10}{'max rel diff relL1':>20}{'max rel diff energy':>21}  figures")
     worst = {}
     for (m, s, k), (rl1, en) in results.items():
+        if m == "floor":
+            continue
         if (m, s, k) not in ref:
             print(f"  {m} power {s:g} mip {k}: not in the C++ report")
             continue
@@ -452,8 +523,16 @@ def main():
     ap.add_argument("--rings", action="store_true", help="print the share of the sampled truth per half-vector angle")
     ap.add_argument("--energy-split", action="store_true", help="where LEAN's energy goes (evaluate --energy-split)")
     ap.add_argument("--steep-deg", type=float, default=45.0)
+    ap.add_argument("--brdf", choices=["blinn-phong", "ggx"], default="blinn-phong",
+                    help="the truth's and the lobes' BRDF (evaluate --brdf)")
     args = ap.parse_args()
+    global BRDF
+    BRDF = args.brdf
     methods = [m for m in args.methods.split(",") if m]
+    if BRDF == "ggx":
+        for m in methods:
+            if m not in ("naive", "toksvig", "vmf", "floor"):
+                sys.exit(f"method {m} has no GGX form here (--brdf ggx: naive, toksvig, vmf, floor)")
     for m in methods:
         for prefix, kind in (("blurred", float), ("hardem", int), ("em", int)):
             if m.startswith(prefix):

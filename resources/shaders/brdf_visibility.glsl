@@ -1,6 +1,7 @@
 // Visibility terms V = G/((n·l)(n·v)), so the specular BRDF is F·V·D/4: the GLSL twin of
 // core/include/burnish/core/shading/visibility.h. Dividing cosines are clamped to [kMinCosine, 1].
 #include "common_math.glsl"
+#include "brdf_ndf.glsl"
 
 // Lazarov 2011
 float visibilityNone() {
@@ -71,4 +72,26 @@ float visibilitySmithGgxCorrelated(float NoL, float NoV, float alpha) {
     float gv = NoL * sqrt(NoV * NoV * (1.0 - a2) + a2);
     float gl = NoV * sqrt(NoL * NoL * (1.0 - a2) + a2);
     return 2.0 / (gv + gl);
+}
+
+// Twin of core/include/burnish/core/shading/ggx_specular.h: α clamped to [kMinRoughness, 1], NaN to
+// kMinRoughness.
+float ggxSpecularAlpha(float alpha) {
+    return alpha > kMinRoughness ? min(alpha, 1.0) : kMinRoughness;
+}
+
+// The specular term glTF engines shade with, unit light, F = 1: D_GGX · V_SmithGGXCorrelated/4 · max(0, n·l).
+// Khronos, glTF 2.0 specification, Appendix B.3.2: f_specular = F·D·V, V = G/(4|n·l||n·v|)
+float ggxSpecularTerm(float NoH, float NoL, float NoV, float alpha) {
+    float a = ggxSpecularAlpha(alpha);
+    float a2 = a * a;
+    float c = NoH > 0.0 ? min(NoH, 1.0) : 0.0;
+    float d = (1.0 - c) * (1.0 + c) + c * c * a2;
+    float D = a2 / (kPi * d * d);
+    float l = NoL > kMinCosine ? min(NoL, 1.0) : kMinCosine;
+    float v = NoV > kMinCosine ? min(NoV, 1.0) : kMinCosine;
+    float gv = l * sqrt(v * v * (1.0 - a2) + a2);
+    float gl = v * sqrt(l * l * (1.0 - a2) + a2);
+    float value = D * (0.5 / (gv + gl)) * l;
+    return (NoH > 0.0 && NoL > 0.0) ? value : 0.0;
 }

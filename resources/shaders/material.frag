@@ -117,9 +117,9 @@ uniform sampler2D uNormalMap;
 #endif
 // The normal map's finest size, for the mip-level view and the slope methods' derivatives.
 uniform vec2 uNormalMapSize;
-// The "gloss" texture: the adjusted lobe of variance-to-gloss and vMF, or the authored gloss map.
+// The "gloss" texture: the adjusted lobe of variance-to-gloss, vMF and the fitted lobe, or the authored gloss map.
 // LEAN and CLEAN carry the authored gloss as 1/s inside their moments: they never read it.
-#if UBERSHADER || METHOD == METHOD_VARIANCE_TO_GLOSS || METHOD == METHOD_VMF
+#if UBERSHADER || METHOD == METHOD_VARIANCE_TO_GLOSS || METHOD == METHOD_VMF || METHOD == METHOD_FITTED
 #define READS_GLOSS_TEXTURE 1
 #elif defined(HAS_GLOSS_MAP) && !STATIC_SLOPE_METHOD
 #define READS_GLOSS_TEXTURE 1
@@ -269,7 +269,7 @@ Lobe materialLobe(vec2 uv) {
         float s = clampPower(uBasePower);
 #if defined(HAS_GLOSS_MAP) && defined(READS_GLOSS_TEXTURE)
         // The authored power per texel (the slope methods' lenNa below then uses the base power).
-        if (UBER_ON(uHasGlossMap) && !(IS_METHOD(METHOD_VARIANCE_TO_GLOSS) || IS_METHOD(METHOD_VMF) ||
+        if (UBER_ON(uHasGlossMap) && !(IS_METHOD(METHOD_VARIANCE_TO_GLOSS) || IS_METHOD(METHOD_VMF) || IS_METHOD(METHOD_FITTED) ||
                                        IS_SLOPE_METHOD))
             s = glossEncodingPower(sampleMap(uGlossMap, uv).r);
 #endif
@@ -297,7 +297,7 @@ Lobe materialLobe(vec2 uv) {
             }
 #endif
 #if defined(READS_GLOSS_TEXTURE)
-            if (IS_METHOD(METHOD_VARIANCE_TO_GLOSS) || IS_METHOD(METHOD_VMF))
+            if (IS_METHOD(METHOD_VARIANCE_TO_GLOSS) || IS_METHOD(METHOD_VMF) || IS_METHOD(METHOD_FITTED))
                 lobe.power = glossEncodingPower(sampleMap(uGlossMap, uv).r);
 #endif
         }

@@ -13,6 +13,7 @@
 #define METHOD_CLEAN 5
 #define METHOD_VMF 6
 #define METHOD_MIXTURE 7
+#define METHOD_FITTED 8
 
 // Base powers below this are treated as this, so 1/s stays finite (methods.cpp).
 const float kMinBasePower = 1e-6;

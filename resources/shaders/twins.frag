@@ -36,6 +36,7 @@
 #define TWIN_MIXTURE_VALUE 23
 #define TWIN_STOCHASTIC_TEXEL 24
 #define TWIN_STOCHASTIC_NUMBERS 25
+#define TWIN_GGX_SPECULAR 26
 // 30..38: the vec3 (RGB specular colour) overloads of brdf_fresnel.glsl, one per twin.
 #define TWIN_FRESNEL_RGB_FIRST 30
 #define TWIN_FRESNEL_RGB_LAST 38
@@ -151,6 +152,9 @@ vec4 twin(vec4 a, vec4 b) {
     // a = (uv, lod, levels), b = (xi, size0.x + 4096·size0.y): the texel and level picked
     ivec3 t = stochasticTexel(a.xy, a.z, ivec2(int(b.w) % 4096, int(b.w) / 4096), int(a.w), b.xyz);
     return vec4(vec3(t), 0.0);
+#elif TWIN == TWIN_GGX_SPECULAR
+    // a = (NoH, NoL, NoV, alpha)
+    return vec4(ggxSpecularTerm(a.x, a.y, a.z, a.w), ggxSpecularAlpha(a.w), 0.0, 0.0);
 #elif TWIN == TWIN_STOCHASTIC_NUMBERS
     // a = (x, y, sample, _): the three numbers of pixel (x, y) and that sample
     return vec4(stochasticNumbers(uvec3(a.xyz)), 0.0);

@@ -50,8 +50,8 @@ TEST(CliEvaluate, WritesTheReportAndNaiveIsWorst) {
         EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
     EXPECT_TRUE(std::filesystem::exists(out / "errors" / "lean-s512-mip4.exr"));
     const auto j = nlohmann::json::parse(r.out);
-    EXPECT_EQ(j["costs"].size(), 8u);
-    EXPECT_EQ(j["errors"].size(), 8u * 4u); // 8 methods (the mixture at its default K) × mips 1..4
+    EXPECT_EQ(j["costs"].size(), 9u);
+    EXPECT_EQ(j["errors"].size(), 9u * 4u); // 9 methods (the mixture at its default K) × mips 1..4
     double naive = 0, lean = 0;
     for (const auto& e : j["errors"]) {
         ASSERT_TRUE(e["relative_l1"].is_number()) << e.dump();

@@ -1,6 +1,7 @@
 #include "random_normals.h"
 
 #include <burnish/core/eval/evaluate.h>
+#include <burnish/core/prefilter/fitted_lobe.h>
 
 #include <burnish/core/eval/approximations.h>
 #include <burnish/core/eval/evaluate_report.h>
@@ -109,6 +110,13 @@ TEST(Evaluate, EveryMethodMatchesTheScalarReferenceAtExtremePowers) {
         auto result = evaluateMethods(map, options);
         ASSERT_TRUE(result.ok()) << result.error();
         std::vector<std::optional<MixturePyramid>> mixtures(kMaxMixtureLobes + 1);
+        // The fitted lobe's powers: its own fit over the same pairs (the reference for its row is the
+        // scalar shading of those lobes).
+        FittedLobeOptions fit;
+        fit.brdf = Brdf::BlinnPhong;
+        fit.directions = result->directions;
+        const FittedPyramid fitted = FittedPyramid::build(
+            pyramid, [s](int, int, int) { return s; }, nullptr, s, 3, fit);
         for (const MipError& e : result->errors) {
             if (e.lobes >= 2 && !mixtures[size_t(e.lobes)])
                 mixtures[size_t(e.lobes)].emplace(MixturePyramid::build(pyramid, s, e.lobes, 3));
@@ -118,11 +126,13 @@ TEST(Evaluate, EveryMethodMatchesTheScalarReferenceAtExtremePowers) {
                 for (int y = 0; y < level.height; ++y)
                     for (int x = 0; x < level.width; ++x) {
                         const double truth = groundTruthTexel(pyramid, e.mip, x, y, s, d);
+                        TexelLobe lobe = methodLobe(e.method, pyramid.boxMoments(e.mip, x, y), s);
+                        if (e.method == Method::Fitted && e.mip > 0) lobe.power = fitted.power(e.mip, x, y);
                         const double value =
                             e.lobes >= 2 && e.mip > 0
                                 ? mixtureValue(mixtures[size_t(e.lobes)]->at(e.mip, x, y), d.l, d.h,
                                                mixtures[size_t(e.lobes)]->minVariance())
-                                : methodValue(methodLobe(e.method, pyramid.boxMoments(e.mip, x, y), s), d);
+                                : methodValue(lobe, d);
                         ASSERT_TRUE(std::isfinite(value));
                         absSum += std::abs(value - truth);
                         truthSum += truth;
@@ -258,14 +268,16 @@ TEST(Evaluate, RealSampleNaiveIsWorstAndGrowsWithMip) {
                 EXPECT_LT(error(m, mip), error(Method::Naive, mip)) << methodName(m) << " mip " << mip;
             }
         }
-        // LEAN, the only anisotropic single-lobe method, is the closest of them on this map; the
-        // lobe mixture (several anisotropic lobes) closer still.
+        // LEAN, the only anisotropic single-lobe method, is the closest of the moment methods on this
+        // map; the lobe mixture (several anisotropic lobes) closer still. The fitted lobe, chosen by
+        // how it shades, is never further than naive or vMF (its candidates).
         for (Method m : allMethods()) {
-            if (m != Method::Lean && m != Method::Mixture) {
+            if (m != Method::Lean && m != Method::Mixture && m != Method::Fitted) {
                 EXPECT_LE(error(Method::Lean, mip), error(m, mip)) << methodName(m) << " mip " << mip;
             }
         }
         EXPECT_LT(error(Method::Mixture, mip), error(Method::Lean, mip)) << "mip " << mip;
+        EXPECT_LE(error(Method::Fitted, mip), error(Method::Vmf, mip)) << "mip " << mip;
     }
 }
 

@@ -46,7 +46,7 @@ TEST(MethodTable, EveryMethodHasOneRowWithAUniqueNameThatRoundTrips) {
         ASSERT_FALSE(spec.textures.empty());
         EXPECT_EQ(spec.textures.front().role, TextureRole::Normal) << spec.name;
     }
-    EXPECT_EQ(names.size(), 8u);
+    EXPECT_EQ(names.size(), 9u);
     EXPECT_FALSE(methodFromName("lean2"));
 }
 
@@ -92,7 +92,8 @@ TEST(MethodTable, OnlyTheSlopeMethodsStoreSlopesAndHaveNoGlossTexture) {
         EXPECT_EQ(hasTexture(m, TextureRole::Gloss), !slope) << methodName(m);
         EXPECT_TRUE(hasTexture(m, TextureRole::Normal)) << methodName(m);
         EXPECT_EQ(methodSpec(m).unnormalizedNormal, m == Method::Toksvig) << methodName(m);
-        EXPECT_EQ(methodSpec(m).adjustsGloss, m == Method::VarianceToGloss || m == Method::Vmf)
+        EXPECT_EQ(methodSpec(m).adjustsGloss,
+                  m == Method::VarianceToGloss || m == Method::Vmf || m == Method::Fitted)
             << methodName(m);
     }
 }

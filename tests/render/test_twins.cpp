@@ -13,6 +13,7 @@
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/shading/fresnel.h>
 #include <burnish/core/shading/geometric_aa.h>
+#include <burnish/core/shading/ggx_specular.h>
 #include <burnish/core/shading/ndf.h>
 #include <burnish/core/shading/specular_aa.h>
 #include <burnish/core/shading/spherical_gaussian.h>
@@ -68,6 +69,7 @@ enum Twin {
     kTwinMixtureValue = 23,
     kTwinStochasticTexel = 24,
     kTwinStochasticNumbers = 25,
+    kTwinGgxSpecular = 26,
     kTwinFresnelRgbFirst = 30,
 };
 
@@ -407,6 +409,25 @@ TEST_F(Twins, Visibility) {
         // Smith–Beckmann goes through an erf approximation with absolute error 1.5e-7
         // (Abramowitz & Stegun 7.1.26) on a denominator >= 1, and exp(−a²).
         {kRational, Tolerance{1e-5, kTinyFloor}, Tolerance{1e-5, kTinyFloor}, kRational}, 4);
+}
+
+TEST_F(Twins, GgxSpecularTerm) {
+    // Cosines from behind the surface to past 1, NaN-free grazing values, and α from below the clamp
+    // (0, the NaN-free sharpest) to past 1.
+    const std::vector<float> cosines{-0.5f, 0.0f, 1e-7f, 1e-3f, 0.05f, 0.3f, 0.7f, 0.95f, 0.999f, 1.0f, 1.2f};
+    expectTwin(
+        "ggxSpecularTerm/ggxSpecularAlpha", kTwinGgxSpecular,
+        product({cosines,
+                 {-1.0f, 0.0f, 0.2f, 0.9f, 1.0f},
+                 {0.0f, 1e-3f, 0.5f, 1.0f},
+                 {0.0f, 1e-5f, 0.01f, 0.088f, 0.3f, 1.0f, 3.0f}}),
+        [](const Args& a) {
+            return std::array<double, 4>{ggxSpecularTerm(d(a[0]), d(a[1]), d(a[2]), d(a[3])),
+                                         ggxSpecularAlpha(d(a[3])), 0, 0};
+        },
+        // A rational formula, but D = α²/(πd²) with d = sin² + c²α² at c → 1 and α = kMinRoughness has
+        // d ≈ 2e-9: the float argument's rounding (c = 0.999 stored in float) moves sin² by a few ulps.
+        {Tolerance{1e-4, kTinyFloor}, kRational}, 2);
 }
 
 TEST_F(Twins, SphericalGaussian) {

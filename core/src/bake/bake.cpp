@@ -2,6 +2,7 @@
 
 #include <burnish/core/bake/base_variance.h>
 #include <burnish/core/eval/mixture_refine.h>
+#include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/util/simd.h>
 
@@ -300,6 +301,8 @@ struct RowPlan {
     const BaseVariancePyramid* base; // the authored gloss as variances, or none (options.basePower)
     // The mixture's lobes for K >= 2 (K = 1 stores LEAN's moments from the rows).
     const MixturePyramid* mixture = nullptr;
+    // The fitted lobe's powers of levels 1 and up (Method::Fitted).
+    const FittedPyramid* fitted = nullptr;
     const NormalMap* finestMap = nullptr;
     std::vector<TextureRole> roles; // of the textures produced, in order
     ChannelScales scales;
@@ -371,6 +374,10 @@ struct RowValues {
                 for (int x = 0; x < width; ++x)
                     lobePowers[size_t(x)] =
                         varianceToGlossPower(lobePowers[size_t(x)], basePowers[size_t(x)]);
+            } else if (o.method == Method::Fitted) {
+                // Level 0's footprint is one normal, whose lobe is the base power's.
+                for (int x = 0; x < width; ++x)
+                    lobePowers[size_t(x)] = k > 0 ? plan.fitted->power(k, x, y) : basePowers[size_t(x)];
             } else {
                 for (int x = 0; x < width; ++x)
                     lobePowers[size_t(x)] = methodPower(o.method, row[x], basePowers[size_t(x)], o.params);
@@ -648,6 +655,15 @@ void bakeLevel(const RowPlan& plan, const NormalPyramid& pyramid, int k, BakeOut
 
 namespace {
 
+// The authored power of every finest texel (the mixture's and the fitted lobe's truth), or none.
+std::optional<std::vector<double>> authoredTexelPowers(const BakeOptions& options) {
+    if (!options.authoredGloss) return std::nullopt;
+    std::vector<double> powers(options.authoredGloss->size());
+    for (size_t i = 0; i < powers.size(); ++i)
+        powers[i] = options.encoding.power((*options.authoredGloss)[i]);
+    return powers;
+}
+
 // Whether a bake with `largestLevel` skips level k of its `levels` (BakeOptions::largestLevel: wider
 // or taller than the limit, and never the last level).
 bool skipsLevel(const PyramidLevel& level, int k, int levels, int largestLevel) {
@@ -700,19 +716,30 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     std::optional<MixturePyramid> mixture;
     const int lobes = std::clamp(options.params.mixtureLobes, 1, kMaxMixtureLobes);
     if (options.method == Method::Mixture && lobes > 1) {
-        std::optional<std::vector<double>> powers;
-        if (options.authoredGloss) {
-            powers.emplace(options.authoredGloss->size());
-            for (size_t i = 0; i < powers->size(); ++i)
-                (*powers)[i] = options.encoding.power((*options.authoredGloss)[i]);
-        }
+        const std::optional<std::vector<double>> powers = authoredTexelPowers(options);
         const std::vector<double>* texelPowers = powers ? &*powers : nullptr;
         mixture.emplace(
             options.params.mixtureShadedFit
                 ? buildShadedMixture(pyramid, options.basePower, lobes, levels - 1, texelPowers)
                 : MixturePyramid::build(pyramid, options.basePower, lobes, levels - 1, texelPowers));
     }
+    // The fitted lobe's powers, fitted under the BRDF the preset's engine shades with.
+    std::optional<FittedPyramid> fitted;
+    if (options.method == Method::Fitted && bakesRole(options, TextureRole::Gloss)) {
+        const std::optional<std::vector<double>> powers = authoredTexelPowers(options);
+        FittedLobeOptions fit;
+        fit.brdf = glossBrdf(options.encoding);
+        // The levels the bake skips (largestLevel) are not fitted: a cached pyramid has released them.
+        while (fit.firstLevel < levels - 1 &&
+               skipsLevel(pyramid.level(fit.firstLevel), fit.firstLevel, levels, options.largestLevel))
+            ++fit.firstLevel;
+        const BaseVariancePyramid* b = base ? &*base : nullptr;
+        fitted.emplace(FittedPyramid::build(
+            pyramid, [&](int k, int x, int y) { return b ? b->power(k, x, y) : options.basePower; },
+            powers ? &*powers : nullptr, options.basePower, levels - 1, fit));
+    }
     RowPlan plan(options, base ? &*base : nullptr, mixture ? &*mixture : nullptr, out.textures, scales);
+    plan.fitted = fitted ? &*fitted : nullptr;
     plan.finestMap = &map;
     // Progress by texels: the pyramids as the finest level's, then each level baked.
     auto baked = [&](int k) {
@@ -747,6 +774,7 @@ Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
         // the caller's, kept).
         if (own) own->releaseBox(k);
         if (mixture && k > 0) mixture->releaseLevel(k);
+        if (fitted && k > 0) fitted->releaseLevel(k);
     };
     // Level 0 last: each level's textures depend on its own moments alone, and level 0's come from
     // the normals, so by then every coarser level's moments (and the mixture's lobes) are freed and

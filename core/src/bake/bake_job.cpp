@@ -3,6 +3,7 @@
 #include <burnish/core/eval/evaluate_report.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/prefilter/detail.h>
+#include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/sample_maps.h>
 #include <burnish/core/util/files.h>
@@ -313,6 +314,9 @@ Result<std::string> writeBakeReport(const BakeJob& job, const NormalMap& map, co
     evaluation.evaluate.border = options.pyramid.border;
     evaluation.evaluate.params = options.params;
     evaluation.evaluate.mixtureLobes = {options.params.mixtureLobes};
+    // The truth of the engine the preset's encoding is for: GGX for the roughness presets.
+    evaluation.evaluate.brdf = glossBrdf(options.encoding);
+    evaluation.evaluate.methods = methodsUnder(evaluation.evaluate.brdf);
     if (options.authoredGloss) {
         // The ground truth with each texel's authored power, decoded as the bake decodes it.
         std::vector<double> powers(options.authoredGloss->size());
@@ -394,7 +398,10 @@ double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile
         lobes >= 2 ? (double(sizeof(LobeMoments)) * double(lobes) + 1.0) * kCoarser + 1.0 : 0.0;
     // The coarser levels are baked first, beside the pyramid's moments (and the mixture's lobes);
     // then level 0, once those are freed; then the export.
-    const double coarser = moments + mixture + textures * kCoarser;
+    // The fitted lobe keeps a power per texel of the levels above the finest (and, with a gloss map, a
+    // power per finest texel: its truth's).
+    const double fitted = shape.method == Method::Fitted ? 4.0 * kCoarser + (glossMap ? 8.0 : 0.0) : 0.0;
+    const double coarser = moments + mixture + fitted + textures * kCoarser;
     const double finest = textures * kChain + exportCopies;
     return kMargin * (kNormals + (glossMap ? kGloss : 0.0) + std::max({kRead, coarser, finest}));
 }

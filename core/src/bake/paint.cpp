@@ -470,6 +470,10 @@ Result<LiveGlossBake> LiveGlossBake::create(std::shared_ptr<const NormalMap> map
     if (!hasTexture(options.method, TextureRole::Gloss))
         return Error{"method '" + std::string(methodName(options.method)) +
                      "' stores no gloss texture (its authored power lives in the moment textures)"};
+    if (options.method == Method::Fitted)
+        return Error{
+            "the fitted lobe's gloss comes from the footprint's shading, not the moments the live bake "
+            "keeps: bake it in full"};
     if (options.authoredGloss->size() != map->texelCount())
         return Error{"authored gloss has " + std::to_string(options.authoredGloss->size()) +
                      " texels, the normal map " + std::to_string(map->texelCount())};

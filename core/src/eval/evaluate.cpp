@@ -4,6 +4,7 @@
 #include "lobe_values.h"
 
 #include <burnish/core/eval/mixture_refine.h>
+#include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/shading/ndf.h>
@@ -83,6 +84,14 @@ private:
 
 } // namespace
 
+std::vector<Method> methodsUnder(Brdf brdf) {
+    std::vector<Method> out;
+    for (Method m : allMethods())
+        if (brdf == Brdf::BlinnPhong || (m != Method::Lean && m != Method::Clean && m != Method::Mixture))
+            out.push_back(m);
+    return out;
+}
+
 std::vector<EvaluatedVariant> evaluatedVariants(const EvaluateOptions& options) {
     std::vector<EvaluatedVariant> out;
     for (FilterKernel kernel : options.kernels)
@@ -95,39 +104,25 @@ std::vector<EvaluatedVariant> evaluatedVariants(const EvaluateOptions& options) 
             for (int k : options.mixtureLobes)
                 out.push_back({m, kernel, std::clamp(k, 1, kMaxMixtureLobes)});
         }
+    if (options.floor) out.push_back({Method::Fitted, FilterKernel::Box, 0, true});
     return out;
 }
 
 std::string variantLabel(const EvaluatedVariant& v) {
-    std::string label(methodName(v.method));
+    std::string label(v.floor ? kFloorLabel : methodName(v.method));
     if (v.method == Method::Mixture) label += "-k" + std::to_string(v.lobes);
     if (v.kernel != FilterKernel::Box) label += " (" + std::string(kernelName(v.kernel)) + ")";
     return label;
 }
 
 std::vector<DirectionPair> evaluationDirections(const EvaluateOptions& options) {
-    std::vector<DirectionPair> pairs;
-    const double thetaV = radians(options.viewAngleDeg);
-    const glm::dvec3 v(std::sin(thetaV), 0.0, std::cos(thetaV));
-    const double minLz = std::sin(radians(options.horizonDeg));
-    for (double thetaDeg : options.halfAnglesDeg) {
-        const double thetaH = radians(thetaDeg);
-        // At θh = 0 every azimuth gives the same half vector: count it once.
-        const int count = thetaDeg == 0.0 ? 1 : std::max(options.azimuths, 1);
-        for (int j = 0; j < count; ++j) {
-            const double phi = 2.0 * kPi<double> * j / count;
-            const glm::dvec3 h(std::sin(thetaH) * std::cos(phi), std::sin(thetaH) * std::sin(phi),
-                               std::cos(thetaH));
-            const glm::dvec3 l = 2.0 * glm::dot(v, h) * h - v;
-            if (l.z < minLz) continue;
-            pairs.push_back({glm::normalize(l), v, h});
-        }
-    }
-    return pairs;
+    return directionPairs(
+        {options.viewAngleDeg, options.halfAnglesDeg, options.azimuths, options.horizonDeg});
 }
 
 TexelLobe methodLobeBetween(Method method, const std::array<NormalMoments, 4>& moments,
-                            const std::array<double, 4>& powers, const MethodParams& params) {
+                            const std::array<double, 4>& powers, const MethodParams& params,
+                            const std::array<double, 4>* lobePowers, Brdf brdf) {
     // The authored power the filtered moments carry: 1/s averaged, as the bake's 1/s on M's diagonal.
     double invS = 0.0;
     for (double p : powers)
@@ -155,23 +150,30 @@ TexelLobe methodLobeBetween(Method method, const std::array<NormalMoments, 4>& m
                   255.0;
         lobe.power = convertToksvigFactor(ft, params.toksvigMapPower, s) * s;
     } else {
-        // Variance-to-gloss and vMF store the adjusted gloss: averaged in the encoding (the bake's
-        // default, blackops), decoded by the shader.
-        const GlossEncoding encoding = GlossEncoding::blackOps();
+        // Variance-to-gloss, vMF and the fitted lobe store the adjusted gloss: averaged in the encoding
+        // (GGX roughness for GGX engines, else the bake's default, blackops), decoded by the shader.
+        const GlossEncoding encoding =
+            brdf == Brdf::Ggx ? GlossEncoding::ggxRoughness() : GlossEncoding::blackOps();
         double g = 0.0;
         for (size_t i = 0; i < 4; ++i)
-            g += 0.25 * encoding.value(methodPower(method, moments[i], powers[i], params));
+            g += 0.25 * encoding.value(lobePowers ? (*lobePowers)[i]
+                                                  : methodPower(method, moments[i], powers[i], params));
         lobe.power = encoding.power(float(g));
     }
     return lobe;
 }
 
-double methodValue(const TexelLobe& lobe, const DirectionPair& d) {
+double methodValue(const TexelLobe& lobe, const DirectionPair& d, Brdf brdf) {
+    if (brdf == Brdf::Ggx && !lobe.slopeGaussian) {
+        const glm::dvec3 n(lobe.normal);
+        return isotropicLobeShading(Brdf::Ggx, glm::dot(n, d.h), glm::dot(n, d.l), glm::dot(n, d.v),
+                                    lobe.power);
+    }
     return methodNdf(lobe, d.h) * std::max(0.0, glm::dot(glm::dvec3(lobe.normal), d.l));
 }
 
-static double truthOfNormal(const glm::dvec3& n, double s, const DirectionPair& d) {
-    return blinnPhongNdf(glm::dot(n, d.h), s) * std::max(0.0, glm::dot(n, d.l));
+static double truthOfNormal(const glm::dvec3& n, double s, const DirectionPair& d, Brdf brdf) {
+    return isotropicLobeShading(brdf, glm::dot(n, d.h), glm::dot(n, d.l), glm::dot(n, d.v), s);
 }
 
 double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,
@@ -182,17 +184,17 @@ double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,
     for (int j = l.yStart[size_t(y)]; j < l.yStart[size_t(y) + 1]; ++j)
         for (int i = l.xStart[size_t(x)]; i < l.xStart[size_t(x) + 1]; ++i)
             sum += truthOfNormal(glm::dvec3(pyramid.finest().at(i, j)),
-                                 texelPowers[size_t(j) * size_t(width) + size_t(i)], d);
+                                 texelPowers[size_t(j) * size_t(width) + size_t(i)], d, Brdf::BlinnPhong);
     return sum / pyramid.footprintCount(mip, x, y);
 }
 
-double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s,
-                        const DirectionPair& d) {
+double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s, const DirectionPair& d,
+                        Brdf brdf) {
     const PyramidLevel& l = pyramid.level(mip);
     double sum = 0.0;
     for (int j = l.yStart[size_t(y)]; j < l.yStart[size_t(y) + 1]; ++j)
         for (int i = l.xStart[size_t(x)]; i < l.xStart[size_t(x) + 1]; ++i)
-            sum += truthOfNormal(glm::dvec3(pyramid.finest().at(i, j)), s, d);
+            sum += truthOfNormal(glm::dvec3(pyramid.finest().at(i, j)), s, d, brdf);
     return sum / pyramid.footprintCount(mip, x, y);
 }
 
@@ -224,16 +226,19 @@ Result<std::vector<double>> evaluationPowers(const NormalMap& map, const Evaluat
 
 // Every lobe of one method at level k: from the kernel-filtered moments when a filtered pyramid is
 // given, else the footprint's own box moments; the authored power per texel or the base power s.
+// The fitted lobe (fitted set) takes its power from the fit at levels >= 1.
 std::vector<TexelLobe> levelLobes(const NormalPyramid& pyramid, const NormalPyramid* filtered, int k,
                                   Method method, FilterKernel kernel, const AuthoredPowers* authored,
-                                  double s, const MethodParams& params) {
+                                  double s, const MethodParams& params, const FittedPyramid* fitted) {
     const PyramidLevel& level = pyramid.level(k);
     std::vector<TexelLobe> out(size_t(level.width) * size_t(level.height));
     tbb::parallel_for(0, level.height, [&](int y) {
-        for (int x = 0; x < level.width; ++x)
-            out[size_t(y) * size_t(level.width) + size_t(x)] =
-                methodLobe(method, filtered ? filtered->moments(k, x, y) : pyramid.boxMoments(k, x, y),
-                           authored ? authored->power(k, x, y, kernel) : s, params);
+        for (int x = 0; x < level.width; ++x) {
+            TexelLobe& lobe = out[size_t(y) * size_t(level.width) + size_t(x)];
+            lobe = methodLobe(method, filtered ? filtered->moments(k, x, y) : pyramid.boxMoments(k, x, y),
+                              authored ? authored->power(k, x, y, kernel) : s, params);
+            if (fitted && k > 0) lobe.power = fitted->power(k, x, y);
+        }
     });
     return out;
 }
@@ -243,8 +248,9 @@ std::vector<TexelLobe> levelLobes(const NormalPyramid& pyramid, const NormalPyra
 // reports zero error and energy 1.
 MipError errorOf(const Accumulator& a, const EvaluatedVariant& v, double s, int k) {
     const bool lit = a.truth > 0.0;
-    return {v.method, s,      k, lit ? a.absError / a.truth : 0.0, lit ? a.method / a.truth : 1.0,
-            v.kernel, v.lobes};
+    return {
+        v.method, s,     k,      lit ? a.absError / a.truth : 0.0, lit ? a.method / a.truth : 1.0, v.kernel,
+        v.lobes,  false, v.floor};
 }
 
 // The per-texel relative error map of one method at one mip: Σ|M − GT| / max(Σ GT, floor), the
@@ -253,7 +259,7 @@ MipError errorOf(const Accumulator& a, const EvaluatedVariant& v, double s, int 
 // zero), clamped to the largest float.
 ErrorMap errorMapOf(const std::vector<double>& absSum, const std::vector<double>& truthSum,
                     const EvaluatedVariant& v, double s, int k, const PyramidLevel& level) {
-    ErrorMap em{v.method, s, k, level.width, level.height, {}, v.kernel, v.lobes};
+    ErrorMap em{v.method, s, k, level.width, level.height, {}, v.kernel, v.lobes, v.floor};
     em.relativeError.resize(absSum.size());
     double meanTruth = 0.0;
     for (double t : truthSum)
@@ -293,9 +299,10 @@ std::array<size_t, 4> cornerTexels(const PyramidLevel& level, int x, int y, Bord
 // Every variant's lobe at every corner point of level k (mip index mi) into the pass's tables.
 void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, size_t mi,
                   const std::vector<EvaluatedVariant>& variants,
-                  const std::vector<const MixturePyramid*>& mixtures, const AuthoredPowers* authored,
+                  const std::vector<const MixturePyramid*>& mixtures,
+                  const std::vector<const FittedPyramid*>& fitted, const AuthoredPowers* authored,
                   const std::vector<double>* texelPowers, double s, const MethodParams& params,
-                  MixtureFiltering filtering, Pass& pass) {
+                  MixtureFiltering filtering, Brdf brdf, Pass& pass) {
     const PyramidLevel& level = pyramid.level(k);
     const BorderMode border = pyramid.options().border;
     const size_t n = size_t(level.width) * size_t(level.height);
@@ -352,17 +359,19 @@ void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, siz
             for (int x = 0; x < level.width; ++x) {
                 const auto t = cornerTexels(level, x, y, border);
                 std::array<NormalMoments, 4> moments;
-                std::array<double, 4> powers;
+                std::array<double, 4> powers, lobePowers;
                 for (size_t c = 0; c < 4; ++c) {
                     const int xi = int(t[c] % size_t(level.width)), yi = int(t[c] / size_t(level.width));
                     moments[c] = pyramid.boxMoments(k, xi, yi);
                     powers[c] = authored ? authored->power(k, xi, yi, FilterKernel::Box) : s;
+                    lobePowers[c] = fitted[m] && k > 0 ? fitted[m]->power(k, xi, yi) : powers[c];
                 }
                 out[size_t(y) * size_t(level.width) + size_t(x)] =
-                    methodLobeBetween(variants[m].method, moments, powers, params);
+                    methodLobeBetween(variants[m].method, moments, powers, params,
+                                      variants[m].method == Method::Fitted ? &lobePowers : nullptr, brdf);
             }
         });
-        pass.betweenTables[m][mi] = LobeTable::of(out);
+        pass.betweenTables[m][mi] = LobeTable::of(out, brdf);
     }
 }
 
@@ -426,10 +435,10 @@ struct BandTruth {
     // The truth for pair d: the finest normals' values, summed up the levels (each a sum of its
     // children), and divided by the footprint's texel count from level `first` on.
     void compute(const NormalMap& map, const NormalPyramid& pyramid, const std::vector<double>* texelPowers,
-                 double s, int first, const DirectionPair& d) {
+                 double s, int first, const DirectionPair& d, Brdf brdf) {
         const size_t begin = size_t(band.rowBegin[0]) * size_t(map.width);
-        truthValues(nx.data(), ny.data(), nz.data(), texelPowers ? texelPowers->data() + begin : nullptr, s,
-                    nx.size(), d, sums[0].data());
+        truthValues(brdf, nx.data(), ny.data(), nz.data(),
+                    texelPowers ? texelPowers->data() + begin : nullptr, s, nx.size(), d, sums[0].data());
         for (int k = 1; k < int(sums.size()); ++k) {
             const PyramidLevel& level = pyramid.level(k);
             const PyramidLevel& child = pyramid.level(k - 1);
@@ -486,7 +495,7 @@ void accumulate(const double* v, const double* truth, size_t n, Accumulator& a, 
 // next band's first row, so with betweenTexels the next band's truth is computed too.
 BandSums evaluateBand(const NormalMap& map, const NormalPyramid& pyramid,
                       const std::vector<double>* texelPowers, double s, int first, int last, int y,
-                      const std::vector<DirectionPair>& directions, Pass& pass) {
+                      const std::vector<DirectionPair>& directions, Brdf brdf, Pass& pass) {
     const size_t variants = pass.tables.size();
     const size_t mips = size_t(last - first + 1);
     const BorderMode border = pyramid.options().border;
@@ -499,8 +508,8 @@ BandSums evaluateBand(const NormalMap& map, const NormalPyramid& pyramid,
     if (pass.betweenTexels && nextY != y) next.emplace(map, pyramid, last, nextY);
     std::vector<double> values(band.truth[size_t(first)].size()), corner(values.size());
     for (const DirectionPair& d : directions) {
-        band.compute(map, pyramid, texelPowers, s, first, d);
-        if (next) next->compute(map, pyramid, texelPowers, s, first, d);
+        band.compute(map, pyramid, texelPowers, s, first, d, brdf);
+        if (next) next->compute(map, pyramid, texelPowers, s, first, d, brdf);
         for (int k = first; k <= last; ++k) {
             const size_t mi = size_t(k - first);
             const PyramidLevel& level = pyramid.level(k);
@@ -560,6 +569,16 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
         return Error{"the energy split takes base powers, not authored gloss (each texel's own power)"};
     if (options.energySplit && !(options.steepDeg > 0.0 && options.steepDeg < 90.0))
         return Error{"the steep angle must lie in (0, 90) degrees"};
+    if (options.brdf == Brdf::Ggx) {
+        if (options.energySplit) return Error{"the energy split is LEAN's, under the Blinn-Phong truth only"};
+        const std::vector<Method> ggx = methodsUnder(Brdf::Ggx);
+        for (Method m : options.methods)
+            if (std::find(ggx.begin(), ggx.end(), m) == ggx.end())
+                return Error{"method '" + std::string(methodName(m)) +
+                             "' is a slope-space Gaussian with no GGX form; --brdf ggx evaluates the methods "
+                             "an engine stores as one roughness (naive, toksvig, toksvig-map, "
+                             "variance-to-gloss, vmf, fitted)"};
+    }
 
     // The pyramid only borrows the map for the duration of this call.
     const std::shared_ptr<const NormalMap> borrowed(&map, [](const NormalMap*) {});
@@ -622,6 +641,27 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                                 : MixturePyramid::build(pyramid, s, v.lobes, -1, texelPowers));
             mixtures[m] = &*mix;
         }
+        // The fitted lobes (and the floor), one per kernel: each fitted to the normal its kernel's
+        // moments give, against the box footprint's truth.
+        std::vector<std::optional<FittedPyramid>> fittedPyramids(methodCount);
+        std::vector<const FittedPyramid*> fitted(methodCount, nullptr);
+        for (size_t m = 0; m < methodCount; ++m) {
+            const EvaluatedVariant& v = variants[m];
+            if (v.method != Method::Fitted || lastMip < 1) continue;
+            if (cancelled()) return Error{std::string(kCancelledMessage)};
+            const auto& kernelPyramid = filtered[kernelIndex(v.kernel)];
+            FittedLobeOptions fit;
+            fit.brdf = options.brdf;
+            fit.directions = directions;
+            fit.floor = v.floor;
+            const AuthoredPowers* a = authored ? &*authored : nullptr;
+            fittedPyramids[m].emplace(FittedPyramid::build(
+                kernelPyramid ? *kernelPyramid : pyramid,
+                [&](int k, int x, int y) { return a ? a->power(k, x, y, v.kernel) : s; }, texelPowers, s,
+                lastMip, fit, cancelled));
+            if (cancelled()) return Error{std::string(kCancelledMessage)};
+            fitted[m] = &*fittedPyramids[m];
+        }
         // Lobes of every variant at every evaluated mip.
         pass.tables.assign(methodCount, std::vector<LobeTable>(size_t(mipCount)));
         for (size_t m = 0; m < methodCount; ++m)
@@ -635,17 +675,18 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                     continue;
                 }
                 const auto& kernelPyramid = filtered[kernelIndex(v.kernel)];
-                table =
-                    LobeTable::of(levelLobes(pyramid, kernelPyramid ? &*kernelPyramid : nullptr, k, v.method,
-                                             v.kernel, authored ? &*authored : nullptr, s, options.params));
+                table = LobeTable::of(levelLobes(pyramid, kernelPyramid ? &*kernelPyramid : nullptr, k,
+                                                 v.method, v.kernel, authored ? &*authored : nullptr, s,
+                                                 options.params, fitted[m]),
+                                      options.brdf);
             }
         if (options.betweenTexels) {
             pass.betweenTables.assign(methodCount, std::vector<LobeTable>(size_t(mipCount)));
             for (int k = firstMip; k <= lastMip; ++k) {
                 if (cancelled()) return Error{std::string(kCancelledMessage)};
-                betweenLevel(map, pyramid, k, size_t(k - firstMip), variants, mixtures,
+                betweenLevel(map, pyramid, k, size_t(k - firstMip), variants, mixtures, fitted,
                              authored ? &*authored : nullptr, texelPowers, s, options.params,
-                             options.mixtureFiltering, pass);
+                             options.mixtureFiltering, options.brdf, pass);
             }
         }
         if (options.errorMaps) {
@@ -664,8 +705,8 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             if (cancelled()) return Error{std::string(kCancelledMessage)};
             const int from = int(int64_t(bands) * b / batches), to = int(int64_t(bands) * (b + 1) / batches);
             tbb::parallel_for(from, to, [&](int y) {
-                sums[size_t(y)] =
-                    evaluateBand(map, pyramid, texelPowers, s, firstMip, lastMip, y, directions, pass);
+                sums[size_t(y)] = evaluateBand(map, pyramid, texelPowers, s, firstMip, lastMip, y, directions,
+                                               options.brdf, pass);
             });
             stepsDone += double(to - from);
             if (progress) progress(stepsDone / totalSteps);

@@ -72,7 +72,7 @@ double measureShadingNs(const NormalPyramid& pyramid, int mip, const EvaluatedVa
     for (int y = 0; y < level.height && lobes.size() < kCostTexels; ++y)
         for (int x = 0; x < level.width && lobes.size() < kCostTexels; ++x)
             lobes.push_back(methodLobe(v.method, pyramid.boxMoments(mip, x, y), s, options.params));
-    return medianNs(LobeTable::of(lobes), directions);
+    return medianNs(LobeTable::of(lobes, options.brdf), directions);
 }
 
 std::string powerLabel(double s) {
@@ -122,7 +122,7 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
     }
     std::vector<EvaluatedVariant> costed;
     for (const EvaluatedVariant& v : evaluatedVariants(options.evaluate))
-        if (v.kernel == FilterKernel::Box) costed.push_back(v);
+        if (v.kernel == FilterKernel::Box && !v.floor) costed.push_back(v);
     const size_t methodCount = costed.size();
     for (size_t i = 0; i < methodCount; ++i) {
         const EvaluatedVariant& v = costed[i];
@@ -140,6 +140,14 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
         bakeOptions.pyramid = {options.evaluate.border, FilterKernel::Box};
         bakeOptions.mipCount = report.result.lastMip + 1;
         bakeOptions.authoredGloss = authoredGloss;
+        // Under GGX the bake a roughness preset runs (the fitted lobe fits GGX for its encoding).
+        if (options.evaluate.brdf == Brdf::Ggx) {
+            bakeOptions.encoding = GlossEncoding::ggxRoughness();
+            if (bakeOptions.authoredGloss)
+                for (size_t t = 0; t < bakeOptions.authoredGloss->size(); ++t)
+                    (*bakeOptions.authoredGloss)[t] =
+                        float(bakeOptions.encoding.value((*options.evaluate.texelPowers)[t]));
+        }
         std::vector<double> runs;
         for (int r = 0; r < options.bakeRuns; ++r) {
             if (cancelled()) return Error{std::string(kCancelledMessage)};
@@ -219,10 +227,20 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
            << ", the label of the tables below). The ground truth uses D_{s_i} per texel; every method "
               "gets the block's power as the bake does, s = 1/mean(1/s_i) (variance averaged).\n\n";
     }
-    md << "Ground truth: for mip k, the mean over the texel's footprint of finest texels of "
-          "D_s(n_i.h) max(0, n_i.l), D_s the normalized Blinn-Phong NDF of the base power s. "
-          "Each method: its own NDF times max(0, n.l) with its normal, from box-footprint moments. "
-          "Relative L1 = sum|M - GT| / sum GT; energy = sum M / sum GT (1 is exact). "
+    if (r.options.brdf == Brdf::Ggx)
+        md << "Ground truth (--brdf ggx): for mip k, the mean over the texel's footprint of finest texels of "
+              "the GGX specular term an engine shades, D_GGX(n_i.h) V(n_i.l, n_i.v)/4 max(0, n_i.l) with "
+              "the height-correlated Smith visibility of glTF's reference BRDF and alpha^2 = 2/(s+2) of the "
+              "base power s (Fresnel 1). Each method: one GGX lobe about its renormalized mean normal with "
+              "the alpha of its power, shaded the same way. ";
+    else
+        md << "Ground truth: for mip k, the mean over the texel's footprint of finest texels of "
+              "D_s(n_i.h) max(0, n_i.l), D_s the normalized Blinn-Phong NDF of the base power s. "
+              "Each method: its own NDF times max(0, n.l) with its normal, from box-footprint moments. ";
+    if (r.options.floor)
+        md << "The one-lobe floor: per texel the best one isotropic lobe about the mean normal, by a "
+              "brute-force search of its roughness (what no single roughness can beat). ";
+    md << "Relative L1 = sum|M - GT| / sum GT; energy = sum M / sum GT (1 is exact). "
           "Rows marked (tent) or (gaussian) use the kernel-filtered moments a bake stores instead of the "
           "footprint's own, against the same ground truth.\n\n";
 
@@ -301,6 +319,7 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
     j["horizon_deg"] = r.options.horizonDeg;
     j["directions"] = r.result.directions.size();
     j["mixture_filtering"] = mixtureFilteringName(r.options.mixtureFiltering);
+    j["brdf"] = brdfName(r.options.brdf);
     j["base_powers"] = r.options.basePowers;
     if (r.options.texelPowers) {
         const auto& p = *r.options.texelPowers;
@@ -313,15 +332,16 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
     j["evaluation_seconds"] = jsonNumber(r.result.seconds);
     j["errors"] = nlohmann::json::array();
     for (const auto& e : r.result.errors)
-        j["errors"].push_back({{"method", methodName(e.method)},
-                               {"variant", variantLabel(variantOf(e))},
-                               {"lobes", e.lobes},
-                               {"between_texels", e.betweenTexels},
-                               {"kernel", kernelName(e.kernel)},
-                               {"base_power", e.basePower},
-                               {"mip", e.mip},
-                               {"relative_l1", jsonNumber(e.relativeL1)},
-                               {"energy_ratio", jsonNumber(e.energyRatio)}});
+        j["errors"].push_back(
+            {{"method", e.floor ? std::string(kFloorLabel) : std::string(methodName(e.method))},
+             {"variant", variantLabel(variantOf(e))},
+             {"lobes", e.lobes},
+             {"between_texels", e.betweenTexels},
+             {"kernel", kernelName(e.kernel)},
+             {"base_power", e.basePower},
+             {"mip", e.mip},
+             {"relative_l1", jsonNumber(e.relativeL1)},
+             {"energy_ratio", jsonNumber(e.energyRatio)}});
     if (r.options.energySplit) {
         j["steep_deg"] = r.options.steepDeg;
         j["lean_energy_split"] = nlohmann::json::array();
@@ -442,8 +462,10 @@ Status writeEvaluationReport(const EvaluationReport& r, const fs::path& dir) {
         for (const auto& m : r.result.maps) {
             const std::string kernel =
                 m.kernel == FilterKernel::Box ? "" : "-" + std::string(kernelName(m.kernel));
-            const std::string name = variantLabel({m.method, FilterKernel::Box, m.lobes}) + kernel + "-s" +
-                                     powerLabel(m.basePower) + "-mip" + std::to_string(m.mip) + ".exr";
+            // The floor's label has spaces: its file is "floor-…".
+            const std::string name =
+                (m.floor ? std::string("floor") : variantLabel({m.method, FilterKernel::Box, m.lobes})) +
+                kernel + "-s" + powerLabel(m.basePower) + "-mip" + std::to_string(m.mip) + ".exr";
             const Status st = errors->add(name, [&](const fs::path& staged) {
                 return writeImageFile(staged, m.width, m.height, 1, m.relativeError,
                                       {StoredType::Float, {"Y"}, {}}, errorsDir / name);

@@ -1,5 +1,6 @@
 #include "lobe_values.h"
 
+#include <burnish/core/shading/ggx_specular.h>
 #include <burnish/core/shading/ndf.h>
 #include <burnish/core/util/numeric.h>
 #include <burnish/core/util/simd.h>
@@ -13,15 +14,6 @@ namespace burnish {
 
 namespace {
 
-constexpr double kSmallestNormal = std::numeric_limits<double>::min();
-
-// max(c, 0)^p as powCos computes it (p clamped, p = 0 gives 1, c >= 1 gives 1), branch-free.
-inline double powCosFast(double c, double p) {
-    const double lg = kLn2<double> * log2Positive(std::max(c, kSmallestNormal));
-    const double v = expNonPositive(p * lg);
-    return (c > 0.0 || p == 0.0) ? v : 0.0;
-}
-
 BURNISH_AVX512_CLONES void blinnPhongValues(const LobeTable& t, size_t begin, size_t count,
                                             const DirectionPair& d, double* out) {
     const double *nx = t.nx.data() + begin, *ny = t.ny.data() + begin, *nz = t.nz.data() + begin;
@@ -32,6 +24,18 @@ BURNISH_AVX512_CLONES void blinnPhongValues(const LobeTable& t, size_t begin, si
         const double nl = std::max(0.0, nx[i] * lx + ny[i] * ly + nz[i] * lz);
         out[i] = norm[i] * powCosFast(c, power[i]) * nl;
     }
+}
+
+// ggxSpecularTerm about each lobe's normal with its α (in `power`).
+BURNISH_AVX512_CLONES void ggxValues(const LobeTable& t, size_t begin, size_t count, const DirectionPair& d,
+                                     double* out) {
+    const double *nx = t.nx.data() + begin, *ny = t.ny.data() + begin, *nz = t.nz.data() + begin;
+    const double* alpha = t.power.data() + begin;
+    const double hx = d.h.x, hy = d.h.y, hz = d.h.z, lx = d.l.x, ly = d.l.y, lz = d.l.z;
+    const double vx = d.v.x, vy = d.v.y, vz = d.v.z;
+    for (size_t i = 0; i < count; ++i)
+        out[i] = ggxSpecularTerm(nx[i] * hx + ny[i] * hy + nz[i] * hz, nx[i] * lx + ny[i] * ly + nz[i] * lz,
+                                 nx[i] * vx + ny[i] * vy + nz[i] * vz, alpha[i]);
 }
 
 // Σ over the slots of share·D(h)·max(0, n·l), D the slope-space Gaussian of slopeGaussianNdf.
@@ -57,33 +61,6 @@ BURNISH_AVX512_CLONES void gaussianValues(const LobeTable& t, size_t begin, size
     }
 }
 
-// The ground truth of finest normals with one power s (powers null) or each its own.
-template <bool kOwnPowers>
-[[gnu::always_inline]] inline void truthLoop(const double* nx, const double* ny, const double* nz,
-                                             const double* powers, double s, size_t count,
-                                             const DirectionPair& d, double* out) {
-    const double hx = d.h.x, hy = d.h.y, hz = d.h.z, lx = d.l.x, ly = d.l.y, lz = d.l.z;
-    const double sc = clampPower(s), normS = blinnPhongNdfNorm(s);
-    for (size_t i = 0; i < count; ++i) {
-        const double p = kOwnPowers ? clampPower(powers[i]) : sc;
-        const double norm = kOwnPowers ? (p + 2.0) / (2.0 * kPi<double>) : normS;
-        const double c = nx[i] * hx + ny[i] * hy + nz[i] * hz;
-        const double nl = std::max(0.0, nx[i] * lx + ny[i] * ly + nz[i] * lz);
-        out[i] = norm * powCosFast(c, p) * nl;
-    }
-}
-
-BURNISH_AVX512_CLONES void truthOnePower(const double* nx, const double* ny, const double* nz, double s,
-                                         size_t count, const DirectionPair& d, double* out) {
-    truthLoop<false>(nx, ny, nz, nullptr, s, count, d, out);
-}
-
-BURNISH_AVX512_CLONES void truthOwnPowers(const double* nx, const double* ny, const double* nz,
-                                          const double* powers, size_t count, const DirectionPair& d,
-                                          double* out) {
-    truthLoop<true>(nx, ny, nz, powers, 0.0, count, d, out);
-}
-
 // One Gaussian slot from its share, mean, covariance (xx, yy, xy) and normal.
 void putGaussian(LobeTable& t, size_t i, double share, const glm::dvec2& mean,
                  const std::array<double, 3>& cov, const glm::dvec3& normal) {
@@ -106,13 +83,25 @@ void resizeGaussian(LobeTable& t, size_t n) {
 
 } // namespace
 
-LobeTable LobeTable::of(const std::vector<TexelLobe>& lobes) {
+LobeTable LobeTable::of(const std::vector<TexelLobe>& lobes, Brdf brdf) {
     LobeTable t;
     t.count = lobes.size();
     const bool gaussian = !lobes.empty() && lobes.front().slopeGaussian;
     for (const TexelLobe& l : lobes)
         if (l.slopeGaussian != gaussian)
             throw std::logic_error("a level mixes Gaussian and Blinn-Phong lobes");
+    if (gaussian && brdf == Brdf::Ggx) throw std::logic_error("a slope-space lobe has no GGX form");
+    if (brdf == Brdf::Ggx) {
+        t.kind = Kind::Ggx;
+        for (auto* v : {&t.nx, &t.ny, &t.nz, &t.power})
+            v->resize(t.count);
+        for (size_t i = 0; i < t.count; ++i) {
+            const glm::dvec3 n(lobes[i].normal);
+            t.nx[i] = n.x, t.ny[i] = n.y, t.nz[i] = n.z;
+            t.power[i] = ggxAlphaFromPower(lobes[i].power);
+        }
+        return t;
+    }
     if (gaussian) {
         t.kind = Kind::Gaussian;
         resizeGaussian(t, t.count);
@@ -173,16 +162,10 @@ LobeTable LobeTable::ofBlends(const std::vector<DecodedMixture>& texels,
 void lobeValues(const LobeTable& table, size_t begin, size_t end, const DirectionPair& d, double* out) {
     if (table.kind == LobeTable::Kind::BlinnPhong)
         blinnPhongValues(table, begin, end - begin, d, out);
+    else if (table.kind == LobeTable::Kind::Ggx)
+        ggxValues(table, begin, end - begin, d, out);
     else
         gaussianValues(table, begin, end - begin, d, out);
-}
-
-void truthValues(const double* nx, const double* ny, const double* nz, const double* powers, double s,
-                 size_t count, const DirectionPair& d, double* out) {
-    if (powers)
-        truthOwnPowers(nx, ny, nz, powers, count, d, out);
-    else
-        truthOnePower(nx, ny, nz, s, count, d, out);
 }
 
 } // namespace burnish

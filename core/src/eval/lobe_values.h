@@ -6,6 +6,7 @@
 #pragma once
 
 #include <burnish/core/eval/evaluate.h>
+#include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 
 #include <array>
@@ -19,18 +20,20 @@ struct LobeTable {
     /// Blinn-Phong: D = (p+2)/(2π)·max(n·h, 0)^p (the isotropic methods). Gaussian: `slots` slope-space
     /// Gaussians per texel, each weighted by its share (LEAN and CLEAN: one slot of share 1; the
     /// mixture: K slots, empty ones of share 0).
-    enum class Kind { BlinnPhong, Gaussian };
+    /// Ggx: ggxSpecularTerm with α = ggxAlphaFromPower(p) about n (the isotropic methods under --brdf ggx).
+    enum class Kind { BlinnPhong, Gaussian, Ggx };
     Kind kind = Kind::BlinnPhong;
     int slots = 1;
     size_t count = 0;
     // Per texel (Blinn-Phong) or per slot and texel, slot-major: [slot·count + t].
     std::vector<double> nx, ny, nz;    // the normal of n·l (and of n·h for Blinn-Phong)
-    std::vector<double> power, norm;   // Blinn-Phong: clampPower(p) and (p+2)/(2π)
+    std::vector<double> power, norm;   // Blinn-Phong: clampPower(p) and (p+2)/(2π); GGX: α in `power`
     std::vector<double> coef;          // Gaussian: share/(2π√det Σ), 0 for an empty slot or det <= 0
     std::vector<double> mx, my;        // Gaussian: mean slope
     std::vector<double> ixx, iyy, ixy; // Gaussian: Σ⁻¹ (xx, yy, xy)
 
-    static LobeTable of(const std::vector<TexelLobe>& lobes);
+    /// The lobes under `brdf` (Ggx: isotropic lobes only; a slope-space lobe is a logic error).
+    static LobeTable of(const std::vector<TexelLobe>& lobes, Brdf brdf = Brdf::BlinnPhong);
     static LobeTable of(const std::vector<DecodedMixture>& mixtures);
     /// Filtering after shading: point i is the blend of the mixtures texels[at[i][c]] with weights
     /// weights[c] (Σ weights[c]·mixture value), each of their lobes a slot of its own with its share
@@ -42,10 +45,5 @@ struct LobeTable {
 
 /// out[i] = the value of lobe begin + i for direction pair d, i < end − begin.
 void lobeValues(const LobeTable& table, size_t begin, size_t end, const DirectionPair& d, double* out);
-
-/// The ground truth of `count` finest normals (x, y, z in three arrays) for d: D_s(n·h)·max(0, n·l)
-/// with each normal's power powers[i], or s for all when powers is null.
-void truthValues(const double* nx, const double* ny, const double* nz, const double* powers, double s,
-                 size_t count, const DirectionPair& d, double* out);
 
 } // namespace burnish

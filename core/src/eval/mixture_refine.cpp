@@ -217,8 +217,8 @@ struct Footprint {
     // The mean truth over the footprint at d.
     double meanTruth(double s, const DirectionPair& d, std::vector<double>& scratch) const {
         scratch.resize(nx.size());
-        truthValues(nx.data(), ny.data(), nz.data(), power.empty() ? nullptr : power.data(), s, nx.size(), d,
-                    scratch.data());
+        truthValues(Brdf::BlinnPhong, nx.data(), ny.data(), nz.data(), power.empty() ? nullptr : power.data(),
+                    s, nx.size(), d, scratch.data());
         double sum = 0.0;
         for (double t : scratch)
             sum += t;
@@ -398,7 +398,8 @@ void refineMixturePyramid(MixturePyramid& mixture, const NormalPyramid& pyramid,
             const size_t count = tileNormals.nx.size();
             values.resize(T * count);
             for (size_t d = 0; d < T; ++d)
-                truthValues(tileNormals.nx.data(), tileNormals.ny.data(), tileNormals.nz.data(),
+                truthValues(Brdf::BlinnPhong, tileNormals.nx.data(), tileNormals.ny.data(),
+                            tileNormals.nz.data(),
                             tileNormals.power.empty() ? nullptr : tileNormals.power.data(), s, count,
                             fixed[d], values.data() + d * count);
             // The sums of texel (k, x, y), refined on the way up.

@@ -181,6 +181,17 @@ const MethodSpec kMethodTable[] = {
      "METHOD_MIXTURE",
      // At the default 3 lobes; methodStorage gives it for any count.
      {5, 40.0, "weights + 3 lobes + cross moments, 5 RGBA16"}},
+    {Method::Fitted,
+     "fitted",
+     "one lobe per texel fitted to the footprint's shading (GGX for roughness presets); never worse than "
+     "the base power or vmf by evaluate's measure",
+     kMomentsMean,
+     {{TextureRole::Normal, kRenormalized}, {TextureRole::Gloss, kAdjustedGloss}},
+     false,
+     true,
+     "plain GGX (or Blinn-Phong) with the stored (fitted) gloss",
+     "METHOD_FITTED",
+     {2, 1.5, "normal BC5 + fitted gloss (or GGX roughness) BC4"}},
 };
 
 } // namespace
@@ -312,6 +323,8 @@ double methodPower(Method method, const NormalMoments& moments, double s, const 
         const double kappa = vmfKappa(double(moments.lengthNa()));
         return kappa > 0.0 ? clampPower(1.0 / (1.0 / s + 1.0 / kappa)) : 0.0;
     }
+    case Method::Fitted: // needs the footprint's normals (fitted_lobe.h): the base power, its first candidate
+        return s;
     case Method::Lean:
     case Method::Clean:
     case Method::Mixture:

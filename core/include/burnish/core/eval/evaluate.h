@@ -24,6 +24,7 @@
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_map.h>
 #include <burnish/core/prefilter/normal_pyramid.h>
+#include <burnish/core/shading/lobe_shading.h>
 #include <burnish/core/util/result.h>
 
 #include <glm/vec3.hpp>
@@ -45,14 +46,19 @@ inline bool isCancelled(const Error& error) {
     return error.message == kCancelledMessage;
 }
 
+/// The methods that have a form under `brdf`, in report order: every method under Blinn-Phong; under GGX
+/// the isotropic ones an engine stores as one roughness (not LEAN, CLEAN or the mixture).
+std::vector<Method> methodsUnder(Brdf brdf);
+
 struct EvaluateOptions {
     std::vector<double> basePowers{512.0};
     int firstMip = 1;
     int lastMip = 4; // clamped to the map's last level
-    double viewAngleDeg = 30.0;
-    std::vector<double> halfAnglesDeg{0.0, 2.5, 5.0, 10.0, 15.0, 20.0, 30.0};
-    int azimuths = 8;
-    double horizonDeg = 3.0;
+    // The light/view pairs (DirectionSet: its defaults are the fitted lobe's too).
+    double viewAngleDeg = DirectionSet{}.viewAngleDeg;
+    std::vector<double> halfAnglesDeg = DirectionSet{}.halfAnglesDeg;
+    int azimuths = DirectionSet{}.azimuths;
+    double horizonDeg = DirectionSet{}.horizonDeg;
     std::vector<Method> methods = allMethods();
     /// Footprint moments each method is evaluated with: Box is the definition above; Tent and
     /// Gaussian use the kernel-filtered moments a bake stores, and are reported beside it.
@@ -85,13 +91,15 @@ struct EvaluateOptions {
     /// with texelPowers.
     bool energySplit = false;
     double steepDeg = 45.0;
-};
-
-/// One light/view pair in tangent space.
-struct DirectionPair {
-    glm::dvec3 l;
-    glm::dvec3 v;
-    glm::dvec3 h;
+    /// The BRDF of the truth and of every method's lobe. BlinnPhong: the definition above. Ggx: each
+    /// finest normal shaded by ggxSpecularTerm (GGX D, height-correlated Smith visibility, n·l) with
+    /// α² = 2/(s+2), against each method's one GGX lobe about its renormalized mean normal with the
+    /// α of its power, as a roughness preset's engine shades them. Only the isotropic methods have a GGX
+    /// form (not LEAN, CLEAN, the mixture or the energy split).
+    Brdf brdf = Brdf::BlinnPhong;
+    /// Also evaluate the one-lobe floor: per texel the best isotropic lobe about the mean normal by a
+    /// brute-force search (FittedLobeOptions::floor), reported as a row labelled "one-lobe floor".
+    bool floor = false;
 };
 
 /// The direction pairs the options define, in a fixed order.
@@ -106,6 +114,7 @@ struct MipError {
     FilterKernel kernel = FilterKernel::Box;
     int lobes = 0;              // the mixture's K (0 for the other methods)
     bool betweenTexels = false; // evaluated between texels (EvaluateOptions::betweenTexels)
+    bool floor = false;         // the one-lobe floor (EvaluateOptions::floor), method Fitted
 };
 
 /// Error maps divide a texel's absolute error by its truth, or by this fraction of the level's mean
@@ -122,6 +131,7 @@ struct ErrorMap {
     std::vector<float> relativeError; // per texel, row-major: Σ|M − GT| / max(Σ GT, floor), finite
     FilterKernel kernel = FilterKernel::Box;
     int lobes = 0;
+    bool floor = false; // the one-lobe floor's map
 };
 
 /// What one row of an evaluation is: a method, its footprint kernel and, for the mixture, its K.
@@ -129,15 +139,17 @@ struct EvaluatedVariant {
     Method method;
     FilterKernel kernel = FilterKernel::Box;
     int lobes = 0;
+    bool floor = false; // the one-lobe floor (method Fitted, box kernel)
     bool operator==(const EvaluatedVariant&) const = default;
 };
 /// The rows the options ask for, kernel-major, methods in the options' order, the mixture once per
-/// lobe count (box kernel only).
+/// lobe count (box kernel only), then the one-lobe floor (box kernel) when asked for.
 std::vector<EvaluatedVariant> evaluatedVariants(const EvaluateOptions& options);
-/// "lean", "lean (tent)", "mixture-k3".
+/// "lean", "lean (tent)", "mixture-k3", "one-lobe floor".
 std::string variantLabel(const EvaluatedVariant& variant);
+inline constexpr std::string_view kFloorLabel = "one-lobe floor";
 inline EvaluatedVariant variantOf(const MipError& e) {
-    return {e.method, e.kernel, e.lobes};
+    return {e.method, e.kernel, e.lobes, e.floor};
 }
 
 /// Where LEAN's energy goes at one base power and mip: its energy ratio Σ M / Σ GT over the texels
@@ -183,8 +195,8 @@ struct EvaluationResult {
 
 /// Ground truth of one texel's footprint for one direction pair (the brute-force definition,
 /// used by tests and by evaluateMethods' hierarchical sums).
-double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s,
-                        const DirectionPair& d);
+double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s, const DirectionPair& d,
+                        Brdf brdf = Brdf::BlinnPhong);
 
 /// The same with each finest texel's own power (texelPowers, row-major over the finest level).
 double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,
@@ -192,13 +204,18 @@ double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,
 
 /// A method's value for one texel and direction: the scalar reference that evaluateMethods'
 /// vectorised loops (src/eval/lobe_values.h) are tested against, as groundTruthTexel is for the truth.
-double methodValue(const TexelLobe& lobe, const DirectionPair& d);
+/// Under Brdf::Ggx an isotropic lobe is shaded by ggxSpecularTerm with the α of its power.
+double methodValue(const TexelLobe& lobe, const DirectionPair& d, Brdf brdf = Brdf::BlinnPhong);
 
 /// The lobe a method's shader reconstructs halfway between four texels from their bilinearly
 /// filtered stored values (EvaluateOptions::betweenTexels): `moments` and `powers` of the four
 /// texels, equal weights. Not for the mixture (its lobes are not NormalMoments).
+/// `lobePowers` (if set) are the four texels' stored lobe powers, for a method whose lobe the moments
+/// do not give (the fitted lobe); the gloss is averaged in the encoding of `brdf`'s engines (GGX
+/// roughness for Ggx, Black Ops gloss for Blinn-Phong, the bake's default).
 TexelLobe methodLobeBetween(Method method, const std::array<NormalMoments, 4>& moments,
-                            const std::array<double, 4>& powers, const MethodParams& params);
+                            const std::array<double, 4>& powers, const MethodParams& params,
+                            const std::array<double, 4>* lobePowers = nullptr, Brdf brdf = Brdf::BlinnPhong);
 
 /// LEAN's energy split (LeanEnergySplit) at base power s for mips firstMip..lastMip of a pyramid with
 /// box slope moments, over `directions`; normals tilted more than steepDeg are steep. Deterministic on

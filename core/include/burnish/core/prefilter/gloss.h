@@ -4,6 +4,7 @@
 // domain's lower end).
 #pragma once
 
+#include <burnish/core/shading/lobe_shading.h>
 #include <burnish/core/util/numeric.h>
 #include <burnish/core/util/result.h>
 
@@ -95,6 +96,15 @@ private:
     std::string m_name;
     std::string m_formula;
 };
+
+/// The BRDF the engine that reads this encoding shades with: GGX for the roughness kinds (glTF,
+/// Unreal, Unity, Godot, Filament), Blinn-Phong for log-power gloss and Beckmann m.
+inline Brdf glossBrdf(const GlossEncoding& encoding) {
+    const GlossKind k = encoding.kind();
+    return k == GlossKind::GgxRoughness || k == GlossKind::GgxAlpha || k == GlossKind::Smoothness
+               ? Brdf::Ggx
+               : Brdf::BlinnPhong;
+}
 
 /// How normal variance relates to a specular power; each text makes its own choice.
 enum class VarianceConvention {

@@ -55,6 +55,12 @@ enum class Method {
     /// Shader: Σ_i w_i D_i(h) max(0, n_i·l), each D_i LEAN's slope-space Gaussian.
     // Runnalls 2007 and Williams & Maybeck 2003 (merge costs) on Olano & Baker 2010's lobes
     Mixture,
+    /// Fitted one lobe: per texel and mip, the isotropic lobe about the renormalized mean normal whose
+    /// shading (GGX for the roughness presets, Blinn-Phong for the others) is closest to the footprint's
+    /// true shading in relative L1 over evaluate's light/view pairs; the base power and vMF's are among
+    /// its candidates, so by that measure it is never worse than either (prefilter/fitted_lobe.h).
+    /// Stores: the gloss map. Shader: plain GGX (or Blinn-Phong) with the stored gloss.
+    Fitted,
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -231,7 +237,9 @@ struct TexelLobe {
 };
 
 /// The lobe of `method` for a footprint with base power s. Finite for every input: |Na| → 0,
-/// zero variance and s up to kMaxPower.
+/// zero variance and s up to kMaxPower. The mixture and the fitted lobe need the footprint's normals
+/// (lobe_mixture.h, fitted_lobe.h): from moments alone the mixture's lobe is LEAN's, and the fitted
+/// lobe is the base power's (its first candidate, and its lobe at mip 0).
 TexelLobe methodLobe(Method method, const NormalMoments& moments, double s, const MethodParams& params = {});
 
 /// methodLobe(...).power alone, without the lobe's normal (what a gloss texture stores).

@@ -142,6 +142,15 @@ inline constexpr double kExpFlushBelow = -707.0;
     return flush ? 0.0 : p * scale;
 }
 
+/// max(c, 0)^p as powCos computes it (p clamped by the caller, p = 0 gives 1, c >= 1 gives 1), without
+/// branches or calls (log2Positive, expNonPositive), so loops over it vectorise; results below e^-707
+/// are 0.
+[[gnu::always_inline]] inline double powCosFast(double c, double p) {
+    const double lg = kLn2<double> * log2Positive(std::max(c, std::numeric_limits<double>::min()));
+    const double v = expNonPositive(p * lg);
+    return (c > 0.0 || p == 0.0) ? v : 0.0;
+}
+
 /// True when x is neither NaN nor infinite.
 template <class T> constexpr bool isFinite(T x) {
     return std::isfinite(x);

@@ -1,0 +1,103 @@
+// The fitted one-lobe roughness: per texel and mip, the single isotropic lobe about the texel's mean
+// normal (the normal an engine rebuilds from the normal texture's mips) that shades closest to the
+// footprint's true shading, judged the way evaluate judges it: the relative L1 error over a set of
+// light/view pairs, under the engine's BRDF (GGX for the roughness presets).
+//
+// Why: one lobe widened by the normals' variance (vMF, variance-to-gloss, Toksvig) flattens the bright
+// core that most real footprints keep, because a few steep normals (grout, treads, bevels) carry most
+// of the variance; in a real engine it is often worse than leaving the roughness alone. The fit chooses
+// the lobe by how it shades instead, and its candidates always include the base power (the engine's
+// default) and vMF's, so by its measure it is never worse than either.
+//
+// How (per texel of mips >= 1; mip 0's footprint is one normal, whose lobe is the base power's exactly):
+//  1. the footprint's truth for every pair, mean_i f(n_i; s_i) with f the BRDF's lobe (lobe_shading.h),
+//     summed up the levels as evaluate's truth is;
+//  2. the error E(α) = Σ_pairs |f(n̄; α) − truth| at α_base, α_vmf and kFitGrid roughnesses spaced evenly
+//     in log α over [α_base, 1.25·max(α_base, α_vmf)] (capped at 1);
+//  3. a golden-section search of kFitSteps steps in the grid cell on each side of the best point; the
+//     best α seen wins.
+// The floor (FittedLobeOptions::floor) replaces 2–3 with a brute-force scan: kFloorGrid roughnesses
+// evenly in log α from min(kFloorMinAlpha, α_base/2) to 1, α_base and α_vmf, and a 30-step golden
+// refinement about the best: the best one isotropic lobe can do, printed beside the fit by evaluate
+// --floor.
+#pragma once
+
+#include <burnish/core/prefilter/normal_pyramid.h>
+#include <burnish/core/shading/lobe_shading.h>
+
+#include <functional>
+#include <vector>
+
+namespace burnish {
+
+/// Roughnesses the fit's first scan tries between the base and vMF's (besides those two).
+inline constexpr int kFitGrid = 6;
+/// Golden-section steps the fit refines its best scan point with.
+inline constexpr int kFitSteps = 8;
+/// Roughnesses the floor's brute-force scan tries, evenly in log α from kFloorMinAlpha to 1.
+inline constexpr int kFloorGrid = 160;
+inline constexpr double kFloorMinAlpha = 1e-3;
+
+struct FittedLobeOptions {
+    Brdf brdf = Brdf::Ggx;
+    /// The pairs the error is summed over (evaluate's defaults).
+    std::vector<DirectionPair> directions = directionPairs({});
+    /// The brute-force floor instead of the fit.
+    bool floor = false;
+    /// Levels below this (and 0) are not fitted and their moments not read: a bake that skips its largest
+    /// levels (BakeOptions::largestLevel) from a pyramid that released them. Their powers stay 0.
+    int firstLevel = 1;
+};
+
+/// Per level and texel, the fitted lobe's power (the isotropic Blinn-Phong power; GGX α² = 2/(p+2)).
+class FittedPyramid {
+public:
+    /// The base power of texel (x, y) of level k: the engine's default roughness there (the authored
+    /// power as the bake filters it, or the one base power).
+    using BasePower = std::function<double(int k, int x, int y)>;
+
+    /// Fits levels 1..lastLevel (lastLevel < 0: every level) of `pyramid`. The lobe's normal is the
+    /// renormalized mean of pyramid.moments (its own kernel: the normal the bake stores); the truth
+    /// is the box footprint's, each finest normal with texelPowers[i] (row-major over the finest
+    /// level) or s. vMF's candidate is methodPower(Vmf) of the same moments and base power.
+    /// Deterministic on any number of threads. `cancelled` (if set) is polled between batches; a
+    /// raised flag returns an empty pyramid (levelCount() 0).
+    static FittedPyramid build(const NormalPyramid& pyramid, const BasePower& basePower,
+                               const std::vector<double>* texelPowers, double s, int lastLevel,
+                               const FittedLobeOptions& options, const std::function<bool()>& cancelled = {});
+
+    int levelCount() const { return int(m_levels.size()); }
+    /// The fitted power of texel (x, y) of level k (k >= 1: level 0 is not fitted, its lobe is the
+    /// base power's).
+    double power(int k, int x, int y) const {
+        const Level& l = m_levels[size_t(k)];
+        return double(l.power[size_t(y) * size_t(l.width) + size_t(x)]);
+    }
+    /// Frees level k's powers once nothing reads them again.
+    void releaseLevel(int k) { m_levels[size_t(k)].power = {}; }
+
+private:
+    struct Level {
+        int width = 0, height = 0;
+        std::vector<float> power;
+    };
+    std::vector<Level> m_levels;
+};
+
+/// The best α for one texel (the fit's search, or the floor's with floor = true): `truth` the footprint's
+/// value per pair, (NoH, NoL, NoV) of the lobe's normal per pair, the base and vMF's α. Exposed for the
+/// tests: E(result) <= min(E(alphaBase), E(alphaVmf)) always.
+double fitTexelAlpha(Brdf brdf, const double* truth, const double* NoH, const double* NoL, const double* NoV,
+                     size_t pairs, double alphaBase, double alphaVmf, bool floor);
+
+/// The ground truth of `count` finest normals (x, y, z in three arrays) for pair d under `brdf`:
+/// isotropicLobeShading about each normal, with its own power powers[i], or s for all when powers is
+/// null. Branch-free loops (vectorised): the truth of evaluate and of the fit.
+void truthValues(Brdf brdf, const double* nx, const double* ny, const double* nz, const double* powers,
+                 double s, size_t count, const DirectionPair& d, double* out);
+
+/// E(α) of one texel: Σ_pairs |lobe(α) − truth| (the fit's objective).
+double fitTexelError(Brdf brdf, const double* truth, const double* NoH, const double* NoL, const double* NoV,
+                     size_t pairs, double alpha);
+
+} // namespace burnish

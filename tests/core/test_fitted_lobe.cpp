@@ -1,0 +1,246 @@
+// The GGX specular term, evaluate's GGX truth and the fitted one-lobe roughness.
+#include "random_normals.h"
+
+#include <burnish/core/bake/bake.h>
+#include <burnish/core/eval/evaluate.h>
+#include <burnish/core/prefilter/fitted_lobe.h>
+#include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/shading/ggx_specular.h>
+#include <burnish/core/shading/ndf.h>
+#include <burnish/core/shading/visibility.h>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+using namespace burnish;
+
+namespace {
+
+// A map whose footprints mix a flat majority with a few steep normals: the case where one lobe widened
+// by the variance flattens the core (grout, treads, bevels).
+NormalMap flatWithSteepNormals(int size, double steepShare, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    auto flat = test::gaussianSlopes(size * size, 0.03, seed + 1);
+    for (auto& n : flat)
+        if (u(rng) < steepShare) {
+            const double phi = 6.283185307179586 * u(rng), tilt = 0.6 + 0.4 * u(rng);
+            n = glm::vec3(glm::normalize(
+                glm::dvec3(std::sin(tilt) * std::cos(phi), std::sin(tilt) * std::sin(phi), std::cos(tilt))));
+        }
+    return makeNormalMap(size, size, std::move(flat));
+}
+
+double rowError(const EvaluationResult& r, Method m, int mip, bool floor = false) {
+    for (const MipError& e : r.errors)
+        if (e.method == m && e.mip == mip && e.floor == floor && !e.betweenTexels) return e.relativeL1;
+    return -1.0;
+}
+
+} // namespace
+
+TEST(GgxSpecular, IsTheNdfTimesTheVisibilityOverFourTimesTheCosine) {
+    for (double alpha : {kMinRoughness, 0.01, 0.088, 0.3, 0.7, 1.0})
+        for (double noh : {0.01, 0.5, 0.9, 0.999, 1.0})
+            for (double nol : {1e-3, 0.2, 0.8, 1.0})
+                for (double nov : {-0.3, 1e-3, 0.5, 1.0}) {
+                    const double expected = ggxNdf(noh, alpha) *
+                                            visibilitySmithGgxCorrelated(nol, nov, alpha) / 4.0 *
+                                            saturate(nol);
+                    EXPECT_NEAR(ggxSpecularTerm(noh, nol, nov, alpha), expected, 1e-12 * expected)
+                        << alpha << " " << noh << " " << nol << " " << nov;
+                }
+}
+
+TEST(GgxSpecular, FiniteAndZeroBehindForEveryInput) {
+    const double nan = std::numeric_limits<double>::quiet_NaN(),
+                 inf = std::numeric_limits<double>::infinity();
+    for (double a : {nan, -1.0, 0.0, 1e-9, 0.5, 1.0, 5.0, inf})
+        for (double c : {nan, -1.0, 0.0, 1e-7, 0.5, 1.0, 2.0, inf})
+            for (double l : {nan, -0.5, 0.0, 1e-7, 1.0, inf})
+                for (double v : {nan, -0.5, 0.0, 1.0, inf}) {
+                    const double x = ggxSpecularTerm(c, l, v, a);
+                    EXPECT_TRUE(std::isfinite(x) && x >= 0.0) << a << " " << c << " " << l << " " << v;
+                    if (!(c > 0.0) || !(l > 0.0)) EXPECT_EQ(x, 0.0);
+                    EXPECT_TRUE(std::isfinite(ggxSpecularTerm(float(c), float(l), float(v), float(a))));
+                }
+}
+
+TEST(FittedLobe, NeverWorseThanTheBaseOrVmfAndTheFloorIsNoWorse) {
+    // Random footprints' truths under the GGX truth, at evaluate's pairs.
+    const auto dirs = directionPairs({});
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int trial = 0; trial < 200; ++trial) {
+        const double s = std::pow(10.0, 1.0 + 5.0 * u(rng));
+        const auto normals = test::gaussianSlopes(16, 0.02 + 0.5 * u(rng), unsigned(trial));
+        glm::dvec3 mean(0.0);
+        for (const auto& n : normals)
+            mean += glm::dvec3(n);
+        const glm::dvec3 nbar = glm::normalize(mean);
+        std::vector<double> truth(dirs.size(), 0.0), noh, nol, nov;
+        for (size_t d = 0; d < dirs.size(); ++d) {
+            for (const auto& n : normals)
+                truth[d] += isotropicLobeShading(Brdf::Ggx, glm::dot(glm::dvec3(n), dirs[d].h),
+                                                 glm::dot(glm::dvec3(n), dirs[d].l),
+                                                 glm::dot(glm::dvec3(n), dirs[d].v), s) /
+                            double(normals.size());
+            noh.push_back(glm::dot(nbar, dirs[d].h));
+            nol.push_back(glm::dot(nbar, dirs[d].l));
+            nov.push_back(glm::dot(nbar, dirs[d].v));
+        }
+        const double aBase = ggxAlphaFromPower(s);
+        const double aVmf = ggxAlphaFromPower(1.0 / (1.0 / s + 1.0 / vmfKappa(glm::length(mean) / 16.0)));
+        auto E = [&](double a) {
+            return fitTexelError(Brdf::Ggx, truth.data(), noh.data(), nol.data(), nov.data(), dirs.size(), a);
+        };
+        const double fit = fitTexelAlpha(Brdf::Ggx, truth.data(), noh.data(), nol.data(), nov.data(),
+                                         dirs.size(), aBase, aVmf, false);
+        const double floor = fitTexelAlpha(Brdf::Ggx, truth.data(), noh.data(), nol.data(), nov.data(),
+                                           dirs.size(), aBase, aVmf, true);
+        ASSERT_TRUE(std::isfinite(fit) && fit > 0.0 && fit <= 1.0);
+        // The fit compares in eight-lane sums: the same figure as E's plain sum to rounding.
+        const double slack = 1e-12 * E(aBase);
+        EXPECT_LE(E(fit), E(aBase) + slack) << trial;
+        EXPECT_LE(E(fit), E(aVmf) + slack) << trial;
+        EXPECT_LE(E(floor), E(fit) * 1.02 + slack) << trial; // the dense search finds at least as good
+    }
+}
+
+TEST(FittedLobe, FlatMapKeepsTheBasePowerAndTheFitIsTheSameOnAnyThreadCount) {
+    const NormalMap flat = makeNormalMap(16, 16, std::vector<glm::vec3>(256, glm::vec3(0.0f, 0.0f, 1.0f)));
+    const auto pyramid =
+        NormalPyramid::build(std::shared_ptr<const NormalMap>(&flat, [](const NormalMap*) {}));
+    const FittedPyramid f =
+        FittedPyramid::build(pyramid, [](int, int, int) { return 256.0; }, nullptr, 256.0, -1, {});
+    for (int k = 1; k < f.levelCount(); ++k)
+        EXPECT_NEAR(f.power(k, 0, 0), 256.0, 1e-3) << k;
+
+    const NormalMap map = flatWithSteepNormals(64, 0.08, 3);
+    const auto shared = std::shared_ptr<const NormalMap>(&map, [](const NormalMap*) {});
+    const auto p = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Tent});
+    auto fitAll = [&] {
+        return FittedPyramid::build(p, [](int, int, int) { return 256.0; }, nullptr, 256.0, -1, {});
+    };
+    const FittedPyramid many = fitAll();
+    std::optional<FittedPyramid> one;
+    {
+        tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+        one.emplace(fitAll());
+    }
+    for (int k = 1; k < many.levelCount(); ++k)
+        for (int y = 0; y < p.level(k).height; ++y)
+            for (int x = 0; x < p.level(k).width; ++x) {
+                ASSERT_EQ(many.power(k, x, y), one->power(k, x, y)) << k << " " << x << " " << y;
+                ASSERT_TRUE(std::isfinite(many.power(k, x, y)) && many.power(k, x, y) > 0.0);
+            }
+}
+
+TEST(FittedLobe, EvaluateUnderGgxMatchesItsScalarReference) {
+    const NormalMap map = flatWithSteepNormals(16, 0.1, 11);
+    const auto shared = std::shared_ptr<const NormalMap>(&map, [](const NormalMap*) {});
+    const NormalPyramid pyramid = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
+    for (double s : {4.0, 256.0, 1e6}) {
+        EvaluateOptions options;
+        options.brdf = Brdf::Ggx;
+        options.methods = methodsUnder(Brdf::Ggx);
+        options.basePowers = {s};
+        options.lastMip = 4;
+        auto result = evaluateMethods(map, options);
+        ASSERT_TRUE(result.ok()) << result.error();
+        FittedLobeOptions fit;
+        fit.directions = result->directions;
+        const FittedPyramid fitted = FittedPyramid::build(
+            pyramid, [s](int, int, int) { return s; }, nullptr, s, 4, fit);
+        for (const MipError& e : result->errors) {
+            double absSum = 0.0, truthSum = 0.0, methodSum = 0.0;
+            const PyramidLevel& level = pyramid.level(e.mip);
+            for (const auto& d : result->directions)
+                for (int y = 0; y < level.height; ++y)
+                    for (int x = 0; x < level.width; ++x) {
+                        const double truth = groundTruthTexel(pyramid, e.mip, x, y, s, d, Brdf::Ggx);
+                        TexelLobe lobe = methodLobe(e.method, pyramid.boxMoments(e.mip, x, y), s);
+                        if (e.method == Method::Fitted) lobe.power = fitted.power(e.mip, x, y);
+                        const double value = methodValue(lobe, d, Brdf::Ggx);
+                        ASSERT_TRUE(std::isfinite(value));
+                        absSum += std::abs(value - truth), truthSum += truth, methodSum += value;
+                    }
+            const std::string what =
+                variantLabel(variantOf(e)) + " s " + std::to_string(s) + " mip " + std::to_string(e.mip);
+            EXPECT_NEAR(e.relativeL1, absSum / truthSum, 1e-9 * (absSum / truthSum) + 1e-14) << what;
+            EXPECT_NEAR(e.energyRatio, methodSum / truthSum, 1e-9 * (methodSum / truthSum)) << what;
+        }
+    }
+}
+
+TEST(FittedLobe, BeatsNaiveAndVmfWhereAFewSteepNormalsCarryTheVarianceAndSitsOnTheFloor) {
+    const NormalMap map = flatWithSteepNormals(128, 0.05, 5);
+    EvaluateOptions options;
+    options.brdf = Brdf::Ggx;
+    options.methods = {Method::Naive, Method::Vmf, Method::Fitted};
+    options.basePowers = {256.0};
+    options.lastMip = 6;
+    options.floor = true;
+    auto result = evaluateMethods(map, options);
+    ASSERT_TRUE(result.ok()) << result.error();
+    for (int mip = 1; mip <= 6; ++mip) {
+        const double fitted = rowError(*result, Method::Fitted, mip),
+                     floor = rowError(*result, Method::Fitted, mip, true);
+        EXPECT_LE(fitted, rowError(*result, Method::Naive, mip) + 1e-12) << mip;
+        EXPECT_LE(fitted, rowError(*result, Method::Vmf, mip) + 1e-12) << mip;
+        EXPECT_LE(fitted, 1.02 * floor) << mip;
+        EXPECT_GT(floor, 0.0);
+    }
+    // Where the footprint holds many steep normals, vMF widens the one lobe past the flat core.
+    EXPECT_LT(rowError(*result, Method::Fitted, 6), 0.75 * rowError(*result, Method::Vmf, 6));
+}
+
+TEST(FittedLobe, GgxRefusesTheSlopeSpaceMethodsAndTheEnergySplit) {
+    const NormalMap map = flatWithSteepNormals(16, 0.1, 2);
+    EvaluateOptions options;
+    options.brdf = Brdf::Ggx;
+    options.methods = {Method::Naive, Method::Lean};
+    auto r = evaluateMethods(map, options);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().find("no GGX form"), std::string::npos) << r.error();
+    options.methods = {Method::Naive};
+    options.energySplit = true;
+    EXPECT_FALSE(evaluateMethods(map, options).ok());
+}
+
+TEST(FittedLobe, BakeStoresTheFitAboveMipZeroAndTheBasePowerAtIt) {
+    const NormalMap map = flatWithSteepNormals(32, 0.1, 9);
+    BakeOptions options;
+    options.method = Method::Fitted;
+    options.encoding = GlossEncoding::ggxRoughness();
+    options.basePower = 256.0;
+    options.pyramid = {BorderMode::Wrap, FilterKernel::Box};
+    auto baked = bake(map, options);
+    ASSERT_TRUE(baked.ok()) << baked.error();
+    const BakedTexture* gloss = baked->find(TextureRole::Gloss);
+    ASSERT_NE(gloss, nullptr);
+    const auto shared = std::shared_ptr<const NormalMap>(&map, [](const NormalMap*) {});
+    const NormalPyramid pyramid = NormalPyramid::build(shared, options.pyramid);
+    FittedLobeOptions fit; // GGX: the encoding's engine
+    const FittedPyramid fitted = FittedPyramid::build(
+        pyramid, [](int, int, int) { return 256.0; }, nullptr, 256.0, -1, fit);
+    const float base = float(options.encoding.value(256.0));
+    EXPECT_NEAR(gloss->mips[0].texels[0], base, 1e-6);
+    int differ = 0;
+    for (int k = 1; k < int(gloss->mips.size()); ++k) {
+        const TextureMip& mip = gloss->mips[size_t(k)];
+        for (int y = 0; y < mip.height; ++y)
+            for (int x = 0; x < mip.width; ++x) {
+                const float stored = mip.texels[size_t(y) * size_t(mip.width) + size_t(x)];
+                EXPECT_NEAR(stored, float(options.encoding.value(fitted.power(k, x, y))), 1e-6) << k;
+                differ += std::abs(stored - base) > 1e-3f;
+            }
+    }
+    EXPECT_GT(differ, 0); // the fit moved some texels off the base roughness
+}

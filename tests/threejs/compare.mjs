@@ -1,0 +1,174 @@
+// Burnish's one-lobe roughness chains rendered by a real third-party client, three.js in headless
+// Chromium, against that client's own supersampled reference (page.html has the scene).
+//
+//   node tests/threejs/compare.mjs --burnish build/bin/burnish --maps A.png,B.png [--distances 2,8,32]
+//        [--methods vmf,variance-to-gloss,fitted] [--power 256] [--supersample 32] [--previews DIR]
+//        [--assert-never-worse fitted] [--json FILE]
+//
+// Each map is baked with the gltf preset (8-bit PNG, one file per mip, as an engine receives it) once per
+// method; three.js draws the plane with the map's own PNG (its mips) and constant roughness ("three.js
+// alone"), then with each method's roughness mip chain as a DataTexture; the reference draws the finest
+// normals (no mips) supersampled. Printed per map and distance: relative L1 and energy against the
+// reference, the ratio to three.js alone, and the reference's own noise (a second reference shifted by
+// half a sample). --assert-never-worse M exits 1 when M is worse than three.js alone by more than that
+// noise at any distance (the test suite's check).
+import {spawnSync} from 'node:child_process';
+import fs from 'node:fs';
+import http from 'node:http';
+import os from 'node:os';
+import path from 'node:path';
+import {fileURLToPath} from 'node:url';
+import puppeteer from 'puppeteer-core';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+
+function parseArgs(argv) {
+    const o = {distances: [2, 8, 32], methods: ['vmf', 'variance-to-gloss', 'fitted'], power: 256, supersample: 32,
+               maps: [], burnish: '', previews: '', assert: '', json: '',
+               chromium: process.env.BURNISH_CHROMIUM || '/usr/bin/chromium'};
+    for (let i = 2; i < argv.length; ++i) {
+        const a = argv[i], v = argv[i + 1];
+        const take = () => { ++i; if (v === undefined) throw new Error(`${a} needs a value`); return v; };
+        if (a === '--burnish') o.burnish = take();
+        else if (a === '--maps') o.maps = take().split(',').filter(Boolean);
+        else if (a === '--distances') o.distances = take().split(',').map(Number);
+        else if (a === '--methods') o.methods = take().split(',').filter(Boolean);
+        else if (a === '--power') o.power = Number(take());
+        else if (a === '--supersample') o.supersample = Number(take());
+        else if (a === '--previews') o.previews = take();
+        else if (a === '--assert-never-worse') o.assert = take();
+        else if (a === '--json') o.json = take();
+        else if (a === '--chromium') o.chromium = take();
+        else throw new Error(`unknown argument ${a}`);
+    }
+    if (!o.burnish || !o.maps.length) throw new Error('give --burnish BIN and --maps A.png[,B.png...]');
+    if (o.distances.some(d => !(d > 0)) || !(o.power > 0) || !(o.supersample >= 1))
+        throw new Error('distances, power and supersample must be positive');
+    return o;
+}
+
+// Every level of one file of a bake: the file, then its _mipK siblings, in order.
+function chainFiles(dir, stem, file) {
+    const out = [path.join(dir, `${stem}_${file}.png`)];
+    for (let k = 1; fs.existsSync(path.join(dir, `${stem}_${file}_mip${k}.png`)); ++k)
+        out.push(path.join(dir, `${stem}_${file}_mip${k}.png`));
+    return out;
+}
+
+function bake(o, map, method, out) {
+    const r = spawnSync(o.burnish, ['bake', map, '--preset', 'gltf', '--method', method, '--power', String(o.power),
+                                    '--format', 'png8', '--out', out, '--force', '--allow-implausible'],
+                        {encoding: 'utf8'});
+    if (r.status !== 0) throw new Error(`burnish bake ${map} --method ${method}: ${r.stderr.trim()}`);
+    return chainFiles(out, path.basename(map).replace(/\.[^.]+$/, ''), 'metallicRoughness');
+}
+
+// Serves three's module, the page and the files it is told about, on 127.0.0.1 only.
+function serve(files) {
+    const types = {'.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.png': 'image/png'};
+    const server = http.createServer((req, res) => {
+        const url = decodeURIComponent(req.url.split('?')[0]);
+        let file = null;
+        if (url === '/page.html') file = path.join(here, 'page.html');
+        else if (url.startsWith('/three/build/')) file = path.join(here, 'node_modules', 'three', 'build', path.basename(url));
+        else if (files.has(url)) file = files.get(url);
+        if (!file || !fs.existsSync(file)) {
+            res.writeHead(404).end();
+            return;
+        }
+        res.writeHead(200, {'Content-Type': types[path.extname(file)] || 'application/octet-stream'});
+        fs.createReadStream(file).pipe(res);
+    });
+    return new Promise(resolve => server.listen(0, '127.0.0.1', () => resolve(server)));
+}
+
+async function main() {
+    const o = parseArgs(process.argv);
+    const work = fs.mkdtempSync(path.join(os.tmpdir(), 'burnish-threejs-'));
+    const files = new Map();
+    const cases = [];
+    try {
+        for (const [mi, map] of o.maps.entries()) {
+            files.set(`/map${mi}/normal.png`, map);
+            const chains = {};
+            for (const method of o.methods) {
+                const levels = bake(o, map, method, path.join(work, `m${mi}-${method}`));
+                chains[method] = levels.map((f, k) => {
+                    const url = `/map${mi}/${method}/${k}.png`;
+                    files.set(url, f);
+                    return url;
+                });
+            }
+            cases.push({map, normal: `/map${mi}/normal.png`, chains});
+        }
+        const server = await serve(files);
+        const port = server.address().port;
+        const browser = await puppeteer.launch({
+            executablePath: o.chromium,
+            args: ['--headless=new', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--no-sandbox',
+                   '--ignore-gpu-blocklist'],
+        });
+        const results = [];
+        let failed = false;
+        try {
+            const page = await browser.newPage();
+            page.on('pageerror', e => console.error(`page error: ${e.message}`));
+            await page.goto(`http://127.0.0.1:${port}/page.html`);
+            await page.waitForFunction('window.ready === true', {timeout: 60000});
+            // Base roughness of power s under the gltf preset's conversion: alpha = sqrt(2/(s+2)), r = sqrt(alpha).
+            const roughness = Math.sqrt(Math.sqrt(2 / (o.power + 2)));
+            for (const c of cases)
+                for (const d of o.distances) {
+                    const r = await page.evaluate(cfg => window.runCase(cfg), {
+                        normal: c.normal, chains: c.chains, minification: d, roughness, supersample: o.supersample,
+                        previews: Boolean(o.previews)});
+                    results.push({map: path.basename(c.map), distance: d, ...r});
+                    if (o.previews) {
+                        fs.mkdirSync(o.previews, {recursive: true});
+                        for (const [name, url] of Object.entries(r.previews))
+                            fs.writeFileSync(path.join(o.previews, `${path.basename(c.map, '.png')}-${d}x-${name.replace(/[^a-z0-9.-]+/gi, '_')}.png`),
+                                             Buffer.from(url.split(',')[1], 'base64'));
+                    }
+                    const alone = r.results['three.js alone'];
+                    const line = [`${path.basename(c.map)} ${d}x (reference noise ${r.noise.relativeL1.toFixed(4)}, ` +
+                                  `${r.seconds.toFixed(1)} s):`];
+                    for (const [name, v] of Object.entries(r.results))
+                        line.push(`  ${name.padEnd(18)} rel. L1 ${v.relativeL1.toFixed(4)}  energy ${v.energy.toFixed(3)}  ` +
+                                  `ratio to three.js alone ${(v.relativeL1 / alone.relativeL1).toFixed(3)}`);
+                    console.log(line.join('\n'));
+                    if (o.assert && r.results[o.assert] &&
+                        r.results[o.assert].relativeL1 > alone.relativeL1 + r.noise.relativeL1) {
+                        console.log(`  FAIL: ${o.assert} is worse than three.js alone beyond the reference's noise`);
+                        failed = true;
+                    }
+                }
+            if (results.length) console.log(`renderer: ${results[0].renderer}`);
+        } finally {
+            await browser.close();
+            server.close();
+        }
+        // Means per distance, each method's ratio to three.js alone.
+        const names = Object.keys(results[0].results);
+        console.log('\n| distance | ' + names.map(n => `${n} rel. L1 (energy)`).join(' | ') + ' | ' +
+                    names.slice(1).map(n => `${n} / alone`).join(' | ') + ' |');
+        console.log('| --- |' + ' ---: |'.repeat(2 * names.length - 1));
+        for (const d of o.distances) {
+            const at = results.filter(r => r.distance === d);
+            const mean = (n, k) => at.reduce((a, r) => a + r.results[n][k], 0) / at.length;
+            const ratio = n => at.reduce((a, r) => a + r.results[n].relativeL1 / r.results['three.js alone'].relativeL1, 0) / at.length;
+            console.log(`| ${d}x | ` + names.map(n => `${mean(n, 'relativeL1').toFixed(4)} (${mean(n, 'energy').toFixed(3)})`).join(' | ') +
+                        ' | ' + names.slice(1).map(n => ratio(n).toFixed(3)).join(' | ') + ' |');
+        }
+        if (o.json) fs.writeFileSync(o.json, JSON.stringify(results.map(({previews, ...r}) => r), null, 1));
+        if (o.assert) console.log(failed ? `${o.assert}: worse than three.js alone in some case` :
+                                           `${o.assert}: never worse than three.js alone beyond the reference's noise`);
+        process.exitCode = failed ? 1 : 0;
+    } finally {
+        fs.rmSync(work, {recursive: true, force: true});
+    }
+}
+
+main().catch(e => {
+    console.error(`compare.mjs: ${e.message}`);
+    process.exitCode = 2;
+});

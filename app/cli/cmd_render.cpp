@@ -662,7 +662,7 @@ const CommandRegistration registration{
         sub->add_option(
                "--method", o->method,
                "Prefiltering method: naive, toksvig, toksvig-map, variance-to-gloss (default), lean, "
-               "clean, vmf, mixture.")
+               "clean, vmf, mixture, fitted.")
             ->type_name("NAME");
         sub->add_option("--lobes", o->lobes,
                         "Lobes per texel of --method mixture, 1..4 (default 3; 1 is LEAN).")

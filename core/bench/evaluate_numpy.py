@@ -37,7 +37,8 @@
 #   alpha^2 = 2/(s+2) clamped to [kMinRoughness, 1] and n.v clamped to [1e-6, 1], against each isotropic
 #   method's one GGX lobe about its mean normal with the alpha of its power (naive, toksvig, vmf; lean and
 #   clean have no GGX form). With --methods floor: the one-lobe floor by an independent dense search
-#   (FLOOR_GRID alphas evenly in log alpha over [1e-3, 1] per texel, no refinement), which the C++
+#   (FLOOR_GRID alphas evenly in log alpha over [alpha_base, 1] per texel, no refinement: no lobe sharper
+#   than the base, as the C++ fit and floor), which the C++
 #   fitted lobe and its --floor row are compared with (their rows must lie at or below it, to the grid's
 #   spacing).
 # And the plain fit the lobe mixture is measured against, for any K:
@@ -406,7 +407,7 @@ def evaluate(n, powers, first_mip, last_mip, methods):
         lobes = {(m, k): method_lobe(m, levels[k], s)
                  for m in methods if m not in blurred and m not in em and m != "floor" for k in mips}
         # The floor's candidates: per texel and candidate alpha, sum over pairs of |lobe - truth|.
-        floor_alphas = np.exp(np.linspace(math.log(1e-3), 0.0, FLOOR_GRID))
+        floor_alphas = np.exp(np.linspace(math.log(float(ggx_alpha(s))), 0.0, FLOOR_GRID))
         floor_err = {k: np.zeros((FLOOR_GRID,) + levels[k]["mx"].shape) for k in mips} if "floor" in methods else {}
         floor_truth = {k: [] for k in floor_err}
         em_fits = {(m, k): em_lobes(m, n, k, s) for m in em for k in mips}

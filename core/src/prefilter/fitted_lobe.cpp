@@ -162,12 +162,16 @@ double fitTexelAlpha(Brdf brdf, const double* truth, const double* NoH, const do
     auto error = [&](double u) { return errorAt(std::exp(u)); };
     double lo, hi;
     int grid;
+    // Never sharper than the base: a lobe sharper than the footprint's own normals' lobes can hide its
+    // energy between the sampled pairs (a sparkle the measure cannot see) and score well on noisy
+    // footprints; the floor obeys the same bound.
+    lo = std::log(aBase);
     if (floor) {
-        lo = std::log(std::min(kFloorMinAlpha, 0.5 * aBase)), hi = 0.0, grid = kFloorGrid;
+        hi = 0.0, grid = kFloorGrid;
     } else {
-        lo = std::log(aBase), hi = std::log(std::min(1.0, 1.25 * std::max(aBase, aVmf))), grid = kFitGrid;
-        if (!(hi - lo > 1e-9)) return bestAlpha; // a flat footprint: the base is the lobe
+        hi = std::log(std::min(1.0, kFitReach * std::max(aBase, aVmf))), grid = kFitGrid;
     }
+    if (!(hi - lo > 1e-9)) return bestAlpha; // a flat footprint, or a base of α = 1: the base is the lobe
     // The scan: grid + 2 points from lo to hi, ends included.
     const int points = grid + 2;
     int bestIndex = 0;

@@ -12,13 +12,15 @@
 // How (per texel of mips >= 1; mip 0's footprint is one normal, whose lobe is the base power's exactly):
 //  1. the footprint's truth for every pair, mean_i f(n_i; s_i) with f the BRDF's lobe (lobe_shading.h),
 //     summed up the levels as evaluate's truth is;
-//  2. the error E(α) = Σ_pairs |f(n̄; α) − truth| at α_base, α_vmf and kFitGrid roughnesses spaced evenly
-//     in log α over [α_base, 1.25·max(α_base, α_vmf)] (capped at 1);
+//  2. the error E(α) = Σ_pairs |f(n̄; α) − truth| at α_base, α_vmf and kFitGrid + 2 roughnesses spaced
+//     evenly in log α over [α_base, kFitReach·max(α_base, α_vmf)] (capped at 1): never sharper than the
+//     base, since a lobe sharper than the footprint's own normals' lobes can hide its energy between the
+//     sampled pairs (a sparkle no finite set of pairs sees) and so score well where it would shimmer;
 //  3. a golden-section search of kFitSteps steps in the grid cell on each side of the best point; the
 //     best α seen wins.
 // The floor (FittedLobeOptions::floor) replaces 2–3 with a brute-force scan: kFloorGrid roughnesses
-// evenly in log α from min(kFloorMinAlpha, α_base/2) to 1, α_base and α_vmf, and a 30-step golden
-// refinement about the best: the best one isotropic lobe can do, printed beside the fit by evaluate
+// evenly in log α from α_base to 1, α_base and α_vmf, and a 30-step golden refinement about the best:
+// the best one isotropic lobe no sharper than the base can do, printed beside the fit by evaluate
 // --floor.
 #pragma once
 
@@ -30,13 +32,14 @@
 
 namespace burnish {
 
-/// Roughnesses the fit's first scan tries between the base and vMF's (besides those two).
-inline constexpr int kFitGrid = 6;
+/// Roughnesses the fit's first scan tries inside its range (besides its ends and the two candidates).
+inline constexpr int kFitGrid = 8;
+/// The fit's range reaches this far above the rougher of the base and vMF's α (capped at 1).
+inline constexpr double kFitReach = 4.0;
 /// Golden-section steps the fit refines its best scan point with.
 inline constexpr int kFitSteps = 8;
-/// Roughnesses the floor's brute-force scan tries, evenly in log α from kFloorMinAlpha to 1.
+/// Roughnesses the floor's brute-force scan tries, evenly in log α from α_base to 1.
 inline constexpr int kFloorGrid = 160;
-inline constexpr double kFloorMinAlpha = 1e-3;
 
 struct FittedLobeOptions {
     Brdf brdf = Brdf::Ggx;

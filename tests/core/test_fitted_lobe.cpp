@@ -104,7 +104,7 @@ TEST(FittedLobe, NeverWorseThanTheBaseOrVmfAndTheFloorIsNoWorse) {
                                          dirs.size(), aBase, aVmf, false);
         const double floor = fitTexelAlpha(Brdf::Ggx, truth.data(), noh.data(), nol.data(), nov.data(),
                                            dirs.size(), aBase, aVmf, true);
-        ASSERT_TRUE(std::isfinite(fit) && fit > 0.0 && fit <= 1.0);
+        ASSERT_TRUE(std::isfinite(fit) && fit > 0.0 && fit <= 1.0) << fit << " " << aBase << " " << aVmf;
         // The fit compares in eight-lane sums: the same figure as E's plain sum to rounding.
         const double slack = 1e-12 * E(aBase);
         EXPECT_LE(E(fit), E(aBase) + slack) << trial;

@@ -79,7 +79,7 @@ TEST(Presets, BuiltinsCarryTheDocumentedChoices) {
     EXPECT_EQ(unity.files[1].channels[0].parameter, "metallic");
     EXPECT_EQ(unity.files[1].channels[3].role, "gloss");
     EXPECT_EQ(get("godot").encoding.name(), "ggx-roughness");
-    EXPECT_EQ(get("filament").method, Method::Vmf);
+    EXPECT_EQ(get("filament").method, Method::Fitted);
     EXPECT_EQ(get("lean").method, Method::Lean);
     EXPECT_FALSE(exportFormatIsEightBit(get("lean").format));
     EXPECT_EQ(get("clean").method, Method::Clean);

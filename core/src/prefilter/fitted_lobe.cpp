@@ -189,7 +189,8 @@ double fitTexelAlpha(Brdf brdf, const double* truth, const double* NoH, const do
     }
     // Strictly better than the candidates by the same sum (eRefined is errorAt(exp(refined))), or the
     // better candidate itself: never worse than either.
-    return eRefined < eCandidates ? std::exp(refined) : bestAlpha;
+    // (α is clamped to 1 as ggxSpecularAlpha clamps it: the scan's top end may round a hair above.)
+    return eRefined < eCandidates ? std::min(std::exp(refined), 1.0) : bestAlpha;
 }
 
 FittedPyramid FittedPyramid::build(const NormalPyramid& pyramid, const BasePower& basePower,

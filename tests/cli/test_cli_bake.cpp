@@ -218,6 +218,8 @@ TEST(CliBake, ReportWritesTheGroundTruthEvaluationBesideTheTextures) {
     const auto evaluation =
         nlohmann::json::parse(burnish::readFile(dir / "o" / "report" / "evaluate.json").value());
     EXPECT_EQ(evaluation["base_powers"][0], 300.0); // the bake's power
+    EXPECT_EQ(evaluation["brdf"], "ggx");           // godot's engine shades GGX
+    EXPECT_EQ(job["method"], "fitted");             // the roughness presets' default
     EXPECT_EQ(evaluation["costs"].size(), 6u);      // every GGX method (godot), not only the baked one
     EXPECT_TRUE(fs::exists(dir / "o" / "report" / "evaluate-error-per-mip.png"));
 }

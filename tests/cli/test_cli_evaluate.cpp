@@ -8,7 +8,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -204,4 +206,42 @@ TEST(CliEvaluate, EnergySplitSaysWhereLeansEnergyGoes) {
     auto badAngle = runBurnish(common + " --steep-deg 90 --out " + (dir / "c").string());
     EXPECT_NE(badAngle.exitCode, 0);
     EXPECT_NE(badAngle.err.find("--steep-deg"), std::string::npos) << badAngle.err;
+}
+
+TEST(CliEvaluate, GgxTruthWithTheFloorAndThePresetsBrdf) {
+    burnish::test::TempDir dir;
+    const std::string in = writeBumpyMap(dir);
+    // --preset gltf takes the GGX truth: only the methods with a GGX form, the fitted lobe among them,
+    // and the floor beside it, which the fit reaches to 2 %.
+    auto r = runBurnish("evaluate " + in + " --preset gltf --floor --power 256 --bake-runs 1 --json --out " +
+                        (dir / "g").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["brdf"], "ggx");
+    std::map<std::string, std::map<int, double>> rows;
+    for (const auto& e : j["errors"])
+        rows[e["variant"].get<std::string>()][e["mip"].get<int>()] = e["relative_l1"].get<double>();
+    EXPECT_FALSE(rows.count("lean"));
+    EXPECT_FALSE(rows.count("mixture-k3"));
+    ASSERT_TRUE(rows.count("fitted") && rows.count("one-lobe floor") && rows.count("naive") &&
+                rows.count("vmf"));
+    for (const auto& [mip, fitted] : rows["fitted"]) {
+        EXPECT_LE(fitted, rows["naive"][mip] + 1e-12) << mip;
+        EXPECT_LE(fitted, rows["vmf"][mip] + 1e-12) << mip;
+        EXPECT_LE(fitted, 1.02 * rows["one-lobe floor"][mip]) << mip;
+    }
+    // Blinn-Phong without a preset; --brdf overrides the preset's.
+    r = runBurnish("evaluate " + in +
+                   " --preset gltf --brdf blinn-phong --methods lean --bake-runs 1 --json --out " +
+                   (dir / "b").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["brdf"], "blinn-phong");
+    // A slope-space method has no GGX form: one line, nothing written.
+    r = runBurnish("evaluate " + in + " --brdf ggx --methods lean --out " + (dir / "l").string());
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("no GGX form"), std::string::npos) << r.err;
+    EXPECT_EQ(lineCount(r.err), 1) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "l" / "evaluate.json"));
+    r = runBurnish("evaluate " + in + " --brdf phong --out " + (dir / "p").string());
+    EXPECT_NE(r.exitCode, 0);
 }

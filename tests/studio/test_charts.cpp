@@ -539,5 +539,31 @@ TEST(ChartsPanel, TheMainWindowHasAChartsDockWithAViewToggle) {
     EXPECT_TRUE(inViewMenu) << "the View menu toggles the Charts dock";
 }
 
+TEST(ErrorCostChart, ARoughnessPresetIsEvaluatedUnderGgxWithTheFittedLobe) {
+    // The gltf preset's engine shades GGX: the chart evaluates the methods with a GGX form, the fitted
+    // lobe among them (never above naive or vmf), and names the truth; LEAN has no point there.
+    MaterialDocument doc;
+    ASSERT_TRUE(doc.setPreset("gltf")) << "gltf preset";
+    ErrorCostChart chart(&doc);
+    QSignalSpy updated(&chart, &ErrorCostChart::methodsUpdated);
+    chart.evaluateNow();
+    ASSERT_TRUE(updated.wait(kWorkerTimeoutMs));
+    ASSERT_NE(chart.report(), nullptr) << chart.statusText().toStdString();
+    EXPECT_EQ(chart.report()->options.brdf, Brdf::Ggx);
+    EXPECT_NE(chart.methodSeries(Method::Fitted), nullptr);
+    EXPECT_EQ(chart.methodSeries(Method::Lean), nullptr);
+    EXPECT_NE(chart.statusText().indexOf("GGX"), -1) << chart.statusText().toStdString();
+    auto error = [&](Method m, int mip) {
+        for (const MipError& e : chart.report()->result.errors)
+            if (e.method == m && e.mip == mip && e.kernel == FilterKernel::Box && !e.betweenTexels)
+                return e.relativeL1;
+        return -1.0;
+    };
+    for (int mip = chart.report()->result.firstMip; mip <= chart.report()->result.lastMip; ++mip) {
+        EXPECT_LE(error(Method::Fitted, mip), error(Method::Naive, mip) + 1e-12) << mip;
+        EXPECT_LE(error(Method::Fitted, mip), error(Method::Vmf, mip) + 1e-12) << mip;
+    }
+}
+
 } // namespace
 } // namespace burnish::studio

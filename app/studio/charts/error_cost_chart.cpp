@@ -1,6 +1,8 @@
 #include "charts/error_cost_chart.h"
 #include "charts/chart_axes.h"
 
+#include <burnish/core/prefilter/gloss.h>
+
 #include <QChart>
 #include <QChartView>
 #include <QComboBox>
@@ -233,11 +235,13 @@ bool ErrorCostChart::evaluatesByItself() const {
 }
 
 QString ErrorCostChart::evaluationKey() const {
-    // The mixture is evaluated with the document's lobe count: another K is another evaluation.
-    return QString("%1 %2 %3")
+    // The mixture is evaluated with the document's lobe count: another K is another evaluation; and
+    // under the BRDF the preset's engine shades (GGX for the roughness presets).
+    return QString("%1 %2 %3 %4")
         .arg(quintptr(m_doc->maps().normal.get()))
         .arg(m_doc->power(), 0, 'g', 17)
-        .arg(m_doc->settings().mixtureLobes);
+        .arg(m_doc->settings().mixtureLobes)
+        .arg(qs(brdfName(glossBrdf(m_doc->preset().encoding))));
 }
 
 void ErrorCostChart::onDocumentChanged() {
@@ -261,15 +265,18 @@ void ErrorCostChart::evaluateNow() {
     std::shared_ptr<const NormalMap> map = m_doc->maps().normal;
     EvaluationReportOptions options;
     options.evaluate.basePowers = {m_doc->power()};
-    options.evaluate.methods = allMethods();
+    // The truth the preset's engine shades: GGX for the roughness presets, whose methods are those with
+    // a GGX form; LEAN's energy split (the "Energy kept" tab) is a Blinn-Phong measure.
+    options.evaluate.brdf = glossBrdf(m_doc->preset().encoding);
+    options.evaluate.methods = methodsUnder(options.evaluate.brdf);
     options.evaluate.mixtureLobes = {m_doc->settings().mixtureLobes};
-    options.evaluate.energySplit = true; // the "Energy kept" tab
+    options.evaluate.energySplit = options.evaluate.brdf == Brdf::BlinnPhong;
     options.bakeRuns = kBakeRuns;
     options.inputName = m_doc->settings().normalMapPath.isEmpty()
                             ? std::string(kSampleName)
                             : m_doc->settings().normalMapPath.toStdString();
     m_status->setText(QString("evaluating %1 methods on the %2×%3 normal map at power %4…")
-                          .arg(allMethods().size())
+                          .arg(options.evaluate.methods.size())
                           .arg(map->width)
                           .arg(map->height)
                           .arg(m_doc->power(), 0, 'g', 4));
@@ -493,7 +500,7 @@ void ErrorCostChart::showMethods() {
         if (!m_evaluating)
             m_status->setText(
                 QString("%1 methods on the %2×%3 map \"%4\", base power %5, mip %6 (%7×%8 texels), "
-                        "%9 directions; evaluated in %10 s. Cost: %11.")
+                        "%9 directions, %12 truth; evaluated in %10 s. Cost: %11.")
                     .arg(shown)
                     .arg(m_report->width)
                     .arg(m_report->height)
@@ -506,7 +513,9 @@ void ErrorCostChart::showMethods() {
                     .arg(m_report->result.directions.size())
                     .arg(m_report->result.seconds, 0, 'f', 2)
                     .arg(ns ? "median ns per lobe evaluation on one CPU core"
-                            : "bytes per texel at mip 0 in the recommended storage"));
+                            : "bytes per texel at mip 0 in the recommended storage")
+                    .arg(m_report->options.brdf == Brdf::Ggx ? "GGX (as this preset's engine shades)"
+                                                             : "Blinn-Phong"));
     } else if (!m_evaluating && m_status->text().isEmpty()) {
         m_status->setText("not evaluated yet: shows when the panel is visible, or press Evaluate now");
     }
@@ -518,6 +527,13 @@ void ErrorCostChart::showMethods() {
 
 void ErrorCostChart::showEnergy() {
     m_energyTable->setRowCount(0);
+    if (m_report && m_report->options.brdf == Brdf::Ggx) {
+        m_energyStatus->setText(
+            "Where LEAN's energy goes is measured under the Blinn-Phong truth; this preset's "
+            "engine shades GGX, where LEAN and the mixture have no form. Choose a "
+            "Blinn-Phong preset (blackops, exp2) to see it.");
+        return;
+    }
     if (!m_report || m_report->result.energySplits.empty()) {
         m_energyStatus->setText(
             m_evaluating ? "evaluating…"

@@ -239,9 +239,11 @@ const CommandRegistration registration{
                         "Engine preset (name or JSON file) whose BRDF the evaluation uses when --brdf is not "
                         "given.")
             ->type_name("NAME");
-        sub->add_flag("--floor", o->floor,
-                      "Also evaluate the one-lobe floor: per texel the best single isotropic roughness by a "
-                      "brute-force search (slow), as a row 'one-lobe floor' beside the fitted lobe.");
+        sub->add_flag(
+            "--floor", o->floor,
+            "Also evaluate the one-lobe floor: per texel the best single isotropic roughness, no sharper "
+            "than the base, by a brute-force search (slow), as a row 'one-lobe floor' beside the "
+            "fitted lobe.");
         sub->add_flag("--json", o->json, "Print the report as JSON on stdout instead of Markdown.");
         sub->add_flag(
             "--force", o->force,

@@ -67,7 +67,9 @@ TEST(GgxSpecular, FiniteAndZeroBehindForEveryInput) {
                 for (double v : {nan, -0.5, 0.0, 1.0, inf}) {
                     const double x = ggxSpecularTerm(c, l, v, a);
                     EXPECT_TRUE(std::isfinite(x) && x >= 0.0) << a << " " << c << " " << l << " " << v;
-                    if (!(c > 0.0) || !(l > 0.0)) EXPECT_EQ(x, 0.0);
+                    if (!(c > 0.0) || !(l > 0.0)) {
+                        EXPECT_EQ(x, 0.0) << a << " " << c << " " << l << " " << v;
+                    }
                     EXPECT_TRUE(std::isfinite(ggxSpecularTerm(float(c), float(l), float(v), float(a))));
                 }
 }
@@ -140,43 +142,6 @@ TEST(FittedLobe, FlatMapKeepsTheBasePowerAndTheFitIsTheSameOnAnyThreadCount) {
                 ASSERT_EQ(many.power(k, x, y), one->power(k, x, y)) << k << " " << x << " " << y;
                 ASSERT_TRUE(std::isfinite(many.power(k, x, y)) && many.power(k, x, y) > 0.0);
             }
-}
-
-TEST(FittedLobe, EvaluateUnderGgxMatchesItsScalarReference) {
-    const NormalMap map = flatWithSteepNormals(16, 0.1, 11);
-    const auto shared = std::shared_ptr<const NormalMap>(&map, [](const NormalMap*) {});
-    const NormalPyramid pyramid = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
-    for (double s : {4.0, 256.0, 1e6}) {
-        EvaluateOptions options;
-        options.brdf = Brdf::Ggx;
-        options.methods = methodsUnder(Brdf::Ggx);
-        options.basePowers = {s};
-        options.lastMip = 4;
-        auto result = evaluateMethods(map, options);
-        ASSERT_TRUE(result.ok()) << result.error();
-        FittedLobeOptions fit;
-        fit.directions = result->directions;
-        const FittedPyramid fitted = FittedPyramid::build(
-            pyramid, [s](int, int, int) { return s; }, nullptr, s, 4, fit);
-        for (const MipError& e : result->errors) {
-            double absSum = 0.0, truthSum = 0.0, methodSum = 0.0;
-            const PyramidLevel& level = pyramid.level(e.mip);
-            for (const auto& d : result->directions)
-                for (int y = 0; y < level.height; ++y)
-                    for (int x = 0; x < level.width; ++x) {
-                        const double truth = groundTruthTexel(pyramid, e.mip, x, y, s, d, Brdf::Ggx);
-                        TexelLobe lobe = methodLobe(e.method, pyramid.boxMoments(e.mip, x, y), s);
-                        if (e.method == Method::Fitted) lobe.power = fitted.power(e.mip, x, y);
-                        const double value = methodValue(lobe, d, Brdf::Ggx);
-                        ASSERT_TRUE(std::isfinite(value));
-                        absSum += std::abs(value - truth), truthSum += truth, methodSum += value;
-                    }
-            const std::string what =
-                variantLabel(variantOf(e)) + " s " + std::to_string(s) + " mip " + std::to_string(e.mip);
-            EXPECT_NEAR(e.relativeL1, absSum / truthSum, 1e-9 * (absSum / truthSum) + 1e-14) << what;
-            EXPECT_NEAR(e.energyRatio, methodSum / truthSum, 1e-9 * (methodSum / truthSum)) << what;
-        }
-    }
 }
 
 TEST(FittedLobe, BeatsNaiveAndVmfWhereAFewSteepNormalsCarryTheVarianceAndSitsOnTheFloor) {

@@ -573,11 +573,15 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
         if (options.energySplit) return Error{"the energy split is LEAN's, under the Blinn-Phong truth only"};
         const std::vector<Method> ggx = methodsUnder(Brdf::Ggx);
         for (Method m : options.methods)
-            if (std::find(ggx.begin(), ggx.end(), m) == ggx.end())
+            if (std::find(ggx.begin(), ggx.end(), m) == ggx.end()) {
+                std::string names;
+                for (Method g : ggx)
+                    names += (names.empty() ? "" : ", ") + std::string(methodName(g));
                 return Error{"method '" + std::string(methodName(m)) +
                              "' is a slope-space Gaussian with no GGX form; --brdf ggx evaluates the methods "
-                             "an engine stores as one roughness (naive, toksvig, toksvig-map, "
-                             "variance-to-gloss, vmf, fitted)"};
+                             "an engine stores as one roughness (" +
+                             names + ")"};
+            }
     }
 
     // The pyramid only borrows the map for the duration of this call.

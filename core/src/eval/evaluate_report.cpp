@@ -111,11 +111,13 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
     const NormalPyramid pyramid =
         NormalPyramid::build(borrowed, {options.evaluate.border, FilterKernel::Box});
     const double s = report.options.basePowers.front();
-    // The bake timed with the authored gloss map too (its variance pyramid costs time), stored in
-    // the bake's default encoding.
+    // The bake timed in the encoding of the engine the truth is for (GGX roughness under GGX, where the
+    // fitted lobe fits GGX; else the bake's default), with the authored gloss map too (its variance
+    // pyramid costs time) stored in it.
+    const GlossEncoding encoding =
+        options.evaluate.brdf == Brdf::Ggx ? GlossEncoding::ggxRoughness() : BakeOptions{}.encoding;
     std::optional<std::vector<float>> authoredGloss;
     if (options.evaluate.texelPowers) {
-        const GlossEncoding encoding = BakeOptions{}.encoding;
         authoredGloss.emplace();
         for (double p : *options.evaluate.texelPowers)
             authoredGloss->push_back(float(encoding.value(p)));
@@ -139,15 +141,8 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
         bakeOptions.params = params;
         bakeOptions.pyramid = {options.evaluate.border, FilterKernel::Box};
         bakeOptions.mipCount = report.result.lastMip + 1;
+        bakeOptions.encoding = encoding;
         bakeOptions.authoredGloss = authoredGloss;
-        // Under GGX the bake a roughness preset runs (the fitted lobe fits GGX for its encoding).
-        if (options.evaluate.brdf == Brdf::Ggx) {
-            bakeOptions.encoding = GlossEncoding::ggxRoughness();
-            if (bakeOptions.authoredGloss)
-                for (size_t t = 0; t < bakeOptions.authoredGloss->size(); ++t)
-                    (*bakeOptions.authoredGloss)[t] =
-                        float(bakeOptions.encoding.value((*options.evaluate.texelPowers)[t]));
-        }
         std::vector<double> runs;
         for (int r = 0; r < options.bakeRuns; ++r) {
             if (cancelled()) return Error{std::string(kCancelledMessage)};
@@ -238,8 +233,8 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
               "D_s(n_i.h) max(0, n_i.l), D_s the normalized Blinn-Phong NDF of the base power s. "
               "Each method: its own NDF times max(0, n.l) with its normal, from box-footprint moments. ";
     if (r.options.floor)
-        md << "The one-lobe floor: per texel the best one isotropic lobe about the mean normal, by a "
-              "brute-force search of its roughness (what no single roughness can beat). ";
+        md << "The one-lobe floor: per texel the best one isotropic lobe about the mean normal no sharper "
+              "than the base, by a brute-force search of its roughness (what no such roughness can beat). ";
     md << "Relative L1 = sum|M - GT| / sum GT; energy = sum M / sum GT (1 is exact). "
           "Rows marked (tent) or (gaussian) use the kernel-filtered moments a bake stores instead of the "
           "footprint's own, against the same ground truth.\n\n";

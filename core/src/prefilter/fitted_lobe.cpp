@@ -47,26 +47,23 @@ template <Brdf kBrdf, bool kOwnPowers>
     }
 }
 
-BURNISH_AVX512_CLONES void truthBlinnPhong(const double* nx, const double* ny, const double* nz, double s,
-                                           size_t count, const DirectionPair& d, double* out) {
-    truthLoop<Brdf::BlinnPhong, false>(nx, ny, nz, nullptr, s, count, d, out);
+// One copy per BRDF; the power source is chosen outside the loop, so each loop stays branch-free.
+BURNISH_AVX512_CLONES void truthBlinnPhong(const double* nx, const double* ny, const double* nz,
+                                           const double* powers, double s, size_t count,
+                                           const DirectionPair& d, double* out) {
+    if (powers)
+        truthLoop<Brdf::BlinnPhong, true>(nx, ny, nz, powers, s, count, d, out);
+    else
+        truthLoop<Brdf::BlinnPhong, false>(nx, ny, nz, nullptr, s, count, d, out);
 }
 
-BURNISH_AVX512_CLONES void truthBlinnPhongOwn(const double* nx, const double* ny, const double* nz,
-                                              const double* powers, size_t count, const DirectionPair& d,
-                                              double* out) {
-    truthLoop<Brdf::BlinnPhong, true>(nx, ny, nz, powers, 0.0, count, d, out);
-}
-
-BURNISH_AVX512_CLONES void truthGgx(const double* nx, const double* ny, const double* nz, double s,
-                                    size_t count, const DirectionPair& d, double* out) {
-    truthLoop<Brdf::Ggx, false>(nx, ny, nz, nullptr, s, count, d, out);
-}
-
-BURNISH_AVX512_CLONES void truthGgxOwn(const double* nx, const double* ny, const double* nz,
-                                       const double* powers, size_t count, const DirectionPair& d,
-                                       double* out) {
-    truthLoop<Brdf::Ggx, true>(nx, ny, nz, powers, 0.0, count, d, out);
+BURNISH_AVX512_CLONES void truthGgx(const double* nx, const double* ny, const double* nz,
+                                    const double* powers, double s, size_t count, const DirectionPair& d,
+                                    double* out) {
+    if (powers)
+        truthLoop<Brdf::Ggx, true>(nx, ny, nz, powers, s, count, d, out);
+    else
+        truthLoop<Brdf::Ggx, false>(nx, ny, nz, nullptr, s, count, d, out);
 }
 
 // The GGX fit's objective, eight pairs at a time (n a multiple of 8; padding pairs with n·l = 0 and truth 0
@@ -116,10 +113,9 @@ void goldenSection(const E& error, double a, double b, int steps, double& best, 
 void truthValues(Brdf brdf, const double* nx, const double* ny, const double* nz, const double* powers,
                  double s, size_t count, const DirectionPair& d, double* out) {
     if (brdf == Brdf::Ggx)
-        powers ? truthGgxOwn(nx, ny, nz, powers, count, d, out) : truthGgx(nx, ny, nz, s, count, d, out);
+        truthGgx(nx, ny, nz, powers, s, count, d, out);
     else
-        powers ? truthBlinnPhongOwn(nx, ny, nz, powers, count, d, out)
-               : truthBlinnPhong(nx, ny, nz, s, count, d, out);
+        truthBlinnPhong(nx, ny, nz, powers, s, count, d, out);
 }
 
 double fitTexelError(Brdf brdf, const double* truth, const double* NoH, const double* NoL, const double* NoV,
@@ -160,17 +156,12 @@ double fitTexelAlpha(Brdf brdf, const double* truth, const double* NoH, const do
     double bestAlpha = aBase;
     if (const double e = errorAt(aVmf); e < eCandidates) eCandidates = e, bestAlpha = aVmf;
     auto error = [&](double u) { return errorAt(std::exp(u)); };
-    double lo, hi;
-    int grid;
     // Never sharper than the base: a lobe sharper than the footprint's own normals' lobes can hide its
     // energy between the sampled pairs (a sparkle the measure cannot see) and score well on noisy
     // footprints; the floor obeys the same bound.
-    lo = std::log(aBase);
-    if (floor) {
-        hi = 0.0, grid = kFloorGrid;
-    } else {
-        hi = std::log(std::min(1.0, kFitReach * std::max(aBase, aVmf))), grid = kFitGrid;
-    }
+    const double lo = std::log(aBase);
+    const double hi = floor ? 0.0 : std::log(std::min(1.0, kFitReach * std::max(aBase, aVmf)));
+    const int grid = floor ? kFloorGrid : kFitGrid;
     if (!(hi - lo > 1e-9)) return bestAlpha; // a flat footprint, or a base of α = 1: the base is the lobe
     // The scan: grid + 2 points from lo to hi, ends included.
     const int points = grid + 2;

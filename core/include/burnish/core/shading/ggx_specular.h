@@ -4,8 +4,6 @@
 // over many normals vectorise; every input, NaN included, gives a finite value >= 0.
 #pragma once
 
-#include <burnish/core/shading/ndf.h>
-#include <burnish/core/shading/visibility.h>
 #include <burnish/core/util/numeric.h>
 
 #include <algorithm>
@@ -20,16 +18,9 @@ template <class T> inline T ggxSpecularAlpha(T alpha) {
     return alpha > aMin ? std::min(alpha, T(1)) : aMin; // NaN → aMin, the sharpest
 }
 
-/// D_GGX(n·h; α) · V_SmithGGXCorrelated(n·l, n·v; α)/4 · max(0, n·l): ggxNdf times
-/// visibilitySmithGgxCorrelated/4 times the clamped cosine, α clamped to [kMinRoughness, 1]. 0 where
-/// n·h <= 0 or n·l <= 0; n·v is clamped to [kMinCosine, 1] as the engines clamp it, so a normal facing
-/// away from the viewer still reflects the light it faces.
-// Khronos, glTF 2.0 specification, Appendix B.3.2: f_specular = F·D·V, V = G/(4|n·l||n·v|), Heitz 2014's
-// height-correlated G
-template <class T> inline T ggxSpecularTerm(T NoH, T NoL, T NoV, T alpha);
-
-/// ggxSpecularTerm for an α already clamped by ggxSpecularAlpha: for loops whose α is the same for every
-/// element, which clamp it once outside (GCC does not vectorise a loop that clamps an invariant inside).
+/// ggxSpecularTerm (below) for an α already clamped by ggxSpecularAlpha: for loops whose α is the same for
+/// every element, which clamp it once outside (GCC does not vectorise a loop that clamps an invariant
+/// inside).
 template <class T> inline T ggxSpecularTermClamped(T NoH, T NoL, T NoV, T a) {
     const T a2 = a * a;
     // Selects that send NaN to the clamp's low end, so no NaN reaches the value.
@@ -45,6 +36,12 @@ template <class T> inline T ggxSpecularTermClamped(T NoH, T NoL, T NoV, T a) {
     return ((NoH > T(0)) & (NoL > T(0))) ? value : T(0); // & not &&: no branch, so loops vectorise
 }
 
+/// D_GGX(n·h; α) · V_SmithGGXCorrelated(n·l, n·v; α)/4 · max(0, n·l): ggxNdf times
+/// visibilitySmithGgxCorrelated/4 times the clamped cosine, α clamped to [kMinRoughness, 1]. 0 where
+/// n·h <= 0 or n·l <= 0; n·v is clamped to [kMinCosine, 1] as the engines clamp it, so a normal facing
+/// away from the viewer still reflects the light it faces.
+// Khronos, glTF 2.0 specification, Appendix B.3.2: f_specular = F·D·V, V = G/(4|n·l||n·v|), Heitz 2014's
+// height-correlated G
 template <class T> inline T ggxSpecularTerm(T NoH, T NoL, T NoV, T alpha) {
     return ggxSpecularTermClamped(NoH, NoL, NoV, ggxSpecularAlpha(alpha));
 }

@@ -41,6 +41,7 @@ struct EvaluateCliOptions {
     std::vector<int> lobes{kDefaultMixtureLobes};
     bool shadedFit = false;
     bool energySplit = false;
+    std::string truthNormals;
     double steepDeg = 45.0;
     std::string mixtureFiltering = "moments";
     std::string brdf;
@@ -96,6 +97,11 @@ int runEvaluate(const EvaluateCliOptions& o) {
         options.evaluate.brdf = glossBrdf(preset->encoding);
     }
     if (!o.brdf.empty()) options.evaluate.brdf = *brdfFromName(o.brdf); // checked by CLI11
+    if (!o.truthNormals.empty()) {
+        TruthNormals t{};
+        truthNormalsFromName(o.truthNormals, t); // checked by CLI11
+        options.evaluate.truthNormals = t;
+    }
     options.evaluate.floor = o.floor;
     options.evaluate.methods = methodsUnder(options.evaluate.brdf);
     if (!o.methods.empty()) {
@@ -234,6 +240,14 @@ const CommandRegistration registration{
                         "--preset's engine's (ggx for gltf, unreal, unity, godot, filament), else "
                         "blinn-phong.")
             ->check(CLI::IsMember({"blinn-phong", "ggx"}))
+            ->type_name("NAME");
+        sub->add_option("--truth-normals", o->truthNormals,
+                        "How the ground truth sees the finest normals: texels (each texel a flat facet, the "
+                        "reference texts' truth) or bilinear (the surface an engine draws when it magnifies "
+                        "the map: each texel the mean of 2x2 sub-samples of the bilinear interpolant, "
+                        "renormalized). Default: bilinear under ggx, texels under blinn-phong. The fitted "
+                        "lobe and the floor fit to this truth.")
+            ->check(CLI::IsMember({"texels", "bilinear"}))
             ->type_name("NAME");
         sub->add_option("--preset", o->preset,
                         "Engine preset (name or JSON file) whose BRDF the evaluation uses when --brdf is not "

@@ -32,7 +32,7 @@
 #   LeanEnergySplit): its energy ratio as cosine x shape x steep, from the truth, the truth with LEAN's
 #   one cosine, and the Gaussian of the normals tilted at most steep-deg weighted by their share; with
 #   --compare the largest relative difference from the C++ figures.
-# --brdf ggx: the GGX truth of evaluate --brdf ggx (evaluate.h EvaluateOptions::brdf): each finest normal
+# --brdf ggx: the GGX truth of evaluate --brdf ggx (evaluate.h EvaluateOptions::brdf): each finest texel
 #   shaded by ggx_specular.h's term, D_GGX(n.h) V_SmithGGXCorrelated(n.l, n.v)/4 max(0, n.l) with
 #   alpha^2 = 2/(s+2) clamped to [kMinRoughness, 1] and n.v clamped to [1e-6, 1], against each isotropic
 #   method's one GGX lobe about its mean normal with the alpha of its power (naive, toksvig, vmf; lean and
@@ -41,6 +41,10 @@
 #   than the base, as the C++ fit and floor), which the C++
 #   fitted lobe and its --floor row are compared with (their rows must lie at or below it, to the grid's
 #   spacing).
+# --truth-normals bilinear (the default under --brdf ggx, as evaluate's): each finest texel's truth is the
+#   mean over its 2x2 sub-samples (at +-1/4 texel) of the bilinear interpolant of the texels, wrapping,
+#   each renormalized (fitted_lobe.h TruthNormals::Bilinear: the surface an engine draws when it
+#   magnifies the map); texels: its own normal (the default under Blinn-Phong).
 # And the plain fit the lobe mixture is measured against, for any K:
 #   --methods emK / hardemK (e.g. em3,hardem3): K slope-space Gaussians fitted to each footprint's
 #       finest slopes by expectation-maximisation, each slope a Gaussian of covariance I/s (so every
@@ -70,6 +74,7 @@ MIN_COSINE = 1e-6        # numeric.h kMinCosine
 MIN_ROUGHNESS = math.sqrt(2.0 / (MAX_POWER + 2.0))  # numeric.h kMinRoughness
 FLOOR_GRID = 241
 BRDF = "blinn-phong"     # --brdf
+TRUTH_NORMALS = "texels"  # --truth-normals (bilinear by default under --brdf ggx)
 F32 = np.float32
 
 
@@ -149,6 +154,37 @@ def directions():
             inv = 1.0 / math.sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2])
             pairs.append((tuple(c * inv for c in l), h))
     return pairs
+
+
+def bilinear_samples(n):
+    """fitted_lobe.cpp TruthBand (TruthNormals::Bilinear): per texel the 2x2 sub-samples at +-1/4 texel of the
+    bilinear interpolant (wrapping), each renormalized (the texel's own normal where the blend cancels),
+    in the C++ order (row offset, then column offset); x, y, z float64 arrays per sample."""
+    d = n.astype(np.float64)
+    out = []
+    for oy in (-1, 1):
+        for ox in (-1, 1):
+            row = np.roll(d, -oy, axis=0)
+            m = 0.75 * (0.75 * d + 0.25 * np.roll(d, -ox, axis=1)) + 0.25 * (0.75 * row + 0.25 * np.roll(row, -ox, axis=1))
+            length = np.sqrt(m[..., 0] * m[..., 0] + m[..., 1] * m[..., 1] + m[..., 2] * m[..., 2])
+            ok = length > 1e-6
+            u = np.where(ok[..., None], m / np.where(ok, length, 1.0)[..., None], d)
+            out.append((u[..., 0], u[..., 1], u[..., 2]))
+    return out
+
+
+def truth_values(fx, fy, fz, samples, s, l, h):
+    """The truth per finest texel under BRDF: its own normal (texels) or the mean over its bilinear sub-samples."""
+    def one(x, y, z):
+        if BRDF == "ggx":
+            return ggx_term(x, y, z, ggx_alpha(s), l, h)
+        return blinn_phong(x, y, z, s, h) * np.maximum(0.0, x * l[0] + y * l[1] + z * l[2])
+    if samples is None:
+        return one(fx, fy, fz)
+    acc = np.zeros(fx.shape)
+    for sx, sy, sz in samples:
+        acc = acc + one(sx, sy, sz)
+    return acc * (1.0 / len(samples))
 
 
 def block_sum(a):
@@ -398,6 +434,7 @@ def evaluate(n, powers, first_mip, last_mip, methods):
     levels = pyramid(n, last_mip)
     levels[0] = level0_moments(n)
     fx, fy, fz = (n[..., i].astype(np.float64) for i in range(3))
+    samples = bilinear_samples(n) if TRUTH_NORMALS == "bilinear" else None
     mips = range(first_mip, last_mip + 1)
     out = {}
     rings = {}
@@ -414,10 +451,7 @@ def evaluate(n, powers, first_mip, last_mip, methods):
         acc = {(m, k): [0.0, 0.0, 0.0] for m in methods for k in mips}   # sum |M - GT|, sum M, sum GT
         for l, h in pairs:
             # Ground truth per finest texel, then summed over 2x2 blocks level by level.
-            if BRDF == "ggx":
-                sums = ggx_term(fx, fy, fz, ggx_alpha(s), l, h)
-            else:
-                sums = blinn_phong(fx, fy, fz, s, h) * np.maximum(0.0, fx * l[0] + fy * l[1] + fz * l[2])
+            sums = truth_values(fx, fy, fz, samples, s, l, h)
             truth = {}
             for k in range(0, last_mip + 1):
                 if k > 0:
@@ -526,9 +560,13 @@ def main():
     ap.add_argument("--steep-deg", type=float, default=45.0)
     ap.add_argument("--brdf", choices=["blinn-phong", "ggx"], default="blinn-phong",
                     help="the truth's and the lobes' BRDF (evaluate --brdf)")
+    ap.add_argument("--truth-normals", choices=["texels", "bilinear"],
+                    help="the finest normals as facets or as the bilinear interpolant (evaluate --truth-normals; "
+                         "default bilinear under --brdf ggx, texels otherwise)")
     args = ap.parse_args()
-    global BRDF
+    global BRDF, TRUTH_NORMALS
     BRDF = args.brdf
+    TRUTH_NORMALS = args.truth_normals or ("bilinear" if BRDF == "ggx" else "texels")
     methods = [m for m in args.methods.split(",") if m]
     if BRDF == "ggx":
         for m in methods:

@@ -236,6 +236,22 @@ TEST(CliEvaluate, GgxTruthWithTheFloorAndThePresetsBrdf) {
                    (dir / "b").string());
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_EQ(nlohmann::json::parse(r.out)["brdf"], "blinn-phong");
+    EXPECT_EQ(nlohmann::json::parse(r.out)["truth_normals"], "texels");
+    // GGX sees the finest normals as the engine magnifies them, unless told texels; the naive row (no
+    // fit) differs between the two truths, and the report says which it used.
+    EXPECT_EQ(j["truth_normals"], "bilinear");
+    r = runBurnish("evaluate " + in +
+                   " --preset gltf --truth-normals texels --power 256 --bake-runs 1 --json --out " +
+                   (dir / "t").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto texels = nlohmann::json::parse(r.out);
+    EXPECT_EQ(texels["truth_normals"], "texels");
+    for (const auto& e : texels["errors"])
+        if (e["variant"] == "naive")
+            EXPECT_NE(e["relative_l1"].get<double>(), rows["naive"][e["mip"].get<int>()]);
+    r = runBurnish("evaluate " + in + " --truth-normals bicubic --out " + (dir / "x").string());
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("--truth-normals"), std::string::npos) << r.err;
     // A slope-space method has no GGX form: one line, nothing written.
     r = runBurnish("evaluate " + in + " --brdf ggx --methods lean --out " + (dir / "l").string());
     EXPECT_NE(r.exitCode, 0);

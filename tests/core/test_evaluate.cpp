@@ -91,7 +91,8 @@ TEST(Evaluate, MatchesBruteForceSumOnATinyMap) {
 // The evaluation's vectorised loops (exp and log without libm, no subnormal results) against the
 // scalar references, every method and the mixture, on a map that is not a power of two, with steep
 // normals, at the extreme powers, with clamped borders; under Blinn-Phong and under GGX (the methods
-// with a GGX form: its truth and lobes through ggxSpecularTerm).
+// with a GGX form: its truth and lobes through ggxSpecularTerm); with the truth on the texels and on
+// their bilinear interpolant.
 TEST(Evaluate, EveryMethodMatchesTheScalarReferenceAtExtremePowers) {
     const int width = 13, height = 10;
     std::vector<glm::vec3> normals = gaussianSlopes(width * height, 0.6, 5);
@@ -102,54 +103,59 @@ TEST(Evaluate, EveryMethodMatchesTheScalarReferenceAtExtremePowers) {
     const auto shared = std::shared_ptr<const NormalMap>(&map, [](const NormalMap*) {});
     const NormalPyramid pyramid = NormalPyramid::build(shared, {BorderMode::Clamp, FilterKernel::Box});
     for (const Brdf brdf : {Brdf::BlinnPhong, Brdf::Ggx})
-        for (const double s : {1.0, 512.0, 1e6}) {
-            EvaluateOptions options;
-            options.brdf = brdf;
-            options.methods = methodsUnder(brdf);
-            options.basePowers = {s};
-            options.firstMip = 0;
-            options.lastMip = 3;
-            options.border = BorderMode::Clamp;
-            options.mixtureLobes = {1, 2, 3};
-            auto result = evaluateMethods(map, options);
-            ASSERT_TRUE(result.ok()) << result.error();
-            std::vector<std::optional<MixturePyramid>> mixtures(kMaxMixtureLobes + 1);
-            // The fitted lobe's powers: its own fit over the same pairs (the reference for its row is the
-            // scalar shading of those lobes).
-            FittedLobeOptions fit;
-            fit.brdf = brdf;
-            fit.directions = result->directions;
-            const FittedPyramid fitted = FittedPyramid::build(
-                pyramid, [s](int, int, int) { return s; }, nullptr, s, 3, fit);
-            for (const MipError& e : result->errors) {
-                if (e.lobes >= 2 && !mixtures[size_t(e.lobes)])
-                    mixtures[size_t(e.lobes)].emplace(MixturePyramid::build(pyramid, s, e.lobes, 3));
-                double absSum = 0.0, truthSum = 0.0, methodSum = 0.0;
-                const PyramidLevel& level = pyramid.level(e.mip);
-                for (const auto& d : result->directions)
-                    for (int y = 0; y < level.height; ++y)
-                        for (int x = 0; x < level.width; ++x) {
-                            const double truth = groundTruthTexel(pyramid, e.mip, x, y, s, d, brdf);
-                            TexelLobe lobe = methodLobe(e.method, pyramid.boxMoments(e.mip, x, y), s);
-                            if (e.method == Method::Fitted && e.mip > 0)
-                                lobe.power = fitted.power(e.mip, x, y);
-                            const double value =
-                                e.lobes >= 2 && e.mip > 0
-                                    ? mixtureValue(mixtures[size_t(e.lobes)]->at(e.mip, x, y), d.l, d.h,
-                                                   mixtures[size_t(e.lobes)]->minVariance())
-                                    : methodValue(lobe, d, brdf);
-                            ASSERT_TRUE(std::isfinite(value));
-                            absSum += std::abs(value - truth);
-                            truthSum += truth;
-                            methodSum += value;
-                        }
-                const std::string what = std::string(brdfName(brdf)) + " " + variantLabel(variantOf(e)) +
-                                         " s " + std::to_string(s) + " mip " + std::to_string(e.mip);
-                // Relative, with a floor for the errors of exact methods (1e-11 at mip 0: rounding alone).
-                EXPECT_NEAR(e.relativeL1, absSum / truthSum, 1e-10 * (absSum / truthSum) + 1e-14) << what;
-                EXPECT_NEAR(e.energyRatio, methodSum / truthSum, 1e-10 * (methodSum / truthSum)) << what;
+        for (const TruthNormals how : {TruthNormals::Texels, TruthNormals::Bilinear})
+            for (const double s : {1.0, 512.0, 1e6}) {
+                EvaluateOptions options;
+                options.brdf = brdf;
+                options.truthNormals = how;
+                options.methods = methodsUnder(brdf);
+                options.basePowers = {s};
+                options.firstMip = 0;
+                options.lastMip = 3;
+                options.border = BorderMode::Clamp;
+                options.mixtureLobes = {1, 2, 3};
+                auto result = evaluateMethods(map, options);
+                ASSERT_TRUE(result.ok()) << result.error();
+                std::vector<std::optional<MixturePyramid>> mixtures(kMaxMixtureLobes + 1);
+                // The fitted lobe's powers: its own fit over the same pairs (the reference for its row is the
+                // scalar shading of those lobes).
+                FittedLobeOptions fit;
+                fit.brdf = brdf;
+                fit.truthNormals = how;
+                fit.directions = result->directions;
+                const FittedPyramid fitted = FittedPyramid::build(
+                    pyramid, [s](int, int, int) { return s; }, nullptr, s, 3, fit);
+                for (const MipError& e : result->errors) {
+                    if (e.lobes >= 2 && !mixtures[size_t(e.lobes)])
+                        mixtures[size_t(e.lobes)].emplace(MixturePyramid::build(pyramid, s, e.lobes, 3));
+                    double absSum = 0.0, truthSum = 0.0, methodSum = 0.0;
+                    const PyramidLevel& level = pyramid.level(e.mip);
+                    for (const auto& d : result->directions)
+                        for (int y = 0; y < level.height; ++y)
+                            for (int x = 0; x < level.width; ++x) {
+                                const double truth = groundTruthTexel(pyramid, e.mip, x, y, s, d, brdf, how);
+                                TexelLobe lobe = methodLobe(e.method, pyramid.boxMoments(e.mip, x, y), s);
+                                if (e.method == Method::Fitted && e.mip > 0)
+                                    lobe.power = fitted.power(e.mip, x, y);
+                                const double value =
+                                    e.lobes >= 2 && e.mip > 0
+                                        ? mixtureValue(mixtures[size_t(e.lobes)]->at(e.mip, x, y), d.l, d.h,
+                                                       mixtures[size_t(e.lobes)]->minVariance())
+                                        : methodValue(lobe, d, brdf);
+                                ASSERT_TRUE(std::isfinite(value));
+                                absSum += std::abs(value - truth);
+                                truthSum += truth;
+                                methodSum += value;
+                            }
+                    const std::string what = std::string(brdfName(brdf)) + " " + truthNormalsName(how) + " " +
+                                             variantLabel(variantOf(e)) + " s " + std::to_string(s) +
+                                             " mip " + std::to_string(e.mip);
+                    // Relative, with a floor for the errors of exact methods (1e-11 at mip 0: rounding
+                    // alone).
+                    EXPECT_NEAR(e.relativeL1, absSum / truthSum, 1e-10 * (absSum / truthSum) + 1e-14) << what;
+                    EXPECT_NEAR(e.energyRatio, methodSum / truthSum, 1e-10 * (methodSum / truthSum)) << what;
+                }
             }
-        }
 }
 
 // The same bits on every run: figures must not follow where the heap puts the buffers. (Built for

@@ -209,3 +209,110 @@ TEST(FittedLobe, BakeStoresTheFitAboveMipZeroAndTheBasePowerAtIt) {
     }
     EXPECT_GT(differ, 0); // the fit moved some texels off the base roughness
 }
+
+// The truth's finest normals: as texels they are truthValues of each texel's own normal; as the bilinear
+// interpolant they agree with evaluate's brute-force definition (groundTruthTexel: the interpolant at
+// 2×2 points per texel, computed from the sample's position) for every texel and pair, both border modes,
+// on maps that are not powers of two, 1×1 and with normals at the horizon; a constant map is the same
+// either way.
+TEST(TruthNormals, TexelsAreTheTexelsAndBilinearIsTheInterpolantAtTwoByTwoPoints) {
+    for (const auto& [w, h] : {std::pair{5, 3}, std::pair{1, 1}, std::pair{7, 1}}) {
+        std::vector<glm::vec3> normals = test::gaussianSlopes(w * h, 0.5, unsigned(w * 10 + h));
+        normals[0] = glm::normalize(glm::vec3(1.0f, 0.0f, 0.001f)); // at the horizon
+        const NormalMap map = makeNormalMap(w, h, normals);
+        const auto shared = std::shared_ptr<const NormalMap>(&map, [](const NormalMap*) {});
+        for (const BorderMode border : {BorderMode::Wrap, BorderMode::Clamp}) {
+            const NormalPyramid pyramid = NormalPyramid::build(shared, {border, FilterKernel::Box});
+            for (const Brdf brdf : {Brdf::Ggx, Brdf::BlinnPhong})
+                for (const TruthNormals how : {TruthNormals::Texels, TruthNormals::Bilinear}) {
+                    TruthBand band(map, 0, h, how, border);
+                    ASSERT_EQ(band.size(), size_t(w * h));
+                    std::vector<double> values(band.size());
+                    for (const DirectionPair& d : directionPairs({})) {
+                        band.values(brdf, nullptr, 256.0, d, values.data());
+                        for (int y = 0; y < h; ++y)
+                            for (int x = 0; x < w; ++x) {
+                                const double v = values[size_t(y * w + x)];
+                                const double ref = groundTruthTexel(pyramid, 0, x, y, 256.0, d, brdf, how);
+                                ASSERT_TRUE(std::isfinite(v));
+                                EXPECT_NEAR(v, ref, 1e-12 * (1.0 + ref))
+                                    << w << "x" << h << " " << truthNormalsName(how) << " " << brdfName(brdf)
+                                    << " texel " << x << "," << y;
+                            }
+                    }
+                }
+        }
+    }
+    // A constant map: every sub-sample is the texel's normal (renormalized in double: the float normal's
+    // length is 1 to 6e-8, which moves a power-512 lobe by up to 3e-5).
+    const NormalMap flat =
+        makeNormalMap(4, 4, std::vector<glm::vec3>(16, glm::normalize(glm::vec3(0.2f, -0.1f, 1.0f))));
+    TruthBand texels(flat, 0, 4, TruthNormals::Texels, BorderMode::Wrap);
+    TruthBand bilinear(flat, 0, 4, TruthNormals::Bilinear, BorderMode::Wrap);
+    std::vector<double> a(16), b(16);
+    for (const DirectionPair& d : directionPairs({})) {
+        texels.values(Brdf::Ggx, nullptr, 512.0, d, a.data());
+        bilinear.values(Brdf::Ggx, nullptr, 512.0, d, b.data());
+        for (size_t i = 0; i < 16; ++i)
+            EXPECT_NEAR(a[i], b[i], 1e-4 * a[i] + 1e-12);
+    }
+}
+
+// What the bilinear truth is for: texel-scale noise is narrower on the interpolant an engine draws than
+// on the texels, so the fit to it is sharper (here by a clear margin on every mip) and, judged by that
+// truth, closer than the fit to the facets.
+TEST(TruthNormals, TheFitToTheInterpolantIsSharperOnTexelNoiseAndBetterByItsTruth) {
+    const NormalMap map = makeNormalMap(64, 64, test::gaussianSlopes(64 * 64, 0.05, 11));
+    const auto shared = std::shared_ptr<const NormalMap>(&map, [](const NormalMap*) {});
+    const NormalPyramid pyramid = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
+    const double s = 256.0;
+    FittedLobeOptions texels, bilinear;
+    texels.truthNormals = TruthNormals::Texels;
+    bilinear.truthNormals = TruthNormals::Bilinear;
+    EXPECT_EQ(FittedLobeOptions{}.truthNormals, std::nullopt);
+    EXPECT_EQ(defaultTruthNormals(Brdf::Ggx), TruthNormals::Bilinear);
+    EXPECT_EQ(defaultTruthNormals(Brdf::BlinnPhong), TruthNormals::Texels);
+    auto base = [s](int, int, int) { return s; };
+    const FittedPyramid onTexels = FittedPyramid::build(pyramid, base, nullptr, s, 4, texels);
+    const FittedPyramid onBilinear = FittedPyramid::build(pyramid, base, nullptr, s, 4, bilinear);
+    for (int k = 1; k <= 4; ++k) {
+        double sumT = 0.0, sumB = 0.0;
+        const PyramidLevel& level = pyramid.level(k);
+        for (int y = 0; y < level.height; ++y)
+            for (int x = 0; x < level.width; ++x)
+                sumT += ggxAlphaFromPower(onTexels.power(k, x, y)),
+                    sumB += ggxAlphaFromPower(onBilinear.power(k, x, y));
+        EXPECT_LT(sumB, 0.9 * sumT) << "mip " << k;
+    }
+    EvaluateOptions options;
+    options.brdf = Brdf::Ggx;
+    options.methods = {Method::Naive, Method::Fitted};
+    options.basePowers = {s};
+    options.firstMip = 1;
+    options.lastMip = 4;
+    for (const TruthNormals how : {TruthNormals::Texels, TruthNormals::Bilinear}) {
+        options.truthNormals = how;
+        const auto r = evaluateMethods(map, options);
+        ASSERT_TRUE(r) << r.error();
+        for (int k = 1; k <= 4; ++k)
+            EXPECT_LT(rowError(*r, Method::Fitted, k), rowError(*r, Method::Naive, k))
+                << truthNormalsName(how);
+    }
+}
+
+TEST(TruthNormals, NamesRoundTripAndTheEnergySplitWantsTexels) {
+    for (const TruthNormals t : {TruthNormals::Texels, TruthNormals::Bilinear}) {
+        TruthNormals back{};
+        ASSERT_TRUE(truthNormalsFromName(truthNormalsName(t), back));
+        EXPECT_EQ(back, t);
+    }
+    TruthNormals unused{};
+    EXPECT_FALSE(truthNormalsFromName("bicubic", unused));
+    const NormalMap map = makeNormalMap(8, 8, test::gaussianSlopes(64, 0.2, 3));
+    EvaluateOptions options;
+    options.energySplit = true;
+    options.truthNormals = TruthNormals::Bilinear;
+    const auto r = evaluateMethods(map, options);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("--truth-normals texels"), std::string::npos) << r.error();
+}

@@ -188,13 +188,42 @@ double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,
     return sum / pyramid.footprintCount(mip, x, y);
 }
 
+// The bilinear interpolant of the finest normals at point p (texel units, texel (i, j)'s centre at
+// (i + 0.5, j + 0.5)), past the edges by the pyramid's border mode, renormalized (the texel under p's
+// own normal where the blend cancels).
+static glm::dvec3 bilinearNormal(const NormalPyramid& pyramid, glm::dvec2 p) {
+    const NormalMap& map = pyramid.finest();
+    const BorderMode border = pyramid.options().border;
+    const glm::dvec2 u = p - 0.5;
+    const int i0 = int(std::floor(u.x)), j0 = int(std::floor(u.y));
+    const double tx = u.x - i0, ty = u.y - j0;
+    auto at = [&](int i, int j) {
+        return glm::dvec3(map.at(borderIndex(i, map.width, border), borderIndex(j, map.height, border)));
+    };
+    const glm::dvec3 n = (1 - ty) * ((1 - tx) * at(i0, j0) + tx * at(i0 + 1, j0)) +
+                         ty * ((1 - tx) * at(i0, j0 + 1) + tx * at(i0 + 1, j0 + 1));
+    const double len = glm::length(n);
+    return len > 1e-6 ? n / len : at(int(std::floor(p.x)), int(std::floor(p.y)));
+}
+
 double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s, const DirectionPair& d,
-                        Brdf brdf) {
+                        Brdf brdf, TruthNormals how) {
     const PyramidLevel& l = pyramid.level(mip);
     double sum = 0.0;
+    const int K = how == TruthNormals::Bilinear ? kBilinearSamples : 1;
     for (int j = l.yStart[size_t(y)]; j < l.yStart[size_t(y) + 1]; ++j)
-        for (int i = l.xStart[size_t(x)]; i < l.xStart[size_t(x) + 1]; ++i)
-            sum += truthOfNormal(glm::dvec3(pyramid.finest().at(i, j)), s, d, brdf);
+        for (int i = l.xStart[size_t(x)]; i < l.xStart[size_t(x) + 1]; ++i) {
+            if (K == 1) {
+                sum += truthOfNormal(glm::dvec3(pyramid.finest().at(i, j)), s, d, brdf);
+                continue;
+            }
+            double texel = 0.0;
+            for (int b = 0; b < K; ++b)
+                for (int a = 0; a < K; ++a)
+                    texel += truthOfNormal(bilinearNormal(pyramid, {i + (a + 0.5) / K, j + (b + 0.5) / K}), s,
+                                           d, brdf);
+            sum += texel / (K * K);
+        }
     return sum / pyramid.footprintCount(mip, x, y);
 }
 
@@ -410,18 +439,13 @@ Band bandOf(const NormalPyramid& pyramid, int last, int y) {
 // and per level the truth of each of its texels for the current direction pair.
 struct BandTruth {
     Band band;
-    std::vector<double> nx, ny, nz;
+    TruthBand finest;
     std::vector<std::vector<double>> sums;  // per level: Σ over each texel's footprint
     std::vector<std::vector<double>> truth; // per evaluated level: the footprint's mean
 
-    BandTruth(const NormalMap& map, const NormalPyramid& pyramid, int last, int y)
-        : band(bandOf(pyramid, last, y)) {
-        const size_t begin = size_t(band.rowBegin[0]) * size_t(map.width);
-        const size_t end = size_t(band.rowEnd[0]) * size_t(map.width);
-        nx.resize(end - begin), ny.resize(end - begin), nz.resize(end - begin);
-        for (size_t i = begin; i < end; ++i)
-            nx[i - begin] = map.normals[i].x, ny[i - begin] = map.normals[i].y,
-                   nz[i - begin] = map.normals[i].z;
+    BandTruth(const NormalMap& map, const NormalPyramid& pyramid, int last, int y, TruthNormals how)
+        : band(bandOf(pyramid, last, y))
+        , finest(map, band.rowBegin[0], band.rowEnd[0], how, pyramid.options().border) {
         sums.resize(size_t(last) + 1);
         truth.resize(size_t(last) + 1);
         for (int k = 0; k <= last; ++k) {
@@ -437,8 +461,7 @@ struct BandTruth {
     void compute(const NormalMap& map, const NormalPyramid& pyramid, const std::vector<double>* texelPowers,
                  double s, int first, const DirectionPair& d, Brdf brdf) {
         const size_t begin = size_t(band.rowBegin[0]) * size_t(map.width);
-        truthValues(brdf, nx.data(), ny.data(), nz.data(),
-                    texelPowers ? texelPowers->data() + begin : nullptr, s, nx.size(), d, sums[0].data());
+        finest.values(brdf, texelPowers ? texelPowers->data() + begin : nullptr, s, d, sums[0].data());
         for (int k = 1; k < int(sums.size()); ++k) {
             const PyramidLevel& level = pyramid.level(k);
             const PyramidLevel& child = pyramid.level(k - 1);
@@ -495,17 +518,17 @@ void accumulate(const double* v, const double* truth, size_t n, Accumulator& a, 
 // next band's first row, so with betweenTexels the next band's truth is computed too.
 BandSums evaluateBand(const NormalMap& map, const NormalPyramid& pyramid,
                       const std::vector<double>* texelPowers, double s, int first, int last, int y,
-                      const std::vector<DirectionPair>& directions, Brdf brdf, Pass& pass) {
+                      const std::vector<DirectionPair>& directions, Brdf brdf, TruthNormals how, Pass& pass) {
     const size_t variants = pass.tables.size();
     const size_t mips = size_t(last - first + 1);
     const BorderMode border = pyramid.options().border;
     BandSums out;
     out.acc.assign(variants * mips, {});
     if (pass.betweenTexels) out.between.assign(variants * mips, {});
-    BandTruth band(map, pyramid, last, y);
+    BandTruth band(map, pyramid, last, y, how);
     std::optional<BandTruth> next;
     const int nextY = borderIndex(y + 1, pyramid.level(last).height, border);
-    if (pass.betweenTexels && nextY != y) next.emplace(map, pyramid, last, nextY);
+    if (pass.betweenTexels && nextY != y) next.emplace(map, pyramid, last, nextY, how);
     std::vector<double> values(band.truth[size_t(first)].size()), corner(values.size());
     for (const DirectionPair& d : directions) {
         band.compute(map, pyramid, texelPowers, s, first, d, brdf);
@@ -569,6 +592,8 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
         return Error{"the energy split takes base powers, not authored gloss (each texel's own power)"};
     if (options.energySplit && !(options.steepDeg > 0.0 && options.steepDeg < 90.0))
         return Error{"the steep angle must lie in (0, 90) degrees"};
+    if (options.energySplit && options.resolvedTruthNormals() != TruthNormals::Texels)
+        return Error{"the energy split is measured on the finest texels (--truth-normals texels)"};
     if (options.brdf == Brdf::Ggx) {
         if (options.energySplit) return Error{"the energy split is LEAN's, under the Blinn-Phong truth only"};
         const std::vector<Method> ggx = methodsUnder(Brdf::Ggx);
@@ -656,6 +681,7 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             const auto& kernelPyramid = filtered[kernelIndex(v.kernel)];
             FittedLobeOptions fit;
             fit.brdf = options.brdf;
+            fit.truthNormals = options.resolvedTruthNormals();
             fit.directions = directions;
             fit.floor = v.floor;
             const AuthoredPowers* a = authored ? &*authored : nullptr;
@@ -710,7 +736,7 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             const int from = int(int64_t(bands) * b / batches), to = int(int64_t(bands) * (b + 1) / batches);
             tbb::parallel_for(from, to, [&](int y) {
                 sums[size_t(y)] = evaluateBand(map, pyramid, texelPowers, s, firstMip, lastMip, y, directions,
-                                               options.brdf, pass);
+                                               options.brdf, options.resolvedTruthNormals(), pass);
             });
             stepsDone += double(to - from);
             if (progress) progress(stepsDone / totalSteps);

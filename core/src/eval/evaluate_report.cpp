@@ -232,6 +232,11 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
         md << "Ground truth: for mip k, the mean over the texel's footprint of finest texels of "
               "D_s(n_i.h) max(0, n_i.l), D_s the normalized Blinn-Phong NDF of the base power s. "
               "Each method: its own NDF times max(0, n.l) with its normal, from box-footprint moments. ";
+    if (r.options.resolvedTruthNormals() == TruthNormals::Bilinear)
+        md << "The finest normals as an engine draws them when it magnifies the map (--truth-normals "
+              "bilinear): each finest texel's truth is the mean over 2x2 sub-samples (at +-1/4 texel) of the "
+              "bilinear interpolant of the texels, renormalized; bilinear filtering averages neighbours, so "
+              "texel-scale noise is narrower there than the texels are. ";
     if (r.options.floor)
         md << "The one-lobe floor: per texel the best one isotropic lobe about the mean normal no sharper "
               "than the base, by a brute-force search of its roughness (what no such roughness can beat). ";
@@ -315,6 +320,7 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
     j["directions"] = r.result.directions.size();
     j["mixture_filtering"] = mixtureFilteringName(r.options.mixtureFiltering);
     j["brdf"] = brdfName(r.options.brdf);
+    j["truth_normals"] = truthNormalsName(r.options.resolvedTruthNormals());
     j["base_powers"] = r.options.basePowers;
     if (r.options.texelPowers) {
         const auto& p = *r.options.texelPowers;

@@ -118,6 +118,78 @@ void truthValues(Brdf brdf, const double* nx, const double* ny, const double* nz
         truthBlinnPhong(nx, ny, nz, powers, s, count, d, out);
 }
 
+TruthNormals defaultTruthNormals(Brdf brdf) {
+    return brdf == Brdf::Ggx ? TruthNormals::Bilinear : TruthNormals::Texels;
+}
+
+const char* truthNormalsName(TruthNormals t) {
+    return t == TruthNormals::Bilinear ? "bilinear" : "texels";
+}
+
+bool truthNormalsFromName(const std::string& name, TruthNormals& out) {
+    if (name == "texels") return out = TruthNormals::Texels, true;
+    if (name == "bilinear") return out = TruthNormals::Bilinear, true;
+    return false;
+}
+
+TruthBand::TruthBand(const NormalMap& map, int rowBegin, int rowEnd, TruthNormals how, BorderMode border)
+    : m_count(size_t(std::max(rowEnd - rowBegin, 0)) * size_t(map.width))
+    , m_samples(how == TruthNormals::Bilinear ? kBilinearSamples * kBilinearSamples : 1) {
+    m_x.resize(m_count * size_t(m_samples)), m_y.resize(m_x.size()), m_z.resize(m_x.size());
+    const size_t begin = size_t(rowBegin) * size_t(map.width);
+    if (m_samples == 1) {
+        for (size_t i = 0; i < m_count; ++i) {
+            const glm::vec3& n = map.normals[begin + i];
+            m_x[i] = n.x, m_y[i] = n.y, m_z[i] = n.z;
+        }
+        return;
+    }
+    // Sub-sample (a, b) of texel (x, y) lies at (x + 0.5 + oa, y + 0.5 + ob), o = (a + 0.5)/K − 0.5: the
+    // bilinear interpolant there weighs the texel and its neighbour towards the sample by 1 − |o| and |o|
+    // per axis (past the edges by `border`); renormalized as the engine's shader does, or the texel's own
+    // normal where the blend cancels out.
+    const int K = kBilinearSamples, W = map.width, H = map.height;
+    for (int y = rowBegin; y < rowEnd; ++y)
+        for (int b = 0; b < K; ++b) {
+            const double oy = (b + 0.5) / K - 0.5;
+            const int y2 = borderIndex(y + (oy < 0 ? -1 : 1), H, border);
+            const double wy = std::abs(oy);
+            for (int a = 0; a < K; ++a) {
+                const double ox = (a + 0.5) / K - 0.5;
+                const double wx = std::abs(ox);
+                const size_t out = size_t(b * K + a) * m_count + size_t(y - rowBegin) * size_t(W);
+                for (int x = 0; x < W; ++x) {
+                    const int x2 = borderIndex(x + (ox < 0 ? -1 : 1), W, border);
+                    const glm::dvec3 n =
+                        (1 - wy) * ((1 - wx) * glm::dvec3(map.at(x, y)) + wx * glm::dvec3(map.at(x2, y))) +
+                        wy * ((1 - wx) * glm::dvec3(map.at(x, y2)) + wx * glm::dvec3(map.at(x2, y2)));
+                    const double len = glm::length(n);
+                    const glm::dvec3 u = len > 1e-6 ? n / len : glm::dvec3(map.at(x, y));
+                    m_x[out + size_t(x)] = u.x, m_y[out + size_t(x)] = u.y, m_z[out + size_t(x)] = u.z;
+                }
+            }
+        }
+    m_scratch.resize(m_count);
+}
+
+void TruthBand::values(Brdf brdf, const double* powers, double s, const DirectionPair& d, double* out) {
+    if (m_samples == 1) {
+        truthValues(brdf, m_x.data(), m_y.data(), m_z.data(), powers, s, m_count, d, out);
+        return;
+    }
+    std::fill(out, out + m_count, 0.0);
+    for (int k = 0; k < m_samples; ++k) {
+        const size_t o = size_t(k) * m_count;
+        truthValues(brdf, m_x.data() + o, m_y.data() + o, m_z.data() + o, powers, s, m_count, d,
+                    m_scratch.data());
+        for (size_t i = 0; i < m_count; ++i)
+            out[i] += m_scratch[i];
+    }
+    const double inv = 1.0 / m_samples;
+    for (size_t i = 0; i < m_count; ++i)
+        out[i] *= inv;
+}
+
 double fitTexelError(Brdf brdf, const double* truth, const double* NoH, const double* NoL, const double* NoV,
                      size_t pairs, double alpha) {
     double sum = 0.0;
@@ -217,6 +289,7 @@ FittedPyramid FittedPyramid::build(const NormalPyramid& pyramid, const BasePower
     while (bandLevel < last && levelBytes(bandLevel) > kBandLevelBytes)
         ++bandLevel;
     const NormalMap& map = pyramid.finest();
+    const TruthNormals truthNormals = options.truthNormals.value_or(defaultTruthNormals(options.brdf));
 
     // One texel's fit from its truth sums (D values, Σ over the footprint).
     auto fitTexel = [&](int k, int x, int y, const double* sums, double* scratch) {
@@ -254,20 +327,16 @@ FittedPyramid FittedPyramid::build(const NormalPyramid& pyramid, const BasePower
             rowEnd[size_t(k - 1)] = pyramid.level(k).yChild[size_t(rowEnd[size_t(k)])];
         }
         const size_t begin = size_t(rowBegin[0]) * size_t(map.width);
-        const size_t end = size_t(rowEnd[0]) * size_t(map.width);
-        const size_t n = end - begin;
-        std::vector<double> nx(n), ny(n), nz(n), values(n);
-        for (size_t i = 0; i < n; ++i)
-            nx[i] = map.normals[begin + i].x, ny[i] = map.normals[begin + i].y,
-            nz[i] = map.normals[begin + i].z;
+        TruthBand finest(map, rowBegin[0], rowEnd[0], truthNormals, pyramid.options().border);
+        std::vector<double> values(finest.size());
         // Per level 1..bandLevel the band's sums, pair-minor; level 0 is `values` for one pair at a time.
         std::vector<std::vector<double>> sums(size_t(bandLevel) + 1);
         for (int k = 1; k <= bandLevel; ++k)
             sums[size_t(k)].assign(
                 size_t(rowEnd[size_t(k)] - rowBegin[size_t(k)]) * size_t(pyramid.level(k).width) * D, 0.0);
         for (size_t d = 0; d < D; ++d) {
-            truthValues(options.brdf, nx.data(), ny.data(), nz.data(),
-                        texelPowers ? texelPowers->data() + begin : nullptr, s, n, dirs[d], values.data());
+            finest.values(options.brdf, texelPowers ? texelPowers->data() + begin : nullptr, s, dirs[d],
+                          values.data());
             for (int k = 1; k <= bandLevel; ++k) {
                 const PyramidLevel& level = pyramid.level(k);
                 const PyramidLevel& child = pyramid.level(k - 1);

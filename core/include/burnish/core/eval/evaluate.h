@@ -20,6 +20,7 @@
 // matches a mixture of very different powers (test_evaluate.cpp measures both).
 #pragma once
 
+#include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_map.h>
@@ -97,6 +98,11 @@ struct EvaluateOptions {
     /// α of its power, as a roughness preset's engine shades them. Only the isotropic methods have a GGX
     /// form (not LEAN, CLEAN, the mixture or the energy split).
     Brdf brdf = Brdf::BlinnPhong;
+    /// How the truth sees the finest normals (fitted_lobe.h): each texel a facet, or the bilinear
+    /// interpolant an engine draws when it magnifies the map. Unset: defaultTruthNormals(brdf), the
+    /// interpolant under GGX, facets under Blinn-Phong. The fitted lobe and the floor fit to this truth.
+    std::optional<TruthNormals> truthNormals;
+    TruthNormals resolvedTruthNormals() const { return truthNormals.value_or(defaultTruthNormals(brdf)); }
     /// Also evaluate the one-lobe floor: per texel the best isotropic lobe about the mean normal by a
     /// brute-force search (FittedLobeOptions::floor), reported as a row labelled "one-lobe floor".
     bool floor = false;
@@ -193,10 +199,11 @@ struct EvaluationResult {
     std::vector<double> basePowers;
 };
 
-/// Ground truth of one texel's footprint for one direction pair (the brute-force definition,
-/// used by tests and by evaluateMethods' hierarchical sums).
+/// Ground truth of one texel's footprint for one direction pair (the brute-force definition that
+/// evaluateMethods' hierarchical sums are tested against); with TruthNormals::Bilinear each finest
+/// texel is the mean over kBilinearSamples² points of the bilinear interpolant inside it.
 double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y, double s, const DirectionPair& d,
-                        Brdf brdf = Brdf::BlinnPhong);
+                        Brdf brdf = Brdf::BlinnPhong, TruthNormals how = TruthNormals::Texels);
 
 /// The same with each finest texel's own power (texelPowers, row-major over the finest level).
 double groundTruthTexel(const NormalPyramid& pyramid, int mip, int x, int y,

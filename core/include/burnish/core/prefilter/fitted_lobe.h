@@ -10,7 +10,8 @@
 // default) and vMF's, so by its measure it is never worse than either.
 //
 // How (per texel of mips >= 1; mip 0's footprint is one normal, whose lobe is the base power's exactly):
-//  1. the footprint's truth for every pair, mean_i f(n_i; s_i) with f the BRDF's lobe (lobe_shading.h),
+//  1. the footprint's truth for every pair, mean_i f(n_i; s_i) with f the BRDF's lobe (lobe_shading.h)
+//     over its finest normals as TruthNormals says (under GGX the bilinear interpolant an engine draws),
 //     summed up the levels as evaluate's truth is;
 //  2. the error E(α) = Σ_pairs |f(n̄; α) − truth| at α_base, α_vmf and kFitGrid + 2 roughnesses spaced
 //     evenly in log α over [α_base, kFitReach·max(α_base, α_vmf)] (capped at 1): never sharper than the
@@ -28,6 +29,8 @@
 #include <burnish/core/shading/lobe_shading.h>
 
 #include <functional>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace burnish {
@@ -41,8 +44,45 @@ inline constexpr int kFitSteps = 8;
 /// Roughnesses the floor's brute-force scan tries, evenly in log α from α_base to 1.
 inline constexpr int kFloorGrid = 160;
 
+/// How the truth sees the finest normals. Texels: each texel one flat facet (the source texts' truth).
+/// Bilinear: the surface an engine draws when it magnifies the map, the bilinear interpolant of the
+/// texels (renormalized; past the edges by the pyramid's border mode, wrap as a tiling sampler), each
+/// texel the mean of kBilinearSamples² points of it. Texel-scale noise is about two thirds as wide there
+/// (bilinear filtering averages neighbours: uncorrelated noise keeps 4/9 of its variance), so a lobe
+/// fitted to facets comes out rougher than the surface the engine shows: on the tread plate at 32× in
+/// three.js, fitted to facets 0.14× three.js alone's error, to the interpolant 0.07× (README, "One
+/// roughness for engines").
+enum class TruthNormals { Texels, Bilinear };
+/// Points per texel side of TruthNormals::Bilinear, at ±1/4 texel (the 2×2 midpoint rule).
+inline constexpr int kBilinearSamples = 2;
+/// Bilinear for GGX (the engines' truth), Texels for Blinn-Phong (the source texts' and the mixture's).
+TruthNormals defaultTruthNormals(Brdf brdf);
+const char* truthNormalsName(TruthNormals t);
+/// "texels" / "bilinear"; false for anything else.
+bool truthNormalsFromName(const std::string& name, TruthNormals& out);
+
+/// The finest normals of rows [rowBegin, rowEnd) of a map as the truth samples them: one set of
+/// (x, y, z) arrays per sub-sample (1 for Texels, kBilinearSamples² for Bilinear), each one value per
+/// texel of the rows, and the truth of each texel as the mean over its sub-samples.
+class TruthBand {
+public:
+    TruthBand() = default;
+    TruthBand(const NormalMap& map, int rowBegin, int rowEnd, TruthNormals how, BorderMode border);
+    size_t size() const { return m_count; }
+    /// Per texel of the rows, the mean of truthValues over its sub-samples (powers: per texel, or null).
+    void values(Brdf brdf, const double* powers, double s, const DirectionPair& d, double* out);
+
+private:
+    size_t m_count = 0;
+    int m_samples = 1;
+    std::vector<double> m_x, m_y, m_z; // sample-major: [sample·count + texel]
+    std::vector<double> m_scratch;
+};
+
 struct FittedLobeOptions {
     Brdf brdf = Brdf::Ggx;
+    /// How the truth sees the finest normals (defaultTruthNormals(brdf) unless set).
+    std::optional<TruthNormals> truthNormals;
     /// The pairs the error is summed over (evaluate's defaults).
     std::vector<DirectionPair> directions = directionPairs({});
     /// The brute-force floor instead of the fit.

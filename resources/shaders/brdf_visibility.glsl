@@ -95,3 +95,23 @@ float ggxSpecularTerm(float NoH, float NoL, float NoV, float alpha) {
     float value = D * (0.5 / (gv + gl)) * l;
     return (NoH > 0.0 && NoL > 0.0) ? value : 0.0;
 }
+
+// The anisotropic term of KHR_materials_anisotropy, unit light, F = 1: alpha_t along t, alpha_b along b,
+// the dot products of h, l, v with (t, b, n) as the engine forms them.
+// Khronos, KHR_materials_anisotropy: D = 1/(pi at ab ((t.h/at)^2 + (b.h/ab)^2 + (n.h)^2)^2),
+// V = 1/(2 (n.l |(at t.v, ab b.v, n.v)| + n.v |(at t.l, ab b.l, n.l)|))
+float ggxAnisotropicSpecularTerm(float NoH, float ToH, float BoH, float NoL, float ToL, float BoL, float NoV,
+                                 float ToV, float BoV, float alphaT, float alphaB) {
+    float at = ggxSpecularAlpha(alphaT), ab = ggxSpecularAlpha(alphaB);
+    float a2 = at * ab;
+    float c = NoH > 0.0 ? min(NoH, 1.0) : 0.0;
+    float x = ab * ToH, y = at * BoH, z = a2 * c;
+    float w = a2 / max(x * x + y * y + z * z, 1.175494e-38);
+    float D = a2 * w * w / kPi;
+    float l = NoL > kMinCosine ? min(NoL, 1.0) : kMinCosine;
+    float v = NoV > kMinCosine ? min(NoV, 1.0) : kMinCosine;
+    float gv = l * sqrt(at * at * ToV * ToV + ab * ab * BoV * BoV + v * v);
+    float gl = v * sqrt(at * at * ToL * ToL + ab * ab * BoL * BoL + l * l);
+    float value = D * (0.5 / (gv + gl)) * l;
+    return (NoH > 0.0 && NoL > 0.0 && value < 3.4e38) ? value : 0.0;
+}

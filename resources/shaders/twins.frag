@@ -37,6 +37,7 @@
 #define TWIN_STOCHASTIC_TEXEL 24
 #define TWIN_STOCHASTIC_NUMBERS 25
 #define TWIN_GGX_SPECULAR 26
+#define TWIN_GGX_ANISOTROPIC 27
 // 30..38: the vec3 (RGB specular colour) overloads of brdf_fresnel.glsl, one per twin.
 #define TWIN_FRESNEL_RGB_FIRST 30
 #define TWIN_FRESNEL_RGB_LAST 38
@@ -155,6 +156,15 @@ vec4 twin(vec4 a, vec4 b) {
 #elif TWIN == TWIN_GGX_SPECULAR
     // a = (NoH, NoL, NoV, alpha)
     return vec4(ggxSpecularTerm(a.x, a.y, a.z, a.w), ggxSpecularAlpha(a.w), 0.0, 0.0);
+#elif TWIN == TWIN_GGX_ANISOTROPIC
+    // a = (v.xy, l.xy), b = (n.xy, alpha_t, alpha_b): unit v and l above the plane, n = normalize(n.xy, 1),
+    // the geometric frame t = x, b = y (not orthonormal to n, as an engine forms it), h = normalize(l + v).
+    vec3 v = vec3(a.xy, sqrt(max(1.0 - dot(a.xy, a.xy), 0.0)));
+    vec3 l = vec3(a.zw, sqrt(max(1.0 - dot(a.zw, a.zw), 0.0)));
+    vec3 n = normalize(vec3(b.xy, 1.0));
+    vec3 h = normalize(l + v);
+    return vec4(ggxAnisotropicSpecularTerm(dot(n, h), h.x, h.y, dot(n, l), l.x, l.y, dot(n, v), v.x, v.y, b.z, b.w),
+                0.0, 0.0, 0.0);
 #elif TWIN == TWIN_STOCHASTIC_NUMBERS
     // a = (x, y, sample, _): the three numbers of pixel (x, y) and that sample
     return vec4(stochasticNumbers(uvec3(a.xyz)), 0.0);

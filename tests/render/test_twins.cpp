@@ -70,6 +70,7 @@ enum Twin {
     kTwinStochasticTexel = 24,
     kTwinStochasticNumbers = 25,
     kTwinGgxSpecular = 26,
+    kTwinGgxAnisotropic = 27,
     kTwinFresnelRgbFirst = 30,
 };
 
@@ -428,6 +429,35 @@ TEST_F(Twins, GgxSpecularTerm) {
         // A rational formula, but D = α²/(πd²) with d = sin² + c²α² at c → 1 and α = kMinRoughness has
         // d ≈ 2e-9: the float argument's rounding (c = 0.999 stored in float) moves sin² by a few ulps.
         {Tolerance{1e-4, kTinyFloor}, kRational}, 2);
+}
+
+TEST_F(Twins, GgxAnisotropicSpecularTerm) {
+    // Views and lights from overhead to grazing (and one below the horizon), a tilted shading normal in
+    // the geometric frame, α_t and α_b from below the clamp to 1 and past it, equal and far apart.
+    const std::vector<float> xy{-0.999f, 0.0f, 0.6f};
+    const std::vector<float> alphas{0.0f, 0.088f, 0.5f, 1.0f, 2.0f};
+    auto reference = [](const Args& a) {
+        const glm::dvec3 v(d(a[0]), d(a[1]),
+                           std::sqrt(std::max(1.0 - d(a[0]) * d(a[0]) - d(a[1]) * d(a[1]), 0.0)));
+        const glm::dvec3 l(d(a[2]), d(a[3]),
+                           std::sqrt(std::max(1.0 - d(a[2]) * d(a[2]) - d(a[3]) * d(a[3]), 0.0)));
+        const glm::dvec3 n = glm::normalize(glm::dvec3(d(a[4]), d(a[5]), 1.0));
+        const glm::dvec3 h = glm::normalize(l + v);
+        return std::array<double, 4>{ggxAnisotropicSpecularTerm(glm::dot(n, h), h.x, h.y, glm::dot(n, l), l.x,
+                                                                l.y, glm::dot(n, v), v.x, v.y, d(a[6]),
+                                                                d(a[7])),
+                                     0, 0, 0};
+    };
+    std::vector<Args> args;
+    for (const Args& a :
+         product({xy, {0.0f, 0.5f}, xy, {-0.3f, 0.0f}, {0.0f, 0.4f}, {0.0f, -0.2f}, alphas, alphas}))
+        if (a[0] * a[0] + a[1] * a[1] <= 1.0f && a[2] * a[2] + a[3] * a[3] <= 1.0f &&
+            !(a[0] == -a[2] && a[1] == -a[3])) // l = -v has no half vector
+            args.push_back(a);
+    // The same rational formula as the isotropic term, in float: a few ulps of its many products, more
+    // near the clamp's sharpest lobes.
+    expectTwin("ggxAnisotropicSpecularTerm", kTwinGgxAnisotropic, args, reference,
+               {Tolerance{1e-4, kTinyFloor}, kRational}, 1);
 }
 
 TEST_F(Twins, SphericalGaussian) {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace burnish {
 
@@ -44,6 +45,34 @@ template <class T> inline T ggxSpecularTermClamped(T NoH, T NoL, T NoV, T a) {
 // height-correlated G
 template <class T> inline T ggxSpecularTerm(T NoH, T NoL, T NoV, T alpha) {
     return ggxSpecularTermClamped(NoH, NoL, NoV, ggxSpecularAlpha(alpha));
+}
+
+/// The anisotropic GGX term of KHR_materials_anisotropy (three.js's MeshPhysicalMaterial, the glTF sample
+/// viewer): D_GGX,aniso · V_SmithGGXCorrelated,aniso · max(0, n·l), Fresnel 1, with α_t along the
+/// tangent-plane direction t and α_b along b (each clamped as ggxSpecularAlpha), and the dot products of
+/// h, l, v with (t, b, n) as the engine computes them (t and b in the geometric tangent plane, n the
+/// shading normal: the frame need not be orthonormal). α_t = α_b with an orthonormal frame is
+/// ggxSpecularTerm. Branch-free; 0 where n·h <= 0 or n·l <= 0, n·v clamped to [kMinCosine, 1].
+// Khronos, KHR_materials_anisotropy: D = 1/(π α_t α_b ((t·h/α_t)² + (b·h/α_b)² + (n·h)²)²),
+// V = 1/(2 (n·l |(α_t t·v, α_b b·v, n·v)| + n·v |(α_t t·l, α_b b·l, n·l)|))
+template <class T>
+inline T ggxAnisotropicSpecularTerm(T NoH, T ToH, T BoH, T NoL, T ToL, T BoL, T NoV, T ToV, T BoV, T alphaT,
+                                    T alphaB) {
+    const T at = ggxSpecularAlpha(alphaT), ab = ggxSpecularAlpha(alphaB);
+    const T a2 = at * ab;
+    const T c = NoH > T(0) ? std::min(NoH, T(1)) : T(0);
+    // D = a2·w²/π with w = a2/|(α_b t·h, α_t b·h, a2 n·h)|²: a sum of squares, no cancellation near n·h = 1.
+    const T x = ab * ToH, y = at * BoH, z = a2 * c;
+    const T q = x * x + y * y + z * z;
+    const T w = a2 / std::max(q, std::numeric_limits<T>::min());
+    const T D = a2 * w * w / kPi<T>;
+    const T l = NoL > T(kMinCosine) ? std::min(NoL, T(1)) : T(kMinCosine);
+    const T v = NoV > T(kMinCosine) ? std::min(NoV, T(1)) : T(kMinCosine);
+    const T gv = l * std::sqrt(at * at * ToV * ToV + ab * ab * BoV * BoV + v * v);
+    const T gl = v * std::sqrt(at * at * ToL * ToL + ab * ab * BoL * BoL + l * l);
+    const T value = D * (T(0.5) / (gv + gl)) * l;
+    const bool finite = value < std::numeric_limits<T>::infinity(); // NaN (from NaN dot products) fails too
+    return ((NoH > T(0)) & (NoL > T(0)) & finite) ? value : T(0);
 }
 
 } // namespace burnish

@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -256,6 +257,109 @@ double fitTexelAlpha(Brdf brdf, const double* truth, const double* NoH, const do
     return eRefined < eCandidates ? std::min(std::exp(refined), 1.0) : bestAlpha;
 }
 
+double AnisotropicLobe::strength() const {
+    if (!(alphaB < 1.0)) return 0.0;
+    return std::sqrt(std::clamp((alphaT - alphaB) / (1.0 - alphaB), 0.0, 1.0));
+}
+
+namespace {
+
+// One texel's anisotropic objective: per pair the lobe normal's cosines and the pair's tangent-plane
+// components, so a trial lobe costs one pass over the pairs.
+struct AnisotropicObjective {
+    const double* truth;
+    size_t D;
+    std::vector<double> noh, nol, nov, hx, hy, lx, ly, vx, vy;
+
+    AnisotropicObjective(const double* t, const std::vector<DirectionPair>& dirs, const glm::dvec3& n)
+        : truth(t), D(dirs.size()) {
+        for (auto* a : {&noh, &nol, &nov, &hx, &hy, &lx, &ly, &vx, &vy})
+            a->resize(D);
+        for (size_t d = 0; d < D; ++d) {
+            const DirectionPair& p = dirs[d];
+            noh[d] = glm::dot(n, p.h), nol[d] = glm::dot(n, p.l), nov[d] = glm::dot(n, p.v);
+            hx[d] = p.h.x, hy[d] = p.h.y, lx[d] = p.l.x, ly[d] = p.l.y, vx[d] = p.v.x, vy[d] = p.v.y;
+        }
+    }
+    double operator()(double angle, double at, double ab) const {
+        const double c = std::cos(angle), s = std::sin(angle);
+        double sum = 0.0;
+        for (size_t d = 0; d < D; ++d) {
+            const double toh = c * hx[d] + s * hy[d], boh = c * hy[d] - s * hx[d];
+            const double tol = c * lx[d] + s * ly[d], bol = c * ly[d] - s * lx[d];
+            const double tov = c * vx[d] + s * vy[d], bov = c * vy[d] - s * vx[d];
+            sum += std::abs(
+                ggxAnisotropicSpecularTerm(noh[d], toh, boh, nol[d], tol, bol, nov[d], tov, bov, at, ab) -
+                truth[d]);
+        }
+        return sum;
+    }
+};
+
+// θ folded into [0, π).
+double foldAngle(double a) {
+    a = std::fmod(a, kPi<double>);
+    return a < 0.0 ? a + kPi<double> : a;
+}
+
+} // namespace
+
+double anisotropicFitError(const double* truth, const std::vector<DirectionPair>& dirs, const glm::dvec3& n,
+                           const AnisotropicLobe& lobe) {
+    return AnisotropicObjective(truth, dirs, n)(lobe.angle, lobe.alphaT, lobe.alphaB);
+}
+
+double principalAngle(const NormalMoments& m) {
+    const double xx = m.cov[0], yy = m.cov[1], xy = m.cov[3];
+    if (!(std::abs(xx - yy) + std::abs(xy) > 1e-12)) return 0.0;
+    return foldAngle(0.5 * std::atan2(2.0 * xy, xx - yy));
+}
+
+AnisotropicLobe fitTexelAnisotropic(const double* truth, const std::vector<DirectionPair>& dirs,
+                                    const glm::dvec3& n, double alphaBase, double alphaIso,
+                                    double principal) {
+    const AnisotropicObjective E(truth, dirs, n);
+    const double aBase = ggxSpecularAlpha(alphaBase);
+    const double aIso = std::max(ggxSpecularAlpha(alphaIso), aBase);
+    AnisotropicLobe best{aIso, aIso, 0.0};
+    double eBest = E(0.0, aIso, aIso);
+    if (const double e = E(0.0, aBase, aBase); e < eBest) eBest = e, best = {aBase, aBase, 0.0};
+    auto tryLobe = [&](double angle, double at, double ab) {
+        at = std::clamp(at, ab, 1.0);
+        const double e = E(angle, at, ab);
+        if (e < eBest) eBest = e, best = {at, ab, foldAngle(angle)};
+    };
+    // The grid: per direction, three α_b up to α_iso and α_t from α_b to 1 evenly in log α.
+    std::array<double, kAnisotropicAngles + 1> angles{};
+    angles[0] = foldAngle(principal);
+    for (int i = 0; i < kAnisotropicAngles; ++i)
+        angles[size_t(i) + 1] = kPi<double> * i / kAnisotropicAngles;
+    for (double angle : angles)
+        for (double f : {0.5, 0.75, 1.0}) {
+            const double ab = std::max(aBase, f * aIso);
+            for (int j = 1; j <= kFitGrid; ++j)
+                tryLobe(angle, std::exp(std::log(ab) * (1.0 - double(j) / kFitGrid)), ab);
+        }
+    if (!(best.alphaT > best.alphaB)) return best; // still round
+    // Refinement, one coordinate at a time (θ; log α_t over [α_b, 1]; log α_b over [α_base, α_t]).
+    const double step = kPi<double> / (2.0 * kAnisotropicAngles);
+    for (int round = 0; round < 2; ++round) {
+        double u = best.angle, eu = eBest;
+        goldenSection([&](double a) { return E(a, best.alphaT, best.alphaB); }, best.angle - step,
+                      best.angle + step, kFitSteps, u, eu);
+        if (eu < eBest) eBest = eu, best.angle = foldAngle(u);
+        u = std::log(best.alphaT), eu = eBest;
+        goldenSection([&](double la) { return E(best.angle, std::exp(la), best.alphaB); },
+                      std::log(best.alphaB), 0.0, kFitSteps, u, eu);
+        if (eu < eBest) eBest = eu, best.alphaT = std::min(std::exp(u), 1.0);
+        u = std::log(best.alphaB), eu = eBest;
+        goldenSection([&](double la) { return E(best.angle, best.alphaT, std::exp(la)); }, std::log(aBase),
+                      std::log(best.alphaT), kFitSteps, u, eu);
+        if (eu < eBest) eBest = eu, best.alphaB = std::min(std::exp(u), best.alphaT);
+    }
+    return best;
+}
+
 FittedPyramid FittedPyramid::build(const NormalPyramid& pyramid, const BasePower& basePower,
                                    const std::vector<double>* texelPowers, double s, int lastLevel,
                                    const FittedLobeOptions& options, const std::function<bool()>& cancelled) {
@@ -290,6 +394,11 @@ FittedPyramid FittedPyramid::build(const NormalPyramid& pyramid, const BasePower
         ++bandLevel;
     const NormalMap& map = pyramid.finest();
     const TruthNormals truthNormals = options.truthNormals.value_or(defaultTruthNormals(options.brdf));
+    const bool anisotropic = options.anisotropic && options.brdf == Brdf::Ggx && !options.floor;
+    out.m_anisotropic = anisotropic;
+    if (anisotropic)
+        for (int k = std::max(1, options.firstLevel); k <= last; ++k)
+            out.m_levels[size_t(k)].aniso.assign(3 * out.m_levels[size_t(k)].power.size(), 0.0f);
 
     // One texel's fit from its truth sums (D values, Σ over the footprint).
     auto fitTexel = [&](int k, int x, int y, const double* sums, double* scratch) {
@@ -310,8 +419,14 @@ FittedPyramid FittedPyramid::build(const NormalPyramid& pyramid, const BasePower
         const double vmf = methodPower(Method::Vmf, m, base);
         const double alpha = fitTexelAlpha(options.brdf, truth, noh, nol, nov, D, ggxAlphaFromPower(base),
                                            ggxAlphaFromPower(vmf), options.floor);
-        out.m_levels[size_t(k)].power[size_t(y) * size_t(pyramid.level(k).width) + size_t(x)] =
-            float(powerFromGgxAlpha(alpha));
+        const size_t t = size_t(y) * size_t(pyramid.level(k).width) + size_t(x);
+        out.m_levels[size_t(k)].power[t] = float(powerFromGgxAlpha(alpha));
+        if (anisotropic) {
+            const AnisotropicLobe a =
+                fitTexelAnisotropic(truth, dirs, n, ggxAlphaFromPower(base), alpha, principalAngle(m));
+            float* o = &out.m_levels[size_t(k)].aniso[3 * t];
+            o[0] = float(a.alphaT), o[1] = float(a.alphaB), o[2] = float(a.angle);
+        }
     };
 
     // Level bandLevel's truth sums, every texel, pair-minor: [t·D + d].

@@ -79,8 +79,45 @@ private:
     std::vector<double> m_scratch;
 };
 
+/// One texel's anisotropic lobe as KHR_materials_anisotropy stores it: the roughness texture's α (α_b,
+/// across), a strength k with α_t = mix(α_b, 1, k²) (along), and the direction of t in the tangent plane,
+/// t = (cos θ, sin θ, 0), b = (−sin θ, cos θ, 0) (the normal map's x and y: glTF's tangent and bitangent).
+struct AnisotropicLobe {
+    double alphaT = 1.0;
+    double alphaB = 1.0;
+    double angle = 0.0; // θ, radians in [0, π)
+    /// KHR_materials_anisotropy's strength: α_t = α_b + (1 − α_b)·k², so k = √((α_t − α_b)/(1 − α_b)).
+    double strength() const;
+};
+
+/// E of one texel for an anisotropic lobe about the unit normal n: Σ_pairs |ggxAnisotropicSpecularTerm −
+/// truth| (the isotropic fit's objective, fitTexelError, with the anisotropic term).
+double anisotropicFitError(const double* truth, const std::vector<DirectionPair>& dirs, const glm::dvec3& n,
+                           const AnisotropicLobe& lobe);
+
+/// The anisotropic fit of one texel: the lobe about n, no sharper than alphaBase across and along, that
+/// minimizes anisotropicFitError. The engines form t and b in the geometric tangent plane (three.js, the
+/// glTF sample viewer, Filament), not about the shading normal, so about a tilted mean normal even a
+/// round lobe of this family is not ggxSpecularTerm's: with KHR_materials_anisotropy on, every texel is
+/// shaded this way, and the family can be better or worse than the isotropic fit (evaluate's "fitted
+/// anisotropic" row measures which, per map). Its first candidates are the round lobes of alphaIso (the
+/// isotropic fit's α) and alphaBase, so it is never worse than those in its own family. Search:
+/// directions principalAngle (the footprint's widest spread of normals) and kAnisotropicAngles evenly over
+/// [0, π), at each kFitGrid α_t from α_b to 1 for three α_b up to alphaIso; then kFitSteps golden-section
+/// steps on θ (±π/(2·kAnisotropicAngles)), log α_t and log α_b, twice.
+AnisotropicLobe fitTexelAnisotropic(const double* truth, const std::vector<DirectionPair>& dirs,
+                                    const glm::dvec3& n, double alphaBase, double alphaIso,
+                                    double principalAngle);
+/// Directions the anisotropic fit tries besides the footprint's principal one.
+inline constexpr int kAnisotropicAngles = 4;
+/// The direction of the widest spread of a footprint's normals in the tangent plane (the principal axis
+/// of their x, y covariance), in [0, π); 0 where the spread is round.
+double principalAngle(const NormalMoments& m);
+
 struct FittedLobeOptions {
     Brdf brdf = Brdf::Ggx;
+    /// Also fit the anisotropic lobe (GGX only): FittedPyramid::anisotropic.
+    bool anisotropic = false;
     /// How the truth sees the finest normals (defaultTruthNormals(brdf) unless set).
     std::optional<TruthNormals> truthNormals;
     /// The pairs the error is summed over (evaluate's defaults).
@@ -117,13 +154,23 @@ public:
         return double(l.power[size_t(y) * size_t(l.width) + size_t(x)]);
     }
     /// Frees level k's powers once nothing reads them again.
-    void releaseLevel(int k) { m_levels[size_t(k)].power = {}; }
+    void releaseLevel(int k) { m_levels[size_t(k)].power = {}, m_levels[size_t(k)].aniso = {}; }
+    /// Whether the anisotropic lobes were fitted (FittedLobeOptions::anisotropic).
+    bool hasAnisotropic() const { return m_anisotropic; }
+    /// The anisotropic lobe of texel (x, y) of level k >= 1 (with hasAnisotropic()).
+    AnisotropicLobe anisotropic(int k, int x, int y) const {
+        const Level& l = m_levels[size_t(k)];
+        const size_t i = 3 * (size_t(y) * size_t(l.width) + size_t(x));
+        return {double(l.aniso[i]), double(l.aniso[i + 1]), double(l.aniso[i + 2])};
+    }
 
 private:
     struct Level {
         int width = 0, height = 0;
         std::vector<float> power;
+        std::vector<float> aniso; // per texel α_t, α_b, θ
     };
+    bool m_anisotropic = false;
     std::vector<Level> m_levels;
 };
 

@@ -42,6 +42,7 @@ struct EvaluateCliOptions {
     bool shadedFit = false;
     bool energySplit = false;
     std::string truthNormals;
+    bool anisotropic = false;
     double steepDeg = 45.0;
     std::string mixtureFiltering = "moments";
     std::string brdf;
@@ -103,6 +104,7 @@ int runEvaluate(const EvaluateCliOptions& o) {
         options.evaluate.truthNormals = t;
     }
     options.evaluate.floor = o.floor;
+    options.evaluate.anisotropic = o.anisotropic;
     options.evaluate.methods = methodsUnder(options.evaluate.brdf);
     if (!o.methods.empty()) {
         options.evaluate.methods.clear();
@@ -241,6 +243,11 @@ const CommandRegistration registration{
                         "blinn-phong.")
             ->check(CLI::IsMember({"blinn-phong", "ggx"}))
             ->type_name("NAME");
+        sub->add_flag(
+            "--anisotropic", o->anisotropic,
+            "Also evaluate the anisotropic fit (GGX only): per texel the pair KHR_materials_anisotropy "
+            "stores (roughness across, strength and direction along), shaded as three.js and the glTF "
+            "sample viewer shade it, as the row 'fitted anisotropic'.");
         sub->add_option("--truth-normals", o->truthNormals,
                         "How the ground truth sees the finest normals: texels (each texel a flat facet, the "
                         "reference texts' truth) or bilinear (the surface an engine draws when it magnifies "

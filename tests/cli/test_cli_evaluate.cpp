@@ -249,6 +249,20 @@ TEST(CliEvaluate, GgxTruthWithTheFloorAndThePresetsBrdf) {
     for (const auto& e : texels["errors"])
         if (e["variant"] == "naive")
             EXPECT_NE(e["relative_l1"].get<double>(), rows["naive"][e["mip"].get<int>()]);
+    // The anisotropic fit's row beside the isotropic one; Blinn-Phong has none (one line, nothing written).
+    r = runBurnish("evaluate " + in +
+                   " --preset gltf --anisotropic --methods fitted --bake-runs 1 --json --out " +
+                   (dir / "a").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    bool anisotropicRow = false;
+    for (const auto& e : nlohmann::json::parse(r.out)["errors"])
+        anisotropicRow |= e["variant"] == "fitted anisotropic" && e["relative_l1"].get<double>() >= 0.0;
+    EXPECT_TRUE(anisotropicRow);
+    r = runBurnish("evaluate " + in + " --brdf blinn-phong --anisotropic --out " + (dir / "ab").string());
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_EQ(lineCount(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("GGX"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "ab" / "evaluate.json"));
     r = runBurnish("evaluate " + in + " --truth-normals bicubic --out " + (dir / "x").string());
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.err.find("--truth-normals"), std::string::npos) << r.err;

@@ -507,3 +507,60 @@ TEST(FittedLobe, AnisotropicFitFindsTheDirectionOfTheSpreadAndIsNeverWorse) {
         EXPECT_EQ(a.strength(), 0.0);
     }
 }
+
+// evaluate's "fitted anisotropic" row is the anisotropic fit's lobes shaded by ggxAnisotropicSpecularTerm
+// about each texel's mean normal in the geometric frame, against the same truth (a scalar recomputation
+// here, to 1e-10), the round base lobe at mip 0; between texels it is finite; refused under Blinn-Phong.
+TEST(FittedLobe, EvaluateRowsTheAnisotropicFitAsEnginesShadeIt) {
+    const NormalMap map = stripes(16, 0.4, 0.15);
+    EvaluateOptions options;
+    options.brdf = Brdf::Ggx;
+    options.truthNormals = TruthNormals::Texels;
+    options.methods = {Method::Fitted};
+    options.anisotropic = true;
+    options.betweenTexels = true;
+    options.basePowers = {256.0};
+    options.firstMip = 0;
+    options.lastMip = 3;
+    const auto r = evaluateMethods(map, options);
+    ASSERT_TRUE(r) << r.error();
+    const auto shared = std::shared_ptr<const NormalMap>(&map, [](const NormalMap*) {});
+    const NormalPyramid pyramid = NormalPyramid::build(shared, {BorderMode::Wrap, FilterKernel::Box});
+    FittedLobeOptions fit;
+    fit.anisotropic = true;
+    fit.truthNormals = TruthNormals::Texels;
+    fit.directions = r->directions;
+    const FittedPyramid fitted = FittedPyramid::build(
+        pyramid, [](int, int, int) { return 256.0; }, nullptr, 256.0, 3, fit);
+    int rows = 0;
+    for (const MipError& e : r->errors) {
+        if (!e.anisotropic) continue;
+        EXPECT_EQ(variantLabel(variantOf(e)), "fitted anisotropic");
+        EXPECT_TRUE(std::isfinite(e.relativeL1) && std::isfinite(e.energyRatio));
+        ++rows;
+        if (e.betweenTexels) continue;
+        const PyramidLevel& level = pyramid.level(e.mip);
+        double abs = 0.0, truth = 0.0;
+        for (const DirectionPair& d : r->directions)
+            for (int y = 0; y < level.height; ++y)
+                for (int x = 0; x < level.width; ++x) {
+                    const glm::dvec3 n(pyramid.boxMoments(e.mip, x, y).meanDirection());
+                    const double a0 = ggxAlphaFromPower(256.0);
+                    const AnisotropicLobe a =
+                        e.mip > 0 ? fitted.anisotropic(e.mip, x, y) : AnisotropicLobe{a0, a0, 0.0};
+                    const glm::dvec3 t(std::cos(a.angle), std::sin(a.angle), 0.0), b(-t.y, t.x, 0.0);
+                    const double value = ggxAnisotropicSpecularTerm(
+                        glm::dot(n, d.h), glm::dot(t, d.h), glm::dot(b, d.h), glm::dot(n, d.l),
+                        glm::dot(t, d.l), glm::dot(b, d.l), glm::dot(n, d.v), glm::dot(t, d.v),
+                        glm::dot(b, d.v), a.alphaT, a.alphaB);
+                    const double gt = groundTruthTexel(pyramid, e.mip, x, y, 256.0, d, Brdf::Ggx);
+                    abs += std::abs(value - gt), truth += gt;
+                }
+        EXPECT_NEAR(e.relativeL1, abs / truth, 1e-10 * abs / truth) << "mip " << e.mip;
+    }
+    EXPECT_EQ(rows, 8); // mips 0-3, at texels and between them
+    options.brdf = Brdf::BlinnPhong;
+    const auto refused = evaluateMethods(map, options);
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.error().find("GGX"), std::string::npos) << refused.error();
+}

@@ -7,6 +7,7 @@
 #include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
+#include <burnish/core/shading/ggx_specular.h>
 #include <burnish/core/shading/ndf.h>
 
 #include <glm/geometric.hpp>
@@ -105,11 +106,12 @@ std::vector<EvaluatedVariant> evaluatedVariants(const EvaluateOptions& options) 
                 out.push_back({m, kernel, std::clamp(k, 1, kMaxMixtureLobes)});
         }
     if (options.floor) out.push_back({Method::Fitted, FilterKernel::Box, 0, true});
+    if (options.anisotropic) out.push_back({Method::Fitted, FilterKernel::Box, 0, false, true});
     return out;
 }
 
 std::string variantLabel(const EvaluatedVariant& v) {
-    std::string label(v.floor ? kFloorLabel : methodName(v.method));
+    std::string label(v.floor ? kFloorLabel : v.anisotropic ? kAnisotropicLabel : methodName(v.method));
     if (v.method == Method::Mixture) label += "-k" + std::to_string(v.lobes);
     if (v.kernel != FilterKernel::Box) label += " (" + std::string(kernelName(v.kernel)) + ")";
     return label;
@@ -272,14 +274,96 @@ std::vector<TexelLobe> levelLobes(const NormalPyramid& pyramid, const NormalPyra
     return out;
 }
 
+// The four texels whose shared corner is the point of texel (x, y): (x, y), (x+1, y), (x, y+1),
+// (x+1, y+1) through the border mode.
+std::array<size_t, 4> cornerTexels(const PyramidLevel& level, int x, int y, BorderMode border) {
+    const int x1 = borderIndex(x + 1, level.width, border), y1 = borderIndex(y + 1, level.height, border);
+    const size_t w = size_t(level.width);
+    return {size_t(y) * w + size_t(x), size_t(y) * w + size_t(x1), size_t(y1) * w + size_t(x),
+            size_t(y1) * w + size_t(x1)};
+}
+
+// The anisotropic fit's lobe of texel (x, y) of level k; at level 0 (not fitted) the round lobe of the
+// texel's base power, which an engine with KHR_materials_anisotropy on still shades in the geometric frame.
+AnisotropicLobe anisotropicLobeAt(const NormalPyramid& pyramid, int k, int x, int y,
+                                  const FittedPyramid* fitted, double s,
+                                  const std::vector<double>* texelPowers) {
+    if (k > 0 && fitted) return fitted->anisotropic(k, x, y);
+    const double p = texelPowers ? (*texelPowers)[size_t(y) * size_t(pyramid.finest().width) + size_t(x)] : s;
+    const double a = ggxSpecularAlpha(ggxAlphaFromPower(p));
+    return {a, a, 0.0};
+}
+
+// The anisotropic fit's lobes at level k about each texel's renormalized mean normal (the normal texture
+// the bake stores).
+LobeTable anisotropicTable(const NormalPyramid& pyramid, int k, const FittedPyramid* fitted, double s,
+                           const std::vector<double>* texelPowers) {
+    const PyramidLevel& level = pyramid.level(k);
+    const size_t n = size_t(level.width) * size_t(level.height);
+    std::vector<glm::dvec3> normals(n);
+    std::vector<AnisotropicLobe> lobes(n);
+    tbb::parallel_for(0, level.height, [&](int y) {
+        for (int x = 0; x < level.width; ++x) {
+            const size_t t = size_t(y) * size_t(level.width) + size_t(x);
+            normals[t] = glm::dvec3(pyramid.boxMoments(k, x, y).meanDirection());
+            lobes[t] = anisotropicLobeAt(pyramid, k, x, y, fitted, s, texelPowers);
+        }
+    });
+    return LobeTable::ofAnisotropic(normals, lobes);
+}
+
+// The anisotropic fit at the corner points of level k as an engine filters its three textures bilinearly
+// there: the normal texture's unit normals averaged and renormalized; the roughness texture's r = √α_b
+// averaged (α_b = r̄²); the anisotropy texture's direction (cos θ, sin θ) averaged and normalized (three.js,
+// the glTF sample viewer) and its strength averaged, α_t = mix(α_b, 1, k̄²).
+LobeTable anisotropicCornerTable(const NormalPyramid& pyramid, int k, const FittedPyramid* fitted, double s,
+                                 const std::vector<double>* texelPowers) {
+    const PyramidLevel& level = pyramid.level(k);
+    const BorderMode border = pyramid.options().border;
+    const size_t n = size_t(level.width) * size_t(level.height);
+    std::vector<glm::dvec3> normals(n);
+    std::vector<AnisotropicLobe> lobes(n);
+    tbb::parallel_for(0, level.height, [&](int y) {
+        for (int x = 0; x < level.width; ++x) {
+            const auto t = cornerTexels(level, x, y, border);
+            glm::dvec3 normal(0.0);
+            glm::dvec2 dir(0.0);
+            double r = 0.0, strength = 0.0;
+            for (size_t c = 0; c < 4; ++c) {
+                const int xi = int(t[c] % size_t(level.width)), yi = int(t[c] / size_t(level.width));
+                normal += 0.25 * glm::dvec3(pyramid.boxMoments(k, xi, yi).meanDirection());
+                const AnisotropicLobe a = anisotropicLobeAt(pyramid, k, xi, yi, fitted, s, texelPowers);
+                r += 0.25 * std::sqrt(a.alphaB);
+                dir += 0.25 * glm::dvec2(std::cos(a.angle), std::sin(a.angle));
+                strength += 0.25 * a.strength();
+            }
+            const double len = glm::length(normal), dirLen = glm::length(dir);
+            const size_t i = size_t(y) * size_t(level.width) + size_t(x);
+            normals[i] = len > 0.0 ? normal / len : glm::dvec3(0.0, 0.0, 1.0);
+            const double alphaB = r * r;
+            // Directions that cancel leave none: a round lobe.
+            const double k2 = dirLen > 1e-9 ? strength * strength : 0.0;
+            lobes[i] = {alphaB + (1.0 - alphaB) * k2, alphaB, dirLen > 1e-9 ? std::atan2(dir.y, dir.x) : 0.0};
+        }
+    });
+    return LobeTable::ofAnisotropic(normals, lobes);
+}
+
 // One method's figures at one mip from its accumulated sums. Σ GT > 0 whenever a direction has its
 // light above the horizon and a normal faces it; a truth of exactly 0 (all normals facing away)
 // reports zero error and energy 1.
 MipError errorOf(const Accumulator& a, const EvaluatedVariant& v, double s, int k) {
     const bool lit = a.truth > 0.0;
-    return {
-        v.method, s,     k,      lit ? a.absError / a.truth : 0.0, lit ? a.method / a.truth : 1.0, v.kernel,
-        v.lobes,  false, v.floor};
+    return {v.method,
+            s,
+            k,
+            lit ? a.absError / a.truth : 0.0,
+            lit ? a.method / a.truth : 1.0,
+            v.kernel,
+            v.lobes,
+            false,
+            v.floor,
+            v.anisotropic};
 }
 
 // The per-texel relative error map of one method at one mip: Σ|M − GT| / max(Σ GT, floor), the
@@ -288,7 +372,7 @@ MipError errorOf(const Accumulator& a, const EvaluatedVariant& v, double s, int 
 // zero), clamped to the largest float.
 ErrorMap errorMapOf(const std::vector<double>& absSum, const std::vector<double>& truthSum,
                     const EvaluatedVariant& v, double s, int k, const PyramidLevel& level) {
-    ErrorMap em{v.method, s, k, level.width, level.height, {}, v.kernel, v.lobes, v.floor};
+    ErrorMap em{v.method, s, k, level.width, level.height, {}, v.kernel, v.lobes, v.floor, v.anisotropic};
     em.relativeError.resize(absSum.size());
     double meanTruth = 0.0;
     for (double t : truthSum)
@@ -315,15 +399,6 @@ struct Pass {
     bool errorMaps = false;
     bool betweenTexels = false;
 };
-
-// The four texels whose shared corner is the point of texel (x, y): (x, y), (x+1, y), (x, y+1),
-// (x+1, y+1) through the border mode.
-std::array<size_t, 4> cornerTexels(const PyramidLevel& level, int x, int y, BorderMode border) {
-    const int x1 = borderIndex(x + 1, level.width, border), y1 = borderIndex(y + 1, level.height, border);
-    const size_t w = size_t(level.width);
-    return {size_t(y) * w + size_t(x), size_t(y) * w + size_t(x1), size_t(y1) * w + size_t(x),
-            size_t(y1) * w + size_t(x1)};
-}
 
 // Every variant's lobe at every corner point of level k (mip index mi) into the pass's tables.
 void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, size_t mi,
@@ -381,6 +456,10 @@ void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, siz
                 }
             });
             pass.betweenTables[m][mi] = LobeTable::of(out);
+            continue;
+        }
+        if (variants[m].anisotropic) {
+            pass.betweenTables[m][mi] = anisotropicCornerTable(pyramid, k, fitted[m], s, texelPowers);
             continue;
         }
         std::vector<TexelLobe> out(n);
@@ -594,6 +673,9 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
         return Error{"the steep angle must lie in (0, 90) degrees"};
     if (options.energySplit && options.resolvedTruthNormals() != TruthNormals::Texels)
         return Error{"the energy split is measured on the finest texels (--truth-normals texels)"};
+    if (options.anisotropic && options.brdf != Brdf::Ggx)
+        return Error{
+            "the anisotropic fit is KHR_materials_anisotropy's, under the GGX truth only (--brdf ggx)"};
     if (options.brdf == Brdf::Ggx) {
         if (options.energySplit) return Error{"the energy split is LEAN's, under the Blinn-Phong truth only"};
         const std::vector<Method> ggx = methodsUnder(Brdf::Ggx);
@@ -684,6 +766,7 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             fit.truthNormals = options.resolvedTruthNormals();
             fit.directions = directions;
             fit.floor = v.floor;
+            fit.anisotropic = v.anisotropic;
             const AuthoredPowers* a = authored ? &*authored : nullptr;
             fittedPyramids[m].emplace(FittedPyramid::build(
                 kernelPyramid ? *kernelPyramid : pyramid,
@@ -705,6 +788,10 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                     continue;
                 }
                 const auto& kernelPyramid = filtered[kernelIndex(v.kernel)];
+                if (v.anisotropic) {
+                    table = anisotropicTable(pyramid, k, fitted[m], s, texelPowers);
+                    continue;
+                }
                 table = LobeTable::of(levelLobes(pyramid, kernelPyramid ? &*kernelPyramid : nullptr, k,
                                                  v.method, v.kernel, authored ? &*authored : nullptr, s,
                                                  options.params, fitted[m]),

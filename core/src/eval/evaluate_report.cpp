@@ -124,7 +124,7 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
     }
     std::vector<EvaluatedVariant> costed;
     for (const EvaluatedVariant& v : evaluatedVariants(options.evaluate))
-        if (v.kernel == FilterKernel::Box && !v.floor) costed.push_back(v);
+        if (v.kernel == FilterKernel::Box && !v.floor && !v.anisotropic) costed.push_back(v);
     const size_t methodCount = costed.size();
     for (size_t i = 0; i < methodCount; ++i) {
         const EvaluatedVariant& v = costed[i];
@@ -237,6 +237,12 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
               "bilinear): each finest texel's truth is the mean over 2x2 sub-samples (at +-1/4 texel) of the "
               "bilinear interpolant of the texels, renormalized; bilinear filtering averages neighbours, so "
               "texel-scale noise is narrower there than the texels are. ";
+    if (r.options.anisotropic)
+        md << "Fitted anisotropic: per texel the pair KHR_materials_anisotropy stores (the roughness across, "
+              "a strength that lengthens it along a direction), fitted by the same measure and shaded as "
+              "three.js and the glTF sample viewer shade it, with the direction in the geometric tangent "
+              "plane (so about a tilted mean normal even a round lobe differs from the isotropic term; "
+              "with the extension on, every texel is shaded that way). ";
     if (r.options.floor)
         md << "The one-lobe floor: per texel the best one isotropic lobe about the mean normal no sharper "
               "than the base, by a brute-force search of its roughness (what no such roughness can beat). ";
@@ -333,16 +339,17 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
     j["evaluation_seconds"] = jsonNumber(r.result.seconds);
     j["errors"] = nlohmann::json::array();
     for (const auto& e : r.result.errors)
-        j["errors"].push_back(
-            {{"method", e.floor ? std::string(kFloorLabel) : std::string(methodName(e.method))},
-             {"variant", variantLabel(variantOf(e))},
-             {"lobes", e.lobes},
-             {"between_texels", e.betweenTexels},
-             {"kernel", kernelName(e.kernel)},
-             {"base_power", e.basePower},
-             {"mip", e.mip},
-             {"relative_l1", jsonNumber(e.relativeL1)},
-             {"energy_ratio", jsonNumber(e.energyRatio)}});
+        j["errors"].push_back({{"method", e.floor         ? std::string(kFloorLabel)
+                                          : e.anisotropic ? std::string(kAnisotropicLabel)
+                                                          : std::string(methodName(e.method))},
+                               {"variant", variantLabel(variantOf(e))},
+                               {"lobes", e.lobes},
+                               {"between_texels", e.betweenTexels},
+                               {"kernel", kernelName(e.kernel)},
+                               {"base_power", e.basePower},
+                               {"mip", e.mip},
+                               {"relative_l1", jsonNumber(e.relativeL1)},
+                               {"energy_ratio", jsonNumber(e.energyRatio)}});
     if (r.options.energySplit) {
         j["steep_deg"] = r.options.steepDeg;
         j["lean_energy_split"] = nlohmann::json::array();
@@ -465,7 +472,9 @@ Status writeEvaluationReport(const EvaluationReport& r, const fs::path& dir) {
                 m.kernel == FilterKernel::Box ? "" : "-" + std::string(kernelName(m.kernel));
             // The floor's label has spaces: its file is "floor-…".
             const std::string name =
-                (m.floor ? std::string("floor") : variantLabel({m.method, FilterKernel::Box, m.lobes})) +
+                (m.floor         ? std::string("floor")
+                 : m.anisotropic ? std::string("fitted-anisotropic")
+                                 : variantLabel({m.method, FilterKernel::Box, m.lobes})) +
                 kernel + "-s" + powerLabel(m.basePower) + "-mip" + std::to_string(m.mip) + ".exr";
             const Status st = errors->add(name, [&](const fs::path& staged) {
                 return writeImageFile(staged, m.width, m.height, 1, m.relativeError,

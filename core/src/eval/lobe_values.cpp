@@ -38,6 +38,23 @@ BURNISH_AVX512_CLONES void ggxValues(const LobeTable& t, size_t begin, size_t co
                                  nx[i] * vx + ny[i] * vy + nz[i] * vz, alpha[i]);
 }
 
+// ggxAnisotropicSpecularTerm about each lobe's normal, in the geometric frame of its direction.
+BURNISH_AVX512_CLONES void ggxAnisotropicValues(const LobeTable& t, size_t begin, size_t count,
+                                                const DirectionPair& d, double* out) {
+    const double *nx = t.nx.data() + begin, *ny = t.ny.data() + begin, *nz = t.nz.data() + begin;
+    const double *ab = t.power.data() + begin, *at = t.alphaT.data() + begin;
+    const double *ca = t.cosA.data() + begin, *sa = t.sinA.data() + begin;
+    const double hx = d.h.x, hy = d.h.y, hz = d.h.z, lx = d.l.x, ly = d.l.y, lz = d.l.z;
+    const double vx = d.v.x, vy = d.v.y, vz = d.v.z;
+    for (size_t i = 0; i < count; ++i) {
+        const double c = ca[i], s = sa[i];
+        out[i] = ggxAnisotropicSpecularTerm(
+            nx[i] * hx + ny[i] * hy + nz[i] * hz, c * hx + s * hy, c * hy - s * hx,
+            nx[i] * lx + ny[i] * ly + nz[i] * lz, c * lx + s * ly, c * ly - s * lx,
+            nx[i] * vx + ny[i] * vy + nz[i] * vz, c * vx + s * vy, c * vy - s * vx, at[i], ab[i]);
+    }
+}
+
 // Σ over the slots of share·D(h)·max(0, n·l), D the slope-space Gaussian of slopeGaussianNdf.
 BURNISH_AVX512_CLONES void gaussianValues(const LobeTable& t, size_t begin, size_t count,
                                           const DirectionPair& d, double* out) {
@@ -120,6 +137,22 @@ LobeTable LobeTable::of(const std::vector<TexelLobe>& lobes, Brdf brdf) {
     return t;
 }
 
+LobeTable LobeTable::ofAnisotropic(const std::vector<glm::dvec3>& normals,
+                                   const std::vector<AnisotropicLobe>& lobes) {
+    if (normals.size() != lobes.size()) throw std::logic_error("one normal per anisotropic lobe");
+    LobeTable t;
+    t.kind = Kind::GgxAnisotropic;
+    t.count = lobes.size();
+    for (auto* v : {&t.nx, &t.ny, &t.nz, &t.power, &t.alphaT, &t.cosA, &t.sinA})
+        v->resize(t.count);
+    for (size_t i = 0; i < t.count; ++i) {
+        t.nx[i] = normals[i].x, t.ny[i] = normals[i].y, t.nz[i] = normals[i].z;
+        t.power[i] = lobes[i].alphaB, t.alphaT[i] = lobes[i].alphaT;
+        t.cosA[i] = std::cos(lobes[i].angle), t.sinA[i] = std::sin(lobes[i].angle);
+    }
+    return t;
+}
+
 LobeTable LobeTable::of(const std::vector<DecodedMixture>& mixtures) {
     LobeTable t;
     t.kind = Kind::Gaussian;
@@ -164,6 +197,8 @@ void lobeValues(const LobeTable& table, size_t begin, size_t end, const Directio
         blinnPhongValues(table, begin, end - begin, d, out);
     else if (table.kind == LobeTable::Kind::Ggx)
         ggxValues(table, begin, end - begin, d, out);
+    else if (table.kind == LobeTable::Kind::GgxAnisotropic)
+        ggxAnisotropicValues(table, begin, end - begin, d, out);
     else
         gaussianValues(table, begin, end - begin, d, out);
 }

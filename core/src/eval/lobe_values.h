@@ -21,20 +21,26 @@ struct LobeTable {
     /// Gaussians per texel, each weighted by its share (LEAN and CLEAN: one slot of share 1; the
     /// mixture: K slots, empty ones of share 0).
     /// Ggx: ggxSpecularTerm with α = ggxAlphaFromPower(p) about n (the isotropic methods under --brdf ggx).
-    enum class Kind { BlinnPhong, Gaussian, Ggx };
+    /// GgxAnisotropic: ggxAnisotropicSpecularTerm about n with α_b in `power`, α_t in `alphaT` and
+    /// t = (cosA, sinA, 0), b = (−sinA, cosA, 0) (the anisotropic fit, as engines shade it).
+    enum class Kind { BlinnPhong, Gaussian, Ggx, GgxAnisotropic };
     Kind kind = Kind::BlinnPhong;
     int slots = 1;
     size_t count = 0;
     // Per texel (Blinn-Phong) or per slot and texel, slot-major: [slot·count + t].
-    std::vector<double> nx, ny, nz;    // the normal of n·l (and of n·h for Blinn-Phong)
-    std::vector<double> power, norm;   // Blinn-Phong: clampPower(p) and (p+2)/(2π); GGX: α in `power`
-    std::vector<double> coef;          // Gaussian: share/(2π√det Σ), 0 for an empty slot or det <= 0
-    std::vector<double> mx, my;        // Gaussian: mean slope
-    std::vector<double> ixx, iyy, ixy; // Gaussian: Σ⁻¹ (xx, yy, xy)
+    std::vector<double> nx, ny, nz;         // the normal of n·l (and of n·h for Blinn-Phong)
+    std::vector<double> power, norm;        // Blinn-Phong: clampPower(p) and (p+2)/(2π); GGX: α in `power`
+    std::vector<double> coef;               // Gaussian: share/(2π√det Σ), 0 for an empty slot or det <= 0
+    std::vector<double> mx, my;             // Gaussian: mean slope
+    std::vector<double> ixx, iyy, ixy;      // Gaussian: Σ⁻¹ (xx, yy, xy)
+    std::vector<double> alphaT, cosA, sinA; // GgxAnisotropic
 
     /// The lobes under `brdf` (Ggx: isotropic lobes only; a slope-space lobe is a logic error).
     static LobeTable of(const std::vector<TexelLobe>& lobes, Brdf brdf = Brdf::BlinnPhong);
     static LobeTable of(const std::vector<DecodedMixture>& mixtures);
+    /// Anisotropic GGX lobes, one per texel: its unit normal and lobe.
+    static LobeTable ofAnisotropic(const std::vector<glm::dvec3>& normals,
+                                   const std::vector<AnisotropicLobe>& lobes);
     /// Filtering after shading: point i is the blend of the mixtures texels[at[i][c]] with weights
     /// weights[c] (Σ weights[c]·mixture value), each of their lobes a slot of its own with its share
     /// times its texel's weight.

@@ -272,7 +272,8 @@ struct AnisotropicObjective {
     std::vector<double> noh, nol, nov, hx, hy, lx, ly, vx, vy;
 
     AnisotropicObjective(const double* t, const std::vector<DirectionPair>& dirs, const glm::dvec3& n)
-        : truth(t), D(dirs.size()) {
+        : truth(t)
+        , D(dirs.size()) {
         for (auto* a : {&noh, &nol, &nov, &hx, &hy, &lx, &ly, &vx, &vy})
             a->resize(D);
         for (size_t d = 0; d < D; ++d) {

@@ -103,6 +103,11 @@ struct EvaluateOptions {
     /// interpolant under GGX, facets under Blinn-Phong. The fitted lobe and the floor fit to this truth.
     std::optional<TruthNormals> truthNormals;
     TruthNormals resolvedTruthNormals() const { return truthNormals.value_or(defaultTruthNormals(brdf)); }
+    /// Also evaluate the anisotropic fit (GGX only; fitted_lobe.h fitTexelAnisotropic): per texel the pair
+    /// KHR_materials_anisotropy stores, shaded as the engines shade it (t and b in the geometric tangent
+    /// plane), reported as a row labelled "fitted anisotropic"; between texels each of its three textures
+    /// (roughness, direction·strength, normal) filtered as the engine filters them.
+    bool anisotropic = false;
     /// Also evaluate the one-lobe floor: per texel the best isotropic lobe about the mean normal by a
     /// brute-force search (FittedLobeOptions::floor), reported as a row labelled "one-lobe floor".
     bool floor = false;
@@ -121,6 +126,7 @@ struct MipError {
     int lobes = 0;              // the mixture's K (0 for the other methods)
     bool betweenTexels = false; // evaluated between texels (EvaluateOptions::betweenTexels)
     bool floor = false;         // the one-lobe floor (EvaluateOptions::floor), method Fitted
+    bool anisotropic = false;   // the anisotropic fit (EvaluateOptions::anisotropic), method Fitted
 };
 
 /// Error maps divide a texel's absolute error by its truth, or by this fraction of the level's mean
@@ -138,6 +144,7 @@ struct ErrorMap {
     FilterKernel kernel = FilterKernel::Box;
     int lobes = 0;
     bool floor = false; // the one-lobe floor's map
+    bool anisotropic = false;
 };
 
 /// What one row of an evaluation is: a method, its footprint kernel and, for the mixture, its K.
@@ -145,7 +152,8 @@ struct EvaluatedVariant {
     Method method;
     FilterKernel kernel = FilterKernel::Box;
     int lobes = 0;
-    bool floor = false; // the one-lobe floor (method Fitted, box kernel)
+    bool floor = false;       // the one-lobe floor (method Fitted, box kernel)
+    bool anisotropic = false; // the anisotropic fit (method Fitted, box kernel)
     bool operator==(const EvaluatedVariant&) const = default;
 };
 /// The rows the options ask for, kernel-major, methods in the options' order, the mixture once per
@@ -154,8 +162,9 @@ std::vector<EvaluatedVariant> evaluatedVariants(const EvaluateOptions& options);
 /// "lean", "lean (tent)", "mixture-k3", "one-lobe floor".
 std::string variantLabel(const EvaluatedVariant& variant);
 inline constexpr std::string_view kFloorLabel = "one-lobe floor";
+inline constexpr std::string_view kAnisotropicLabel = "fitted anisotropic";
 inline EvaluatedVariant variantOf(const MipError& e) {
-    return {e.method, e.kernel, e.lobes, e.floor};
+    return {e.method, e.kernel, e.lobes, e.floor, e.anisotropic};
 }
 
 /// Where LEAN's energy goes at one base power and mip: its energy ratio Σ M / Σ GT over the texels

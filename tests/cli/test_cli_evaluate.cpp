@@ -255,7 +255,8 @@ TEST(CliEvaluate, GgxTruthWithTheFloorAndThePresetsBrdf) {
                    (dir / "a").string());
     ASSERT_EQ(r.exitCode, 0) << r.err;
     bool anisotropicRow = false;
-    for (const auto& e : nlohmann::json::parse(r.out)["errors"])
+    const auto withAnisotropic = nlohmann::json::parse(r.out);
+    for (const auto& e : withAnisotropic["errors"])
         anisotropicRow |= e["variant"] == "fitted anisotropic" && e["relative_l1"].get<double>() >= 0.0;
     EXPECT_TRUE(anisotropicRow);
     r = runBurnish("evaluate " + in + " --brdf blinn-phong --anisotropic --out " + (dir / "ab").string());

@@ -3,7 +3,7 @@
 //
 //   node tests/threejs/compare.mjs --burnish build/bin/burnish --maps A.png,B.png [--distances 2,8,32]
 //        [--methods vmf,variance-to-gloss,fitted] [--power 256] [--supersample 32] [--previews DIR]
-//        [--assert-never-worse fitted] [--anisotropy N] [--json FILE]
+//        [--assert-never-worse fitted] [--anisotropy N] [--anisotropy-on] [--json FILE]
 //
 // Each map is baked with the gltf preset (8-bit PNG, one file per mip, as an engine receives it) once per
 // method; three.js draws the plane with the map's own PNG (its mips) and constant roughness ("three.js
@@ -13,6 +13,9 @@
 // half a sample). --assert-never-worse M exits 1 when M is worse than three.js alone by more than that
 // noise at any distance (the test suite's check). --anisotropy N samples both maps with N× anisotropic
 // filtering (three.js's default is none: the mip level follows the footprint's long axis).
+// --anisotropy-on adds the row "anisotropy on, round": three.js alone with KHR_materials_anisotropy's path
+// switched on and a round lobe (MeshPhysicalMaterial, anisotropy 1e-4), which three.js forms in the
+// geometric tangent frame: what turning the extension on costs before any anisotropy is stored.
 import {spawnSync} from 'node:child_process';
 import fs from 'node:fs';
 import http from 'node:http';
@@ -25,7 +28,7 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 
 function parseArgs(argv) {
     const o = {distances: [2, 8, 32], methods: ['vmf', 'variance-to-gloss', 'fitted'], power: 256, supersample: 32,
-               maps: [], burnish: '', previews: '', assert: '', json: '', anisotropy: 1,
+               maps: [], burnish: '', previews: '', assert: '', json: '', anisotropy: 1, anisotropyOn: false,
                chromium: process.env.BURNISH_CHROMIUM || '/usr/bin/chromium'};
     for (let i = 2; i < argv.length; ++i) {
         const a = argv[i], v = argv[i + 1];
@@ -41,6 +44,7 @@ function parseArgs(argv) {
         else if (a === '--json') o.json = take();
         else if (a === '--chromium') o.chromium = take();
         else if (a === '--anisotropy') o.anisotropy = Number(take());
+        else if (a === '--anisotropy-on') o.anisotropyOn = true;
         else throw new Error(`unknown argument ${a}`);
     }
     if (!o.burnish || !o.maps.length) throw new Error('give --burnish BIN and --maps A.png[,B.png...]');
@@ -123,7 +127,7 @@ async function main() {
                 for (const d of o.distances) {
                     const r = await page.evaluate(cfg => window.runCase(cfg), {
                         normal: c.normal, chains: c.chains, minification: d, roughness, supersample: o.supersample,
-                        anisotropy: o.anisotropy,
+                        anisotropy: o.anisotropy, anisotropyOn: o.anisotropyOn,
                         previews: Boolean(o.previews)});
                     results.push({map: path.basename(c.map), distance: d, ...r});
                     if (o.previews) {

@@ -100,6 +100,7 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     m_mipSpin->setRange(0, 16);
     m_mipSpin->setKeyboardTracking(false);
     m_status = new QLabel(this);
+    m_status->setObjectName("paintStatus");
     m_status->setWordWrap(true);
 
     auto* buttons = new QHBoxLayout;
@@ -394,9 +395,10 @@ void PaintTool::updateOverlay(const std::optional<TexelRect>& rect) {
         }
     }
     m_view->setOverlay(m_overlay);
-    m_status->setText(QString("%1 texels over-shine at mip %2 (painted gloss above what the normal variance "
-                              "permits); last update recomputed %3 baked texels")
-                          .arg(m_overShine.flaggedCount)
+    m_status->setText(QString("%1 of %2 texels over-shine at mip %3 (painted gloss above what the normal "
+                              "variance permits); last update recomputed %4 baked texels")
+                          .arg(m_overShine.flaggedMipTexels)
+                          .arg(qulonglong(m_overShine.mipWidth) * qulonglong(m_overShine.mipHeight))
                           .arg(m_overShine.mip)
                           .arg(m_live->lastRecomputedTexels()));
 }

@@ -402,6 +402,24 @@ TEST(Paint, OverShineFlagsMaxGlossOnBumpsAndNotOnAFlatMap) {
     ASSERT_TRUE(overShine(*bumpy, authored, mip, kOverShineStops, &paint, bumps));
     // Every painted texel of the bumpy map: 8192 asks for far more than the variance permits.
     EXPECT_EQ(bumps.flaggedCount, paintedTexels);
+    // Counted at the mip the measure names too: the level-3 texels holding a flagged finest texel, never
+    // more than the level has (the studio's count; it once showed finest texels under "at mip 3").
+    auto mipTexelsFlagged = [&](const OverShineMap& m) {
+        std::vector<uint8_t> any(size_t(m.mipWidth) * size_t(m.mipHeight), 0);
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x)
+                if (m.flagged[size_t(y * size + x)]) {
+                    const glm::ivec2 p = bumpy->texelAtLevel(m.mip, x, y);
+                    any[size_t(p.y * m.mipWidth + p.x)] = 1;
+                }
+        return size_t(std::count(any.begin(), any.end(), uint8_t(1)));
+    };
+    EXPECT_EQ(bumps.mipWidth, size >> mip);
+    EXPECT_EQ(bumps.mipHeight, size >> mip);
+    EXPECT_EQ(bumps.flaggedMipTexels, mipTexelsFlagged(bumps));
+    EXPECT_GT(bumps.flaggedMipTexels, 0u);
+    EXPECT_LT(bumps.flaggedMipTexels, bumps.flaggedCount);
+    EXPECT_LE(bumps.flaggedMipTexels, size_t(bumps.mipWidth) * size_t(bumps.mipHeight));
     EXPECT_GT(bumps.stops[paint.index(32, 32)], 4.0f); // more than 16× the (n+1) it can deliver
     // Unpainted texels are never flagged with the mask, even where base gloss over-shines.
     EXPECT_EQ(bumps.flagged[paint.index(0, 0)], 0);
@@ -429,6 +447,9 @@ TEST(Paint, OverShineFlagsMaxGlossOnBumpsAndNotOnAFlatMap) {
     OverShineMap fresh;
     ASSERT_TRUE(overShine(*bumpy, mixed, mip, kOverShineStops, &paint, fresh));
     EXPECT_EQ(updated.flaggedCount, fresh.flaggedCount);
+    EXPECT_EQ(updated.flaggedMipTexels, fresh.flaggedMipTexels);
+    EXPECT_EQ(updated.flaggedMipTexels, mipTexelsFlagged(fresh));
+    EXPECT_TRUE(updated.flaggedUnder == fresh.flaggedUnder);
     EXPECT_TRUE(updated.flagged == fresh.flagged);
     EXPECT_GT(fresh.flaggedCount, 0u);
 }

@@ -23,6 +23,7 @@
 #include <QImage>
 #include <QLabel>
 #include <QLineEdit>
+#include <QRegularExpression>
 #include <QSignalSpy>
 #include <QTest>
 
@@ -138,6 +139,19 @@ TEST(StudioPaint, StrokeOnTheViewChangesTheLayerAndUndoRestoresIt) {
     // The live bake follows the stroke and equals a full bake of the painted gloss's region.
     EXPECT_GT(tool->lastRecomputedTexels(), 0u);
     EXPECT_TRUE(sameBits(tool->liveBake()->authoredGloss(), *doc->authoredGloss()));
+    // The over-shine count is in texels of the mip it names, never more than that mip has (it once
+    // counted finest texels: "13941 texels over-shine at mip 3" where mip 3 had 4096).
+    const auto* status = tool->findChild<QLabel*>("paintStatus");
+    ASSERT_NE(status, nullptr);
+    const QRegularExpression counted("(\\d+) of (\\d+) texels over-shine at mip (\\d+)");
+    const QRegularExpressionMatch match = counted.match(status->text());
+    ASSERT_TRUE(match.hasMatch()) << status->text().toStdString();
+    const int mip = match.captured(3).toInt();
+    const qulonglong texels =
+        qulonglong(tool->liveBake()->levelWidth(mip)) * qulonglong(tool->liveBake()->levelHeight(mip));
+    EXPECT_EQ(match.captured(2).toULongLong(), texels);
+    EXPECT_GT(match.captured(1).toULongLong(), 0u); // 0.95 on the sample's bumps over-shines at mip 3
+    EXPECT_LE(match.captured(1).toULongLong(), texels);
 
     doc->undoStack()->undo();
     EXPECT_TRUE(samePaint(doc->paintLayer(PaintLayerKind::Gloss), before));

@@ -599,6 +599,10 @@ Status overShine(const LiveGlossBake& bake, const std::vector<float>& authoredGl
         inOut.stops.assign(n, 0.0f);
         inOut.flagged.assign(n, 0);
         inOut.flaggedCount = 0;
+        inOut.mipWidth = bake.levelWidth(k);
+        inOut.mipHeight = bake.levelHeight(k);
+        inOut.flaggedUnder.assign(size_t(inOut.mipWidth) * size_t(inOut.mipHeight), 0);
+        inOut.flaggedMipTexels = 0;
     }
     const GlossEncoding& encoding = bake.options().encoding;
     for (int y = r.y0; y < r.y1; ++y)
@@ -613,8 +617,15 @@ Status overShine(const LiveGlossBake& bake, const std::vector<float>& authoredGl
             const double stops = std::max(0.0, std::log2((np + 1.0) / (pv + 1.0)));
             const bool painted = !paintedMask || paintedMask->coverageAt(i) > 0.0f;
             const uint8_t flag = stops > thresholdStops && painted ? 1 : 0;
-            if (flag && !inOut.flagged[i]) ++inOut.flaggedCount;
-            if (!flag && inOut.flagged[i]) --inOut.flaggedCount;
+            uint32_t& under = inOut.flaggedUnder[size_t(p.y) * size_t(inOut.mipWidth) + size_t(p.x)];
+            if (flag && !inOut.flagged[i]) {
+                ++inOut.flaggedCount;
+                if (under++ == 0) ++inOut.flaggedMipTexels;
+            }
+            if (!flag && inOut.flagged[i]) {
+                --inOut.flaggedCount;
+                if (--under == 0) --inOut.flaggedMipTexels;
+            }
             inOut.stops[i] = float(stops);
             inOut.flagged[i] = flag;
         }

@@ -206,6 +206,8 @@ public:
     const BakedTexture& gloss() const { return m_gloss; }
     const std::vector<float>& authoredGloss() const { return m_authored; }
     int levelCount() const { return int(m_levels.size()); }
+    int levelWidth(int k) const { return m_levels[size_t(k)].width; }
+    int levelHeight(int k) const { return m_levels[size_t(k)].height; }
     int width() const { return m_levels.empty() ? 0 : m_levels[0].width; }
     int height() const { return m_levels.empty() ? 0 : m_levels[0].height; }
     const BakeOptions& options() const { return m_options; }
@@ -258,7 +260,13 @@ struct OverShineMap {
     int mip = 0;
     std::vector<float> stops;     // per finest texel, >= 0
     std::vector<uint8_t> flagged; // 1 where stops > threshold (and painted, when a mask is given)
-    size_t flaggedCount = 0;
+    size_t flaggedCount = 0;      // finest texels flagged
+    /// Per texel of level `mip` (mipWidth × mipHeight), how many finest texels under it are flagged, and
+    /// how many of those texels have any: the count at the mip the measure names.
+    int mipWidth = 0;
+    int mipHeight = 0;
+    std::vector<uint32_t> flaggedUnder;
+    size_t flaggedMipTexels = 0;
 };
 
 /// Default over-shine threshold: 1 stop, where the painted lobe is narrower than the normal spread.

@@ -16,9 +16,11 @@
 #include <QDialog>
 #include <QDir>
 #include <QDockWidget>
+#include <QDoubleSpinBox>
 #include <QFileDialog>
 #include <QFileInfo>
 #include <QGuiApplication>
+#include <QKeyEvent>
 #include <QLabel>
 #include <QMenuBar>
 #include <QMimeData>
@@ -26,10 +28,12 @@
 #include <QScrollArea>
 #include <QSettings>
 #include <QShowEvent>
+#include <QSpinBox>
 #include <QSplitter>
 #include <QStatusBar>
 #include <QTextBrowser>
 #include <QTimer>
+#include <QUndoStack>
 #include <QUndoView>
 #include <QVBoxLayout>
 
@@ -60,6 +64,54 @@ bool isProjectFile(const QString& path) {
 }
 
 const QString kProjectFilter = QString("Burnish projects (*.%1);;All files (*)").arg(kProjectSuffix);
+
+// Ctrl+Z / Ctrl+Shift+Z in a number field whose value is committed undo and redo the document, as in
+// Blender or Substance: a field (its line edit) otherwise claims the keys for its own text history, and a
+// committed edit could be undone only from the Edit menu. The filter claims the shortcut for the field
+// (so no window shortcut runs twice) and turns the key press into the document's undo or redo. While
+// typed text is not yet the field's value, the field keeps the keys for that text.
+class NumberFieldUndo : public QObject {
+public:
+    NumberFieldUndo(QUndoStack* stack, QObject* parent)
+        : QObject(parent)
+        , m_stack(stack) {}
+
+protected:
+    bool eventFilter(QObject* watched, QEvent* event) override {
+        if (event->type() != QEvent::ShortcutOverride && event->type() != QEvent::KeyPress) return false;
+        const auto* key = static_cast<QKeyEvent*>(event);
+        const QKeySequence pressed(key->keyCombination());
+        auto is = [&](QKeySequence::StandardKey k) { return QKeySequence::keyBindings(k).contains(pressed); };
+        const bool undo = is(QKeySequence::Undo), redo = is(QKeySequence::Redo);
+        if (!undo && !redo) return false;
+        auto* spin = qobject_cast<QAbstractSpinBox*>(watched);
+        if (!spin && watched->parent()) spin = qobject_cast<QAbstractSpinBox*>(watched->parent());
+        auto inThisWindow = [&](const QObject* o) { // floating docks included
+            for (; o; o = o->parent())
+                if (o == parent()) return true;
+            return false;
+        };
+        if (!spin || !inThisWindow(spin)) return false;
+        const auto* number = qobject_cast<QDoubleSpinBox*>(spin);
+        const auto* integer = qobject_cast<QSpinBox*>(spin);
+        bool parsed = false;
+        const bool committed =
+            (number && number->cleanText() == number->textFromValue(number->value())) ||
+            (integer && integer->locale().toInt(integer->cleanText(), &parsed) == integer->value() && parsed);
+        if (!committed) return false;
+        event->accept();
+        if (event->type() == QEvent::KeyPress) {
+            if (undo)
+                m_stack->undo();
+            else
+                m_stack->redo();
+        }
+        return true;
+    }
+
+private:
+    QUndoStack* m_stack;
+};
 
 } // namespace
 
@@ -207,6 +259,7 @@ void MainWindow::buildMenus() {
     file->addSeparator();
     file->addAction("&Quit", QKeySequence::Quit, this, &QWidget::close);
 
+    qApp->installEventFilter(new NumberFieldUndo(m_doc->undoStack(), this)); // removed with the window
     QMenu* edit = menuBar()->addMenu("&Edit");
     QAction* undo = m_doc->undoStack()->createUndoAction(this, "&Undo");
     undo->setShortcut(QKeySequence::Undo);

@@ -787,6 +787,37 @@ StudioRun runStudioWithoutDisplay(const std::string& args) {
     return run;
 }
 
+// Ctrl+Z in a number field undoes a committed edit of the document, as in Blender or Substance (the field
+// used to swallow it for its own text history; only Edit > Undo worked), and Ctrl+Shift+Z redoes it;
+// while typed text is not committed yet, the shortcut stays the field's.
+TEST(StudioKeys, UndoFromANumberFieldUndoesTheDocument) {
+    MainWindow window;
+    window.setAutosaveInterval(0);
+    window.show();
+    window.activateWindow();
+    ASSERT_TRUE(QTest::qWaitForWindowActive(&window));
+    auto* spin = window.findChild<QDoubleSpinBox*>("materialGloss");
+    ASSERT_NE(spin, nullptr);
+    MaterialDocument* doc = window.document();
+    const double before = doc->settings().gloss;
+    spin->setFocus();
+    typeInto(spin, "0.2");
+    QTest::keyClick(spin, Qt::Key_Return);
+    ASSERT_DOUBLE_EQ(doc->settings().gloss, 0.2);
+    const int index = doc->undoStack()->index();
+    QTest::keyClick(spin, Qt::Key_Z, Qt::ControlModifier);
+    EXPECT_EQ(doc->undoStack()->index(), index - 1);
+    EXPECT_DOUBLE_EQ(doc->settings().gloss, before);
+    QTest::keyClick(spin, Qt::Key_Z, Qt::ControlModifier | Qt::ShiftModifier);
+    EXPECT_EQ(doc->undoStack()->index(), index);
+    EXPECT_DOUBLE_EQ(doc->settings().gloss, 0.2);
+    // Mid-typing the field keeps Ctrl+Z for its text: the document is untouched.
+    typeInto(spin, "0.33");
+    QTest::keyClick(spin, Qt::Key_Z, Qt::ControlModifier);
+    EXPECT_EQ(doc->undoStack()->index(), index);
+    EXPECT_DOUBLE_EQ(doc->settings().gloss, 0.2);
+}
+
 TEST(StudioCommandLine, HelpAndVersionNeedNoDisplay) {
     const StudioRun help = runStudioWithoutDisplay("--help");
     EXPECT_EQ(help.exitCode, 0) << help.err;

@@ -259,6 +259,20 @@ TEST(CliEvaluate, GgxTruthWithTheFloorAndThePresetsBrdf) {
     for (const auto& e : withAnisotropic["errors"])
         anisotropicRow |= e["variant"] == "fitted anisotropic" && e["relative_l1"].get<double>() >= 0.0;
     EXPECT_TRUE(anisotropicRow);
+    // Whether the extension pays, from the same rows: the means over the (power, mip) cases.
+    const auto& verdict = withAnisotropic["anisotropic_verdict"];
+    ASSERT_TRUE(verdict.is_object()) << r.out.substr(0, 400);
+    double fittedSum = 0.0, anisotropicSum = 0.0;
+    int cases = 0;
+    for (const auto& e : withAnisotropic["errors"])
+        if (!e["between_texels"].get<bool>()) {
+            if (e["variant"] == "fitted") fittedSum += e["relative_l1"].get<double>(), ++cases;
+            if (e["variant"] == "fitted anisotropic") anisotropicSum += e["relative_l1"].get<double>();
+        }
+    EXPECT_EQ(verdict["cases"].get<int>(), cases);
+    EXPECT_NEAR(verdict["fitted_mean"].get<double>(), fittedSum / cases, 1e-12);
+    EXPECT_NEAR(verdict["anisotropic_mean"].get<double>(), anisotropicSum / cases, 1e-12);
+    EXPECT_EQ(verdict["anisotropic_better"].get<bool>(), anisotropicSum < fittedSum);
     r = runBurnish("evaluate " + in + " --brdf blinn-phong --anisotropic --out " + (dir / "ab").string());
     EXPECT_NE(r.exitCode, 0);
     EXPECT_EQ(lineCount(r.err), 1) << r.err;

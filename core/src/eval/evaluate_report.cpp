@@ -166,6 +166,30 @@ namespace {
 
 // Where LEAN's energy goes at base power s (EvaluateOptions::energySplit), beside each evaluated
 // mixture's energy at the same mip; empty without a split.
+// Whether KHR_materials_anisotropy pays on this map: the means of the isotropic fit's and the anisotropic
+// fit's relative L1 over every (power, mip) both were evaluated at, texel centres, box kernel. A material
+// turns the extension on for all its texels, so this is the choice an export makes.
+struct AnisotropicVerdict {
+    int cases = 0;
+    double fittedMean = 0.0, anisotropicMean = 0.0;
+};
+std::optional<AnisotropicVerdict> anisotropicVerdict(const EvaluationReport& r) {
+    if (!r.options.anisotropic) return std::nullopt;
+    AnisotropicVerdict v;
+    for (const MipError& a : r.result.errors) {
+        if (!a.anisotropic || a.betweenTexels) continue;
+        for (const MipError& f : r.result.errors)
+            if (f.method == Method::Fitted && !f.anisotropic && !f.floor && !f.betweenTexels &&
+                f.kernel == FilterKernel::Box && f.basePower == a.basePower && f.mip == a.mip) {
+                v.fittedMean += f.relativeL1, v.anisotropicMean += a.relativeL1, ++v.cases;
+                break;
+            }
+    }
+    if (v.cases == 0) return std::nullopt;
+    v.fittedMean /= v.cases, v.anisotropicMean /= v.cases;
+    return v;
+}
+
 std::string energySplitMarkdown(const EvaluationReport& r, double s) {
     std::vector<const LeanEnergySplit*> rows;
     for (const auto& e : r.result.energySplits)
@@ -290,6 +314,15 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
         md << energySplitMarkdown(r, s);
     }
 
+    if (const auto v = anisotropicVerdict(r))
+        md << "**KHR_materials_anisotropy on this map:** over the " << v->cases
+           << " power and mip cases the anisotropic fit's mean relative L1 is "
+           << formatNumber(v->anisotropicMean) << " against the isotropic fit's "
+           << formatNumber(v->fittedMean) << ": "
+           << (v->anisotropicMean < v->fittedMean
+                   ? "by this measure turning the extension on pays here."
+                   : "leave it off (with it on, every texel is shaded by the anisotropic form).")
+           << "\n\n";
     md << "## Cost\n\n";
     MarkdownTable cost({"method", "bake (s, median of " + std::to_string(r.bakeRuns) + ")",
                         "shading (ns/lobe)", "fetches", "bytes/texel", "storage"},
@@ -327,6 +360,11 @@ nlohmann::json evaluationJson(const EvaluationReport& r) {
     j["mixture_filtering"] = mixtureFilteringName(r.options.mixtureFiltering);
     j["brdf"] = brdfName(r.options.brdf);
     j["truth_normals"] = truthNormalsName(r.options.resolvedTruthNormals());
+    if (const auto v = anisotropicVerdict(r))
+        j["anisotropic_verdict"] = {{"cases", v->cases},
+                                    {"fitted_mean", jsonNumber(v->fittedMean)},
+                                    {"anisotropic_mean", jsonNumber(v->anisotropicMean)},
+                                    {"anisotropic_better", v->anisotropicMean < v->fittedMean}};
     j["base_powers"] = r.options.basePowers;
     if (r.options.texelPowers) {
         const auto& p = *r.options.texelPowers;

@@ -567,6 +567,8 @@ def main():
     global BRDF, TRUTH_NORMALS
     BRDF = args.brdf
     TRUTH_NORMALS = args.truth_normals or ("bilinear" if BRDF == "ggx" else "texels")
+    if args.energy_split and TRUTH_NORMALS != "texels":
+        sys.exit("the energy split is measured on the finest texels (--truth-normals texels), as evaluate's")
     methods = [m for m in args.methods.split(",") if m]
     if BRDF == "ggx":
         for m in methods:

@@ -66,7 +66,6 @@ bool truthNormalsFromName(const std::string& name, TruthNormals& out);
 /// texel of the rows, and the truth of each texel as the mean over its sub-samples.
 class TruthBand {
 public:
-    TruthBand() = default;
     TruthBand(const NormalMap& map, int rowBegin, int rowEnd, TruthNormals how, BorderMode border);
     size_t size() const { return m_count; }
     /// Per texel of the rows, the mean of truthValues over its sub-samples (powers: per texel, or null).

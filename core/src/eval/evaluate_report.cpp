@@ -164,8 +164,6 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
 
 namespace {
 
-// Where LEAN's energy goes at base power s (EvaluateOptions::energySplit), beside each evaluated
-// mixture's energy at the same mip; empty without a split.
 // Whether KHR_materials_anisotropy pays on this map: the means of the isotropic fit's and the anisotropic
 // fit's relative L1 over every (power, mip) both were evaluated at, texel centres, box kernel. A material
 // turns the extension on for all its texels, so this is the choice an export makes.
@@ -190,6 +188,8 @@ std::optional<AnisotropicVerdict> anisotropicVerdict(const EvaluationReport& r) 
     return v;
 }
 
+// Where LEAN's energy goes at base power s (EvaluateOptions::energySplit), beside each evaluated
+// mixture's energy at the same mip; empty without a split.
 std::string energySplitMarkdown(const EvaluationReport& r, double s) {
     std::vector<const LeanEnergySplit*> rows;
     for (const auto& e : r.result.energySplits)

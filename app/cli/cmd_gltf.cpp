@@ -1,0 +1,98 @@
+// `burnish gltf`: a glTF 2.0 asset's normal-mapped materials baked (fitted roughness by default) and
+// written back as glTF with KTX2 textures holding Burnish's own mip chains (core's bake/gltf.h).
+#include "command.h"
+#include "common.h"
+
+#include <burnish/core/bake/gltf.h>
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace burnish::cli {
+
+namespace {
+
+struct GltfCli {
+    std::string input;
+    std::string out;
+    std::optional<std::string> method;
+    std::string coding = "raw";
+    bool force = false;
+    bool allowImplausible = false;
+    bool json = false;
+};
+
+int runGltf(const GltfCli& o) {
+    if (o.input.empty()) return fail("no input asset given (see 'burnish gltf --help')");
+    if (o.out.empty()) return fail("no output folder given (--out DIR)");
+    GltfOptions options;
+    options.method = o.method;
+    options.coding = o.coding == "bc" ? GltfTextureCoding::Bc : GltfTextureCoding::Raw;
+    options.overwrite = o.force ? Overwrite::Allow : Overwrite::Refuse;
+    options.allowImplausible = o.allowImplausible;
+    ProgressBar bar("gltf");
+    options.progress = [&](double fraction, std::string_view stage) {
+        bar.update(fraction, std::string(stage));
+        return true;
+    };
+    auto result = processGltf(o.input, o.out, options);
+    bar.finish();
+    if (!result) return fail(result.error());
+    if (o.json) {
+        std::puts(result->summary.dump(2).c_str());
+        return 0;
+    }
+    if (result->materials.empty())
+        std::printf("%s: no material has a normalTexture; copied unchanged to %s\n", o.input.c_str(),
+                    result->asset.string().c_str());
+    for (const GltfMaterialReport& m : result->materials) {
+        std::printf("material %d '%s': %dx%d normal map, %d mips, border %s, scale %g, roughnessFactor %g%s: "
+                    "mean roughness %.3f at mip 0, %.3f at 1x1\n",
+                    m.index, m.name.c_str(), m.width, m.height, m.mipCount, m.border.c_str(), m.normalScale,
+                    m.roughnessFactor, m.roughnessTexture ? " x texture" : "", m.meanRoughnessMip0,
+                    m.meanRoughnessLast);
+        for (const std::string& note : m.notes)
+            std::printf("  note: %s\n", note.c_str());
+    }
+    std::printf("wrote %s (%zu files)\n", result->asset.string().c_str(), result->written.size());
+    return 0;
+}
+
+const CommandRegistration registration{
+    45, [](CLI::App& app) -> std::function<int()> {
+        auto* cmd = app.add_subcommand(
+            "gltf",
+            "Bake a glTF 2.0 asset's normal-mapped materials into KTX2 textures with Burnish's own mips");
+        auto o = std::make_shared<GltfCli>();
+        cmd->add_option("input", o->input, "A glTF 2.0 asset: .gltf (with its files) or .glb");
+        cmd->add_option("--out", o->out,
+                        "Output folder (created if missing): the asset, its KTX2 and PNG files");
+        cmd->add_option("--method", o->method,
+                        "Roughness method of the gltf preset (default fitted): naive, toksvig, vmf, "
+                        "variance-to-gloss, fitted, ...");
+        cmd->add_option("--coding", o->coding,
+                        "KTX2 payload: raw (default; normal RG8, metallicRoughness RGBA8) or bc (normal BC5, "
+                        "metallicRoughness BC3, whose G has 6-bit endpoints)")
+            ->check(CLI::IsMember({"raw", "bc"}));
+        cmd->add_flag("--force", o->force, "Replace existing output files (still atomically, as a set)");
+        cmd->add_flag("--allow-implausible", o->allowImplausible,
+                      "Bake normal maps that do not look like tangent-space normal maps");
+        cmd->add_flag("--json", o->json, "Print a machine-readable summary on stdout");
+        cmd->footer(
+            "Every material with a normalTexture gets a new normalTexture and metallicRoughnessTexture: the "
+            "normal map baked with its UV set, scale and sampler wrap (repeat: wrap; clamp or mirrored: "
+            "clamp), G = the baked GGX roughness with roughnessFactor and the material's roughness texture "
+            "folded in (roughnessFactor becomes 1; R and B of its texture kept). Each is a KTX2 file with "
+            "the whole mip chain to 1x1, referenced through the draft extension KHR_texture_ktx, and a PNG "
+            "of mip 0 as the texture's source, which viewers without KTX2 support load instead. Everything "
+            "else is carried over unchanged; external files are copied beside the output; a .glb stays a "
+            ".glb. An asset without normal maps is copied unchanged (exit 0).");
+        return [o]() { return runGltf(*o); };
+    }};
+
+} // namespace
+
+} // namespace burnish::cli

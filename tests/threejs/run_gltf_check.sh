@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# The test suite's independent glTF check (CTest gltf_validator_ktx_parse): `burnish gltf` on the test
+# plane (a real map as its normal texture), as .gltf with raw and BC payloads and as .glb, and on
+# Debian's assimp-testmodels ClearCoatTest.gltf where installed; Khronos's gltf-validator reports no
+# error Burnish added, ktx-parse reads every KTX2 chain back in full, and the raw plane's levels equal
+# `burnish bake --preset gltf --format png8` of the same map, code for code (check_gltf.mjs). Skips
+# (exit 77, with the reason) where Node or the pinned npm packages (.ci/deps installs them) are missing.
+#   run_gltf_check.sh BURNISH_BIN
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+burnish="$1"
+skip() { echo "SKIPPED: $*"; exit 77; }
+command -v node >/dev/null || skip "node is not installed (Debian: nodejs)"
+[ -d "$here/node_modules/gltf-validator" ] && [ -d "$here/node_modules/ktx-parse" ] ||
+  skip "the npm packages are not installed (cd tests/threejs && npm ci)"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+mkdir "$work/in"
+cp "$here/../data/gltf/plane.gltf" "$work/in/"
+cp "$here/../data/trak-treadplate1_nm.png" "$work/in/normal.png"
+check() { node "$here/check_gltf.mjs" "$@" > "$work/check.json" || { cat "$work/check.json"; exit 1; }
+  node -e 'const d=JSON.parse(require("fs").readFileSync(process.argv[1]));
+    console.log(process.argv[2], "validator errors", d.validator.errors, "(of the input", d.validator.errorsOfTheInput + ")",
+      "ktx2", d.ktx2.map(k => k.format + " " + k.width + "x" + k.height + "/" + k.levels).join(", "),
+      "compared", JSON.stringify(d.compared))' "$work/check.json" "$1"; }
+# The plane's roughnessFactor 0.5 is Blinn-Phong power 2/0.5^4 - 2 = 30 in the gltf preset's terms.
+"$burnish" gltf "$work/in/plane.gltf" --out "$work/raw" > /dev/null
+"$burnish" bake "$work/in/normal.png" --preset gltf --power 30 --format png8 --out "$work/bake" > /dev/null
+check "$work/raw/plane.gltf" --bake "$work/bake"
+"$burnish" gltf "$work/in/plane.gltf" --out "$work/bc" --coding bc > /dev/null
+check "$work/bc/plane.gltf"
+node "$here/to_glb.mjs" "$work/in/plane.gltf" "$work/in/plane.glb"
+"$burnish" gltf "$work/in/plane.glb" --out "$work/glb" > /dev/null
+check "$work/glb/plane.glb" --bake "$work/bake"
+clearcoat=/usr/share/assimp/models/glTF2/ClearCoat-glTF/ClearCoatTest.gltf
+if [ -f "$clearcoat" ]; then
+  "$burnish" gltf "$clearcoat" --out "$work/clearcoat" > /dev/null
+  check "$work/clearcoat/ClearCoatTest.gltf" --input "$clearcoat"
+else
+  echo "note: $clearcoat missing (Debian: assimp-testmodels): checked the test plane only"
+fi

@@ -3,7 +3,7 @@
 //
 //   node tests/threejs/compare.mjs --burnish build/bin/burnish --maps A.png,B.png [--distances 2,8,32]
 //        [--methods vmf,variance-to-gloss,fitted] [--power 256] [--supersample 32] [--previews DIR]
-//        [--assert-never-worse fitted] [--anisotropy N] [--anisotropy-on] [--json FILE]
+//        [--assert-never-worse fitted] [--anisotropy N] [--anisotropy-on] [--json FILE] [--gltf]
 //
 // Each map is baked with the gltf preset (8-bit PNG, one file per mip, as an engine receives it) once per
 // method; three.js draws the plane with the map's own PNG (its mips) and constant roughness ("three.js
@@ -16,6 +16,12 @@
 // --anisotropy-on adds the row "anisotropy on, round": three.js alone with KHR_materials_anisotropy's path
 // switched on and a round lobe (MeshPhysicalMaterial, anisotropy 1e-4), which three.js forms in the
 // geometric tangent frame: what turning the extension on costs before any anisotropy is stored.
+// --gltf goes through glTF instead: each map becomes the test plane asset (tests/data/gltf/plane.gltf,
+// roughnessFactor the base roughness, metal), "three.js alone" is that asset as GLTFLoader loads it, and
+// each method's row ("gltf <method>") is the asset `burnish gltf --method <method>` wrote, loaded by
+// GLTFLoader with three.js's KTX2Loader and resources/three/burnish-gltf.js (KHR_texture_ktx): the KTX2
+// normal and metallicRoughness chains as Burnish baked them. The reference is the original's normal map
+// without mips.
 import {spawnSync} from 'node:child_process';
 import fs from 'node:fs';
 import http from 'node:http';
@@ -28,7 +34,7 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 
 function parseArgs(argv) {
     const o = {distances: [2, 8, 32], methods: ['vmf', 'variance-to-gloss', 'fitted'], power: 256, supersample: 32,
-               maps: [], burnish: '', previews: '', assert: '', json: '', anisotropy: 1, anisotropyOn: false,
+               maps: [], burnish: '', previews: '', assert: '', json: '', anisotropy: 1, anisotropyOn: false, gltf: false,
                chromium: process.env.BURNISH_CHROMIUM || '/usr/bin/chromium'};
     for (let i = 2; i < argv.length; ++i) {
         const a = argv[i], v = argv[i + 1];
@@ -45,6 +51,7 @@ function parseArgs(argv) {
         else if (a === '--chromium') o.chromium = take();
         else if (a === '--anisotropy') o.anisotropy = Number(take());
         else if (a === '--anisotropy-on') o.anisotropyOn = true;
+        else if (a === '--gltf') o.gltf = true;
         else throw new Error(`unknown argument ${a}`);
     }
     if (!o.burnish || !o.maps.length) throw new Error('give --burnish BIN and --maps A.png[,B.png...]');
@@ -69,14 +76,42 @@ function bake(o, map, method, out) {
     return chainFiles(out, path.basename(map).replace(/\.[^.]+$/, ''), 'metallicRoughness');
 }
 
-// Serves three's module, the page and the files it is told about, on 127.0.0.1 only.
-function serve(files) {
-    const types = {'.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.png': 'image/png'};
+// The test plane asset with `map` as its normal map and base roughness `roughness`, in `dir`.
+function planeAsset(map, roughness, dir) {
+    fs.mkdirSync(dir, {recursive: true});
+    const doc = JSON.parse(fs.readFileSync(path.join(here, '..', 'data', 'gltf', 'plane.gltf'), 'utf8'));
+    doc.materials[0].pbrMetallicRoughness = {baseColorFactor: [1, 1, 1, 1], metallicFactor: 1, roughnessFactor: roughness};
+    fs.writeFileSync(path.join(dir, 'plane.gltf'), JSON.stringify(doc));
+    fs.copyFileSync(map, path.join(dir, 'normal.png'));
+    return path.join(dir, 'plane.gltf');
+}
+
+function gltf(o, asset, method, out) {
+    const r = spawnSync(o.burnish, ['gltf', asset, '--method', method, '--out', out, '--force', '--allow-implausible'],
+                        {encoding: 'utf8'});
+    if (r.status !== 0) throw new Error(`burnish gltf ${asset} --method ${method}: ${r.stderr.trim()}`);
+    return path.join(out, 'plane.gltf');
+}
+
+// A file under `root` named by the rest of a URL, or null when it would lie outside.
+function within(root, rest) {
+    const file = path.resolve(root, '.' + path.posix.normalize('/' + rest));
+    return file.startsWith(path.resolve(root) + path.sep) ? file : null;
+}
+
+// Serves three.js (its build and addons), Burnish's three.js module, the page, the files it is told about
+// and the folders under /asset<k>/, on 127.0.0.1 only.
+function serve(files, folders = new Map()) {
+    const types = {'.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.png': 'image/png',
+                   '.gltf': 'model/gltf+json', '.ktx2': 'image/ktx2', '.wasm': 'application/wasm'};
     const server = http.createServer((req, res) => {
         const url = decodeURIComponent(req.url.split('?')[0]);
         let file = null;
+        const folder = [...folders.keys()].find(prefix => url.startsWith(prefix + '/'));
         if (url === '/page.html') file = path.join(here, 'page.html');
-        else if (url.startsWith('/three/build/')) file = path.join(here, 'node_modules', 'three', 'build', path.basename(url));
+        else if (url.startsWith('/three/')) file = within(path.join(here, 'node_modules', 'three'), url.slice(7));
+        else if (url.startsWith('/burnish/three/')) file = within(path.join(here, '..', '..', 'resources', 'three'), url.slice(15));
+        else if (folder) file = within(folders.get(folder), url.slice(folder.length + 1));
         else if (files.has(url)) file = files.get(url);
         if (!file || !fs.existsSync(file)) {
             res.writeHead(404).end();
@@ -92,9 +127,24 @@ async function main() {
     const o = parseArgs(process.argv);
     const work = fs.mkdtempSync(path.join(os.tmpdir(), 'burnish-threejs-'));
     const files = new Map();
+    const folders = new Map();
     const cases = [];
+    // Base roughness of power s under the gltf preset's conversion: alpha = sqrt(2/(s+2)), r = sqrt(alpha).
+    const roughness = Math.sqrt(Math.sqrt(2 / (o.power + 2)));
     try {
         for (const [mi, map] of o.maps.entries()) {
+            if (o.gltf) {
+                const asset = planeAsset(map, roughness, path.join(work, `m${mi}`, 'original'));
+                folders.set(`/asset${mi}/original`, path.dirname(asset));
+                const assets = {};
+                for (const method of o.methods) {
+                    const out = gltf(o, asset, method, path.join(work, `m${mi}`, method));
+                    folders.set(`/asset${mi}/${method}`, path.dirname(out));
+                    assets[`gltf ${method}`] = `/asset${mi}/${method}/plane.gltf`;
+                }
+                cases.push({map, original: `/asset${mi}/original/plane.gltf`, assets});
+                continue;
+            }
             files.set(`/map${mi}/normal.png`, map);
             const chains = {};
             for (const method of o.methods) {
@@ -107,7 +157,7 @@ async function main() {
             }
             cases.push({map, normal: `/map${mi}/normal.png`, chains});
         }
-        const server = await serve(files);
+        const server = await serve(files, folders);
         const port = server.address().port;
         const browser = await puppeteer.launch({
             executablePath: o.chromium,
@@ -121,14 +171,16 @@ async function main() {
             page.on('pageerror', e => console.error(`page error: ${e.message}`));
             await page.goto(`http://127.0.0.1:${port}/page.html`);
             await page.waitForFunction('window.ready === true', {timeout: 60000});
-            // Base roughness of power s under the gltf preset's conversion: alpha = sqrt(2/(s+2)), r = sqrt(alpha).
-            const roughness = Math.sqrt(Math.sqrt(2 / (o.power + 2)));
             for (const c of cases)
                 for (const d of o.distances) {
-                    const r = await page.evaluate(cfg => window.runCase(cfg), {
-                        normal: c.normal, chains: c.chains, minification: d, roughness, supersample: o.supersample,
-                        anisotropy: o.anisotropy, anisotropyOn: o.anisotropyOn,
-                        previews: Boolean(o.previews)});
+                    const r = o.gltf
+                        ? await page.evaluate(cfg => window.runGltfCase(cfg), {
+                              original: c.original, assets: c.assets, minification: d, supersample: o.supersample,
+                              previews: Boolean(o.previews)})
+                        : await page.evaluate(cfg => window.runCase(cfg), {
+                              normal: c.normal, chains: c.chains, minification: d, roughness, supersample: o.supersample,
+                              anisotropy: o.anisotropy, anisotropyOn: o.anisotropyOn,
+                              previews: Boolean(o.previews)});
                     results.push({map: path.basename(c.map), distance: d, ...r});
                     if (o.previews) {
                         fs.mkdirSync(o.previews, {recursive: true});

@@ -3,6 +3,7 @@
 #include "bake_dialog.h"
 #include "charts/charts_panel.h"
 #include "environment_panel.h"
+#include "gltf_import.h"
 #include "material_panel.h"
 #include "paint_tool.h"
 #include "project.h"
@@ -24,6 +25,7 @@
 #include <QLabel>
 #include <QMenuBar>
 #include <QMimeData>
+#include <QProgressDialog>
 #include <QScreen>
 #include <QScrollArea>
 #include <QSettings>
@@ -127,10 +129,32 @@ QRect fitInside(const QRect& window, const QRect& available) {
 
 MainWindow::MainWindow(QWidget* parent)
     : QMainWindow(parent)
-    , m_doc(new MaterialDocument(this)) {
+    , m_doc(new MaterialDocument(this))
+    , m_gltfRunner(new GltfRunner(this)) {
     showMessage = [this](const QString& title, const QString& text) {
         QMessageBox::warning(this, title, text);
     };
+    showResult = [this](const QString& title, const QString& text) {
+        QMessageBox::information(this, title, text);
+    };
+    connect(m_gltfRunner, &GltfRunner::progress, this, [this](double fraction, const QString& stage) {
+        if (!m_gltfProgress) return;
+        m_gltfProgress->setLabelText("glTF: " + stage + "…");
+        m_gltfProgress->setValue(int(fraction * 1000));
+    });
+    connect(m_gltfRunner, &GltfRunner::finished, this, [this](bool ok, const QString& message) {
+        if (m_gltfProgress) {
+            m_gltfProgress->reset();
+            m_gltfProgress->deleteLater();
+            m_gltfProgress = nullptr;
+        }
+        statusBar()->showMessage(ok ? "glTF asset processed" : "glTF: " + message, 10000);
+        emit gltfFinished(ok, message);
+        if (ok)
+            showResult("glTF asset processed", message);
+        else if (message != "cancelled")
+            showMessage("Cannot process the glTF asset", message);
+    });
     ask = [this](const QString& title, const QString& text, QMessageBox::StandardButtons buttons) {
         return QMessageBox::question(this, title, text, buttons);
     };
@@ -256,6 +280,8 @@ void MainWindow::buildMenus() {
     file->addSeparator();
     file->addAction("&Export Textures…", QKeySequence(Qt::CTRL | Qt::Key_E), this,
                     &MainWindow::exportTextures);
+    file->addAction("Process &glTF Asset…", QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_G), this,
+                    &MainWindow::chooseGltfAsset);
     file->addSeparator();
     file->addAction("&Quit", QKeySequence::Quit, this, &QWidget::close);
 
@@ -561,6 +587,42 @@ void MainWindow::exportTextures() {
     dialog->show();
     dialog->raise();
     dialog->activateWindow();
+}
+
+void MainWindow::chooseGltfAsset() {
+    QSettings settings;
+    const QString input =
+        QFileDialog::getOpenFileName(this, "Process glTF asset", settings.value("folders/gltf").toString(),
+                                     "glTF 2.0 assets (*.gltf *.glb)");
+    if (input.isEmpty()) return;
+    const QFileInfo info(input);
+    settings.setValue("folders/gltf", info.absolutePath());
+    const QString outDir = QFileDialog::getExistingDirectory(
+        this, "Folder for the processed asset (its KTX2 textures go beside it)", info.absolutePath());
+    if (outDir.isEmpty()) return;
+    processGltfAsset(input, outDir);
+}
+
+void MainWindow::processGltfAsset(const QString& input, const QString& outDir) {
+    if (m_gltfRunner->running()) return;
+    GltfOptions options;
+    options.method = gltfMethodFor(*m_doc);
+    const QFileInfo info(input);
+    // The asset file is the set's index: it exists when a previous run of this asset is there.
+    const QString target = QDir(outDir).filePath(info.completeBaseName() +
+                                                 (info.suffix().toLower() == "glb" ? ".glb" : ".gltf"));
+    if (QFileInfo::exists(target)) {
+        if (ask("Replace processed asset?",
+                QString("%1 already exists. Replace it and its textures?").arg(target),
+                QMessageBox::Yes | QMessageBox::Cancel) != QMessageBox::Yes)
+            return;
+        options.overwrite = Overwrite::Allow;
+    }
+    m_gltfProgress = new QProgressDialog("Processing " + info.fileName() + "…", "Cancel", 0, 1000, this);
+    m_gltfProgress->setWindowModality(Qt::WindowModal);
+    m_gltfProgress->setMinimumDuration(300);
+    connect(m_gltfProgress, &QProgressDialog::canceled, m_gltfRunner, &GltfRunner::cancel);
+    m_gltfRunner->start(input, outDir, std::move(options));
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {

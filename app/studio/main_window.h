@@ -16,12 +16,14 @@ class QDialog;
 class QDockWidget;
 class QLabel;
 class QMenu;
+class QProgressDialog;
 class QSplitter;
 class QTimer;
 
 namespace burnish::studio {
 
 class BakeDialog;
+class GltfRunner;
 class MaterialPanel;
 class PaintTool;
 class TexturePane;
@@ -65,9 +67,20 @@ public:
     /// Offers to recover an autosave copy newer than the project (or of the untitled document).
     void offerRecovery();
     QStringList recentProjects() const;
+    /// Processes a glTF asset into `outDir` as `burnish gltf` does (gltfMethodFor's method), on a worker
+    /// thread with a progress dialog that can cancel; an existing output is replaced only after asking.
+    /// gltfFinished reports the outcome, which is also shown (showResult, or showMessage for an error).
+    void processGltfAsset(const QString& input, const QString& outDir);
+    GltfRunner* gltfRunner() const { return m_gltfRunner; }
 
+signals:
+    void gltfFinished(bool ok, const QString& message);
+
+public:
     /// How the window reports to the user; tests replace them to read the text without a modal box.
     std::function<void(const QString& title, const QString& text)> showMessage;
+    /// How a finished job's summary is shown (an information box).
+    std::function<void(const QString& title, const QString& text)> showResult;
     /// Asks a question; returns the button chosen.
     std::function<QMessageBox::StandardButton(const QString& title, const QString& text,
                                               QMessageBox::StandardButtons buttons)>
@@ -91,6 +104,8 @@ private:
     bool saveAs();
     void open();
     void exportTextures();
+    /// File ▸ Process glTF Asset…: asks for the asset and the output folder.
+    void chooseGltfAsset();
     void removeAutosave();
     void restoreSettings();
     void saveSettings();
@@ -113,6 +128,8 @@ private:
     PaintTool* m_paintTool;
     QDockWidget* m_paintDock;
     BakeDialog* m_bakeDialog = nullptr;
+    GltfRunner* m_gltfRunner;
+    QProgressDialog* m_gltfProgress = nullptr;
     QMenu* m_viewMenu = nullptr;
     QMenu* m_recentMenu = nullptr;
     QLabel* m_statusPower;

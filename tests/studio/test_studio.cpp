@@ -4,6 +4,7 @@
 // draws something, and burnish-studio --help/--version work without a display.
 #include "bake_dialog.h"
 #include "charts/error_cost_chart.h"
+#include "gltf_import.h"
 #include "main_window.h"
 #include "material_panel.h"
 #include "paint_tool.h"
@@ -73,9 +74,11 @@ QString q(const fs::path& p) {
 struct TestWindow {
     MainWindow window;
     QStringList messages;
+    QStringList results; // showResult's summaries
     QMessageBox::StandardButton answer = QMessageBox::Discard;
     TestWindow() {
         window.showMessage = [this](const QString&, const QString& text) { messages << text; };
+        window.showResult = [this](const QString&, const QString& text) { results << text; };
         window.ask = [this](const QString&, const QString&, QMessageBox::StandardButtons) { return answer; };
         window.setAutosaveInterval(0);
     }
@@ -581,6 +584,54 @@ TEST(MainWindow, OpenFileTakesAProjectOrAnImageAsTheNormalMap) {
     TestWindow other;
     ASSERT_TRUE(other.window.openFile(project)) << other.messages.join("\n").toStdString();
     EXPECT_EQ(other.window.document()->settings(), before);
+}
+
+TEST(MainWindow, ProcessGltfAssetWritesWhatBurnishGltfWritesAndAsksBeforeReplacing) {
+    // File ▸ Process glTF Asset…: the test plane with a real normal map, baked with the document's
+    // method, on a worker thread; the same asset bytes as `burnish gltf --method <that method>`.
+    test::TempDir dir;
+    fs::create_directories(dir / "in");
+    fs::copy_file(fs::path(BURNISH_TEST_DATA_DIR) / "gltf" / "plane.gltf", dir / "in" / "plane.gltf");
+    fs::copy_file(kNormalMap.toStdString(), dir / "in" / "normal.png");
+    TestWindow w;
+    EXPECT_EQ(gltfMethodFor(*w.window.document()), std::nullopt); // another preset: gltf's own default
+    ASSERT_TRUE(w.window.document()->setPreset("gltf"));
+    ASSERT_TRUE(w.window.document()->setMethod(Method::Vmf));
+    EXPECT_EQ(gltfMethodFor(*w.window.document()), "vmf");
+    QSignalSpy finished(&w.window, &MainWindow::gltfFinished);
+    QSignalSpy progress(w.window.gltfRunner(), &GltfRunner::progress);
+    w.window.processGltfAsset(q(dir / "in" / "plane.gltf"), q(dir / "studio"));
+    ASSERT_TRUE(finished.wait(kWorkerTimeoutMs));
+    ASSERT_TRUE(finished.at(0).at(0).toBool()) << finished.at(0).at(1).toString().toStdString();
+    EXPECT_TRUE(finished.at(0).at(1).toString().contains("Material 0 'metal'"))
+        << finished.at(0).at(1).toString().toStdString();
+    EXPECT_GT(progress.count(), 2);
+    EXPECT_TRUE(w.messages.isEmpty());
+    ASSERT_EQ(w.results.size(), 1);
+    GltfOptions cli;
+    cli.method = "vmf";
+    auto expected = processGltf(dir / "in" / "plane.gltf", dir / "cli", cli);
+    ASSERT_TRUE(expected) << expected.error();
+    for (const std::string& name : expected->written)
+        EXPECT_EQ(*readFile(dir / "studio" / name), *readFile(dir / "cli" / name)) << name;
+
+    // Again into the same folder: asked first; "Cancel" leaves everything as it was.
+    const auto before = fs::last_write_time(dir / "studio" / "plane.gltf");
+    w.answer = QMessageBox::Cancel;
+    w.window.processGltfAsset(q(dir / "in" / "plane.gltf"), q(dir / "studio"));
+    EXPECT_FALSE(w.window.gltfRunner()->running());
+    EXPECT_EQ(fs::last_write_time(dir / "studio" / "plane.gltf"), before);
+    // "Yes" replaces it; a broken asset reports its one-line error.
+    w.answer = QMessageBox::Yes;
+    w.window.processGltfAsset(q(dir / "in" / "plane.gltf"), q(dir / "studio"));
+    ASSERT_TRUE(finished.wait(kWorkerTimeoutMs));
+    EXPECT_TRUE(finished.at(1).at(0).toBool());
+    ASSERT_TRUE(
+        writeFileAtomic(dir / "in" / "broken.gltf", std::string("{\"asset\": {\"version\": \"1.0\"}}")));
+    w.window.processGltfAsset(q(dir / "in" / "broken.gltf"), q(dir / "studio"));
+    ASSERT_TRUE(finished.wait(kWorkerTimeoutMs));
+    EXPECT_FALSE(finished.at(2).at(0).toBool());
+    EXPECT_TRUE(w.messages.last().contains("glTF version 1.0")) << w.messages.last().toStdString();
 }
 
 TEST(Project, AutosaveIsWrittenAndOfferedForRecovery) {

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The test suite's three.js check (CTest threejs_fitted_never_worse): one real map at two distances,
 # Burnish's fitted roughness chain drawn by three.js in headless Chromium, never worse than three.js's
-# own result beyond the supersampled reference's noise. Skips (exit 77, with the reason) where Chromium,
+# own result beyond the supersampled reference's noise: as a DataTexture chain, then through glTF (the
+# asset `burnish gltf` writes, loaded by GLTFLoader + KTX2Loader + resources/three/burnish-gltf.js). Skips (exit 77, with the reason) where Chromium,
 # Node or the pinned npm packages (.ci/deps installs them) are missing.
 #   run_check.sh BURNISH_BIN
 set -euo pipefail
@@ -13,5 +14,7 @@ command -v node >/dev/null || skip "node is not installed (Debian: nodejs)"
 [ -x "$chromium" ] || skip "$chromium is not installed (Debian: chromium)"
 [ -d "$here/node_modules/three" ] && [ -d "$here/node_modules/puppeteer-core" ] ||
   skip "the npm packages are not installed (cd tests/threejs && npm ci)"
-exec node "$here/compare.mjs" --burnish "$burnish" --maps "$here/../data/trak-treadplate1_nm.png" \
+node "$here/compare.mjs" --burnish "$burnish" --maps "$here/../data/trak-treadplate1_nm.png" \
   --distances 8,32 --methods vmf,fitted --supersample 16 --assert-never-worse fitted
+exec node "$here/compare.mjs" --burnish "$burnish" --maps "$here/../data/trak-treadplate1_nm.png" \
+  --distances 8,32 --methods fitted --supersample 16 --gltf --assert-never-worse "gltf fitted"

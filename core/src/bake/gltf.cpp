@@ -672,7 +672,12 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
         } else {
             bo.basePower = job.preset.encoding.power(factor);
         }
+        const double done = 0.05 + 0.85 * double(wi) / double(work.size()), span = 0.85 / double(work.size());
+        bo.progress = [&](double fraction) {
+            return progress(done + 0.8 * span * fraction, "baking " + what);
+        };
         auto baked = bake(*map, bo);
+        if (!baked && baked.error() == "cancelled") return Error("cancelled");
         if (!baked) return Error(fmt::format("{}: {}: {}", name, what, baked.error()));
         const BakedTexture* normalTex = baked->find(TextureRole::Normal);
         const BakedTexture* glossTex = baked->find(TextureRole::Gloss);

@@ -1,0 +1,48 @@
+// File ▸ Process glTF Asset…: a glTF 2.0 asset's normal-mapped materials through core's processGltf
+// (the same as `burnish gltf`) on a worker thread, with progress that can cancel; the result is
+// summarised in one message.
+#pragma once
+
+#include "material_document.h"
+
+#include <burnish/core/bake/gltf.h>
+
+#include <QObject>
+#include <QString>
+
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace burnish::studio {
+
+/// The document's method when its preset is gltf (what the viewport shows is what the asset gets),
+/// else none: the gltf preset's default (fitted), whatever another preset's method is.
+std::optional<std::string> gltfMethodFor(const MaterialDocument& doc);
+
+/// What one processed asset comes to, for the message after it: one line per material.
+QString gltfSummaryText(const GltfResult& result);
+
+/// Runs one processGltf on a worker thread; progress and the outcome arrive on the GUI thread.
+class GltfRunner : public QObject {
+    Q_OBJECT
+public:
+    explicit GltfRunner(QObject* parent = nullptr);
+    ~GltfRunner() override;
+    void start(const QString& input, const QString& outDir, GltfOptions options);
+    /// Asks the run to stop at its next check (between stages and inside each bake).
+    void cancel() { m_cancel->store(true); }
+    bool running() const { return m_running; }
+
+signals:
+    void progress(double fraction, const QString& stage);
+    /// ok: gltfSummaryText of the result; else the error ("cancelled" after cancel()).
+    void finished(bool ok, const QString& message);
+
+private:
+    std::shared_ptr<std::atomic<bool>> m_cancel;
+    bool m_running = false;
+};
+
+} // namespace burnish::studio

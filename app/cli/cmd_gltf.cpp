@@ -4,11 +4,14 @@
 #include "common.h"
 
 #include <burnish/core/bake/gltf.h>
+#include <burnish/core/prefilter/normal_map.h>
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace burnish::cli {
@@ -16,6 +19,12 @@ namespace burnish::cli {
 namespace {
 
 struct GltfCli {
+    std::string normalMap; // --normal-map: a material of one map instead of an asset
+    double roughness = 0.5;
+    std::string specular = "0.04,0.04,0.04";
+    std::string albedo = "0.5,0.5,0.5";
+    bool dielectric = false;
+    std::string name = "material";
     std::string input;
     std::string out;
     std::optional<std::string> method;
@@ -25,8 +34,17 @@ struct GltfCli {
     bool json = false;
 };
 
+// "r,g,b" of three numbers.
+std::optional<std::array<double, 3>> parseRgb(const std::string& text) {
+    std::array<double, 3> rgb{};
+    char tail = 0;
+    if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &rgb[0], &rgb[1], &rgb[2], &tail) != 3) return std::nullopt;
+    return rgb;
+}
+
 int runGltf(const GltfCli& o) {
-    if (o.input.empty()) return fail("no input asset given (see 'burnish gltf --help')");
+    if (o.input.empty() == o.normalMap.empty())
+        return fail("give an input asset or --normal-map FILE (see 'burnish gltf --help')");
     if (o.out.empty()) return fail("no output folder given (--out DIR)");
     GltfOptions options;
     options.method = o.method;
@@ -38,7 +56,24 @@ int runGltf(const GltfCli& o) {
         bar.update(fraction, std::string(stage));
         return true;
     };
-    auto result = processGltf(o.input, o.out, options);
+    Result<GltfResult> result = Error{""};
+    if (!o.normalMap.empty()) {
+        auto map = loadNormalMap(o.normalMap);
+        if (!map) return fail(map.error());
+        GltfMaterialSource m;
+        m.name = o.name;
+        m.normal = std::make_shared<const NormalMap>(std::move(map.value()));
+        m.roughness = o.roughness;
+        m.metal = !o.dielectric;
+        const auto specular = parseRgb(o.specular), albedo = parseRgb(o.albedo);
+        if (!specular) return fail("--specular: give three numbers, r,g,b (linear F0)");
+        if (!albedo) return fail("--albedo: give three numbers, r,g,b (linear)");
+        m.specular = *specular;
+        m.albedo = *albedo;
+        result = exportMaterialGltf(m, o.out, options);
+    } else {
+        result = processGltf(o.input, o.out, options);
+    }
     bar.finish();
     if (!result) return fail(result.error());
     if (o.json) {
@@ -68,6 +103,15 @@ const CommandRegistration registration{
             "Bake a glTF 2.0 asset's normal-mapped materials into KTX2 textures with Burnish's own mips");
         auto o = std::make_shared<GltfCli>();
         cmd->add_option("input", o->input, "A glTF 2.0 asset: .gltf (with its files) or .glb");
+    cmd->add_option("--normal-map", o->normalMap,
+                    "Instead of an asset: a material of this normal map on a 2x2 quad, written as glTF");
+    cmd->add_option("--roughness", o->roughness, "With --normal-map: GGX perceptual roughness (default 0.5)");
+    cmd->add_option("--specular", o->specular,
+                    "With --normal-map: linear F0 r,g,b (a metal's base colour; a dielectric's "
+                    "KHR_materials_specular colour at ior 1.5)");
+    cmd->add_option("--albedo", o->albedo, "With --normal-map and --dielectric: linear diffuse albedo r,g,b");
+    cmd->add_flag("--dielectric", o->dielectric, "With --normal-map: a dielectric (default: a metal)");
+    cmd->add_option("--name", o->name, "With --normal-map: the material's name and the asset's file stem");
         cmd->add_option("--out", o->out,
                         "Output folder (created if missing): the asset, its KTX2 and PNG files");
         cmd->add_option("--method", o->method,

@@ -351,3 +351,68 @@ TEST(Gltf, BadAssetsAreRefusedInOneLineAndNothingIsWritten) {
 
 } // namespace
 } // namespace burnish
+
+namespace burnish {
+namespace {
+
+TEST(Gltf, AMaterialExportsWithItsSpecularColourInGltfTerms) {
+    test::TempDir dir;
+    auto map = loadNormalMap(kData / "trak-rust1_nm.png");
+    ASSERT_TRUE(map);
+    GltfMaterialSource m;
+    m.name = "iron";
+    m.normal = std::make_shared<const NormalMap>(std::move(map.value()));
+    m.roughness = 0.35;
+    m.specular = {0.56, 0.57, 0.58};
+    auto metal = exportMaterialGltf(m, dir.path() / "metal");
+    ASSERT_TRUE(metal) << metal.error();
+    const json a = readJson(metal->asset);
+    EXPECT_EQ(metal->asset.filename(), "iron.gltf");
+    const json& pbr = a["materials"][0]["pbrMetallicRoughness"];
+    EXPECT_EQ(pbr["baseColorFactor"], json({0.56, 0.57, 0.58, 1.0}));
+    EXPECT_EQ(pbr["metallicFactor"], 1.0);
+    EXPECT_FALSE(pbr.contains("roughnessFactor"));
+    EXPECT_NEAR(metal->materials[0].meanRoughnessMip0, 0.35, 0.002);
+    // Only the baked textures: the 16-bit source's images and textures are pruned, no file of them written.
+    EXPECT_EQ(a["textures"].size(), 2u);
+    EXPECT_EQ(a["images"].size(), 4u);
+    EXPECT_EQ(a["materials"][0]["normalTexture"]["index"], 0);
+    EXPECT_EQ(pbr["metallicRoughnessTexture"]["index"], 1);
+    EXPECT_FALSE(fs::exists(dir.path() / "metal" / "normal.png"));
+    EXPECT_EQ(metal->written.size(), 5u);
+    EXPECT_EQ(materialKtx(dir.path() / "metal", a, "normal").levels.size(), 10u);
+
+    // A dielectric: F0 through KHR_materials_specular at ior 1.5; painted roughness per texel.
+    m.metal = false;
+    m.specular = {0.02, 0.03, 0.04};
+    m.albedo = {0.3, 0.2, 0.1};
+    auto texels = std::make_shared<std::vector<float>>(m.normal->texelCount(), 0.2f);
+    for (size_t i = 0; i < texels->size() / 2; ++i) (*texels)[i] = 0.8f;
+    m.roughnessTexels = texels;
+    auto dielectric = exportMaterialGltf(m, dir.path() / "dielectric");
+    ASSERT_TRUE(dielectric) << dielectric.error();
+    const json d = readJson(dielectric->asset);
+    const json& ext = d["materials"][0]["extensions"];
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(ext["KHR_materials_specular"]["specularColorFactor"][size_t(c)].get<double>() * 0.04, m.specular[size_t(c)], 1e-12);
+    EXPECT_EQ(ext["KHR_materials_ior"]["ior"], 1.5);
+    EXPECT_EQ(d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"], json({0.3, 0.2, 0.1, 1.0}));
+    EXPECT_NEAR(dielectric->materials[0].meanRoughnessMip0, 0.5, 0.01); // half 0.8, half 0.2
+    EXPECT_TRUE(dielectric->materials[0].roughnessTexture);
+
+    // Refusals.
+    m.roughnessTexels = std::make_shared<std::vector<float>>(3, 0.5f);
+    EXPECT_FALSE(exportMaterialGltf(m, dir.path() / "bad"));
+    m.roughnessTexels = nullptr;
+    m.roughness = std::nan("");
+    EXPECT_FALSE(exportMaterialGltf(m, dir.path() / "bad"));
+    m.roughness = 0.5;
+    m.specular = {1.5, 0, 0};
+    EXPECT_FALSE(exportMaterialGltf(m, dir.path() / "bad"));
+    m.normal = nullptr;
+    EXPECT_FALSE(exportMaterialGltf(m, dir.path() / "bad"));
+    EXPECT_FALSE(fs::exists(dir.path() / "bad"));
+}
+
+} // namespace
+} // namespace burnish

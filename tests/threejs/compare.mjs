@@ -176,7 +176,7 @@ async function main() {
                     const r = o.gltf
                         ? await page.evaluate(cfg => window.runGltfCase(cfg), {
                               original: c.original, assets: c.assets, minification: d, supersample: o.supersample,
-                              previews: Boolean(o.previews)})
+                              anisotropy: o.anisotropy, previews: Boolean(o.previews)})
                         : await page.evaluate(cfg => window.runCase(cfg), {
                               normal: c.normal, chains: c.chains, minification: d, roughness, supersample: o.supersample,
                               anisotropy: o.anisotropy, anisotropyOn: o.anisotropyOn,

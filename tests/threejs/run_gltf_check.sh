@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The test suite's independent glTF check (CTest gltf_validator_ktx_parse): `burnish gltf` on the test
-# plane (a real map as its normal texture), as .gltf with raw and BC payloads and as .glb, and on
+# plane (a real map as its normal texture), as .gltf with raw and BC payloads and as .glb, a material
+# written from one map (`burnish gltf --normal-map`), and
 # Debian's assimp-testmodels ClearCoatTest.gltf where installed; Khronos's gltf-validator reports no
 # error Burnish added, ktx-parse reads every KTX2 chain back in full, and the raw plane's levels equal
 # `burnish bake --preset gltf --format png8` of the same map, code for code (check_gltf.mjs). Skips
@@ -32,6 +33,10 @@ check "$work/bc/plane.gltf"
 node "$here/to_glb.mjs" "$work/in/plane.gltf" "$work/in/plane.glb"
 "$burnish" gltf "$work/in/plane.glb" --out "$work/glb" > /dev/null
 check "$work/glb/plane.glb" --bake "$work/bake"
+# A material of one map (the studio's File ▸ Export glTF): a dielectric with its specular colour.
+"$burnish" gltf --normal-map "$work/in/normal.png" --dielectric --specular 0.02,0.03,0.04 --roughness 0.4 \
+  --name plastic --out "$work/material" > /dev/null
+check "$work/material/plastic.gltf"
 clearcoat=/usr/share/assimp/models/glTF2/ClearCoat-glTF/ClearCoatTest.gltf
 if [ -f "$clearcoat" ]; then
   "$burnish" gltf "$clearcoat" --out "$work/clearcoat" > /dev/null

@@ -58,7 +58,7 @@ Result<std::string> decodeBase64(std::string_view in) {
     size_t i = 0;
     for (; i < in.size() && in[i] != '='; ++i) {
         const int v = value(in[i]);
-        if (v < 0) return Error("not base64");
+        if (v < 0) return Error{"not base64"};
         bits = (bits << 6) | std::uint32_t(v);
         if (++count == 4) {
             out.push_back(static_cast<char>((bits >> 16) & 0xFF));
@@ -69,8 +69,8 @@ Result<std::string> decodeBase64(std::string_view in) {
         }
     }
     for (; i < in.size(); ++i)
-        if (in[i] != '=') return Error("not base64");
-    if (count == 1) return Error("not base64");
+        if (in[i] != '=') return Error{"not base64"};
+    if (count == 1) return Error{"not base64"};
     if (count == 2) out.push_back(static_cast<char>((bits >> 4) & 0xFF));
     if (count == 3) {
         out.push_back(static_cast<char>((bits >> 10) & 0xFF));
@@ -88,7 +88,7 @@ Result<std::string> percentDecode(std::string_view in) {
         }
         if (i + 2 >= in.size() || !std::isxdigit(static_cast<unsigned char>(in[i + 1])) ||
             !std::isxdigit(static_cast<unsigned char>(in[i + 2])))
-            return Error("a malformed %-escape");
+            return Error{"a malformed %-escape"};
         out.push_back(static_cast<char>(std::stoi(std::string(in.substr(i + 1, 2)), nullptr, 16)));
         i += 2;
     }
@@ -125,72 +125,72 @@ Result<Asset> Asset::read(const fs::path& input) {
     a.path = input;
     a.folder = input.parent_path().empty() ? fs::path(".") : input.parent_path();
     auto bytes = readFile(input);
-    if (!bytes) return Error(bytes.error());
+    if (!bytes) return Error{bytes.error()};
     const std::string name = input.string();
     const std::string_view text = *bytes;
     if (text.size() >= 4 && le32(text, 0) == kGlbMagic) {
         a.glb = true;
-        if (text.size() < 20) return Error(name + ": a GLB file shorter than its header");
+        if (text.size() < 20) return Error{name + ": a GLB file shorter than its header"};
         if (le32(text, 4) != 2)
-            return Error(fmt::format("{}: GLB container version {} (Burnish reads 2)", name, le32(text, 4)));
+            return Error{fmt::format("{}: GLB container version {} (Burnish reads 2)", name, le32(text, 4))};
         if (le32(text, 8) != text.size())
-            return Error(fmt::format("{}: the GLB header says {} bytes, the file has {}", name, le32(text, 8),
-                                     text.size()));
+            return Error{fmt::format("{}: the GLB header says {} bytes, the file has {}", name, le32(text, 8),
+                                     text.size())};
         bool first = true;
         for (size_t at = 12; at < text.size();) {
-            if (text.size() - at < 8) return Error(name + ": a truncated GLB chunk header");
+            if (text.size() - at < 8) return Error{name + ": a truncated GLB chunk header"};
             const std::uint32_t length = le32(text, at), type = le32(text, at + 4);
             if (length > text.size() - at - 8)
-                return Error(name + ": a GLB chunk runs past the end of the file");
+                return Error{name + ": a GLB chunk runs past the end of the file"};
             const std::string_view chunk = text.substr(at + 8, length);
             if (first) {
-                if (type != kGlbJson) return Error(name + ": the GLB's first chunk is not JSON");
+                if (type != kGlbJson) return Error{name + ": the GLB's first chunk is not JSON"};
                 a.doc = json::parse(chunk.begin(), chunk.end(), nullptr, false);
-                if (a.doc.is_discarded()) return Error(name + ": the GLB's JSON chunk is not valid JSON");
+                if (a.doc.is_discarded()) return Error{name + ": the GLB's JSON chunk is not valid JSON"};
             } else if (type == kGlbBin && a.bin.empty()) {
                 a.bin = std::string(chunk);
             }
             first = false;
             at += 8 + size_t(length);
         }
-        if (first) return Error(name + ": a GLB without a JSON chunk");
+        if (first) return Error{name + ": a GLB without a JSON chunk"};
     } else {
         a.doc = json::parse(text.begin(), text.end(), nullptr, false);
-        if (a.doc.is_discarded()) return Error(name + ": not valid JSON (nor a GLB file)");
+        if (a.doc.is_discarded()) return Error{name + ": not valid JSON (nor a GLB file)"};
     }
-    if (!a.doc.is_object()) return Error(name + ": the glTF JSON is not an object");
+    if (!a.doc.is_object()) return Error{name + ": the glTF JSON is not an object"};
     const json* asset = a.doc.contains("asset") ? &a.doc["asset"] : nullptr;
     if (!asset || !asset->is_object() || !asset->contains("version") || !(*asset)["version"].is_string())
-        return Error(name + ": not a glTF asset (no asset.version)");
+        return Error{name + ": not a glTF asset (no asset.version)"};
     const std::string version = (*asset)["version"];
     if (version.rfind("2.", 0) != 0)
-        return Error(fmt::format("{}: glTF version {} (Burnish reads 2.0)", name, version));
+        return Error{fmt::format("{}: glTF version {} (Burnish reads 2.0)", name, version)};
     for (const char* key :
          {"buffers", "bufferViews", "images", "textures", "samplers", "materials", "meshes"})
         if (a.doc.contains(key) && !a.doc[key].is_array())
-            return Error(fmt::format("{}: '{}' is not an array", name, key));
+            return Error{fmt::format("{}: '{}' is not an array", name, key)};
 
     const json& buffers = a.doc.value("buffers", json::array());
     for (size_t i = 0; i < buffers.size(); ++i) {
         const json& b = buffers[i];
         const std::string what = fmt::format("buffer {}", i);
         if (!b.is_object() || !b.contains("byteLength") || !b["byteLength"].is_number_unsigned())
-            return Error(fmt::format("{}: {} has no byteLength", name, what));
+            return Error{fmt::format("{}: {} has no byteLength", name, what)};
         const std::uint64_t length = b["byteLength"];
         std::string data;
         if (b.contains("uri")) {
-            if (!b["uri"].is_string()) return Error(fmt::format("{}: {}'s uri is not a string", name, what));
+            if (!b["uri"].is_string()) return Error{fmt::format("{}: {}'s uri is not a string", name, what)};
             auto r = a.uri(b["uri"], what);
-            if (!r) return Error(r.error());
+            if (!r) return Error{r.error()};
             data = std::move(r->bytes);
         } else if (a.glb && i == 0) {
             data = a.bin;
         } else {
-            return Error(fmt::format("{}: {} has no uri", name, what));
+            return Error{fmt::format("{}: {} has no uri", name, what)};
         }
         if (data.size() < length)
-            return Error(fmt::format("{}: {} holds {} bytes, less than its byteLength {}", name, what,
-                                     data.size(), length));
+            return Error{fmt::format("{}: {} holds {} bytes, less than its byteLength {}", name, what,
+                                     data.size(), length)};
         a.buffers.push_back(std::move(data));
     }
     return a;
@@ -202,36 +202,36 @@ Result<Resource> Asset::uri(const std::string& uri, const std::string& what) con
     if (uri.rfind("data:", 0) == 0) {
         const size_t comma = uri.find(',');
         if (comma == std::string::npos)
-            return Error(fmt::format("{}: {}: a data URI without ','", name, what));
+            return Error{fmt::format("{}: {}: a data URI without ','", name, what)};
         const std::string header = uri.substr(5, comma - 5);
         if (header.size() < 7 || header.substr(header.size() - 7) != ";base64")
-            return Error(fmt::format("{}: {}: a data URI that is not base64", name, what));
+            return Error{fmt::format("{}: {}: a data URI that is not base64", name, what)};
         r.mime = header.substr(0, header.size() - 7);
         auto bytes = decodeBase64(std::string_view(uri).substr(comma + 1));
-        if (!bytes) return Error(fmt::format("{}: {}: the data URI's payload is not base64", name, what));
+        if (!bytes) return Error{fmt::format("{}: {}: the data URI's payload is not base64", name, what)};
         r.bytes = std::move(*bytes);
         return r;
     }
     const size_t colon = uri.find(':'), slash = uri.find('/');
     if (colon != std::string::npos && (slash == std::string::npos || colon < slash))
-        return Error(fmt::format(
+        return Error{fmt::format(
             "{}: {}: URI '{}' has a scheme; Burnish reads files beside the asset and data: URIs only", name,
-            what, uri));
+            what, uri)};
     auto decoded = percentDecode(uri);
-    if (!decoded) return Error(fmt::format("{}: {}: URI '{}': {}", name, what, uri, decoded.error()));
+    if (!decoded) return Error{fmt::format("{}: {}: URI '{}': {}", name, what, uri, decoded.error())};
     const fs::path relative = fs::path(*decoded).lexically_normal();
     if (decoded->empty() || relative.is_absolute() || relative.empty() || *relative.begin() == "..")
-        return Error(fmt::format("{}: {}: URI '{}' points outside the asset's folder", name, what, uri));
+        return Error{fmt::format("{}: {}: URI '{}' points outside the asset's folder", name, what, uri)};
     const fs::path file = folder / relative;
     std::error_code ec;
     const fs::path real = fs::weakly_canonical(file, ec), base = fs::weakly_canonical(folder, ec);
     if (!ec) {
         const fs::path within = real.lexically_relative(base);
         if (within.empty() || *within.begin() == "..")
-            return Error(fmt::format("{}: {}: URI '{}' leads outside the asset's folder", name, what, uri));
+            return Error{fmt::format("{}: {}: URI '{}' leads outside the asset's folder", name, what, uri)};
     }
     auto bytes = readFile(file);
-    if (!bytes) return Error(fmt::format("{}: {}: {}", name, what, bytes.error()));
+    if (!bytes) return Error{fmt::format("{}: {}: {}", name, what, bytes.error())};
     r.bytes = std::move(*bytes);
     r.file = file;
     r.relative = relative.generic_string();
@@ -242,19 +242,19 @@ Result<std::string_view> Asset::bufferView(int index, const std::string& what) c
     const std::string name = path.string();
     const json& views = doc.value("bufferViews", json::array());
     if (index < 0 || size_t(index) >= views.size() || !views[size_t(index)].is_object())
-        return Error(fmt::format("{}: {}: bufferView {} does not exist", name, what, index));
+        return Error{fmt::format("{}: {}: bufferView {} does not exist", name, what, index)};
     const json& v = views[size_t(index)];
     const int buffer = v.value("buffer", -1);
     if (buffer < 0 || size_t(buffer) >= buffers.size())
-        return Error(fmt::format("{}: {}: bufferView {} names buffer {}, which does not exist", name, what,
-                                 index, buffer));
+        return Error{fmt::format("{}: {}: bufferView {} names buffer {}, which does not exist", name, what,
+                                 index, buffer)};
     if (!v.contains("byteLength") || !v["byteLength"].is_number_unsigned())
-        return Error(fmt::format("{}: {}: bufferView {} has no byteLength", name, what, index));
+        return Error{fmt::format("{}: {}: bufferView {} has no byteLength", name, what, index)};
     const std::uint64_t offset = v.value("byteOffset", std::uint64_t(0)), length = v["byteLength"];
     const std::string& data = buffers[size_t(buffer)];
     if (offset > data.size() || length > data.size() - offset)
-        return Error(
-            fmt::format("{}: {}: bufferView {} runs past the end of buffer {}", name, what, index, buffer));
+        return Error{
+            fmt::format("{}: {}: bufferView {} runs past the end of buffer {}", name, what, index, buffer)};
     return std::string_view(data).substr(offset, length);
 }
 
@@ -263,37 +263,37 @@ Result<Resource> Asset::image(int index) const {
     const json& images = doc.value("images", json::array());
     const std::string what = fmt::format("image {}", index);
     if (index < 0 || size_t(index) >= images.size() || !images[size_t(index)].is_object())
-        return Error(fmt::format("{}: {} does not exist", name, what));
+        return Error{fmt::format("{}: {} does not exist", name, what)};
     const json& im = images[size_t(index)];
     if (im.contains("uri") && im["uri"].is_string()) return uri(im["uri"], what);
     if (im.contains("bufferView") && im["bufferView"].is_number_integer()) {
         auto view = bufferView(im["bufferView"], what);
-        if (!view) return Error(view.error());
+        if (!view) return Error{view.error()};
         Resource r;
         r.bytes = std::string(*view);
         r.mime = im.value("mimeType", std::string());
         return r;
     }
-    return Error(fmt::format("{}: {} has neither a uri nor a bufferView", name, what));
+    return Error{fmt::format("{}: {} has neither a uri nor a bufferView", name, what)};
 }
 
 // Reads image bytes through the importer (which reads files): a private temporary file.
 Result<Image> decodeImage(const Resource& r, const std::string& what) {
     if (!r.file.empty()) {
         auto image = readImage(r.file);
-        if (!image) return Error(what + ": " + image.error());
+        if (!image) return Error{what + ": " + image.error()};
         return image;
     }
     const bool png = r.bytes.size() >= 8 && std::memcmp(r.bytes.data(), "\x89PNG", 4) == 0;
     const bool jpeg = r.bytes.size() >= 3 && static_cast<unsigned char>(r.bytes[0]) == 0xFF &&
                       static_cast<unsigned char>(r.bytes[1]) == 0xD8;
-    if (!png && !jpeg) return Error(what + ": neither a PNG nor a JPEG image");
+    if (!png && !jpeg) return Error{what + ": neither a PNG nor a JPEG image"};
     auto staging = StagingFolder::create(fs::temp_directory_path());
-    if (!staging) return Error(what + ": " + staging.error());
+    if (!staging) return Error{what + ": " + staging.error()};
     const fs::path file = staging.value().fileFor(png ? "image.png" : "image.jpg");
-    if (Status s = writeNewFile(file, r.bytes); !s) return Error(what + ": " + s.error());
+    if (Status s = writeNewFile(file, r.bytes); !s) return Error{what + ": " + s.error()};
     auto image = readImage(file);
-    if (!image) return Error(what + ": " + image.error());
+    if (!image) return Error{what + ": " + image.error()};
     return image;
 }
 
@@ -310,7 +310,7 @@ Result<TextureRef> textureRef(const Asset& a, const json& info, const std::strin
     const std::string name = a.path.string();
     TextureRef t;
     if (!info.is_object() || !info.contains("index") || !info["index"].is_number_integer())
-        return Error(fmt::format("{}: {} has no texture index", name, what));
+        return Error{fmt::format("{}: {} has no texture index", name, what)};
     t.texture = info["index"];
     t.texCoord = info.value("texCoord", 0);
     if (info.contains("extensions") && info["extensions"].is_object() &&
@@ -318,17 +318,17 @@ Result<TextureRef> textureRef(const Asset& a, const json& info, const std::strin
         t.transform = info["extensions"]["KHR_texture_transform"];
     const json& textures = a.doc.value("textures", json::array());
     if (t.texture < 0 || size_t(t.texture) >= textures.size() || !textures[size_t(t.texture)].is_object())
-        return Error(fmt::format("{}: {}: texture {} does not exist", name, what, t.texture));
+        return Error{fmt::format("{}: {}: texture {} does not exist", name, what, t.texture)};
     const json& tex = textures[size_t(t.texture)];
     if (!tex.contains("source") || !tex["source"].is_number_integer())
-        return Error(fmt::format("{}: {}: texture {} has no PNG or JPEG source Burnish can read", name, what,
-                                 t.texture));
+        return Error{fmt::format("{}: {}: texture {} has no PNG or JPEG source Burnish can read", name, what,
+                                 t.texture)};
     t.image = tex["source"];
     if (tex.contains("sampler") && tex["sampler"].is_number_integer()) {
         const json& samplers = a.doc.value("samplers", json::array());
         const int s = tex["sampler"];
         if (s < 0 || size_t(s) >= samplers.size() || !samplers[size_t(s)].is_object())
-            return Error(fmt::format("{}: {}: sampler {} does not exist", name, what, s));
+            return Error{fmt::format("{}: {}: sampler {} does not exist", name, what, s)};
         t.wrapS = samplers[size_t(s)].value("wrapS", kRepeat);
         t.wrapT = samplers[size_t(s)].value("wrapT", kRepeat);
     }
@@ -433,11 +433,11 @@ Result<std::string> encodeKtx2Chains(const Chains& c, Ktx2Format format, const s
                                            : format == Ktx2Format::Bc4 ? DdsCompression::Bc4
                                                                        : DdsCompression::Bc3;
         auto dds = encodeDds(mips, int(channels), compression);
-        if (!dds) return Error(dds.error());
+        if (!dds) return Error{dds.error()};
         std::uint64_t total = 0;
         for (const auto& [w, h] : c.sizes)
             total += ktx2LevelBytes(format, w, h);
-        if (dds->size() < total) return Error("the DDS encoder wrote fewer blocks than the chain holds");
+        if (dds->size() < total) return Error{"the DDS encoder wrote fewer blocks than the chain holds"};
         size_t at = dds->size() - total; // the blocks follow the DDS header, level 0 first
         for (const auto& [w, h] : c.sizes) {
             const size_t bytes = ktx2LevelBytes(format, w, h);
@@ -473,15 +473,78 @@ std::string safeStem(std::string s) {
     return s.empty() ? std::string("asset") : s;
 }
 
+// Every textureInfo of the document (an object under a key ending in "Texture" with an integer
+// "index"), visited with its index.
+void forEachTextureInfo(json& node, const std::function<void(json& info)>& visit) {
+    if (node.is_object()) {
+        for (auto& [key, value] : node.items()) {
+            if (key.size() > 7 && key.compare(key.size() - 7, 7, "Texture") == 0 && value.is_object() &&
+                value.contains("index") && value["index"].is_number_integer())
+                visit(value);
+            forEachTextureInfo(value, visit);
+        }
+    } else if (node.is_array()) {
+        for (json& value : node) forEachTextureInfo(value, visit);
+    }
+}
+
+// The images a texture reads: its source and every extension's source.
+void forEachTextureSource(json& texture, const std::function<void(json& holder)>& visit) {
+    if (texture.contains("source") && texture["source"].is_number_integer()) visit(texture);
+    if (texture.contains("extensions") && texture["extensions"].is_object())
+        for (auto& [name, ext] : texture["extensions"].items())
+            if (ext.is_object() && ext.contains("source") && ext["source"].is_number_integer()) visit(ext);
+}
+
+// Removes the textures of `candidates` that no textureInfo names any more, then the images no texture
+// reads, renumbering what stays (GltfOptions::pruneReplaced).
+void pruneTextures(json& doc, const std::set<int>& candidates) {
+    json& textures = doc["textures"];
+    std::set<int> used;
+    forEachTextureInfo(doc, [&](json& info) { used.insert(info["index"].get<int>()); });
+    std::vector<int> textureMap(textures.size());
+    int next = 0;
+    json keptTextures = json::array();
+    for (size_t i = 0; i < textures.size(); ++i) {
+        if (candidates.count(int(i)) && !used.count(int(i))) {
+            textureMap[i] = -1;
+            continue;
+        }
+        textureMap[i] = next++;
+        keptTextures.push_back(textures[i]);
+    }
+    forEachTextureInfo(doc, [&](json& info) {
+        const int i = info["index"];
+        if (i >= 0 && size_t(i) < textureMap.size()) info["index"] = textureMap[size_t(i)];
+    });
+    textures = std::move(keptTextures);
+    json& images = doc["images"];
+    std::set<int> read;
+    for (json& t : textures) forEachTextureSource(t, [&](json& h) { read.insert(h["source"].get<int>()); });
+    std::vector<int> imageMap(images.size());
+    next = 0;
+    json keptImages = json::array();
+    for (size_t i = 0; i < images.size(); ++i) {
+        imageMap[i] = read.count(int(i)) ? next++ : -1;
+        if (imageMap[i] >= 0) keptImages.push_back(images[i]);
+    }
+    for (json& t : textures)
+        forEachTextureSource(t, [&](json& h) {
+            const int i = h["source"];
+            if (i >= 0 && size_t(i) < imageMap.size()) h["source"] = imageMap[size_t(i)];
+        });
+    images = std::move(keptImages);
+}
+
 } // namespace
 
 Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, const GltfOptions& options) {
     auto progress = [&](double f, std::string_view stage) {
         return !options.progress || options.progress(f, stage);
     };
-    if (!progress(0.0, "reading")) return Error("cancelled");
+    if (!progress(0.0, "reading")) return Error{"cancelled"};
     auto read = Asset::read(input);
-    if (!read) return Error(read.error());
+    if (!read) return Error{read.error()};
     Asset& a = read.value();
     const std::string name = input.string();
 
@@ -492,7 +555,7 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
     spec.method = options.method;
     spec.allowImplausible = options.allowImplausible;
     auto resolved = resolveBakeJob(spec);
-    if (!resolved) return Error(resolved.error());
+    if (!resolved) return Error{resolved.error()};
     const BakeJob job = std::move(*resolved);
 
     // The arrays this edits, made where the asset has none (and left out again if still empty).
@@ -505,7 +568,12 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
     json& materials = a.doc["materials"];
     json& textures = a.doc["textures"];
     json& images = a.doc["images"];
-    const size_t originalImages = images.size(), originalBuffers = a.doc["buffers"].size();
+    const size_t originalBuffers = a.doc["buffers"].size();
+    // The asset's own images, told from the new ones after pruning renumbers them (the tag is removed
+    // when they are carried over).
+    constexpr const char* kOriginalTag = "__burnish_original";
+    for (json& image : images)
+        if (image.is_object()) image[kOriginalTag] = true;
 
     // Which materials use a UV set that a primitive drawing them lacks.
     std::map<int, std::vector<std::pair<std::string, std::set<std::string>>>> users;
@@ -540,22 +608,22 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
         if (!m.is_object() || !m.contains("normalTexture")) continue;
         const std::string what = fmt::format("material {} ('{}')", i, m.value("name", std::string()));
         auto normal = textureRef(a, m["normalTexture"], what + " normalTexture");
-        if (!normal) return Error(normal.error());
+        if (!normal) return Error{normal.error()};
         for (const auto& [label, attributes] : users[int(i)])
             if (!attributes.count(fmt::format("TEXCOORD_{}", normal->texCoord)))
-                return Error(fmt::format("{}: {}'s normalTexture uses TEXCOORD_{}, which {} lacks", name,
-                                         what, normal->texCoord, label));
+                return Error{fmt::format("{}: {}'s normalTexture uses TEXCOORD_{}, which {} lacks", name,
+                                         what, normal->texCoord, label)};
         Work w{int(i), *normal, std::nullopt};
         const json pbr = m.value("pbrMetallicRoughness", json::object());
         if (pbr.is_object() && pbr.contains("metallicRoughnessTexture")) {
             auto mr = textureRef(a, pbr["metallicRoughnessTexture"], what + " metallicRoughnessTexture");
-            if (!mr) return Error(mr.error());
+            if (!mr) return Error{mr.error()};
             if (mr->texCoord != normal->texCoord || mr->transform != normal->transform)
-                return Error(fmt::format(
+                return Error{fmt::format(
                     "{}: {}'s metallicRoughnessTexture uses another UV set or transform than its "
                     "normalTexture; Burnish folds a roughness texture into the normal map's texels only "
                     "when both share them",
-                    name, what));
+                    name, what)};
             w.roughness = *mr;
         }
         work.push_back(std::move(w));
@@ -615,20 +683,20 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
         report.name = m.value("name", std::string());
         const std::string what = fmt::format("material {} ('{}')", w.material, report.name);
         if (!progress(0.05 + 0.85 * double(wi) / double(work.size()), "baking " + what))
-            return Error("cancelled");
+            return Error{"cancelled"};
 
         auto normalBytes = a.image(w.normal.image);
-        if (!normalBytes) return Error(normalBytes.error());
+        if (!normalBytes) return Error{normalBytes.error()};
         auto normalImage = decodeImage(
             *normalBytes, fmt::format("{}: {} normal map (image {})", name, what, w.normal.image));
-        if (!normalImage) return Error(normalImage.error());
+        if (!normalImage) return Error{normalImage.error()};
         auto map = decodeNormalMap(*normalImage, job.normalMap);
         if (!map)
-            return Error(
-                fmt::format("{}: {} normal map (image {}): {}", name, what, w.normal.image, map.error()));
+            return Error{
+                fmt::format("{}: {} normal map (image {}): {}", name, what, w.normal.image, map.error())};
         report.normalScale = m["normalTexture"].value("scale", 1.0);
         if (!std::isfinite(report.normalScale))
-            return Error(fmt::format("{}: {}: a normalTexture scale that is not finite", name, what));
+            return Error{fmt::format("{}: {}: a normalTexture scale that is not finite", name, what)};
         if (report.normalScale != 1.0)
             for (glm::vec3& n : map.value().normals) {
                 const glm::vec3 s(n.x * float(report.normalScale), n.y * float(report.normalScale), n.z);
@@ -648,16 +716,16 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
         const json pbr = m.value("pbrMetallicRoughness", json::object());
         report.roughnessFactor = pbr.is_object() ? pbr.value("roughnessFactor", 1.0) : 1.0;
         if (!std::isfinite(report.roughnessFactor))
-            return Error(fmt::format("{}: {}: a roughnessFactor that is not finite", name, what));
+            return Error{fmt::format("{}: {}: a roughnessFactor that is not finite", name, what)};
         const double factor = std::clamp(report.roughnessFactor, 0.0, 1.0);
         const int W = map->width, H = map->height;
         std::optional<Image> mrImage;
         if (w.roughness) {
             auto bytes = a.image(w.roughness->image);
-            if (!bytes) return Error(bytes.error());
+            if (!bytes) return Error{bytes.error()};
             auto image = decodeImage(*bytes, fmt::format("{}: {} metallicRoughness texture (image {})", name,
                                                          what, w.roughness->image));
-            if (!image) return Error(image.error());
+            if (!image) return Error{image.error()};
             mrImage = std::move(*image);
             const int g = mrImage->channels >= 3 ? 1 : 0;
             std::vector<float> gloss = resampleChannel(*mrImage, g, W, H, wrap);
@@ -677,15 +745,15 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
             return progress(done + 0.8 * span * fraction, "baking " + what);
         };
         auto baked = bake(*map, bo);
-        if (!baked && baked.error() == "cancelled") return Error("cancelled");
-        if (!baked) return Error(fmt::format("{}: {}: {}", name, what, baked.error()));
+        if (!baked && baked.error() == "cancelled") return Error{"cancelled"};
+        if (!baked) return Error{fmt::format("{}: {}: {}", name, what, baked.error())};
         const BakedTexture* normalTex = baked->find(TextureRole::Normal);
         const BakedTexture* glossTex = baked->find(TextureRole::Gloss);
         if (!normalTex || !glossTex || normalTex->channels < 2 || glossTex->channels != 1 ||
             normalTex->decode[0].scale != 2.0 || normalTex->decode[0].bias != -1.0)
-            return Error(
+            return Error{
                 fmt::format("{}: method {} bakes no unsigned normal and one roughness texture for glTF", name,
-                            methodName(job.method)));
+                            methodName(job.method))};
         Chains normal, mr;
         for (const TextureMip& mip : normalTex->mips) {
             normal.sizes.emplace_back(mip.width, mip.height);
@@ -751,15 +819,15 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
             options.coding == GltfTextureCoding::Bc ? Ktx2Format::Bc3 : Ktx2Format::Rgba8;
         auto normalKtx = encodeKtx2Chains(normal, normalFormat, "normal");
         if (!normalKtx)
-            return Error(fmt::format("{}: {}: the normal texture's KTX2: {}", name, what, normalKtx.error()));
+            return Error{fmt::format("{}: {}: the normal texture's KTX2: {}", name, what, normalKtx.error())};
         auto mrKtx = encodeKtx2Chains(mr, mrFormat, "metallicRoughness");
         if (!mrKtx)
-            return Error(
-                fmt::format("{}: {}: the metallicRoughness texture's KTX2: {}", name, what, mrKtx.error()));
+            return Error{
+                fmt::format("{}: {}: the metallicRoughness texture's KTX2: {}", name, what, mrKtx.error())};
         auto normalPngBytes = encodePngLevel(normalPng);
-        if (!normalPngBytes) return Error(normalPngBytes.error());
+        if (!normalPngBytes) return Error{normalPngBytes.error()};
         auto mrPngBytes = encodePngLevel(mrPng);
-        if (!mrPngBytes) return Error(mrPngBytes.error());
+        if (!mrPngBytes) return Error{mrPngBytes.error()};
 
         const std::string base = fmt::format("{}_material{}", stem, w.material);
         auto texture = [&](const std::string& role, const std::string& ktx, const std::string& png) {
@@ -796,6 +864,14 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
                                           {"roughnessFactor", report.roughnessFactor}};
         result.materials.push_back(std::move(report));
     }
+    if (options.pruneReplaced) {
+        std::set<int> replaced;
+        for (const Work& w : work) {
+            replaced.insert(w.normal.texture);
+            if (w.roughness) replaced.insert(w.roughness->texture);
+        }
+        pruneTextures(a.doc, replaced);
+    }
     if (!work.empty()) {
         json& used = a.doc["extensionsUsed"];
         if (!used.is_array()) used = json::array();
@@ -810,7 +886,7 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
         const std::string uri = holder["uri"];
         if (uri.rfind("data:", 0) == 0) return {};
         auto r = a.uri(uri, what);
-        if (!r) return Error(r.error());
+        if (!r) return Error{r.error()};
         auto found = copiedAs.find(r->relative);
         if (found == copiedAs.end()) {
             const fs::path rel(r->relative);
@@ -827,14 +903,16 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
     const size_t firstBuffer = a.doc["buffers"].size() - originalBuffers;
     for (size_t i = firstBuffer; i < a.doc["buffers"].size(); ++i)
         if (Status s = carry(a.doc["buffers"][i], fmt::format("buffer {}", i - firstBuffer)); !s)
-            return Error(s.error());
-    for (size_t i = 0; i < originalImages; ++i)
-        if (images[i].is_object())
-            if (Status s = carry(images[i], fmt::format("image {}", i)); !s) return Error(s.error());
+            return Error{s.error()};
+    for (size_t i = 0; i < images.size(); ++i)
+        if (images[i].is_object() && images[i].contains(kOriginalTag)) {
+            images[i].erase(kOriginalTag);
+            if (Status s = carry(images[i], fmt::format("image {}", i)); !s) return Error{s.error()};
+        }
 
     for (const std::string& key : absent)
         if (a.doc[key].empty()) a.doc.erase(key);
-    if (!progress(0.9, "writing")) return Error("cancelled");
+    if (!progress(0.9, "writing")) return Error{"cancelled"};
     std::string assetBytes;
     if (a.glb) {
         while (newBin.size() % 4)
@@ -845,7 +923,7 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
             text.push_back(' ');
         const bool withBin = binBuffer;
         const size_t total = 12 + 8 + text.size() + (withBin ? 8 + newBin.size() : 0);
-        if (total > 0xFFFFFFFFull) return Error(fmt::format("{}: the output GLB would exceed 4 GiB", name));
+        if (total > 0xFFFFFFFFull) return Error{fmt::format("{}: the output GLB would exceed 4 GiB", name)};
         put32(assetBytes, kGlbMagic);
         put32(assetBytes, 2);
         put32(assetBytes, std::uint32_t(total));
@@ -863,13 +941,13 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
 
     std::error_code ec;
     fs::create_directories(outDir, ec);
-    if (ec) return Error(fmt::format("--out {}: {}", outDir.string(), ec.message()));
+    if (ec) return Error{fmt::format("--out {}: {}", outDir.string(), ec.message())};
     auto set = FileSet::begin(outDir);
-    if (!set) return Error(set.error());
+    if (!set) return Error{set.error()};
     for (const NewFile& f : files)
-        if (Status s = set.value().addBytes(f.name, f.bytes); !s) return Error(s.error());
-    if (Status s = set.value().addBytes(assetName, assetBytes); !s) return Error(s.error());
-    if (Status s = set.value().commit(assetName, {}, options.overwrite); !s) return Error(s.error());
+        if (Status s = set.value().addBytes(f.name, f.bytes); !s) return Error{s.error()};
+    if (Status s = set.value().addBytes(assetName, assetBytes); !s) return Error{s.error()};
+    if (Status s = set.value().commit(assetName, {}, options.overwrite); !s) return Error{s.error()};
 
     result.asset = outDir / assetName;
     for (const NewFile& f : files)
@@ -899,6 +977,156 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
                       {"written", result.written}};
     progress(1.0, "done");
     return result;
+}
+
+namespace {
+
+std::string encodeBase64(std::string_view in) {
+    static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (size_t i = 0; i < in.size(); i += 3) {
+        std::uint32_t v = std::uint32_t(static_cast<unsigned char>(in[i])) << 16;
+        if (i + 1 < in.size()) v |= std::uint32_t(static_cast<unsigned char>(in[i + 1])) << 8;
+        if (i + 2 < in.size()) v |= std::uint32_t(static_cast<unsigned char>(in[i + 2]));
+        out.push_back(kDigits[(v >> 18) & 63]);
+        out.push_back(kDigits[(v >> 12) & 63]);
+        out.push_back(i + 1 < in.size() ? kDigits[(v >> 6) & 63] : '=');
+        out.push_back(i + 2 < in.size() ? kDigits[v & 63] : '=');
+    }
+    return out;
+}
+
+// A 2×2 quad in the xz plane facing +y: positions, normals, UVs (v down the image, as glTF's), tangents
+// and indices in one buffer, as glTF JSON around it.
+json quadAsset() {
+    const float positions[] = {-1, 0, 1, 1, 0, 1, 1, 0, -1, -1, 0, -1};
+    const float normals[] = {0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0};
+    const float uvs[] = {0, 1, 1, 1, 1, 0, 0, 0};
+    const float tangents[] = {1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1};
+    const std::uint16_t indices[] = {0, 1, 2, 0, 2, 3};
+    std::string bytes;
+    auto add = [&](const void* data, size_t n) {
+        bytes.append(static_cast<const char*>(data), n);
+        while (bytes.size() % 4) bytes.push_back('\0');
+    };
+    add(positions, sizeof positions);
+    add(normals, sizeof normals);
+    add(uvs, sizeof uvs);
+    add(tangents, sizeof tangents);
+    add(indices, sizeof indices);
+    json views = json::array({{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}, {"target", 34962}},
+                              {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 48}, {"target", 34962}},
+                              {{"buffer", 0}, {"byteOffset", 96}, {"byteLength", 32}, {"target", 34962}},
+                              {{"buffer", 0}, {"byteOffset", 128}, {"byteLength", 64}, {"target", 34962}},
+                              {{"buffer", 0}, {"byteOffset", 192}, {"byteLength", 12}, {"target", 34963}}});
+    json accessors = json::array(
+        {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {-1, 0, -1}}, {"max", {1, 0, 1}}},
+         {{"bufferView", 1}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}},
+         {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
+         {{"bufferView", 3}, {"componentType", 5126}, {"count", 4}, {"type", "VEC4"}},
+         {{"bufferView", 4}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}});
+    return json{{"asset", {{"version", "2.0"}, {"generator", "Burnish"}}},
+                {"scene", 0},
+                {"scenes", json::array({{{"nodes", {0}}}})},
+                {"nodes", json::array({{{"mesh", 0}, {"name", "plane"}}})},
+                {"meshes", json::array({{{"name", "plane"},
+                                         {"primitives", json::array({{{"attributes", {{"POSITION", 0}, {"NORMAL", 1},
+                                                                                      {"TEXCOORD_0", 2}, {"TANGENT", 3}}},
+                                                                       {"indices", 4},
+                                                                       {"material", 0}}})}}})},
+                {"buffers", json::array({{{"byteLength", bytes.size()},
+                                          {"uri", "data:application/octet-stream;base64," + encodeBase64(bytes)}}})},
+                {"bufferViews", views},
+                {"accessors", accessors}};
+}
+
+// 16-bit RGB PNG bytes of width×height texels made by `texel(i, rgb)`.
+Result<std::string> png16(int width, int height, const std::function<void(size_t i, float rgb[3])>& texel) {
+    std::vector<std::uint16_t> data(size_t(width) * size_t(height) * 3);
+    for (size_t i = 0; i < size_t(width) * size_t(height); ++i) {
+        float rgb[3];
+        texel(i, rgb);
+        for (int c = 0; c < 3; ++c) data[i * 3 + size_t(c)] = unorm16(rgb[c]);
+    }
+    PngPixels p;
+    p.width = width;
+    p.height = height;
+    p.channels = 3;
+    p.bitDepth = 16;
+    p.data = data.data();
+    return encodePng(p);
+}
+
+} // namespace
+
+Result<GltfResult> exportMaterialGltf(const GltfMaterialSource& m, const fs::path& outDir, const GltfOptions& options) {
+    if (!m.normal || m.normal->width < 1 || m.normal->height < 1) return Error{"glTF export: no normal map"};
+    const NormalMap& map = *m.normal;
+    const size_t texels = map.texelCount();
+    auto unit = [](double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; };
+    if (m.roughnessTexels) {
+        if (m.roughnessTexels->size() != texels)
+            return Error{fmt::format("glTF export: {} roughness values for a {}x{} normal map", m.roughnessTexels->size(),
+                                     map.width, map.height)};
+        for (float v : *m.roughnessTexels)
+            if (!unit(v)) return Error{"glTF export: a roughness value outside [0, 1]"};
+    } else if (!unit(m.roughness)) {
+        return Error{fmt::format("glTF export: roughness {} outside [0, 1]", m.roughness)};
+    }
+    for (double c : m.specular)
+        if (!unit(c)) return Error{"glTF export: a specular colour channel outside [0, 1]"};
+    for (double c : m.albedo)
+        if (!unit(c)) return Error{"glTF export: an albedo channel outside [0, 1]"};
+
+    json doc = quadAsset();
+    json material = {{"name", m.name}};
+    json pbr = {{"metallicFactor", m.metal ? 1.0 : 0.0}};
+    if (m.metal) {
+        pbr["baseColorFactor"] = {m.specular[0], m.specular[1], m.specular[2], 1.0};
+    } else {
+        pbr["baseColorFactor"] = {m.albedo[0], m.albedo[1], m.albedo[2], 1.0};
+        // KHR_materials_specular: dielectric F0 = ((ior − 1)/(ior + 1))² · specularColorFactor, 0.04 at 1.5.
+        material["extensions"] = {{"KHR_materials_specular", {{"specularColorFactor", {m.specular[0] / 0.04, m.specular[1] / 0.04, m.specular[2] / 0.04}}}},
+                                  {"KHR_materials_ior", {{"ior", 1.5}}}};
+        doc["extensionsUsed"] = {"KHR_materials_specular", "KHR_materials_ior"};
+    }
+    const int sampler = m.border == BorderMode::Wrap ? kRepeat : 33071;
+    doc["samplers"] = json::array({{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", sampler}, {"wrapT", sampler}}});
+    doc["textures"] = json::array({{{"source", 0}, {"sampler", 0}}});
+    doc["images"] = json::array({{{"uri", "normal.png"}}});
+    material["normalTexture"] = {{"index", 0}};
+    if (m.roughnessTexels) {
+        doc["textures"].push_back({{"source", 1}, {"sampler", 0}});
+        doc["images"].push_back({{"uri", "roughness.png"}});
+        pbr["metallicRoughnessTexture"] = {{"index", 1}};
+    } else {
+        pbr["roughnessFactor"] = m.roughness;
+    }
+    material["pbrMetallicRoughness"] = pbr;
+    doc["materials"] = json::array({material});
+
+    auto staging = StagingFolder::create(fs::temp_directory_path());
+    if (!staging) return Error{"glTF export: " + staging.error()};
+    const fs::path folder = staging.value().path();
+    auto normalPng = png16(map.width, map.height, [&](size_t i, float rgb[3]) {
+        for (int c = 0; c < 3; ++c) rgb[c] = 0.5f * map.normals[i][c] + 0.5f;
+    });
+    if (!normalPng) return Error{normalPng.error()};
+    if (Status st = writeNewFile(folder / "normal.png", *normalPng); !st) return Error{st.error()};
+    if (m.roughnessTexels) {
+        auto roughPng = png16(map.width, map.height, [&](size_t i, float rgb[3]) {
+            rgb[0] = 1.0f, rgb[1] = (*m.roughnessTexels)[i], rgb[2] = 1.0f;
+        });
+        if (!roughPng) return Error{roughPng.error()};
+        if (Status st = writeNewFile(folder / "roughness.png", *roughPng); !st) return Error{st.error()};
+    }
+    const fs::path asset = folder / (safeStem(m.name) + ".gltf");
+    if (Status st = writeNewFile(asset, doc.dump(1) + "\n"); !st) return Error{st.error()};
+    GltfOptions o = options;
+    o.pruneReplaced = true;
+    // The studio's normals are already decoded (any green convention): the 16-bit source holds them as +Y.
+    o.allowImplausible = true;
+    return processGltf(asset, outDir, o);
 }
 
 } // namespace burnish

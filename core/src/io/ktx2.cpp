@@ -167,25 +167,25 @@ Result<std::string> encodeKtx2(const Ktx2Texture& texture) {
     const FormatInfo& f = info(texture.format);
     if (texture.width < 1 || texture.height < 1 || texture.width > kMaxImageSide ||
         texture.height > kMaxImageSide)
-        return Error(fmt::format("KTX2: a {}x{} texture is outside 1..{} on a side", texture.width,
-                                 texture.height, kMaxImageSide));
+        return Error{fmt::format("KTX2: a {}x{} texture is outside 1..{} on a side", texture.width,
+                                 texture.height, kMaxImageSide)};
     const int full = fullChainLevels(texture.width, texture.height);
     if (texture.levels.empty() || int(texture.levels.size()) > full)
-        return Error(fmt::format("KTX2: {} levels for a {}x{} texture (1 to {})", texture.levels.size(),
-                                 texture.width, texture.height, full));
+        return Error{fmt::format("KTX2: {} levels for a {}x{} texture (1 to {})", texture.levels.size(),
+                                 texture.width, texture.height, full)};
     for (size_t k = 0; k < texture.levels.size(); ++k) {
         const auto [w, h] = levelExtent(texture.width, texture.height, int(k));
         const std::uint64_t want = ktx2LevelBytes(texture.format, w, h);
         if (texture.levels[k].size() != want)
-            return Error(fmt::format("KTX2: level {} ({}x{} {}) holds {} bytes, not {}", k, w, h, f.name,
-                                     texture.levels[k].size(), want));
+            return Error{fmt::format("KTX2: level {} ({}x{} {}) holds {} bytes, not {}", k, w, h, f.name,
+                                     texture.levels[k].size(), want)};
     }
     std::map<std::string, std::string> keyValues;
     keyValues["KTXorientation"] = std::string("rd") + '\0';
     keyValues["KTXwriter"] = std::string(kWriter) + '\0';
     for (const auto& [key, value] : texture.keyValues) {
         if (key.empty() || key.find('\0') != std::string::npos)
-            return Error("KTX2: a key/value key is empty or holds a NUL");
+            return Error{"KTX2: a key/value key is empty or holds a NUL"};
         keyValues[key] = value;
     }
 
@@ -236,10 +236,10 @@ Result<std::string> encodeKtx2(const Ktx2Texture& texture) {
 
 Result<Ktx2Texture> decodeKtx2(std::string_view bytes) {
     if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kIdentifier.data(), kIdentifier.size()) != 0)
-        return Error(bytes.size() >= kIdentifier.size() &&
+        return Error{bytes.size() >= kIdentifier.size() &&
                              std::memcmp(bytes.data(), kIdentifier.data(), kIdentifier.size()) == 0
                          ? "KTX2: truncated header"
-                         : "KTX2: not a KTX 2.0 file (wrong identifier)");
+                         : "KTX2: not a KTX 2.0 file (wrong identifier)"};
     const std::uint32_t vkFormat = get32(bytes, 12), typeSize = get32(bytes, 16);
     const std::uint32_t width = get32(bytes, 20), height = get32(bytes, 24), depth = get32(bytes, 28);
     const std::uint32_t layers = get32(bytes, 32), faces = get32(bytes, 36), levels = get32(bytes, 40);
@@ -250,31 +250,31 @@ Result<Ktx2Texture> decodeKtx2(std::string_view bytes) {
     const auto found = std::find_if(kFormats.begin(), kFormats.end(),
                                     [&](const FormatInfo& f) { return f.vkFormat == vkFormat; });
     if (found == kFormats.end())
-        return Error(fmt::format("KTX2: vkFormat {} is not one Burnish reads (r8, rg8, rgba8, bc3, bc4, bc5)",
-                                 vkFormat));
-    if (typeSize != 1) return Error(fmt::format("KTX2: typeSize {} for an 8-bit format (1)", typeSize));
+        return Error{fmt::format("KTX2: vkFormat {} is not one Burnish reads (r8, rg8, rgba8, bc3, bc4, bc5)",
+                                 vkFormat)};
+    if (typeSize != 1) return Error{fmt::format("KTX2: typeSize {} for an 8-bit format (1)", typeSize)};
     if (width < 1 || height < 1 || width > std::uint32_t(kMaxImageSide) ||
         height > std::uint32_t(kMaxImageSide))
-        return Error(
-            fmt::format("KTX2: a {}x{} texture is outside 1..{} on a side", width, height, kMaxImageSide));
+        return Error{
+            fmt::format("KTX2: a {}x{} texture is outside 1..{} on a side", width, height, kMaxImageSide)};
     if (depth != 0 || layers != 0 || faces != 1)
-        return Error("KTX2: a volume, array or cube map (Burnish reads one 2D texture)");
+        return Error{"KTX2: a volume, array or cube map (Burnish reads one 2D texture)"};
     if (scheme != 0)
-        return Error(fmt::format("KTX2: supercompression scheme {} (Burnish reads none)", scheme));
+        return Error{fmt::format("KTX2: supercompression scheme {} (Burnish reads none)", scheme)};
     const int full = fullChainLevels(int(width), int(height));
     if (levels < 1 || levels > std::uint32_t(full))
-        return Error(
-            fmt::format("KTX2: {} levels for a {}x{} texture (1 to {})", levels, width, height, full));
-    if (sgdOffset != 0 || sgdLength != 0) return Error("KTX2: supercompression global data without a scheme");
+        return Error{
+            fmt::format("KTX2: {} levels for a {}x{} texture (1 to {})", levels, width, height, full)};
+    if (sgdOffset != 0 || sgdLength != 0) return Error{"KTX2: supercompression global data without a scheme"};
     const std::uint64_t indexEnd = kHeaderBytes + std::uint64_t(kLevelIndexEntryBytes) * levels;
     auto inside = [&](std::uint64_t offset, std::uint64_t length) {
         return offset >= indexEnd && offset <= bytes.size() && length <= bytes.size() - offset;
     };
-    if (indexEnd > bytes.size()) return Error("KTX2: truncated level index");
+    if (indexEnd > bytes.size()) return Error{"KTX2: truncated level index"};
     if (!inside(dfdOffset, dfdLength) || dfdLength < 4)
-        return Error("KTX2: the data format descriptor lies outside the file");
+        return Error{"KTX2: the data format descriptor lies outside the file"};
     if (kvdLength != 0 && !inside(kvdOffset, kvdLength))
-        return Error("KTX2: the key/value data lies outside the file");
+        return Error{"KTX2: the key/value data lies outside the file"};
 
     Ktx2Texture texture;
     texture.format = found->format;
@@ -291,15 +291,15 @@ Result<Ktx2Texture> decodeKtx2(std::string_view bytes) {
         return true;
     };
     if (!sameExceptColour(dfd, expectedDfd))
-        return Error(fmt::format("KTX2: the data format descriptor does not describe {}", found->name));
+        return Error{fmt::format("KTX2: the data format descriptor does not describe {}", found->name)};
 
     for (size_t at = 0; at < kvdLength;) {
-        if (kvdLength - at < 4) return Error("KTX2: truncated key/value data");
+        if (kvdLength - at < 4) return Error{"KTX2: truncated key/value data"};
         const std::uint32_t length = get32(bytes, kvdOffset + at);
-        if (length > kvdLength - at - 4) return Error("KTX2: a key/value entry runs past its data");
+        if (length > kvdLength - at - 4) return Error{"KTX2: a key/value entry runs past its data"};
         const std::string_view entry = bytes.substr(kvdOffset + at + 4, length);
         const size_t nul = entry.find('\0');
-        if (nul == std::string_view::npos || nul == 0) return Error("KTX2: a key/value entry without a key");
+        if (nul == std::string_view::npos || nul == 0) return Error{"KTX2: a key/value entry without a key"};
         std::string key(entry.substr(0, nul));
         if (key != "KTXorientation" && key != "KTXwriter")
             texture.keyValues.emplace_back(std::move(key), std::string(entry.substr(nul + 1)));
@@ -317,17 +317,17 @@ Result<Ktx2Texture> decodeKtx2(std::string_view bytes) {
         const auto [w, h] = levelExtent(texture.width, texture.height, int(k));
         const std::uint64_t want = ktx2LevelBytes(texture.format, w, h);
         if (length != want || raw != want)
-            return Error(fmt::format("KTX2: level {} ({}x{} {}) holds {} bytes, not {}", k, w, h, found->name,
-                                     length, want));
+            return Error{fmt::format("KTX2: level {} ({}x{} {}) holds {} bytes, not {}", k, w, h, found->name,
+                                     length, want)};
         if (offset < dataStart || !inside(offset, length))
-            return Error(fmt::format("KTX2: level {} lies outside the file's level data", k));
+            return Error{fmt::format("KTX2: level {} lies outside the file's level data", k)};
         ranges.emplace_back(offset, length);
         texture.levels.emplace_back(bytes.substr(offset, length));
     }
     std::sort(ranges.begin(), ranges.end());
     for (size_t i = 1; i < ranges.size(); ++i)
         if (ranges[i - 1].first + ranges[i - 1].second > ranges[i].first)
-            return Error("KTX2: two levels overlap");
+            return Error{"KTX2: two levels overlap"};
     return texture;
 }
 

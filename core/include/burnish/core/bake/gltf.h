@@ -14,12 +14,16 @@
 #pragma once
 
 #include <burnish/core/prefilter/methods.h>
+#include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/prefilter/normal_pyramid.h>
 #include <burnish/core/util/files.h>
 #include <burnish/core/util/result.h>
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <filesystem>
+#include <memory>
 #include <functional>
 #include <optional>
 #include <string>
@@ -43,6 +47,11 @@ struct GltfOptions {
     GltfTextureCoding coding = GltfTextureCoding::Raw;
     Overwrite overwrite = Overwrite::Refuse;
     bool allowImplausible = false;
+    /// Removes the textures Burnish's replaced (a material's old normal and roughness textures) when no
+    /// textureInfo names them any more, and the images then no texture reads, renumbering the rest. For
+    /// sources Burnish wrote itself (exportMaterialGltf): an asset of others may name textures or images
+    /// in ways this does not know (every key ending in "Texture" with an "index" counts as a use).
+    bool pruneReplaced = false;
     /// Called with the fraction done and the stage ("reading", "baking <material>", "writing");
     /// returning false cancels before the next stage ("cancelled", nothing written).
     std::function<bool(double fraction, std::string_view stage)> progress;
@@ -82,5 +91,29 @@ struct GltfResult {
 /// "cancelled".
 Result<GltfResult> processGltf(const std::filesystem::path& input, const std::filesystem::path& outDir,
                                const GltfOptions& options = {});
+
+/// One material as the studio holds it, for exportMaterialGltf.
+struct GltfMaterialSource {
+    std::string name = "material"; // the asset's file stem and the material's name
+    std::shared_ptr<const NormalMap> normal;
+    /// GGX perceptual roughness: one value, or one per texel of the normal map (painted layers).
+    double roughness = 0.5;
+    std::shared_ptr<const std::vector<float>> roughnessTexels;
+    bool metal = true;
+    /// Linear F0 (the specular colour) and linear diffuse albedo (dielectrics).
+    std::array<double, 3> specular{0.04, 0.04, 0.04};
+    std::array<double, 3> albedo{0.5, 0.5, 0.5};
+    BorderMode border = BorderMode::Wrap;
+};
+
+/// The material on a 2×2 quad (positions, normals, UVs, tangents) as a glTF asset, baked as processGltf
+/// bakes one: a metal's specular colour is its baseColorFactor (metallicFactor 1); a dielectric's is
+/// KHR_materials_specular's specularColorFactor = F0 / 0.04 at KHR_materials_ior's ior 1.5 (so
+/// ((ior − 1)/(ior + 1))² · specularColorFactor = F0), its albedo the baseColorFactor (metallicFactor 0).
+/// The source asset (16-bit PNG normal and roughness textures) is made in a private temporary folder.
+/// Errors: no normal map, roughness texels of the wrong count or not finite, a roughness or colour
+/// outside [0, 1] (a dielectric F0 up to 1 too), and processGltf's.
+Result<GltfResult> exportMaterialGltf(const GltfMaterialSource& material, const std::filesystem::path& outDir,
+                                      const GltfOptions& options = {});
 
 } // namespace burnish

@@ -38,7 +38,8 @@ struct GltfCli {
 std::optional<std::array<double, 3>> parseRgb(const std::string& text) {
     std::array<double, 3> rgb{};
     char tail = 0;
-    if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &rgb[0], &rgb[1], &rgb[2], &tail) != 3) return std::nullopt;
+    if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &rgb[0], &rgb[1], &rgb[2], &tail) != 3)
+        return std::nullopt;
     return rgb;
 }
 
@@ -103,15 +104,18 @@ const CommandRegistration registration{
             "Bake a glTF 2.0 asset's normal-mapped materials into KTX2 textures with Burnish's own mips");
         auto o = std::make_shared<GltfCli>();
         cmd->add_option("input", o->input, "A glTF 2.0 asset: .gltf (with its files) or .glb");
-    cmd->add_option("--normal-map", o->normalMap,
-                    "Instead of an asset: a material of this normal map on a 2x2 quad, written as glTF");
-    cmd->add_option("--roughness", o->roughness, "With --normal-map: GGX perceptual roughness (default 0.5)");
-    cmd->add_option("--specular", o->specular,
-                    "With --normal-map: linear F0 r,g,b (a metal's base colour; a dielectric's "
-                    "KHR_materials_specular colour at ior 1.5)");
-    cmd->add_option("--albedo", o->albedo, "With --normal-map and --dielectric: linear diffuse albedo r,g,b");
-    cmd->add_flag("--dielectric", o->dielectric, "With --normal-map: a dielectric (default: a metal)");
-    cmd->add_option("--name", o->name, "With --normal-map: the material's name and the asset's file stem");
+        cmd->add_option("--normal-map", o->normalMap,
+                        "Instead of an asset: a material of this normal map on a 2x2 quad, written as glTF");
+        cmd->add_option("--roughness", o->roughness,
+                        "With --normal-map: GGX perceptual roughness (default 0.5)");
+        cmd->add_option("--specular", o->specular,
+                        "With --normal-map: linear F0 r,g,b (a metal's base colour; a dielectric's "
+                        "KHR_materials_specular colour at ior 1.5)");
+        cmd->add_option("--albedo", o->albedo,
+                        "With --normal-map and --dielectric: linear diffuse albedo r,g,b");
+        cmd->add_flag("--dielectric", o->dielectric, "With --normal-map: a dielectric (default: a metal)");
+        cmd->add_option("--name", o->name,
+                        "With --normal-map: the material's name and the asset's file stem");
         cmd->add_option("--out", o->out,
                         "Output folder (created if missing): the asset, its KTX2 and PNG files");
         cmd->add_option("--method", o->method,

@@ -2,9 +2,13 @@
 
 #include <burnish/core/bake/presets.h>
 
+#include <burnish/core/prefilter/gloss.h>
+
 #include <QCoreApplication>
 #include <QPointer>
 #include <QThread>
+
+#include <algorithm>
 
 namespace burnish::studio {
 
@@ -43,34 +47,70 @@ GltfRunner::~GltfRunner() {
     m_cancel->store(true); // a running job stops at its next check and reports into a null QPointer
 }
 
+GltfMaterialSource gltfMaterialSourceFor(const MaterialDocument& doc, const std::string& name) {
+    const MaterialSettings& s = doc.settings();
+    const GlossEncoding roughness = GlossEncoding::ggxRoughness();
+    GltfMaterialSource m;
+    m.name = name;
+    m.normal = doc.maps().normal;
+    m.roughness = roughness.value(doc.power());
+    if (const auto authored = doc.authoredGloss()) {
+        const GlossEncoding& encoding = doc.preset().encoding;
+        auto texels = std::make_shared<std::vector<float>>(authored->size());
+        for (size_t i = 0; i < authored->size(); ++i)
+            (*texels)[i] =
+                float(roughness.value(encoding.power(std::clamp(double((*authored)[i]), 0.0, 1.0))));
+        m.roughnessTexels = std::move(texels);
+    }
+    m.metal = s.materialClass == MaterialClass::Metal;
+    m.specular = {std::clamp(s.specular.r, 0.0, 1.0), std::clamp(s.specular.g, 0.0, 1.0),
+                  std::clamp(s.specular.b, 0.0, 1.0)};
+    m.albedo = {std::clamp(s.albedo.r, 0.0, 1.0), std::clamp(s.albedo.g, 0.0, 1.0),
+                std::clamp(s.albedo.b, 0.0, 1.0)};
+    return m;
+}
+
 void GltfRunner::start(const QString& input, const QString& outDir, GltfOptions options) {
+    run([input,
+         outDir](const GltfOptions& o) { return processGltf(input.toStdString(), outDir.toStdString(), o); },
+        std::move(options));
+}
+
+void GltfRunner::startExport(GltfMaterialSource material, const QString& outDir, GltfOptions options) {
+    run([material = std::move(material),
+         outDir](const GltfOptions& o) { return exportMaterialGltf(material, outDir.toStdString(), o); },
+        std::move(options));
+}
+
+void GltfRunner::run(std::function<Result<GltfResult>(const GltfOptions&)> job, GltfOptions options) {
     m_cancel = std::make_shared<std::atomic<bool>>(false);
     m_running = true;
     QPointer<GltfRunner> self(this);
     auto cancel = m_cancel;
-    QThread* worker = QThread::create([self, cancel, input, outDir, options = std::move(options)]() mutable {
-        options.progress = [&](double fraction, std::string_view stage) {
-            const QString text = QString::fromUtf8(stage.data(), qsizetype(stage.size()));
+    QThread* worker =
+        QThread::create([self, cancel, job = std::move(job), options = std::move(options)]() mutable {
+            options.progress = [&](double fraction, std::string_view stage) {
+                const QString text = QString::fromUtf8(stage.data(), qsizetype(stage.size()));
+                QMetaObject::invokeMethod(
+                    QCoreApplication::instance(),
+                    [self, fraction, text] {
+                        if (self) emit self->progress(fraction, text);
+                    },
+                    Qt::QueuedConnection);
+                return !cancel->load();
+            };
+            auto result = job(options);
+            const bool ok = result.ok();
+            const QString message = ok ? gltfSummaryText(*result) : QString::fromStdString(result.error());
             QMetaObject::invokeMethod(
                 QCoreApplication::instance(),
-                [self, fraction, text] {
-                    if (self) emit self->progress(fraction, text);
+                [self, ok, message] {
+                    if (!self) return;
+                    self->m_running = false;
+                    emit self->finished(ok, message);
                 },
                 Qt::QueuedConnection);
-            return !cancel->load();
-        };
-        auto result = processGltf(input.toStdString(), outDir.toStdString(), options);
-        const bool ok = result.ok();
-        const QString message = ok ? gltfSummaryText(*result) : QString::fromStdString(result.error());
-        QMetaObject::invokeMethod(
-            QCoreApplication::instance(),
-            [self, ok, message] {
-                if (!self) return;
-                self->m_running = false;
-                emit self->finished(ok, message);
-            },
-            Qt::QueuedConnection);
-    });
+        });
     connect(worker, &QThread::finished, worker, &QObject::deleteLater);
     worker->start();
 }

@@ -1,6 +1,7 @@
-// File ▸ Process glTF Asset…: a glTF 2.0 asset's normal-mapped materials through core's processGltf
-// (the same as `burnish gltf`) on a worker thread, with progress that can cancel; the result is
-// summarised in one message.
+// File ▸ Process glTF Asset… (a glTF 2.0 asset's normal-mapped materials through core's processGltf,
+// the same as `burnish gltf`) and File ▸ Export glTF… (the current material on a quad through core's
+// exportMaterialGltf, as `burnish gltf --normal-map`), each on a worker thread with progress that can
+// cancel; the result is summarised in one message.
 #pragma once
 
 #include "material_document.h"
@@ -11,6 +12,7 @@
 #include <QString>
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -20,6 +22,11 @@ namespace burnish::studio {
 /// The document's method when its preset is gltf (what the viewport shows is what the asset gets),
 /// else none: the gltf preset's default (fitted), whatever another preset's method is.
 std::optional<std::string> gltfMethodFor(const MaterialDocument& doc);
+
+/// The document's material as exportMaterialGltf takes it: its normal map, its base gloss or authored
+/// gloss per texel (a gloss map, painted layers) as GGX perceptual roughness through the powers they
+/// stand for, dielectric or metal, its specular colour and albedo, named `name`.
+GltfMaterialSource gltfMaterialSourceFor(const MaterialDocument& doc, const std::string& name);
 
 /// What one processed asset comes to, for the message after it: one line per material.
 QString gltfSummaryText(const GltfResult& result);
@@ -31,6 +38,8 @@ public:
     explicit GltfRunner(QObject* parent = nullptr);
     ~GltfRunner() override;
     void start(const QString& input, const QString& outDir, GltfOptions options);
+    /// exportMaterialGltf of `material` into `outDir`.
+    void startExport(GltfMaterialSource material, const QString& outDir, GltfOptions options);
     /// Asks the run to stop at its next check (between stages and inside each bake).
     void cancel() { m_cancel->store(true); }
     bool running() const { return m_running; }
@@ -41,6 +50,7 @@ signals:
     void finished(bool ok, const QString& message);
 
 private:
+    void run(std::function<Result<GltfResult>(const GltfOptions&)> job, GltfOptions options);
     std::shared_ptr<std::atomic<bool>> m_cancel;
     bool m_running = false;
 };

@@ -148,7 +148,7 @@ MainWindow::MainWindow(QWidget* parent)
             m_gltfProgress->deleteLater();
             m_gltfProgress = nullptr;
         }
-        statusBar()->showMessage(ok ? "glTF asset processed" : "glTF: " + message, 10000);
+        statusBar()->showMessage(ok ? "glTF asset written" : "glTF: " + message, 10000);
         emit gltfFinished(ok, message);
         if (ok)
             showResult("glTF asset processed", message);
@@ -280,6 +280,8 @@ void MainWindow::buildMenus() {
     file->addSeparator();
     file->addAction("&Export Textures…", QKeySequence(Qt::CTRL | Qt::Key_E), this,
                     &MainWindow::exportTextures);
+    file->addAction("Export g&lTF…", QKeySequence(Qt::CTRL | Qt::ALT | Qt::Key_G), this,
+                    &MainWindow::chooseGltfExport);
     file->addAction("Process &glTF Asset…", QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_G), this,
                     &MainWindow::chooseGltfAsset);
     file->addSeparator();
@@ -611,18 +613,43 @@ void MainWindow::processGltfAsset(const QString& input, const QString& outDir) {
     // The asset file is the set's index: it exists when a previous run of this asset is there.
     const QString target = QDir(outDir).filePath(info.completeBaseName() +
                                                  (info.suffix().toLower() == "glb" ? ".glb" : ".gltf"));
+    if (!beginGltfJob("Processing " + info.fileName() + "…", target, options)) return;
+    m_gltfRunner->start(input, outDir, std::move(options));
+}
+
+bool MainWindow::beginGltfJob(const QString& label, const QString& target, GltfOptions& options) {
     if (QFileInfo::exists(target)) {
-        if (ask("Replace processed asset?",
-                QString("%1 already exists. Replace it and its textures?").arg(target),
+        if (ask("Replace glTF asset?", QString("%1 already exists. Replace it and its textures?").arg(target),
                 QMessageBox::Yes | QMessageBox::Cancel) != QMessageBox::Yes)
-            return;
+            return false;
         options.overwrite = Overwrite::Allow;
     }
-    m_gltfProgress = new QProgressDialog("Processing " + info.fileName() + "…", "Cancel", 0, 1000, this);
+    m_gltfProgress = new QProgressDialog(label, "Cancel", 0, 1000, this);
     m_gltfProgress->setWindowModality(Qt::WindowModal);
     m_gltfProgress->setMinimumDuration(300);
     connect(m_gltfProgress, &QProgressDialog::canceled, m_gltfRunner, &GltfRunner::cancel);
-    m_gltfRunner->start(input, outDir, std::move(options));
+    return true;
+}
+
+void MainWindow::chooseGltfExport() {
+    QSettings settings;
+    const QString outDir = QFileDialog::getExistingDirectory(this, "Export the material as glTF into",
+                                                             settings.value("folders/gltfExport").toString());
+    if (outDir.isEmpty()) return;
+    settings.setValue("folders/gltfExport", outDir);
+    exportGltf(outDir);
+}
+
+void MainWindow::exportGltf(const QString& outDir) {
+    if (m_gltfRunner->running()) return;
+    const std::string name =
+        m_projectPath.isEmpty() ? "material" : QFileInfo(m_projectPath).completeBaseName().toStdString();
+    GltfMaterialSource material = gltfMaterialSourceFor(*m_doc, name);
+    GltfOptions options;
+    options.method = gltfMethodFor(*m_doc);
+    const QString target = QDir(outDir).filePath(QString::fromStdString(name) + ".gltf");
+    if (!beginGltfJob("Exporting the material as glTF…", target, options)) return;
+    m_gltfRunner->startExport(std::move(material), outDir, std::move(options));
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {

@@ -5,6 +5,8 @@
 
 #include "material_document.h"
 
+#include <burnish/core/bake/gltf.h>
+
 #include <burnish/core/util/result.h>
 
 #include <QMainWindow>
@@ -71,6 +73,10 @@ public:
     /// thread with a progress dialog that can cancel; an existing output is replaced only after asking.
     /// gltfFinished reports the outcome, which is also shown (showResult, or showMessage for an error).
     void processGltfAsset(const QString& input, const QString& outDir);
+    /// Writes the current material on a quad as a glTF asset into `outDir` (exportMaterialGltf, named
+    /// after the project, or "material"), the same way: asks before replacing, reports through
+    /// gltfFinished.
+    void exportGltf(const QString& outDir);
     GltfRunner* gltfRunner() const { return m_gltfRunner; }
 
 signals:
@@ -106,6 +112,10 @@ private:
     void exportTextures();
     /// File ▸ Process glTF Asset…: asks for the asset and the output folder.
     void chooseGltfAsset();
+    /// File ▸ Export glTF…: asks for the output folder.
+    void chooseGltfExport();
+    /// The progress dialog of a glTF job; false when `target` exists and replacing it was declined.
+    bool beginGltfJob(const QString& label, const QString& target, GltfOptions& options);
     void removeAutosave();
     void restoreSettings();
     void saveSettings();

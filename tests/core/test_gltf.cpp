@@ -387,14 +387,16 @@ TEST(Gltf, AMaterialExportsWithItsSpecularColourInGltfTerms) {
     m.specular = {0.02, 0.03, 0.04};
     m.albedo = {0.3, 0.2, 0.1};
     auto texels = std::make_shared<std::vector<float>>(m.normal->texelCount(), 0.2f);
-    for (size_t i = 0; i < texels->size() / 2; ++i) (*texels)[i] = 0.8f;
+    for (size_t i = 0; i < texels->size() / 2; ++i)
+        (*texels)[i] = 0.8f;
     m.roughnessTexels = texels;
     auto dielectric = exportMaterialGltf(m, dir.path() / "dielectric");
     ASSERT_TRUE(dielectric) << dielectric.error();
     const json d = readJson(dielectric->asset);
     const json& ext = d["materials"][0]["extensions"];
     for (int c = 0; c < 3; ++c)
-        EXPECT_NEAR(ext["KHR_materials_specular"]["specularColorFactor"][size_t(c)].get<double>() * 0.04, m.specular[size_t(c)], 1e-12);
+        EXPECT_NEAR(ext["KHR_materials_specular"]["specularColorFactor"][size_t(c)].get<double>() * 0.04,
+                    m.specular[size_t(c)], 1e-12);
     EXPECT_EQ(ext["KHR_materials_ior"]["ior"], 1.5);
     EXPECT_EQ(d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"], json({0.3, 0.2, 0.1, 1.0}));
     EXPECT_NEAR(dielectric->materials[0].meanRoughnessMip0, 0.5, 0.01); // half 0.8, half 0.2

@@ -634,6 +634,32 @@ TEST(MainWindow, ProcessGltfAssetWritesWhatBurnishGltfWritesAndAsksBeforeReplaci
     EXPECT_TRUE(w.messages.last().contains("glTF version 1.0")) << w.messages.last().toStdString();
 }
 
+TEST(MainWindow, ExportGltfWritesTheMaterialWithItsSpecularColour) {
+    // File ▸ Export glTF…: the document's normal map, gloss and specular colour as a glTF material, the
+    // same bytes as core's exportMaterialGltf of gltfMaterialSourceFor(document).
+    test::TempDir dir;
+    TestWindow w;
+    MaterialDocument& doc = *w.window.document();
+    ASSERT_TRUE(doc.setSpecularMaterial("gold"));
+    doc.setGloss(0.5);
+    QSignalSpy finished(&w.window, &MainWindow::gltfFinished);
+    w.window.exportGltf(q(dir / "studio"));
+    ASSERT_TRUE(finished.wait(kWorkerTimeoutMs));
+    ASSERT_TRUE(finished.at(0).at(0).toBool()) << finished.at(0).at(1).toString().toStdString();
+    auto text = readFile(dir / "studio" / "material.gltf");
+    ASSERT_TRUE(text);
+    const auto asset = nlohmann::json::parse(*text);
+    const auto& color = asset["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"];
+    EXPECT_EQ(color[0].get<double>(), doc.settings().specular.r); // a metal: F0 is the base colour
+    EXPECT_EQ(color[2].get<double>(), doc.settings().specular.b);
+    const GltfMaterialSource source = gltfMaterialSourceFor(doc, "material");
+    EXPECT_NEAR(source.roughness, GlossEncoding::ggxRoughness().value(doc.power()), 1e-12);
+    auto expected = exportMaterialGltf(source, dir / "core");
+    ASSERT_TRUE(expected) << expected.error();
+    for (const std::string& name : expected->written)
+        EXPECT_EQ(*readFile(dir / "studio" / name), *readFile(dir / "core" / name)) << name;
+}
+
 TEST(Project, AutosaveIsWrittenAndOfferedForRecovery) {
     test::TempDir dir;
     const QString file = q(dir / "a.burnish");

@@ -484,7 +484,8 @@ void forEachTextureInfo(json& node, const std::function<void(json& info)>& visit
             forEachTextureInfo(value, visit);
         }
     } else if (node.is_array()) {
-        for (json& value : node) forEachTextureInfo(value, visit);
+        for (json& value : node)
+            forEachTextureInfo(value, visit);
     }
 }
 
@@ -520,7 +521,8 @@ void pruneTextures(json& doc, const std::set<int>& candidates) {
     textures = std::move(keptTextures);
     json& images = doc["images"];
     std::set<int> read;
-    for (json& t : textures) forEachTextureSource(t, [&](json& h) { read.insert(h["source"].get<int>()); });
+    for (json& t : textures)
+        forEachTextureSource(t, [&](json& h) { read.insert(h["source"].get<int>()); });
     std::vector<int> imageMap(images.size());
     next = 0;
     json keptImages = json::array();
@@ -1007,7 +1009,8 @@ json quadAsset() {
     std::string bytes;
     auto add = [&](const void* data, size_t n) {
         bytes.append(static_cast<const char*>(data), n);
-        while (bytes.size() % 4) bytes.push_back('\0');
+        while (bytes.size() % 4)
+            bytes.push_back('\0');
     };
     add(positions, sizeof positions);
     add(normals, sizeof normals);
@@ -1019,25 +1022,33 @@ json quadAsset() {
                               {{"buffer", 0}, {"byteOffset", 96}, {"byteLength", 32}, {"target", 34962}},
                               {{"buffer", 0}, {"byteOffset", 128}, {"byteLength", 64}, {"target", 34962}},
                               {{"buffer", 0}, {"byteOffset", 192}, {"byteLength", 12}, {"target", 34963}}});
-    json accessors = json::array(
-        {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {-1, 0, -1}}, {"max", {1, 0, 1}}},
-         {{"bufferView", 1}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}},
-         {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
-         {{"bufferView", 3}, {"componentType", 5126}, {"count", 4}, {"type", "VEC4"}},
-         {{"bufferView", 4}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}});
-    return json{{"asset", {{"version", "2.0"}, {"generator", "Burnish"}}},
-                {"scene", 0},
-                {"scenes", json::array({{{"nodes", {0}}}})},
-                {"nodes", json::array({{{"mesh", 0}, {"name", "plane"}}})},
-                {"meshes", json::array({{{"name", "plane"},
-                                         {"primitives", json::array({{{"attributes", {{"POSITION", 0}, {"NORMAL", 1},
-                                                                                      {"TEXCOORD_0", 2}, {"TANGENT", 3}}},
-                                                                       {"indices", 4},
-                                                                       {"material", 0}}})}}})},
-                {"buffers", json::array({{{"byteLength", bytes.size()},
-                                          {"uri", "data:application/octet-stream;base64," + encodeBase64(bytes)}}})},
-                {"bufferViews", views},
-                {"accessors", accessors}};
+    json accessors =
+        json::array({{{"bufferView", 0},
+                      {"componentType", 5126},
+                      {"count", 4},
+                      {"type", "VEC3"},
+                      {"min", {-1, 0, -1}},
+                      {"max", {1, 0, 1}}},
+                     {{"bufferView", 1}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}},
+                     {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
+                     {{"bufferView", 3}, {"componentType", 5126}, {"count", 4}, {"type", "VEC4"}},
+                     {{"bufferView", 4}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}});
+    return json{
+        {"asset", {{"version", "2.0"}, {"generator", "Burnish"}}},
+        {"scene", 0},
+        {"scenes", json::array({{{"nodes", {0}}}})},
+        {"nodes", json::array({{{"mesh", 0}, {"name", "plane"}}})},
+        {"meshes",
+         json::array({{{"name", "plane"},
+                       {"primitives",
+                        json::array({{{"attributes",
+                                       {{"POSITION", 0}, {"NORMAL", 1}, {"TEXCOORD_0", 2}, {"TANGENT", 3}}},
+                                      {"indices", 4},
+                                      {"material", 0}}})}}})},
+        {"buffers", json::array({{{"byteLength", bytes.size()},
+                                  {"uri", "data:application/octet-stream;base64," + encodeBase64(bytes)}}})},
+        {"bufferViews", views},
+        {"accessors", accessors}};
 }
 
 // 16-bit RGB PNG bytes of width×height texels made by `texel(i, rgb)`.
@@ -1046,7 +1057,8 @@ Result<std::string> png16(int width, int height, const std::function<void(size_t
     for (size_t i = 0; i < size_t(width) * size_t(height); ++i) {
         float rgb[3];
         texel(i, rgb);
-        for (int c = 0; c < 3; ++c) data[i * 3 + size_t(c)] = unorm16(rgb[c]);
+        for (int c = 0; c < 3; ++c)
+            data[i * 3 + size_t(c)] = unorm16(rgb[c]);
     }
     PngPixels p;
     p.width = width;
@@ -1059,15 +1071,16 @@ Result<std::string> png16(int width, int height, const std::function<void(size_t
 
 } // namespace
 
-Result<GltfResult> exportMaterialGltf(const GltfMaterialSource& m, const fs::path& outDir, const GltfOptions& options) {
+Result<GltfResult> exportMaterialGltf(const GltfMaterialSource& m, const fs::path& outDir,
+                                      const GltfOptions& options) {
     if (!m.normal || m.normal->width < 1 || m.normal->height < 1) return Error{"glTF export: no normal map"};
     const NormalMap& map = *m.normal;
     const size_t texels = map.texelCount();
     auto unit = [](double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; };
     if (m.roughnessTexels) {
         if (m.roughnessTexels->size() != texels)
-            return Error{fmt::format("glTF export: {} roughness values for a {}x{} normal map", m.roughnessTexels->size(),
-                                     map.width, map.height)};
+            return Error{fmt::format("glTF export: {} roughness values for a {}x{} normal map",
+                                     m.roughnessTexels->size(), map.width, map.height)};
         for (float v : *m.roughnessTexels)
             if (!unit(v)) return Error{"glTF export: a roughness value outside [0, 1]"};
     } else if (!unit(m.roughness)) {
@@ -1086,12 +1099,15 @@ Result<GltfResult> exportMaterialGltf(const GltfMaterialSource& m, const fs::pat
     } else {
         pbr["baseColorFactor"] = {m.albedo[0], m.albedo[1], m.albedo[2], 1.0};
         // KHR_materials_specular: dielectric F0 = ((ior − 1)/(ior + 1))² · specularColorFactor, 0.04 at 1.5.
-        material["extensions"] = {{"KHR_materials_specular", {{"specularColorFactor", {m.specular[0] / 0.04, m.specular[1] / 0.04, m.specular[2] / 0.04}}}},
-                                  {"KHR_materials_ior", {{"ior", 1.5}}}};
+        material["extensions"] = {
+            {"KHR_materials_specular",
+             {{"specularColorFactor", {m.specular[0] / 0.04, m.specular[1] / 0.04, m.specular[2] / 0.04}}}},
+            {"KHR_materials_ior", {{"ior", 1.5}}}};
         doc["extensionsUsed"] = {"KHR_materials_specular", "KHR_materials_ior"};
     }
     const int sampler = m.border == BorderMode::Wrap ? kRepeat : 33071;
-    doc["samplers"] = json::array({{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", sampler}, {"wrapT", sampler}}});
+    doc["samplers"] =
+        json::array({{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", sampler}, {"wrapT", sampler}}});
     doc["textures"] = json::array({{{"source", 0}, {"sampler", 0}}});
     doc["images"] = json::array({{{"uri", "normal.png"}}});
     material["normalTexture"] = {{"index", 0}};
@@ -1109,7 +1125,8 @@ Result<GltfResult> exportMaterialGltf(const GltfMaterialSource& m, const fs::pat
     if (!staging) return Error{"glTF export: " + staging.error()};
     const fs::path folder = staging.value().path();
     auto normalPng = png16(map.width, map.height, [&](size_t i, float rgb[3]) {
-        for (int c = 0; c < 3; ++c) rgb[c] = 0.5f * map.normals[i][c] + 0.5f;
+        for (int c = 0; c < 3; ++c)
+            rgb[c] = 0.5f * map.normals[i][c] + 0.5f;
     });
     if (!normalPng) return Error{normalPng.error()};
     if (Status st = writeNewFile(folder / "normal.png", *normalPng); !st) return Error{st.error()};

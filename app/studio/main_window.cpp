@@ -151,9 +151,9 @@ MainWindow::MainWindow(QWidget* parent)
         statusBar()->showMessage(ok ? "glTF asset written" : "glTF: " + message, 10000);
         emit gltfFinished(ok, message);
         if (ok)
-            showResult("glTF asset processed", message);
+            showResult("glTF asset written", message);
         else if (message != "cancelled")
-            showMessage("Cannot process the glTF asset", message);
+            showMessage("Cannot write the glTF asset", message);
     });
     ask = [this](const QString& title, const QString& text, QMessageBox::StandardButtons buttons) {
         return QMessageBox::question(this, title, text, buttons);

@@ -138,6 +138,14 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                     "files without negative finite values are unsigned, 2v-1), unsigned, or signed");
     cmd->add_option("--metallic", spec->metallic,
                     "Metalness in [0, 1] for presets with a metallic channel (gltf, unity)");
+    cmd->add_option("--specular", spec->specular,
+                    "Specular colour: a material of `burnish materials` (iron, gold, water...) or linear F0 "
+                    "R,G,B; bake.json's \"material\" records it in the preset engine's own terms (glTF "
+                    "KHR_materials_specular, Unreal Specular = F0/0.08, Godot/Filament 0.16 s^2, ...) with a "
+                    "warning where the engine cannot hold it; sets --metallic from the class when not given");
+    cmd->add_option("--material-class", spec->materialClass,
+                    "metal or dielectric, for a --specular given as numbers (default: metal when --metallic "
+                    ">= 0.5)");
     cmd->add_option("--lobes", spec->lobes,
                     "Mixture lobes per texel, 1..4 (--method mixture; default: as many as the preset stores, "
                     "3 in the mixture preset, whose lobe files mixture-lobe0..K-1 follow K; 1 is LEAN)");

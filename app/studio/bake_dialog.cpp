@@ -17,7 +17,9 @@
 #include <QSettings>
 #include <QSpinBox>
 #include <QThread>
+
 #include <QVBoxLayout>
+#include <fmt/format.h>
 
 #include <filesystem>
 
@@ -61,6 +63,10 @@ BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc) {
     if (!s.detailMapPath.isEmpty()) spec.detail = s.detailMapPath.toStdString();
     if (doc.preset().findParameter("metallic"))
         spec.metallic = s.materialClass == MaterialClass::Metal ? 1.0 : 0.0;
+    // The picked colour as numbers (a calibrated pick is its table value), so bake.json records it in the
+    // preset engine's terms as `burnish bake --specular R,G,B --material-class C` does.
+    spec.specular = fmt::format("{:.17g},{:.17g},{:.17g}", s.specular.r, s.specular.g, s.specular.b);
+    spec.materialClass = s.materialClass == MaterialClass::Metal ? "metal" : "dielectric";
     spec.force = s.exportSettings.overwrite;
     spec.shadedFit = s.method == Method::Mixture && s.exportSettings.shadedFit;
     // The lobes the viewport draws; a preset laid out as the mixture's writes that many lobe files.

@@ -431,6 +431,10 @@ TEST(StudioPaint, ExportOfPaintedLayersWritesTheBytesOfBurnishBakeWithTheSameGlo
                            " --gloss " + test::shellQuote(exr.string()) + " --format " + c.format +
                            " --out " + test::shellQuote((dir / "cli").string());
         if (doc.preset().findParameter("metallic")) args += " --metallic 1";
+        const LinearRgb f0 = doc.settings().specular; // the picked colour, as the studio passes it
+        char specular[128];
+        std::snprintf(specular, sizeof specular, "%.17g,%.17g,%.17g", f0.r, f0.g, f0.b);
+        args += std::string(" --specular ") + specular + " --material-class metal";
         const auto cli = test::runBurnish(args);
         ASSERT_EQ(cli.exitCode, 0) << cli.err;
 

@@ -800,6 +800,11 @@ TEST(BakeDialog, ExportWritesTheBytesOfBurnishBake) {
         if (c.detail) args += " --detail " + test::shellQuote(kNormalMap.toStdString());
         if (*c.compression) args += std::string(" --compression ") + c.compression;
         if (doc.preset().findParameter("metallic")) args += " --metallic 1";
+        // The picked colour (the default document's iron, a metal) as the studio passes it.
+        const LinearRgb f0 = doc.settings().specular;
+        char specular[128];
+        std::snprintf(specular, sizeof specular, "%.17g,%.17g,%.17g", f0.r, f0.g, f0.b);
+        args += std::string(" --specular ") + specular + " --material-class metal";
         const auto cli = test::runBurnish(args);
         ASSERT_EQ(cli.exitCode, 0) << cli.err;
 

@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -222,6 +223,41 @@ Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
                          "' stores no metallic channel (presets with one: " + joined(with) + ")"};
         }
         job.exportOptions.parameters["metallic"] = *spec.metallic;
+    }
+    if (spec.materialClass && *spec.materialClass != "metal" && *spec.materialClass != "dielectric")
+        return Error{"--material-class: '" + *spec.materialClass + "' is neither metal nor dielectric"};
+    if (spec.materialClass && !spec.specular)
+        return Error{"--material-class applies to a --specular colour given as numbers"};
+    if (spec.specular) {
+        BakeJob::Specular sp;
+        double rgb[3];
+        char tail = 0;
+        if (std::sscanf(spec.specular->c_str(), "%lf,%lf,%lf%c", &rgb[0], &rgb[1], &rgb[2], &tail) == 3) {
+            for (double c : rgb)
+                if (!(c >= 0.0 && c <= 1.0))
+                    return Error{"--specular " + *spec.specular +
+                                 ": each linear F0 channel must lie in [0, 1]"};
+            sp.f0 = {rgb[0], rgb[1], rgb[2]};
+            sp.materialClass =
+                spec.materialClass
+                    ? (*spec.materialClass == "metal" ? MaterialClass::Metal : MaterialClass::Dielectric)
+                : spec.metallic.value_or(0.0) >= 0.5 ? MaterialClass::Metal
+                                                     : MaterialClass::Dielectric;
+        } else {
+            const Material* m = builtinMaterialTable().find(*spec.specular);
+            if (!m)
+                return Error{"--specular '" + *spec.specular +
+                             "': neither a material of `burnish materials` nor linear F0 R,G,B"};
+            if (spec.materialClass)
+                return Error{"--material-class: '" + *spec.specular + "' is a " + toString(m->materialClass) +
+                             " of its own"};
+            sp.f0 = m->f0();
+            sp.materialClass = m->materialClass;
+            sp.name = m->name;
+        }
+        if (!spec.metallic && job.preset.findParameter("metallic"))
+            job.exportOptions.parameters["metallic"] = sp.materialClass == MaterialClass::Metal ? 1.0 : 0.0;
+        job.specular = sp;
     }
     // The power range every core formula accepts (numeric.h): above kMaxPower lobes are clamped.
     if (spec.power && !(*spec.power > 0.0 && *spec.power <= kMaxPower))
@@ -567,6 +603,17 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
         {"allow8bit", job.spec.allowEightBit},
         {"allowImplausible", job.spec.allowImplausible}};
     if (detailRecord) record.options["detailFade"] = {detailRecord->fadeStartMip, detailRecord->fadeEndMip};
+    if (job.specular) {
+        const SpecularTerms terms =
+            specularTerms(job.preset.specular, job.specular->materialClass, job.specular->f0);
+        record.material = {{"class", toString(job.specular->materialClass)},
+                           {"f0Linear", {job.specular->f0.r, job.specular->f0.g, job.specular->f0.b}},
+                           {"name", job.specular->name.empty() ? Json(nullptr) : Json(job.specular->name)},
+                           {"engine",
+                            {{"convention", std::string(specularConventionName(job.preset.specular))},
+                             {"values", terms.values},
+                             {"warnings", terms.warnings}}}};
+    }
     if (job.method == Method::Mixture) {
         record.options["lobes"] = job.bake.params.mixtureLobes;
         record.options["shadedFit"] = job.bake.params.mixtureShadedFit;
@@ -612,6 +659,11 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
                       {"exportSeconds", exportSeconds},
                       {"seconds", seconds},
                       {"warnings", map->diagnostics.warnings}};
+    if (!record.material.is_null()) {
+        result.summary["material"] = record.material;
+        for (const Json& w : record.material["engine"]["warnings"])
+            result.summary["warnings"].push_back(w);
+    }
     if (detailRecord)
         result.summary["detail"] = {{"file", exported->manifest["detail"]["file"]},
                                     {"constantVariance", detailRecord->constantVariance},
@@ -727,6 +779,10 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
                 s = optStr(spec.encoding);
             else if (key == "metallic")
                 s = num(spec.metallic);
+            else if (key == "specular")
+                s = optStr(spec.specular);
+            else if (key == "material-class")
+                s = optStr(spec.materialClass);
             else if (key == "mips") {
                 if (!value.is_number_integer())
                     s = Error{at + ": 'mips' must be an integer"};
@@ -750,13 +806,14 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
             else if (key == "allow-8bit")
                 s = flag(spec.allowEightBit);
             else
-                s = Error{
-                    at + ": unknown field '" + key +
-                    "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
-                    "border, "
-                    "green, layout, encoding, metallic, mips, lobes, shaded-fit, detail, detail-fade, force, "
-                    "allow-implausible, "
-                    "allow-8bit)"};
+                s = Error{at + ": unknown field '" + key +
+                          "' (known: input, out, preset, method, power, gloss, format, compression, kernel, "
+                          "border, "
+                          "green, layout, encoding, metallic, specular, material-class, mips, lobes, "
+                          "shaded-fit, detail, "
+                          "detail-fade, force, "
+                          "allow-implausible, "
+                          "allow-8bit)"};
             if (!s) return Error{s.error()};
         }
         if (j.contains("input") && !isSampleBakeInput(spec.input)) spec.input = rebase(spec.input);

@@ -181,6 +181,8 @@ std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& j
         args.insert(args.end(),
                     {"--compression", std::string(ddsCompressionName(*job.exportOptions.compression))});
     if (s.metallic) args.insert(args.end(), {"--metallic", fmt::format("{}", *s.metallic)});
+    if (s.specular) args.insert(args.end(), {"--specular", *s.specular});
+    if (s.materialClass) args.insert(args.end(), {"--material-class", *s.materialClass});
     if (s.mips) args.insert(args.end(), {"--mips", std::to_string(*s.mips)});
     if (s.lobes) args.insert(args.end(), {"--lobes", std::to_string(*s.lobes)});
     if (s.detail)

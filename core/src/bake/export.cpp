@@ -392,6 +392,7 @@ Json manifestJson(const Plan& plan, const BakeOutput& bake, const Preset& preset
     m["format"] = std::string(exportFormatName(format));
     m["inputs"] = record.inputs;
     m["options"] = record.options;
+    if (!record.material.is_null()) m["material"] = record.material;
     Json params = Json::object();
     for (const auto& [name, value] : parameters)
         params[name] = value;

@@ -7,6 +7,7 @@
 #include <burnish/core/bake/gltf.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/io/ktx2.h>
+#include <burnish/core/shading/specular_terms.h>
 
 #include "io/png_encode.h"
 
@@ -1093,16 +1094,18 @@ Result<GltfResult> exportMaterialGltf(const GltfMaterialSource& m, const fs::pat
 
     json doc = quadAsset();
     json material = {{"name", m.name}};
-    json pbr = {{"metallicFactor", m.metal ? 1.0 : 0.0}};
+    // The specular colour in glTF's terms (shading/specular_terms.h): a metal's F0 is its base colour, a
+    // dielectric's KHR_materials_specular colour at ior 1.5.
+    const SpecularTerms terms =
+        specularTerms(SpecularConvention::Gltf, m.metal ? MaterialClass::Metal : MaterialClass::Dielectric,
+                      LinearRgb{m.specular[0], m.specular[1], m.specular[2]});
+    json pbr = {{"metallicFactor", terms.values["metallicFactor"]}};
     if (m.metal) {
-        pbr["baseColorFactor"] = {m.specular[0], m.specular[1], m.specular[2], 1.0};
+        pbr["baseColorFactor"] = terms.values["baseColorFactor"];
     } else {
         pbr["baseColorFactor"] = {m.albedo[0], m.albedo[1], m.albedo[2], 1.0};
-        // KHR_materials_specular: dielectric F0 = ((ior − 1)/(ior + 1))² · specularColorFactor, 0.04 at 1.5.
-        material["extensions"] = {
-            {"KHR_materials_specular",
-             {{"specularColorFactor", {m.specular[0] / 0.04, m.specular[1] / 0.04, m.specular[2] / 0.04}}}},
-            {"KHR_materials_ior", {{"ior", 1.5}}}};
+        material["extensions"] = {{"KHR_materials_specular", terms.values["KHR_materials_specular"]},
+                                  {"KHR_materials_ior", terms.values["KHR_materials_ior"]}};
         doc["extensionsUsed"] = {"KHR_materials_specular", "KHR_materials_ior"};
     }
     const int sampler = m.border == BorderMode::Wrap ? kRepeat : 33071;

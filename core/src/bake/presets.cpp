@@ -289,7 +289,7 @@ Result<Preset> parseFields(const Json& root, const std::string& origin) {
 
     if (const Status s =
             top.onlyKnown({"schema", "version", "name", "title", "description", "conversion", "gloss",
-                           "method", "green", "format", "parameters", "files", "notes"});
+                           "method", "green", "specular", "format", "parameters", "files", "notes"});
         !s)
         return Error{s.error()};
     const auto schema = top.string("schema");
@@ -330,6 +330,13 @@ Result<Preset> parseFields(const Json& root, const std::string& origin) {
         preset.green = GreenConvention::DirectX;
     else
         return top.error("'green' must be \"opengl\" or \"directx\", not \"" + *green + "\"");
+
+    if (const Json* specular = top.find("specular")) {
+        if (!specular->is_string()) return top.error("'specular' must be a string");
+        const auto convention = specularConventionFromName(specular->get<std::string>());
+        if (!convention) return top.error("'specular': " + convention.error());
+        preset.specular = *convention;
+    }
 
     const auto format = top.string("format");
     if (!format) return Error{format.error()};

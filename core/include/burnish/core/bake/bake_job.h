@@ -58,6 +58,14 @@ struct BakeJobSpec {
     /// How the input's stored values map to [-1, 1]: auto (detected), unsigned or signed.
     std::optional<std::string> encoding;
     std::optional<double> metallic;
+    /// The specular colour: a material of `burnish materials` ("iron") or linear F0 "R,G,B"; bake.json
+    /// records it with the preset's engine's values for it (shading/specular_terms.h) and the job's
+    /// summary its warnings. Absent: no colour is recorded.
+    std::optional<std::string> specular;
+    /// "metal" or "dielectric": the class of a specular colour given as numbers (a named material has
+    /// its own; saying another is an error). Absent with numbers: metal when --metallic >= 0.5, else
+    /// dielectric. With a metallic channel and no --metallic, the class sets it (1 or 0).
+    std::optional<std::string> materialClass;
     /// Mip levels to write (absent = the whole chain down to 1×1); must be >= 1.
     std::optional<int> mips;
     /// The mixture's lobes per texel (1..4; absent = as many as the preset's files store).
@@ -106,6 +114,13 @@ struct BakeJob {
     NormalMapOptions normalMap;
     ExportOptions exportOptions;
     DetailOptions detail; // used when spec.detail is set
+    /// The resolved specular colour (spec.specular), its class and name ("" for numbers).
+    struct Specular {
+        LinearRgb f0;
+        MaterialClass materialClass = MaterialClass::Metal;
+        std::string name;
+    };
+    std::optional<Specular> specular;
 };
 
 /// Resolves and checks every name and value of a spec. Errors name the option as the command line

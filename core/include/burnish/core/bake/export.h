@@ -63,6 +63,8 @@ struct BakeRecord {
     std::optional<NormalMapDiagnostics> diagnostics;
     /// Required when the bake holds a "detail" texture, and only then.
     std::optional<DetailRecord> detail;
+    /// bake.json's "material": the specular colour and the engine's values for it (null: none given).
+    nlohmann::json material;
 };
 
 /// One stored channel of an exported file.

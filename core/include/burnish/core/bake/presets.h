@@ -7,6 +7,7 @@
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/shading/specular_terms.h>
 #include <burnish/core/util/result.h>
 
 #include <filesystem>
@@ -94,6 +95,8 @@ struct Preset {
     GlossEncoding encoding = GlossEncoding::blackOps();
     /// The green convention written (the normal map's y, LEAN's B.y and M.xy flip with it).
     GreenConvention green = GreenConvention::OpenGL;
+    /// How the engine takes the specular colour ("specular" in the file; f0 when absent).
+    SpecularConvention specular = SpecularConvention::F0;
     ExportFormat format = ExportFormat::Png8;
     std::vector<PresetParameter> parameters;
     std::vector<PresetFile> files;

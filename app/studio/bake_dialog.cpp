@@ -227,6 +227,16 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
                          QString::fromStdString(summary["format"].get<std::string>()))
                     .arg(summary["mipCount"].get<int>())
                     .arg(summary["seconds"].get<double>(), 0, 'f', 2));
+            // The picked colour as the preset's engine takes it, and what it cannot hold.
+            if (summary.contains("material")) {
+                QString text =
+                    m_result->text() + "\nSpecular colour in " +
+                    QString::fromStdString(summary["material"]["engine"]["convention"].get<std::string>()) +
+                    "'s terms: " + QString::fromStdString(summary["material"]["engine"]["values"].dump());
+                for (const auto& w : summary["warnings"])
+                    text += "\nWarning: " + QString::fromStdString(w.get<std::string>());
+                m_result->setText(text);
+            }
         } else {
             // The command line's advice ("use --force") in the studio's words.
             QString text = message;

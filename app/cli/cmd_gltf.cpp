@@ -29,6 +29,7 @@ struct GltfCli {
     std::string out;
     std::optional<std::string> method;
     std::string coding = "raw";
+    std::string anisotropy = "off";
     bool force = false;
     bool allowImplausible = false;
     bool json = false;
@@ -50,6 +51,9 @@ int runGltf(const GltfCli& o) {
     GltfOptions options;
     options.method = o.method;
     options.coding = o.coding == "bc" ? GltfTextureCoding::Bc : GltfTextureCoding::Raw;
+    options.anisotropy = o.anisotropy == "on"     ? GltfAnisotropy::On
+                         : o.anisotropy == "auto" ? GltfAnisotropy::Auto
+                                                  : GltfAnisotropy::Off;
     options.overwrite = o.force ? Overwrite::Allow : Overwrite::Refuse;
     options.allowImplausible = o.allowImplausible;
     ProgressBar bar("gltf");
@@ -90,6 +94,9 @@ int runGltf(const GltfCli& o) {
                     m.index, m.name.c_str(), m.width, m.height, m.mipCount, m.border.c_str(), m.normalScale,
                     m.roughnessFactor, m.roughnessTexture ? " x texture" : "", m.meanRoughnessMip0,
                     m.meanRoughnessLast);
+        if (!m.anisotropy.empty())
+            std::printf("  anisotropy %s (relative L1 over mips 1-6: anisotropic %.4f, isotropic %.4f)\n",
+                        m.anisotropy.c_str(), m.anisotropicError, m.isotropicError);
         for (const std::string& note : m.notes)
             std::printf("  note: %s\n", note.c_str());
     }
@@ -125,6 +132,12 @@ const CommandRegistration registration{
                         "KTX2 payload: raw (default; normal RG8, metallicRoughness RGBA8) or bc (normal BC5, "
                         "metallicRoughness BC3, whose G has 6-bit endpoints)")
             ->check(CLI::IsMember({"raw", "bc"}));
+        cmd->add_option(
+               "--anisotropy", o->anisotropy,
+               "KHR_materials_anisotropy from the anisotropic fit (method fitted, constant base roughness): "
+               "off (default), auto (where it is closer to the truth than the isotropic fit, as the "
+               "engines shade every texel with the extension on), on")
+            ->check(CLI::IsMember({"off", "auto", "on"}));
         cmd->add_flag("--force", o->force, "Replace existing output files (still atomically, as a set)");
         cmd->add_flag("--allow-implausible", o->allowImplausible,
                       "Bake normal maps that do not look like tangent-space normal maps");

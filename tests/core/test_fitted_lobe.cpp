@@ -564,18 +564,18 @@ TEST(FittedLobe, EvaluateRowsTheAnisotropicFitAsEnginesShadeIt) {
                         // r = √α_b averaged, directions averaged and normalized, strengths averaged.
                         glm::dvec3 sum(0.0);
                         glm::dvec2 dir(0.0);
-                        double r = 0.0, k = 0.0;
+                        double roughness = 0.0, k = 0.0;
                         gt = 0.0;
                         for (const auto& [dx, dy] : {std::pair{0, 0}, {1, 0}, {0, 1}, {1, 1}}) {
                             const int xi = (x + dx) % level.width, yi = (y + dy) % level.height;
                             const AnisotropicLobe c = lobeOf(xi, yi);
                             sum += glm::dvec3(pyramid.boxMoments(e.mip, xi, yi).meanDirection());
-                            r += 0.25 * std::sqrt(c.alphaB), k += 0.25 * c.strength();
+                            roughness += 0.25 * std::sqrt(c.alphaB), k += 0.25 * c.strength();
                             dir += glm::dvec2(std::cos(c.angle), std::sin(c.angle));
                             gt += 0.25 * groundTruthTexel(pyramid, e.mip, xi, yi, 256.0, d, Brdf::Ggx);
                         }
                         n = glm::normalize(sum);
-                        const double alphaB = r * r;
+                        const double alphaB = roughness * roughness;
                         a = {alphaB + (1.0 - alphaB) * k * k, alphaB, std::atan2(dir.y, dir.x)};
                     }
                     abs += std::abs(shade(n, a, d) - gt), truth += gt;
@@ -589,3 +589,43 @@ TEST(FittedLobe, EvaluateRowsTheAnisotropicFitAsEnginesShadeIt) {
     ASSERT_FALSE(refused);
     EXPECT_NE(refused.error().find("GGX"), std::string::npos) << refused.error();
 }
+
+namespace burnish {
+namespace {
+
+TEST(FittedLobe, FitErrorsSumTheIsotropicAndAnisotropicFitsPerLevel) {
+    // A flat map: both fits are the base lobe about +z, where the engines' frame is the normal's: no error.
+    const NormalMap flat = makeNormalMap(16, 16, std::vector<glm::vec3>(256, glm::vec3(0, 0, 1)));
+    const NormalPyramid flatPyramid =
+        NormalPyramid::build(std::shared_ptr<const NormalMap>(&flat, [](const NormalMap*) {}));
+    FittedLobeOptions o;
+    o.brdf = Brdf::Ggx;
+    o.anisotropic = true;
+    const FittedPyramid f = FittedPyramid::build(
+        flatPyramid, [](int, int, int) { return 256.0; }, nullptr, 256.0, -1, o);
+    for (int k = 1; k < f.levelCount(); ++k) {
+        const auto e = f.fitErrors(k);
+        EXPECT_GT(e.truth, 0.0);
+        EXPECT_LT(e.isotropic, 1e-6 * e.truth) << k;
+        EXPECT_LT(e.anisotropic, 1e-6 * e.truth) << k;
+    }
+    // Ridges along y: both fits err somewhere, every sum finite; without the anisotropic fit, no sums.
+    std::vector<glm::vec3> ridges;
+    for (int i = 0; i < 256; ++i)
+        ridges.push_back(glm::normalize(glm::vec3(i % 2 ? 0.4f : -0.4f, 0.0f, 1.0f)));
+    const NormalMap ridged = makeNormalMap(16, 16, ridges);
+    const NormalPyramid pyramid =
+        NormalPyramid::build(std::shared_ptr<const NormalMap>(&ridged, [](const NormalMap*) {}));
+    const FittedPyramid r = FittedPyramid::build(
+        pyramid, [](int, int, int) { return 256.0; }, nullptr, 256.0, -1, o);
+    const auto e = r.fitErrors(2);
+    EXPECT_TRUE(std::isfinite(e.isotropic) && std::isfinite(e.anisotropic));
+    EXPECT_GT(e.isotropic, 0.01 * e.truth);
+    o.anisotropic = false;
+    const FittedPyramid iso = FittedPyramid::build(
+        pyramid, [](int, int, int) { return 256.0; }, nullptr, 256.0, -1, o);
+    EXPECT_EQ(iso.fitErrors(2).truth, 0.0);
+}
+
+} // namespace
+} // namespace burnish

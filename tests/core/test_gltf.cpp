@@ -418,3 +418,62 @@ TEST(Gltf, AMaterialExportsWithItsSpecularColourInGltfTerms) {
 
 } // namespace
 } // namespace burnish
+
+namespace burnish {
+namespace {
+
+TEST(Gltf, AnisotropyIsWrittenWhereTheAnisotropicFitIsCloser) {
+    test::TempDir dir;
+    GltfOptions o;
+    o.anisotropy = GltfAnisotropy::Auto;
+    // The tread plate: its anisotropic fit is closer (evaluate --anisotropic says the same).
+    auto r = processGltf(planeAsset(dir.path() / "in"), dir.path() / "out", o);
+    ASSERT_TRUE(r) << r.error();
+    ASSERT_EQ(r->materials[0].anisotropy, "on");
+    EXPECT_LT(r->materials[0].anisotropicError, r->materials[0].isotropicError);
+    const json a = readJson(r->asset);
+    const json& ext = a["materials"][0]["extensions"]["KHR_materials_anisotropy"];
+    EXPECT_EQ(ext["anisotropyStrength"], 1.0);
+    const auto& used = a["extensionsUsed"];
+    EXPECT_NE(std::find(used.begin(), used.end(), "KHR_materials_anisotropy"), used.end());
+    const int image = a["textures"][ext["anisotropyTexture"]["index"].get<size_t>()]["extensions"]
+                       ["KHR_texture_ktx"]["source"];
+    auto bytes = readFile(dir.path() / "out" / a["images"][size_t(image)]["uri"].get<std::string>());
+    ASSERT_TRUE(bytes);
+    auto ktx = decodeKtx2(*bytes);
+    ASSERT_TRUE(ktx) << ktx.error();
+    EXPECT_EQ(ktx->format, Ktx2Format::Rgba8);
+    ASSERT_EQ(ktx->levels.size(), 10u);
+    // Level 0 is the base lobe, round; coarser levels hold unit directions and some strength.
+    for (size_t i = 0; i < ktx->levels[0].size(); i += 4)
+        ASSERT_EQ(static_cast<unsigned char>(ktx->levels[0][i + 2]), 0);
+    int strong = 0;
+    for (size_t k = 1; k < ktx->levels.size(); ++k)
+        for (size_t i = 0; i < ktx->levels[k].size(); i += 4) {
+            const double x = static_cast<unsigned char>(ktx->levels[k][i]) / 127.5 - 1.0;
+            const double y = static_cast<unsigned char>(ktx->levels[k][i + 1]) / 127.5 - 1.0;
+            ASSERT_NEAR(std::hypot(x, y), 1.0, 0.02);
+            strong += static_cast<unsigned char>(ktx->levels[k][i + 2]) > 25;
+        }
+    EXPECT_GT(strong, 0);
+
+    // Off by default; On writes it where Auto would not; a material with a roughness texture says why not.
+    auto off = processGltf(planeAsset(dir.path() / "in2"), dir.path() / "out2");
+    ASSERT_TRUE(off);
+    EXPECT_TRUE(off->materials[0].anisotropy.empty());
+    EXPECT_FALSE(readJson(off->asset)["materials"][0].contains("extensions"));
+    std::vector<float> mr(16 * 16 * 3, 0.5f);
+    fs::create_directories(dir.path() / "in3");
+    writeRgb(dir.path() / "in3" / "mr.png", 16, 16, mr);
+    const fs::path textured = planeAsset(dir.path() / "in3", [](json& d) {
+        d["materials"][0]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {{"index", 1}};
+        d["textures"].push_back({{"source", 1}});
+        d["images"].push_back({{"uri", "mr.png"}});
+    });
+    auto withTexture = processGltf(textured, dir.path() / "out3", o);
+    ASSERT_TRUE(withTexture);
+    EXPECT_EQ(withTexture->materials[0].anisotropy.rfind("off: ", 0), 0u);
+}
+
+} // namespace
+} // namespace burnish

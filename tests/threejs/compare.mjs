@@ -21,7 +21,8 @@
 // each method's row ("gltf <method>") is the asset `burnish gltf --method <method>` wrote, loaded by
 // GLTFLoader with three.js's KTX2Loader and resources/three/burnish-gltf.js (KHR_texture_ktx): the KTX2
 // normal and metallicRoughness chains as Burnish baked them. The reference is the original's normal map
-// without mips.
+// without mips. A method "fitted+anisotropy=on" (or =auto) adds burnish gltf --anisotropy: the
+// anisotropic fit as KHR_materials_anisotropy, which three.js's MeshPhysicalMaterial draws.
 import {spawnSync} from 'node:child_process';
 import fs from 'node:fs';
 import http from 'node:http';
@@ -86,9 +87,12 @@ function planeAsset(map, roughness, dir) {
     return path.join(dir, 'plane.gltf');
 }
 
+// A method name with "+anisotropy=auto|on" asks burnish gltf for KHR_materials_anisotropy too.
 function gltf(o, asset, method, out) {
-    const r = spawnSync(o.burnish, ['gltf', asset, '--method', method, '--out', out, '--force', '--allow-implausible'],
-                        {encoding: 'utf8'});
+    const [name, extra] = method.split('+');
+    const args = ['gltf', asset, '--method', name, '--out', out, '--force', '--allow-implausible'];
+    if (extra) args.push('--anisotropy', extra.replace(/^anisotropy=/, ''));
+    const r = spawnSync(o.burnish, args, {encoding: 'utf8'});
     if (r.status !== 0) throw new Error(`burnish gltf ${asset} --method ${method}: ${r.stderr.trim()}`);
     return path.join(out, 'plane.gltf');
 }
@@ -138,9 +142,10 @@ async function main() {
                 folders.set(`/asset${mi}/original`, path.dirname(asset));
                 const assets = {};
                 for (const method of o.methods) {
-                    const out = gltf(o, asset, method, path.join(work, `m${mi}`, method));
-                    folders.set(`/asset${mi}/${method}`, path.dirname(out));
-                    assets[`gltf ${method}`] = `/asset${mi}/${method}/plane.gltf`;
+                    const out = gltf(o, asset, method, path.join(work, `m${mi}`, method.replace(/[^a-z0-9-]/gi, '_')));
+                    const folder = method.replace(/[^a-z0-9-]/gi, '_');
+                    folders.set(`/asset${mi}/${folder}`, path.dirname(out));
+                    assets[`gltf ${method}`] = `/asset${mi}/${folder}/plane.gltf`;
                 }
                 cases.push({map, original: `/asset${mi}/original/plane.gltf`, assets});
                 continue;

@@ -7,6 +7,7 @@
 #include <burnish/core/bake/gltf.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/io/ktx2.h>
+#include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/shading/specular_terms.h>
 
 #include "io/png_encode.h"
@@ -15,6 +16,7 @@
 #include <glm/glm.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -678,6 +680,7 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
         return int(images.size() - 1);
     };
 
+    bool anisotropyUsed = false;
     for (size_t wi = 0; wi < work.size(); ++wi) {
         const Work& w = work[wi];
         json& m = materials[size_t(w.material)];
@@ -796,6 +799,70 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
                     chain[k].assign(size_t(mr.sizes[k].first) * size_t(mr.sizes[k].second), 1.0f);
             return chain;
         };
+        // KHR_materials_anisotropy from the anisotropic fit (fitted_lobe.h), where it pays for this map: the
+        // fit's relative L1 over levels 1-6 as the engines shade every texel with the extension on,
+        // against the isotropic fit's. Then G holds α_b's roughness and the anisotropy texture the
+        // direction (RG) and strength (B); level 0 keeps the base, round.
+        Chains aniso;
+        if (options.anisotropy != GltfAnisotropy::Off && job.method == Method::Fitted) {
+            if (w.roughness) {
+                report.anisotropy =
+                    "off: fitted for a constant base roughness only (this material has a texture)";
+            } else {
+                PyramidOptions po;
+                po.border = bo.pyramid.border;
+                po.kernel = bo.pyramid.kernel;
+                const NormalPyramid pyramid =
+                    NormalPyramid::build(std::make_shared<const NormalMap>(*map), po);
+                FittedLobeOptions fo;
+                fo.brdf = Brdf::Ggx;
+                fo.anisotropic = true;
+                const double base = bo.basePower;
+                std::atomic<bool> stop{false};
+                const FittedPyramid fp = FittedPyramid::build(
+                    pyramid, [&](int, int, int) { return base; }, nullptr, base, -1, fo,
+                    [&] {
+                        if (!progress(done + 0.85 * span, "fitting anisotropy, " + what)) stop = true;
+                        return stop.load();
+                    });
+                if (stop) return Error{"cancelled"};
+                int levels = 0;
+                for (int k = 1; k < std::min(fp.levelCount(), 7); ++k) {
+                    const FittedPyramid::FitErrors e = fp.fitErrors(k);
+                    if (!(e.truth > 0.0)) continue;
+                    report.isotropicError += e.isotropic / e.truth;
+                    report.anisotropicError += e.anisotropic / e.truth;
+                    ++levels;
+                }
+                if (levels > 0) report.isotropicError /= levels, report.anisotropicError /= levels;
+                const bool on = levels > 0 && (options.anisotropy == GltfAnisotropy::On ||
+                                               report.anisotropicError < report.isotropicError);
+                report.anisotropy = on ? "on" : "off: the isotropic fit is closer on this map";
+                if (on) {
+                    aniso.sizes = mr.sizes;
+                    aniso.channels.assign(4, {});
+                    for (size_t k = 0; k < aniso.sizes.size(); ++k) {
+                        const auto [lw, lh] = aniso.sizes[k];
+                        const size_t n = size_t(lw) * size_t(lh);
+                        std::vector<float> r(n, 1.0f), g(n, 0.5f), b(n, 0.0f), alphaChannel(n, 1.0f);
+                        if (k > 0)
+                            for (int y = 0; y < lh; ++y)
+                                for (int x = 0; x < lw; ++x) {
+                                    const AnisotropicLobe lobe = fp.anisotropic(int(k), x, y);
+                                    const size_t i = size_t(y) * size_t(lw) + size_t(x);
+                                    r[i] = float(0.5 + 0.5 * std::cos(lobe.angle));
+                                    g[i] = float(0.5 + 0.5 * std::sin(lobe.angle));
+                                    b[i] = float(lobe.strength());
+                                    rough[k][i] = float(std::sqrt(lobe.alphaB)); // perceptual roughness
+                                }
+                        aniso.channels[0].push_back(std::move(r));
+                        aniso.channels[1].push_back(std::move(g));
+                        aniso.channels[2].push_back(std::move(b));
+                        aniso.channels[3].push_back(std::move(alphaChannel));
+                    }
+                }
+            }
+        }
         mr.channels = {constantOr(channelChain(0)), rough, constantOr(channelChain(2)),
                        std::vector<std::vector<float>>(mr.sizes.size())};
         mr.channels[3] = constantOr(std::move(mr.channels[3]));
@@ -860,6 +927,27 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
             mrInfo["extensions"] = json{{"KHR_texture_transform", w.normal.transform}};
         p["metallicRoughnessTexture"] = mrInfo;
         p.erase("roughnessFactor"); // 1: folded into the texture
+        if (!aniso.sizes.empty()) {
+            Chains anisoPng;
+            anisoPng.sizes = {aniso.sizes[0]};
+            for (int ch = 0; ch < 3; ++ch)
+                anisoPng.channels.push_back({aniso.channels[size_t(ch)][0]});
+            auto anisoKtx = encodeKtx2Chains(aniso, Ktx2Format::Rgba8, "anisotropy");
+            if (!anisoKtx)
+                return Error{
+                    fmt::format("{}: {}: the anisotropy texture's KTX2: {}", name, what, anisoKtx.error())};
+            auto anisoPngBytes = encodePngLevel(anisoPng);
+            if (!anisoPngBytes) return Error{anisoPngBytes.error()};
+            json info = {{"index", texture("anisotropy", *anisoKtx, *anisoPngBytes)}};
+            if (w.normal.texCoord != 0) info["texCoord"] = w.normal.texCoord;
+            if (!w.normal.transform.is_null())
+                info["extensions"] = json{{"KHR_texture_transform", w.normal.transform}};
+            json& ext = m["extensions"];
+            if (!ext.is_object()) ext = json::object();
+            ext["KHR_materials_anisotropy"] = {
+                {"anisotropyStrength", 1.0}, {"anisotropyRotation", 0.0}, {"anisotropyTexture", info}};
+            anisotropyUsed = true;
+        }
         m["extras"] = m.value("extras", json::object());
         if (m["extras"].is_object())
             m["extras"]["burnish"] = json{{"method", methodName(job.method)},
@@ -878,8 +966,10 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
     if (!work.empty()) {
         json& used = a.doc["extensionsUsed"];
         if (!used.is_array()) used = json::array();
-        if (std::find(used.begin(), used.end(), json(std::string(kKhrTextureKtx))) == used.end())
-            used.push_back(std::string(kKhrTextureKtx));
+        for (const std::string& ext : {std::string(kKhrTextureKtx), std::string("KHR_materials_anisotropy")})
+            if ((ext != "KHR_materials_anisotropy" || anisotropyUsed) &&
+                std::find(used.begin(), used.end(), json(ext)) == used.end())
+                used.push_back(ext);
     }
 
     // External files carried over under plain names in the output folder, their URIs rewritten.

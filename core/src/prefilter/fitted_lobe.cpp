@@ -361,6 +361,14 @@ AnisotropicLobe fitTexelAnisotropic(const double* truth, const std::vector<Direc
     return best;
 }
 
+FittedPyramid::FitErrors FittedPyramid::fitErrors(int k) const {
+    FitErrors sum;
+    const std::vector<float>& e = m_levels[size_t(k)].errors;
+    for (size_t i = 0; i + 2 < e.size(); i += 3) // texel order: the same sums on any thread count
+        sum.isotropic += e[i], sum.anisotropic += e[i + 1], sum.truth += e[i + 2];
+    return sum;
+}
+
 FittedPyramid FittedPyramid::build(const NormalPyramid& pyramid, const BasePower& basePower,
                                    const std::vector<double>* texelPowers, double s, int lastLevel,
                                    const FittedLobeOptions& options, const std::function<bool()>& cancelled) {
@@ -398,8 +406,10 @@ FittedPyramid FittedPyramid::build(const NormalPyramid& pyramid, const BasePower
     const bool anisotropic = options.anisotropic && options.brdf == Brdf::Ggx && !options.floor;
     out.m_anisotropic = anisotropic;
     if (anisotropic)
-        for (int k = std::max(1, options.firstLevel); k <= last; ++k)
+        for (int k = std::max(1, options.firstLevel); k <= last; ++k) {
             out.m_levels[size_t(k)].aniso.assign(3 * out.m_levels[size_t(k)].power.size(), 0.0f);
+            out.m_levels[size_t(k)].errors.assign(3 * out.m_levels[size_t(k)].power.size(), 0.0f);
+        }
 
     // One texel's fit from its truth sums (D values, Σ over the footprint).
     auto fitTexel = [&](int k, int x, int y, const double* sums, double* scratch) {
@@ -427,6 +437,13 @@ FittedPyramid FittedPyramid::build(const NormalPyramid& pyramid, const BasePower
                 fitTexelAnisotropic(truth, dirs, n, ggxAlphaFromPower(base), alpha, principalAngle(m));
             float* o = &out.m_levels[size_t(k)].aniso[3 * t];
             o[0] = float(a.alphaT), o[1] = float(a.alphaB), o[2] = float(a.angle);
+            double truthSum = 0.0;
+            for (size_t d = 0; d < D; ++d)
+                truthSum += truth[d];
+            float* e = &out.m_levels[size_t(k)].errors[3 * t];
+            e[0] = float(fitTexelError(options.brdf, truth, noh, nol, nov, D, alpha));
+            e[1] = float(anisotropicFitError(truth, dirs, n, a));
+            e[2] = float(truthSum);
         }
     };
 

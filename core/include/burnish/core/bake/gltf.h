@@ -38,6 +38,11 @@ enum class GltfTextureCoding {
     Bc,  // normals BC5, metallicRoughness BC3 (its G through 6-bit colour endpoints)
 };
 
+/// Whether a material gets KHR_materials_anisotropy from the anisotropic fit (method fitted, a constant
+/// base roughness): Auto where the fit, as the engines shade every texel with the extension on, is
+/// closer to the truth than the isotropic fit over levels 1-6; On always; Off never.
+enum class GltfAnisotropy { Off, Auto, On };
+
 /// The name of the draft extension that points a texture at a KTX2 image of any payload.
 inline constexpr std::string_view kKhrTextureKtx = "KHR_texture_ktx";
 
@@ -45,6 +50,7 @@ struct GltfOptions {
     /// A method the gltf preset stores (normal + one roughness channel); the preset's default when unset.
     std::optional<std::string> method;
     GltfTextureCoding coding = GltfTextureCoding::Raw;
+    GltfAnisotropy anisotropy = GltfAnisotropy::Off;
     Overwrite overwrite = Overwrite::Refuse;
     bool allowImplausible = false;
     /// Removes the textures Burnish's replaced (a material's old normal and roughness textures) when no
@@ -69,6 +75,10 @@ struct GltfMaterialReport {
     bool roughnessTexture = false;  // a roughness texture folded in
     double meanRoughnessMip0 = 0.0; // mean stored roughness of the finest level
     double meanRoughnessLast = 0.0; // ... and of the 1×1 level
+    /// "on", or "off: " and why; empty when not asked (GltfAnisotropy::Off, or a method other than fitted).
+    std::string anisotropy;
+    /// The isotropic and anisotropic fits' mean relative L1 over levels 1-6 (when the anisotropy was fitted).
+    double isotropicError = 0.0, anisotropicError = 0.0;
     std::vector<std::string> files; // files written for it (empty inside a .glb)
     std::vector<std::string> notes; // what the reader should know (a mirrored wrap baked as clamp, ...)
 };

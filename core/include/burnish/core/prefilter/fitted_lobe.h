@@ -153,7 +153,9 @@ public:
         return double(l.power[size_t(y) * size_t(l.width) + size_t(x)]);
     }
     /// Frees level k's powers once nothing reads them again.
-    void releaseLevel(int k) { m_levels[size_t(k)].power = {}, m_levels[size_t(k)].aniso = {}; }
+    void releaseLevel(int k) {
+        m_levels[size_t(k)].power = {}, m_levels[size_t(k)].aniso = {}, m_levels[size_t(k)].errors = {};
+    }
     /// Whether the anisotropic lobes were fitted (FittedLobeOptions::anisotropic).
     bool hasAnisotropic() const { return m_anisotropic; }
     /// The anisotropic lobe of texel (x, y) of level k >= 1 (with hasAnisotropic()).
@@ -163,11 +165,21 @@ public:
         return {double(l.aniso[i]), double(l.aniso[i + 1]), double(l.aniso[i + 2])};
     }
 
+    /// Level k's fit errors summed over its texels (with hasAnisotropic()): the isotropic fit's E (its lobe
+    /// as ggxSpecularTerm shades it), the anisotropic fit's (as the engines shade every texel with
+    /// KHR_materials_anisotropy on), and the truth's Σ over the pairs — each error / truth is the level's
+    /// relative L1 of that fit: whether turning the extension on pays for a map (burnish gltf).
+    struct FitErrors {
+        double isotropic = 0.0, anisotropic = 0.0, truth = 0.0;
+    };
+    FitErrors fitErrors(int k) const;
+
 private:
     struct Level {
         int width = 0, height = 0;
         std::vector<float> power;
-        std::vector<float> aniso; // per texel α_t, α_b, θ
+        std::vector<float> aniso;  // per texel α_t, α_b, θ
+        std::vector<float> errors; // per texel E_iso, E_aniso, Σ truth (anisotropic fits only)
     };
     bool m_anisotropic = false;
     std::vector<Level> m_levels;

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The test suite's independent glTF check (CTest gltf_validator_ktx_parse): `burnish gltf` on the test
-# plane (a real map as its normal texture), as .gltf with raw and BC payloads and as .glb, a material
+# plane (a real map as its normal texture), as .gltf with raw and BC payloads, with
+# KHR_materials_anisotropy and as .glb, a material
 # written from one map (`burnish gltf --normal-map`), and
 # Debian's assimp-testmodels ClearCoatTest.gltf where installed; Khronos's gltf-validator reports no
 # error Burnish added, ktx-parse reads every KTX2 chain back in full, and the raw plane's levels equal
@@ -30,6 +31,8 @@ check() { node "$here/check_gltf.mjs" "$@" > "$work/check.json" || { cat "$work/
 check "$work/raw/plane.gltf" --bake "$work/bake"
 "$burnish" gltf "$work/in/plane.gltf" --out "$work/bc" --coding bc > /dev/null
 check "$work/bc/plane.gltf"
+"$burnish" gltf "$work/in/plane.gltf" --out "$work/aniso" --anisotropy on > /dev/null
+check "$work/aniso/plane.gltf"
 node "$here/to_glb.mjs" "$work/in/plane.gltf" "$work/in/plane.glb"
 "$burnish" gltf "$work/in/plane.glb" --out "$work/glb" > /dev/null
 check "$work/glb/plane.glb" --bake "$work/bake"

@@ -4,19 +4,16 @@
 
 #include <QCheckBox>
 #include <QComboBox>
-#include <QCoreApplication>
 #include <QDialogButtonBox>
 #include <QFileDialog>
 #include <QFormLayout>
 #include <QHBoxLayout>
 #include <QLabel>
 #include <QLineEdit>
-#include <QPointer>
 #include <QProgressDialog>
 #include <QPushButton>
 #include <QSettings>
 #include <QSpinBox>
-#include <QThread>
 
 #include <QVBoxLayout>
 #include <fmt/format.h>
@@ -74,50 +71,17 @@ BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc) {
     return spec;
 }
 
-BakeRunner::BakeRunner(QObject* parent)
-    : QObject(parent)
-    , m_cancel(std::make_shared<std::atomic<bool>>(false)) {}
-
-BakeRunner::~BakeRunner() {
-    // A running job stops at its next stage and reports into a QPointer that is null by then.
-    m_cancel->store(true);
-}
-
 void BakeRunner::start(const BakeJobSpec& spec) {
     auto job = resolveBakeJob(spec);
     if (!job) {
         emit finished(false, QString::fromStdString(job.error()));
         return;
     }
-    m_cancel = std::make_shared<std::atomic<bool>>(false);
-    m_running = true;
-    QPointer<BakeRunner> self(this);
-    auto cancel = m_cancel;
-    QThread* worker = QThread::create([self, cancel, job = std::move(job.value())] {
-        auto result = runBakeJob(job, [&](double fraction, std::string_view stage) {
-            const QString text = qs(stage);
-            QMetaObject::invokeMethod(
-                QCoreApplication::instance(),
-                [self, fraction, text] {
-                    if (self) emit self->progress(fraction, text);
-                },
-                Qt::QueuedConnection);
-            return !cancel->load();
-        });
-        const bool ok = result.ok();
-        const QString message =
-            ok ? QString::fromStdString(result->summary.dump(2)) : QString::fromStdString(result.error());
-        QMetaObject::invokeMethod(
-            QCoreApplication::instance(),
-            [self, ok, message] {
-                if (!self) return;
-                self->m_running = false;
-                emit self->finished(ok, message);
-            },
-            Qt::QueuedConnection);
+    launch([job = std::move(job.value())](const Progress& progress) {
+        auto result = runBakeJob(job, progress);
+        return result ? std::pair{true, QString::fromStdString(result->summary.dump(2))}
+                      : std::pair{false, QString::fromStdString(result.error())};
     });
-    connect(worker, &QThread::finished, worker, &QObject::deleteLater);
-    worker->start();
 }
 
 BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)

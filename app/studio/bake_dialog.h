@@ -4,6 +4,7 @@
 #pragma once
 
 #include "material_document.h"
+#include "worker_runner.h"
 
 #include <burnish/core/bake/bake_job.h>
 
@@ -31,26 +32,13 @@ namespace burnish::studio {
 /// (overriding the gloss map, which bake.json names as what was painted over; no base power).
 BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc);
 
-/// Runs one job on a worker thread; progress and the result arrive on the GUI thread.
-class BakeRunner : public QObject {
+/// Runs one bake job on a worker thread (WorkerRunner); finished carries the summary JSON text.
+class BakeRunner : public WorkerRunner {
     Q_OBJECT
 public:
-    explicit BakeRunner(QObject* parent = nullptr);
-    ~BakeRunner() override;
+    using WorkerRunner::WorkerRunner;
     /// Starts the job (resolve errors are reported through finished at once).
     void start(const BakeJobSpec& spec);
-    /// Asks the job to stop before its next stage.
-    void cancel() { m_cancel->store(true); }
-    bool running() const { return m_running; }
-
-signals:
-    void progress(double fraction, const QString& stage);
-    /// ok: the summary JSON text; else the error message ("cancelled" after cancel()).
-    void finished(bool ok, const QString& message);
-
-private:
-    std::shared_ptr<std::atomic<bool>> m_cancel;
-    bool m_running = false;
 };
 
 class BakeDialog : public QDialog {

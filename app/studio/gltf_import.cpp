@@ -4,9 +4,6 @@
 
 #include <burnish/core/prefilter/gloss.h>
 
-#include <QCoreApplication>
-#include <QPointer>
-#include <QThread>
 
 #include <algorithm>
 
@@ -37,14 +34,6 @@ QString gltfSummaryText(const GltfResult& result) {
                 .arg(QString::fromStdString(result.asset.string()))
                 .arg(result.written.size());
     return text;
-}
-
-GltfRunner::GltfRunner(QObject* parent)
-    : QObject(parent)
-    , m_cancel(std::make_shared<std::atomic<bool>>(false)) {}
-
-GltfRunner::~GltfRunner() {
-    m_cancel->store(true); // a running job stops at its next check and reports into a null QPointer
 }
 
 GltfMaterialSource gltfMaterialSourceFor(const MaterialDocument& doc, const std::string& name) {
@@ -83,36 +72,12 @@ void GltfRunner::startExport(GltfMaterialSource material, const QString& outDir,
 }
 
 void GltfRunner::run(std::function<Result<GltfResult>(const GltfOptions&)> job, GltfOptions options) {
-    m_cancel = std::make_shared<std::atomic<bool>>(false);
-    m_running = true;
-    QPointer<GltfRunner> self(this);
-    auto cancel = m_cancel;
-    QThread* worker =
-        QThread::create([self, cancel, job = std::move(job), options = std::move(options)]() mutable {
-            options.progress = [&](double fraction, std::string_view stage) {
-                const QString text = QString::fromUtf8(stage.data(), qsizetype(stage.size()));
-                QMetaObject::invokeMethod(
-                    QCoreApplication::instance(),
-                    [self, fraction, text] {
-                        if (self) emit self->progress(fraction, text);
-                    },
-                    Qt::QueuedConnection);
-                return !cancel->load();
-            };
-            auto result = job(options);
-            const bool ok = result.ok();
-            const QString message = ok ? gltfSummaryText(*result) : QString::fromStdString(result.error());
-            QMetaObject::invokeMethod(
-                QCoreApplication::instance(),
-                [self, ok, message] {
-                    if (!self) return;
-                    self->m_running = false;
-                    emit self->finished(ok, message);
-                },
-                Qt::QueuedConnection);
-        });
-    connect(worker, &QThread::finished, worker, &QObject::deleteLater);
-    worker->start();
+    launch([job = std::move(job), options = std::move(options)](const Progress& progress) mutable {
+        options.progress = progress;
+        auto result = job(options);
+        return result ? std::pair{true, gltfSummaryText(*result)}
+                      : std::pair{false, QString::fromStdString(result.error())};
+    });
 }
 
 } // namespace burnish::studio

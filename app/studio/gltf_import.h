@@ -5,6 +5,7 @@
 #pragma once
 
 #include "material_document.h"
+#include "worker_runner.h"
 
 #include <burnish/core/bake/gltf.h>
 
@@ -31,28 +32,18 @@ GltfMaterialSource gltfMaterialSourceFor(const MaterialDocument& doc, const std:
 /// What one processed asset comes to, for the message after it: one line per material.
 QString gltfSummaryText(const GltfResult& result);
 
-/// Runs one processGltf on a worker thread; progress and the outcome arrive on the GUI thread.
-class GltfRunner : public QObject {
+/// Runs one processGltf or exportMaterialGltf on a worker thread (WorkerRunner); finished carries
+/// gltfSummaryText of the result.
+class GltfRunner : public WorkerRunner {
     Q_OBJECT
 public:
-    explicit GltfRunner(QObject* parent = nullptr);
-    ~GltfRunner() override;
+    using WorkerRunner::WorkerRunner;
     void start(const QString& input, const QString& outDir, GltfOptions options);
     /// exportMaterialGltf of `material` into `outDir`.
     void startExport(GltfMaterialSource material, const QString& outDir, GltfOptions options);
-    /// Asks the run to stop at its next check (between stages and inside each bake).
-    void cancel() { m_cancel->store(true); }
-    bool running() const { return m_running; }
-
-signals:
-    void progress(double fraction, const QString& stage);
-    /// ok: gltfSummaryText of the result; else the error ("cancelled" after cancel()).
-    void finished(bool ok, const QString& message);
 
 private:
     void run(std::function<Result<GltfResult>(const GltfOptions&)> job, GltfOptions options);
-    std::shared_ptr<std::atomic<bool>> m_cancel;
-    bool m_running = false;
 };
 
 } // namespace burnish::studio

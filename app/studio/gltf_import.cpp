@@ -4,7 +4,6 @@
 
 #include <burnish/core/prefilter/gloss.h>
 
-
 #include <algorithm>
 
 namespace burnish::studio {

@@ -151,4 +151,10 @@ TEST(Ktx2, TheReaderRefusesDamagedFilesInOneLine) {
     refused(patched(52, 0xFFFFFF00u), "a descriptor past the end");
     refused(patched(60, 0xFFFFFF00u), "key/value data past the end");
     refused(patched(u32(*good, 56), 0xFFFFu), "a key/value entry past its data");
+    // Keys out of order: "KTXorientation" renamed "KTXz..." sorts after "KTXwriter".
+    std::string unsorted = *good;
+    const size_t key = unsorted.find("KTXorientation");
+    ASSERT_NE(key, std::string::npos);
+    unsorted[key + 3] = 'z';
+    refused(unsorted, "keys out of order");
 }

@@ -293,6 +293,7 @@ Result<Ktx2Texture> decodeKtx2(std::string_view bytes) {
     if (!sameExceptColour(dfd, expectedDfd))
         return Error{fmt::format("KTX2: the data format descriptor does not describe {}", found->name)};
 
+    std::string previousKey;
     for (size_t at = 0; at < kvdLength;) {
         if (kvdLength - at < 4) return Error{"KTX2: truncated key/value data"};
         const std::uint32_t length = get32(bytes, kvdOffset + at);
@@ -301,6 +302,10 @@ Result<Ktx2Texture> decodeKtx2(std::string_view bytes) {
         const size_t nul = entry.find('\0');
         if (nul == std::string_view::npos || nul == 0) return Error{"KTX2: a key/value entry without a key"};
         std::string key(entry.substr(0, nul));
+        // The format sorts the keys by their bytes, each once (what the writer's map gives back).
+        if (!previousKey.empty() && !(previousKey < key))
+            return Error{"KTX2: the key/value keys are not sorted and unique"};
+        previousKey = key;
         if (key != "KTXorientation" && key != "KTXwriter")
             texture.keyValues.emplace_back(std::move(key), std::string(entry.substr(nul + 1)));
         at += 4 + length;

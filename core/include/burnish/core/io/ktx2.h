@@ -43,8 +43,9 @@ Result<std::string> encodeKtx2(const Ktx2Texture& texture);
 
 /// Reads a .ktx2 file of the subset encodeKtx2 writes (any level count, any key/value data). Errors, in
 /// one line each: a wrong identifier, a truncated file, a format outside Ktx2Format, layers, faces or
-/// depth, supercompression, level or data ranges outside the file or overlapping the header, a level
-/// whose byte count does not match its extent, a DFD that does not describe the format.
+/// depth, supercompression, key/value keys out of order or repeated, level or data ranges outside the file or
+/// overlapping the header, a level whose byte count does not match its extent, a DFD that does not describe
+/// the format.
 Result<Ktx2Texture> decodeKtx2(std::string_view bytes);
 
 } // namespace burnish

@@ -450,9 +450,14 @@ bool MainWindow::newDocument() {
 
 void MainWindow::open() {
     if (!maybeSave()) return;
+    // A project, or an image to open as the normal map (what the command line and a drop do).
+    const QString filter =
+        QString("Projects and normal maps (*.%1 *.png *.tga *.jpg *.jpeg *.exr *.tif *.tiff "
+                "*.dds *.hdr);;Burnish projects (*.%1);;All files (*)")
+            .arg(kProjectSuffix);
     const QString path = QFileDialog::getOpenFileName(
-        this, "Open project", QSettings().value("folders/projects").toString(), kProjectFilter);
-    if (!path.isEmpty()) openProject(path);
+        this, "Open project or normal map", QSettings().value("folders/projects").toString(), filter);
+    if (!path.isEmpty()) openFile(path);
 }
 
 bool MainWindow::openProject(const QString& path) {

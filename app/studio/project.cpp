@@ -235,8 +235,11 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
     Json root;
     try {
         root = Json::parse(text);
-    } catch (const Json::exception& e) { // parse errors, and numbers out of range (out_of_range.406)
-        return Error{where + ": not valid JSON (" + e.what() + ")"};
+    } catch (const Json::parse_error& e) { // said in the artist's words, not the parser's
+        return Error{where + ": not a Burnish project: not valid JSON (at byte " + std::to_string(e.byte) +
+                     ")"};
+    } catch (const Json::exception&) { // numbers out of range (out_of_range.406)
+        return Error{where + ": not a Burnish project: a number out of range"};
     }
     if (!root.is_object()) return Error{where + ": not a Burnish project (expected a JSON object)"};
     if (!root.contains("format") || root["format"] != kProjectFormat)

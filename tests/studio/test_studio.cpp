@@ -440,7 +440,10 @@ TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
               text.replace(text.find("\"HUGE\""), 6, "1e999");
               return text;
           }(),
-          "not valid JSON"}},
+          "a number out of range"}},
+        // An image opened as a project (issue 44: the parser's own message showed): the artist's words.
+        {"png-bytes",
+         {std::string("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16), "not a Burnish project: not valid JSON"}},
         {"wrong-type", {materialGloss("high"), "'gloss' must be a number in [0"}},
         {"newer", {withField("version", 2), "written by a newer Burnish (project version 2"}},
         {"unknown-preset", {withField("preset", "no-such-preset"), "preset 'no-such-preset' is not known"}},
@@ -464,6 +467,7 @@ TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
         ASSERT_EQ(w.messages.size(), 1) << name;
         EXPECT_TRUE(w.messages[0].contains(QString::fromStdString(c.second)))
             << name << ": " << w.messages[0].toStdString();
+        EXPECT_FALSE(w.messages[0].contains("json.exception")) << name << ": " << w.messages[0].toStdString();
         EXPECT_EQ(doc->settings(), before) << name;
         EXPECT_EQ(doc->undoStack()->index(), undoIndex) << name;
         EXPECT_TRUE(w.window.projectPath().isEmpty()) << name;

@@ -392,7 +392,7 @@ void MainWindow::updateStatus() {
     m_statusPreset->setText("preset " + s.preset);
     m_statusMethod->setText("method " + qs(methodName(s.method)));
     m_statusGloss->setText(
-        QString("%1 %2").arg(glossQuantity(m_doc->preset().encoding, false)).arg(s.gloss, 0, 'f', 3));
+        QString("%1 %2").arg(glossQuantity(m_doc->preset().encoding, false)).arg(glossText(s.gloss)));
     m_statusPower->setText(QString("power %1").arg(m_doc->power(), 0, 'g', 5));
 }
 

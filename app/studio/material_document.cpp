@@ -116,6 +116,12 @@ const char* mapSlotName(MapSlot slot) {
     return "normal";
 }
 
+QString glossText(double gloss) {
+    QString text = QString::number(gloss, 'f', kGlossDecimals);
+    if (text.endsWith('0')) text.chop(1);
+    return text;
+}
+
 QString glossQuantity(const GlossEncoding& encoding, bool capitalised) {
     QString name = QString::fromUtf8(encoding.quantity().data(), qsizetype(encoding.quantity().size()));
     if (capitalised && !name.isEmpty()) name[0] = name[0].toUpper();
@@ -310,7 +316,7 @@ void MaterialDocument::setAlbedo(const LinearRgb& albedo) {
 void MaterialDocument::setGloss(double gloss, bool merge) {
     MaterialSettings s = m_settings;
     s.gloss = saturate(gloss);
-    push(s, m_maps, QString("%1 %2").arg(glossQuantity(preset().encoding)).arg(s.gloss, 0, 'f', 3),
+    push(s, m_maps, QString("%1 %2").arg(glossQuantity(preset().encoding)).arg(glossText(s.gloss)),
          merge ? kGlossField : kNoMerge);
 }
 

@@ -252,6 +252,13 @@ private:
 /// (lower case with capitalised = false), so a roughness preset never says gloss.
 QString glossQuantity(const GlossEncoding& encoding, bool capitalised = true);
 
+/// Decimals a gloss field keeps: what is typed to four places (0.4567), finer than an 8-bit channel's
+/// step (1/255) and as fine as a person types.
+inline constexpr int kGlossDecimals = 4;
+/// A gloss value as the studio writes it (history, status bar): four places, a trailing zero of the
+/// fourth dropped ("0.450", "0.4567").
+QString glossText(double gloss);
+
 /// The built-in sample normal map (shared; made once).
 std::shared_ptr<const NormalMap> sampleNormalMap();
 

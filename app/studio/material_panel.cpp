@@ -176,7 +176,7 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
     m_glossSlider->setRange(0, kGlossSteps);
     m_glossSpin = new QDoubleSpinBox(this);
     m_glossSpin->setRange(0.0, 1.0);
-    m_glossSpin->setDecimals(3);
+    m_glossSpin->setDecimals(kGlossDecimals);
     m_glossSpin->setSingleStep(0.01);
     m_glossSpin->setKeyboardTracking(false); // commit on Enter or focus-out, not per keystroke
     m_glossSpin->setObjectName("materialGloss");

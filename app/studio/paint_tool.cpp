@@ -80,7 +80,7 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     m_radiusSpin = spin(kMinBrushRadius, 1024.0, 1.0, 1, "Brush radius in texels of the finest level");
     m_hardnessSpin = spin(0.0, 1.0, 0.05, 2, "Fraction of the radius painted at full strength");
     m_opacitySpin = spin(0.0, 1.0, 0.05, 2, "The most one stroke changes a texel");
-    m_valueSpin = spin(0.0, 1.0, 0.01, 3, "Gloss (preset encoding) or variance painted");
+    m_valueSpin = spin(0.0, 1.0, 0.01, kGlossDecimals, "Gloss (preset encoding) or variance painted");
     m_radiusSpin->setObjectName("paintRadius");
     m_hardnessSpin->setObjectName("paintHardness");
     m_opacitySpin->setObjectName("paintOpacity");

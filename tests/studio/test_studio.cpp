@@ -140,6 +140,12 @@ TEST(MaterialPanel, TypedGlossCommitsWholeOnEnterAsOneUndoStep) {
     EXPECT_EQ(doc.undoStack()->text(steps).toStdString(), "Gloss 0.450");
     doc.undoStack()->undo();
     EXPECT_NE(doc.settings().gloss, 0.45);
+    // Four places are kept (issue 44: 0.4567 became 0.456).
+    typeInto(spin, "0.4567");
+    QTest::keyClick(spin, Qt::Key_Return);
+    EXPECT_DOUBLE_EQ(doc.settings().gloss, 0.4567);
+    EXPECT_EQ(doc.undoStack()->text(doc.undoStack()->index() - 1).toStdString(), "Gloss 0.4567");
+    doc.undoStack()->undo();
 
     const QLocale before;
     QLocale::setDefault(QLocale(QLocale::German, QLocale::Germany));

@@ -5,10 +5,10 @@
 
 #include <burnish/core/bake/gltf.h>
 #include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/shading/color.h>
 
 #include <fmt/format.h>
 
-#include <array>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -34,15 +34,6 @@ struct GltfCli {
     bool allowImplausible = false;
     bool json = false;
 };
-
-// "r,g,b" of three numbers.
-std::optional<std::array<double, 3>> parseRgb(const std::string& text) {
-    std::array<double, 3> rgb{};
-    char tail = 0;
-    if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &rgb[0], &rgb[1], &rgb[2], &tail) != 3)
-        return std::nullopt;
-    return rgb;
-}
 
 int runGltf(const GltfCli& o) {
     if (o.input.empty() == o.normalMap.empty())
@@ -70,11 +61,12 @@ int runGltf(const GltfCli& o) {
         m.normal = std::make_shared<const NormalMap>(std::move(map.value()));
         m.roughness = o.roughness;
         m.metal = !o.dielectric;
-        const auto specular = parseRgb(o.specular), albedo = parseRgb(o.albedo);
-        if (!specular) return fail("--specular: give three numbers, r,g,b (linear F0)");
-        if (!albedo) return fail("--albedo: give three numbers, r,g,b (linear)");
-        m.specular = *specular;
-        m.albedo = *albedo;
+        const auto specular = parseLinearRgb(o.specular, "--specular");
+        if (!specular) return fail(specular.error());
+        const auto albedo = parseLinearRgb(o.albedo, "--albedo");
+        if (!albedo) return fail(albedo.error());
+        m.specular = {specular->r, specular->g, specular->b};
+        m.albedo = {albedo->r, albedo->g, albedo->b};
         result = exportMaterialGltf(m, o.out, options);
     } else {
         result = processGltf(o.input, o.out, options);

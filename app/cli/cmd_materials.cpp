@@ -44,24 +44,6 @@ std::vector<std::string> splitComma(const std::string& text) {
     return out;
 }
 
-// "R,G,B" or one value for a grey, linear, each finite and in [0, 1].
-Result<LinearRgb> parseLinearTriple(const std::string& text) {
-    const auto fields = splitComma(text);
-    if (fields.size() != 1 && fields.size() != 3)
-        return Error{fmt::format("--check '{}': give R,G,B or one value for a grey", text)};
-    double v[3] = {0, 0, 0};
-    for (std::size_t i = 0; i < fields.size(); ++i) {
-        const std::string& f = fields[i];
-        const auto [end, ec] = std::from_chars(f.data(), f.data() + f.size(), v[i]);
-        if (f.empty() || ec != std::errc() || end != f.data() + f.size())
-            return Error{fmt::format("--check '{}': '{}' is not a number", text, f)};
-        if (!std::isfinite(v[i]) || v[i] < 0.0 || v[i] > 1.0)
-            return Error{fmt::format("--check '{}': {} is outside the linear range [0, 1]", text, f)};
-    }
-    if (fields.size() == 1) return LinearRgb::grey(v[0]);
-    return LinearRgb{v[0], v[1], v[2]};
-}
-
 // "R,G,B" or one code for a grey, 8-bit sRGB codes 0..255.
 Result<Srgb8> parseSrgb8Triple(const std::string& text) {
     const auto fields = splitComma(text);
@@ -263,7 +245,7 @@ int runMaterials(const MaterialsOptions& options) {
     if (!options.check.empty() && !options.checkSrgb.empty())
         return fail("give --check or --check-srgb, not both");
     if (!options.check.empty()) {
-        const auto colour = parseLinearTriple(options.check);
+        const auto colour = parseLinearRgb(options.check, "--check");
         if (!colour) return fail(colour.error());
         return runCheck(*table, colour.value(), options);
     }

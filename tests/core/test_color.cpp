@@ -182,3 +182,20 @@ TEST(Srgb8Triple, ConvertsEachChannel) {
     EXPECT_EQ(back.g, srgb8ToLinear(229));
     EXPECT_EQ(back.b, srgb8ToLinear(158));
 }
+
+TEST(Color, ParseLinearRgbTakesATripleOrAGreyAndRefusesTheRest) {
+    const auto triple = parseLinearRgb("0.56,0.57,0.58", "--specular");
+    ASSERT_TRUE(triple) << triple.error();
+    EXPECT_EQ(*triple, (LinearRgb{0.56, 0.57, 0.58}));
+    const auto grey = parseLinearRgb("0.04", "--specular");
+    ASSERT_TRUE(grey);
+    EXPECT_EQ(*grey, LinearRgb::grey(0.04));
+    for (const char* bad : {"", "red", "0.1,0.2", "0.1,0.2,0.3,0.4", "0.1,,0.3", "1.5,0,0", "-0.1", "nan",
+                            "inf,0,0", "0.1,0.2,0.3x"}) {
+        const auto r = parseLinearRgb(bad, "--specular");
+        ASSERT_FALSE(r) << bad;
+        EXPECT_EQ(r.error().rfind("--specular '", 0), 0u) << r.error();
+    }
+    EXPECT_NE(parseLinearRgb("1.5,0,0", "--albedo").error().find("outside the linear range [0, 1]"),
+              std::string::npos);
+}

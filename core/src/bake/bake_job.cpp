@@ -17,7 +17,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -230,14 +229,8 @@ Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
         return Error{"--material-class applies to a --specular colour given as numbers"};
     if (spec.specular) {
         BakeJob::Specular sp;
-        double rgb[3];
-        char tail = 0;
-        if (std::sscanf(spec.specular->c_str(), "%lf,%lf,%lf%c", &rgb[0], &rgb[1], &rgb[2], &tail) == 3) {
-            for (double c : rgb)
-                if (!(c >= 0.0 && c <= 1.0))
-                    return Error{"--specular " + *spec.specular +
-                                 ": each linear F0 channel must lie in [0, 1]"};
-            sp.f0 = {rgb[0], rgb[1], rgb[2]};
+        if (const auto typed = parseLinearRgb(*spec.specular, "--specular")) {
+            sp.f0 = *typed;
             sp.materialClass =
                 spec.materialClass
                     ? (*spec.materialClass == "metal" ? MaterialClass::Metal : MaterialClass::Dielectric)
@@ -247,7 +240,8 @@ Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
             const Material* m = builtinMaterialTable().find(*spec.specular);
             if (!m)
                 return Error{"--specular '" + *spec.specular +
-                             "': neither a material of `burnish materials` nor linear F0 R,G,B"};
+                             "': neither a material of `burnish materials` nor linear F0 R,G,B (" +
+                             typed.error() + ")"};
             if (spec.materialClass)
                 return Error{"--material-class: '" + *spec.specular + "' is a " + toString(m->materialClass) +
                              " of its own"};

@@ -6,10 +6,12 @@
 #pragma once
 
 #include <burnish/core/util/numeric.h>
+#include <burnish/core/util/result.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string_view>
 
 namespace burnish {
 
@@ -93,6 +95,10 @@ struct Srgb8 {
 constexpr double luminance(const LinearRgb& c) {
     return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
 }
+
+/// A linear colour as typed: "R,G,B", or one value for a grey, each a whole number, finite, in [0, 1].
+/// Errors name `option` and the field ("--check '0.5,x': 'x' is not a number").
+Result<LinearRgb> parseLinearRgb(std::string_view text, std::string_view option);
 
 /// Each channel through linearToSrgb8.
 inline Srgb8 toSrgb8(const LinearRgb& c) {

@@ -140,8 +140,8 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                     "Metalness in [0, 1] for presets with a metallic channel (gltf, unity)");
     cmd->add_option("--specular", spec->specular,
                     "Specular colour: a material of `burnish materials` (iron, gold, water...) or linear F0 "
-                    "for a grey) "
-                    "R,G,B; bake.json's \"material\" records it in the preset engine's own terms (glTF "
+                    "R,G,B (one value for a grey); bake.json's \"material\" records it in the preset "
+                    "engine's own terms (glTF "
                     "KHR_materials_specular, Unreal Specular = F0/0.08, Godot/Filament 0.16 s^2, ...) with a "
                     "warning where the engine cannot hold it; sets --metallic from the class when not given");
     cmd->add_option("--material-class", spec->materialClass,

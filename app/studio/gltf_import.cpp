@@ -19,16 +19,18 @@ std::optional<std::string> gltfMethodFor(const MaterialDocument& doc) {
 QString gltfSummaryText(const GltfResult& result) {
     QString text;
     if (result.materials.empty()) text = "No material has a normal map: the asset was copied unchanged.\n";
-    for (const GltfMaterialReport& m : result.materials)
-        text += QString("Material %1 '%2': %3×%4 normal map, %5 mips, roughness %6 at mip 0 → %7 at 1×1%8\n")
+    for (const GltfMaterialReport& m : result.materials) {
+        text += QString("Material %1 '%2': %3×%4 normal map, %5 mips, roughness %6 at mip 0 → %7 at 1×1\n")
                     .arg(m.index)
                     .arg(QString::fromStdString(m.name))
                     .arg(m.width)
                     .arg(m.height)
                     .arg(m.mipCount)
                     .arg(m.meanRoughnessMip0, 0, 'f', 3)
-                    .arg(m.meanRoughnessLast, 0, 'f', 3)
-                    .arg(m.notes.empty() ? QString() : " (" + QString::fromStdString(m.notes.front()) + ")");
+                    .arg(m.meanRoughnessLast, 0, 'f', 3);
+        for (const std::string& note : m.notes)
+            text += "  Note: " + QString::fromStdString(note) + "\n";
+    }
     text += QString("Wrote %1 (%2 files).")
                 .arg(QString::fromStdString(result.asset.string()))
                 .arg(result.written.size());

@@ -402,6 +402,19 @@ TEST(Gltf, AMaterialExportsWithItsSpecularColourInGltfTerms) {
     EXPECT_NEAR(dielectric->materials[0].meanRoughnessMip0, 0.5, 0.01); // half 0.8, half 0.2
     EXPECT_TRUE(dielectric->materials[0].roughnessTexture);
 
+    EXPECT_TRUE(dielectric->materials[0].notes.empty() ||
+                dielectric->materials[0].notes[0].find("material table") == std::string::npos);
+    // A "metal" as dark as water: written as asked, and said.
+    m.metal = true;
+    m.roughnessTexels = nullptr;
+    m.specular = {0.003, 0.003, 0.003};
+    auto dark = exportMaterialGltf(m, dir.path() / "dark");
+    ASSERT_TRUE(dark) << dark.error();
+    ASSERT_FALSE(dark->materials[0].notes.empty());
+    EXPECT_NE(dark->materials[0].notes.back().find("lies in the material table's"), std::string::npos);
+    EXPECT_EQ(dark->summary["materials"][0]["notes"].back(), dark->materials[0].notes.back());
+    m.metal = false;
+
     // Refusals.
     m.roughnessTexels = std::make_shared<std::vector<float>>(3, 0.5f);
     EXPECT_FALSE(exportMaterialGltf(m, dir.path() / "bad"));

@@ -750,7 +750,13 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
         bo.progress = [&](double fraction) {
             return progress(done + 0.8 * span * fraction, "baking " + what);
         };
-        auto baked = bake(*map, bo);
+        // One normal pyramid for the bake and, with anisotropy, the anisotropic fit: built once, from the
+        // one copy of the map.
+        const bool fitAnisotropy =
+            options.anisotropy != GltfAnisotropy::Off && job.method == Method::Fitted && !w.roughness;
+        const auto shared = std::make_shared<const NormalMap>(std::move(map.value()));
+        if (fitAnisotropy) bo.cachedPyramid = bakePyramid(shared, bo);
+        auto baked = bake(*shared, bo);
         if (!baked && baked.error() == "cancelled") return Error{"cancelled"};
         if (!baked) return Error{fmt::format("{}: {}: {}", name, what, baked.error())};
         const BakedTexture* normalTex = baked->find(TextureRole::Normal);
@@ -809,11 +815,7 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
                 report.anisotropy =
                     "off: fitted for a constant base roughness only (this material has a texture)";
             } else {
-                PyramidOptions po;
-                po.border = bo.pyramid.border;
-                po.kernel = bo.pyramid.kernel;
-                const NormalPyramid pyramid =
-                    NormalPyramid::build(std::make_shared<const NormalMap>(*map), po);
+                const NormalPyramid& pyramid = *bo.cachedPyramid;
                 FittedLobeOptions fo;
                 fo.brdf = Brdf::Ggx;
                 fo.anisotropic = true;
@@ -1236,7 +1238,15 @@ Result<GltfResult> exportMaterialGltf(const GltfMaterialSource& m, const fs::pat
     o.pruneReplaced = true;
     // The studio's normals are already decoded (any green convention): the 16-bit source holds them as +Y.
     o.allowImplausible = true;
-    return processGltf(asset, outDir, o);
+    auto result = processGltf(asset, outDir, o);
+    // What glTF cannot hold of the colour (a "metal" as dark as a dielectric, ...) is said, as bake.json says
+    // it.
+    if (result && !result->materials.empty())
+        for (const std::string& w : terms.warnings) {
+            result.value().materials[0].notes.push_back(w);
+            result.value().summary["materials"][0]["notes"].push_back(w);
+        }
+    return result;
 }
 
 } // namespace burnish

@@ -490,3 +490,33 @@ TEST(Gltf, AnisotropyIsWrittenWhereTheAnisotropicFitIsCloser) {
 
 } // namespace
 } // namespace burnish
+
+namespace burnish {
+namespace {
+
+TEST(Gltf, ReplacingAnAssetRemovesTheFilesOnlyItNamed) {
+    test::TempDir dir;
+    const fs::path asset = planeAsset(dir.path() / "in");
+    GltfOptions aniso;
+    aniso.anisotropy = GltfAnisotropy::On;
+    auto first = processGltf(asset, dir.path() / "out", aniso);
+    ASSERT_TRUE(first) << first.error();
+    ASSERT_TRUE(fs::exists(dir.path() / "out" / "plane_material0_anisotropy.ktx2"));
+    writeText(dir.path() / "out" / "notes.txt", "the artist's own file");
+    GltfOptions plain;
+    plain.overwrite = Overwrite::Allow;
+    auto second = processGltf(asset, dir.path() / "out", plain);
+    ASSERT_TRUE(second) << second.error();
+    EXPECT_FALSE(fs::exists(dir.path() / "out" / "plane_material0_anisotropy.ktx2"));
+    EXPECT_FALSE(fs::exists(dir.path() / "out" / "plane_material0_anisotropy.png"));
+    EXPECT_TRUE(fs::exists(dir.path() / "out" / "notes.txt")); // never named by the asset: kept
+    for (const std::string& name : second->written)
+        EXPECT_TRUE(fs::exists(dir.path() / "out" / name)) << name;
+    size_t entries = 0;
+    for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir.path() / "out"))
+        ++entries;
+    EXPECT_EQ(entries, second->written.size() + 1);
+}
+
+} // namespace
+} // namespace burnish

@@ -541,6 +541,33 @@ void pruneTextures(json& doc, const std::set<int>& candidates) {
     images = std::move(keptImages);
 }
 
+// The plain file names (no folder) an asset written earlier names in its images and buffers; none when
+// it is missing or unreadable (then nothing is removed).
+std::vector<std::string> previousFiles(const fs::path& asset) {
+    auto bytes = readFile(asset);
+    if (!bytes) return {};
+    std::string_view text = *bytes;
+    if (text.size() >= 20 && le32(text, 0) == kGlbMagic) {
+        const std::uint32_t length = le32(text, 12);
+        if (le32(text, 16) != kGlbJson || length > text.size() - 20) return {};
+        text = text.substr(20, length);
+    }
+    const json doc = json::parse(text.begin(), text.end(), nullptr, false);
+    std::vector<std::string> names;
+    if (!doc.is_object()) return names;
+    for (const char* key : {"images", "buffers"}) {
+        const json list = doc.value(key, json::array());
+        if (!list.is_array()) continue;
+        for (const json& item : list) {
+            if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
+            const std::string uri = item["uri"];
+            if (!uri.empty() && uri.find_first_of("/\\:%") == std::string::npos && uri != "." && uri != "..")
+                names.push_back(uri);
+        }
+    }
+    return names;
+}
+
 } // namespace
 
 Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, const GltfOptions& options) {
@@ -1042,7 +1069,13 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
     for (const NewFile& f : files)
         if (Status s = set.value().addBytes(f.name, f.bytes); !s) return Error{s.error()};
     if (Status s = set.value().addBytes(assetName, assetBytes); !s) return Error{s.error()};
-    if (Status s = set.value().commit(assetName, {}, options.overwrite); !s) return Error{s.error()};
+    // Files the previous asset of this name named beside it that this set does not write (another
+    // method's or option's textures) go with it, as a bake's previous set goes (export.h).
+    std::vector<std::string> obsolete;
+    for (const std::string& old : previousFiles(outDir / assetName))
+        if (std::none_of(files.begin(), files.end(), [&](const NewFile& f) { return f.name == old; }))
+            obsolete.push_back(old);
+    if (Status s = set.value().commit(assetName, obsolete, options.overwrite); !s) return Error{s.error()};
 
     result.asset = outDir / assetName;
     for (const NewFile& f : files)

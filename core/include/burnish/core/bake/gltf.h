@@ -10,7 +10,8 @@
 // does not read KTX2 still loads the asset. Everything else — meshes, nodes, animations, other
 // materials and textures, extras, unknown extensions — is carried over unchanged; external files are
 // copied beside the output. A .glb comes out as a .glb with every new image in its binary chunk.
-// The output folder gets one set (util/files.h's FileSet): the asset file is renamed last.
+// The output folder gets one set (util/files.h's FileSet): the asset file is renamed last, and files
+// beside it that the asset it replaces named and this one does not are removed.
 #pragma once
 
 #include <burnish/core/prefilter/methods.h>

@@ -4,6 +4,7 @@
 #include "common.h"
 
 #include <burnish/core/bake/gltf.h>
+#include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_map.h>
 #include <burnish/core/shading/color.h>
 
@@ -30,6 +31,7 @@ struct GltfCli {
     std::optional<std::string> method;
     std::string coding = "raw";
     std::string anisotropy = "off";
+    int lobes = kDefaultMixtureLobes;
     bool force = false;
     bool allowImplausible = false;
     bool json = false;
@@ -41,6 +43,7 @@ int runGltf(const GltfCli& o) {
     if (o.out.empty()) return fail("no output folder given (--out DIR)");
     GltfOptions options;
     options.method = o.method;
+    options.mixtureLobes = o.lobes;
     options.coding = o.coding == "bc" ? GltfTextureCoding::Bc : GltfTextureCoding::Raw;
     options.anisotropy = o.anisotropy == "on"     ? GltfAnisotropy::On
                          : o.anisotropy == "auto" ? GltfAnisotropy::Auto
@@ -89,6 +92,7 @@ int runGltf(const GltfCli& o) {
         if (!m.anisotropy.empty())
             std::printf("  anisotropy %s (relative L1 over mips 1-6: anisotropic %.4f, isotropic %.4f)\n",
                         m.anisotropy.c_str(), m.anisotropicError, m.isotropicError);
+        if (!m.mixture.empty()) std::printf("  lobe mixture %s\n", m.mixture.c_str());
         for (const std::string& note : m.notes)
             std::printf("  note: %s\n", note.c_str());
     }
@@ -117,9 +121,14 @@ const CommandRegistration registration{
                         "With --normal-map: the material's name and the asset's file stem");
         cmd->add_option("--out", o->out,
                         "Output folder (created if missing): the asset, its KTX2 and PNG files");
-        cmd->add_option("--method", o->method,
-                        "Roughness method of the gltf preset (default fitted): naive, toksvig, vmf, "
-                        "variance-to-gloss, fitted, ...");
+        cmd->add_option(
+            "--method", o->method,
+            "Roughness method of the gltf preset (default fitted): naive, toksvig, vmf, "
+            "variance-to-gloss, fitted, ...; or mixture: the fitted roughness and, beside it, the "
+            "lobe mixture as BURNISH_lobe_mixture (RGBA16F KTX2 lobe textures that "
+            "resources/three/burnish-mixture.js shades in three.js)");
+        cmd->add_option("--lobes", o->lobes, "With --method mixture: lobes per texel, 1 to 4 (default 3)")
+            ->check(CLI::Range(1, 4));
         cmd->add_option("--coding", o->coding,
                         "KTX2 payload: raw (default; normal RG8, metallicRoughness RGBA8) or bc (normal BC5, "
                         "metallicRoughness BC3, whose G has 6-bit endpoints)")
@@ -142,7 +151,11 @@ const CommandRegistration registration{
             "the whole mip chain to 1x1, referenced through the draft extension KHR_texture_ktx, and a PNG "
             "of mip 0 as the texture's source, which viewers without KTX2 support load instead. Everything "
             "else is carried over unchanged; external files are copied beside the output; a .glb stays a "
-            ".glb. An asset without normal maps is copied unchanged (exit 0).");
+            ".glb. An asset without normal maps is copied unchanged (exit 0). With --method mixture a "
+            "material "
+            "of constant base roughness also gets BURNISH_lobe_mixture: K lobe textures (w, w*b.x, w*b.y, "
+            "w*spread per texel, every mip) and the base roughness, which only a client with Burnish's "
+            "three.js module reads; a material with a roughness texture gets the fitted lobe alone.");
         return [o]() { return runGltf(*o); };
     }};
 

@@ -125,8 +125,11 @@ TEST(Evaluate, EveryMethodMatchesTheScalarReferenceAtExtremePowers) {
                 fit.directions = result->directions;
                 const FittedPyramid fitted = FittedPyramid::build(
                     pyramid, [s](int, int, int) { return s; }, nullptr, s, 3, fit);
+                // Under GGX every K's mixture is its own GGX form at every mip (mixtureGgxLobe,
+                // mixtureGgxValue).
+                const bool ggxMixture = brdf == Brdf::Ggx;
                 for (const MipError& e : result->errors) {
-                    if (e.lobes >= 2 && !mixtures[size_t(e.lobes)])
+                    if ((e.lobes >= 2 || (ggxMixture && e.lobes >= 1)) && !mixtures[size_t(e.lobes)])
                         mixtures[size_t(e.lobes)].emplace(MixturePyramid::build(pyramid, s, e.lobes, 3));
                     double absSum = 0.0, truthSum = 0.0, methodSum = 0.0;
                     const PyramidLevel& level = pyramid.level(e.mip);
@@ -137,8 +140,23 @@ TEST(Evaluate, EveryMethodMatchesTheScalarReferenceAtExtremePowers) {
                                 TexelLobe lobe = methodLobe(e.method, pyramid.boxMoments(e.mip, x, y), s);
                                 if (e.method == Method::Fitted && e.mip > 0)
                                     lobe.power = fitted.power(e.mip, x, y);
+                                auto ggxValue = [&] {
+                                    const MixturePyramid& mix = *mixtures[size_t(e.lobes)];
+                                    const auto stored = mix.storedTexel(map, e.mip, x, y, s);
+                                    const double v = mixtureBaseVariance(s, e.lobes);
+                                    double total = 0.0;
+                                    for (int i = 0; i < e.lobes; ++i)
+                                        total += std::max(stored[size_t(i)].w, 0.0);
+                                    std::array<MixtureGgxLobe, kMaxMixtureLobes> lobes{};
+                                    for (int i = 0; i < e.lobes; ++i)
+                                        lobes[size_t(i)] =
+                                            mixtureGgxLobe(mixtureGgxTexel(stored[size_t(i)], v), total,
+                                                           ggxAlphaFromPower(s));
+                                    return mixtureGgxValue(lobes, e.lobes, d.l, d.v, d.h);
+                                };
                                 const double value =
-                                    e.lobes >= 2 && e.mip > 0
+                                    ggxMixture && e.lobes >= 1 ? ggxValue()
+                                    : e.lobes >= 2 && e.mip > 0
                                         ? mixtureValue(mixtures[size_t(e.lobes)]->at(e.mip, x, y), d.l, d.h,
                                                        mixtures[size_t(e.lobes)]->minVariance())
                                         : methodValue(lobe, d, brdf);

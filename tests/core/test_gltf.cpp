@@ -5,13 +5,16 @@
 #include <burnish/core/io/image.h>
 #include <burnish/core/io/ktx2.h>
 #include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
 
 #include "temp_dir.h"
 
+#include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -516,6 +519,108 @@ TEST(Gltf, ReplacingAnAssetRemovesTheFilesOnlyItNamed) {
     for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir.path() / "out"))
         ++entries;
     EXPECT_EQ(entries, second->written.size() + 1);
+}
+
+} // namespace
+} // namespace burnish
+
+namespace burnish {
+namespace {
+
+// --method mixture: the fitted lobe as ever, and BURNISH_lobe_mixture beside it: K RGBA16F KTX2 chains to
+// 1×1 in the normal texture's UV set, whose level 0 is each finest normal's own base lobe (share 1 in one
+// slot, no spread) and whose levels above are the mixture's stored lobes (weights summing to 1).
+TEST(Gltf, TheMixtureRidesBesideTheFittedLobeAsRgba16fLobeChains) {
+    test::TempDir dir;
+    GltfOptions o;
+    o.method = "mixture";
+    o.mixtureLobes = 2;
+    auto r = processGltf(planeAsset(dir.path() / "in"), dir.path() / "out", o);
+    ASSERT_TRUE(r) << r.error();
+    EXPECT_EQ(r->materials[0].mixture, "on, 2 lobes");
+    EXPECT_EQ(r->summary["method"], "mixture");
+    const json a = readJson(r->asset);
+    const json& m = a["materials"][0];
+    ASSERT_TRUE(m["extensions"].contains("BURNISH_lobe_mixture")) << m.dump();
+    const json& ext = m["extensions"]["BURNISH_lobe_mixture"];
+    EXPECT_EQ(ext["lobes"], 2);
+    EXPECT_DOUBLE_EQ(ext["roughnessFactor"].get<double>(), 0.5); // plane.gltf's
+    EXPECT_DOUBLE_EQ(ext["spreadScale"].get<double>(), kMixtureGgxSpreadScale);
+    ASSERT_EQ(ext["lobeTextures"].size(), 2u);
+    const auto& used = a["extensionsUsed"];
+    EXPECT_NE(std::find(used.begin(), used.end(), "BURNISH_lobe_mixture"), used.end());
+    // The fitted lobe's textures are the plain fitted export's, byte for byte.
+    GltfOptions fitted;
+    auto plain = processGltf(planeAsset(dir.path() / "in2"), dir.path() / "out2", fitted);
+    ASSERT_TRUE(plain) << plain.error();
+    const json p = readJson(plain->asset);
+    EXPECT_EQ(materialKtx(dir.path() / "out", a, "metallicRoughness").levels,
+              materialKtx(dir.path() / "out2", p, "metallicRoughness").levels);
+    EXPECT_EQ(materialKtx(dir.path() / "out", a, "normal").levels,
+              materialKtx(dir.path() / "out2", p, "normal").levels);
+
+    std::vector<Ktx2Texture> lobes;
+    for (const json& info : ext["lobeTextures"]) {
+        const json& t = a["textures"][info["index"].get<size_t>()];
+        EXPECT_FALSE(t.contains("source")); // no PNG can hold these values
+        const int image = t["extensions"]["KHR_texture_ktx"]["source"];
+        auto bytes = readFile(dir.path() / "out" / a["images"][size_t(image)]["uri"].get<std::string>());
+        ASSERT_TRUE(bytes);
+        auto ktx = decodeKtx2(*bytes);
+        ASSERT_TRUE(ktx) << ktx.error();
+        EXPECT_EQ(ktx->format, Ktx2Format::Rgba16f);
+        ASSERT_EQ(ktx->levels.size(), 10u); // 512² to 1×1
+        lobes.push_back(*ktx);
+    }
+    auto texel = [&](size_t lobe, size_t k, size_t i) {
+        std::array<double, 4> t{};
+        for (size_t c = 0; c < 4; ++c) {
+            Imath::half h;
+            std::uint16_t bits;
+            std::memcpy(&bits, lobes[lobe].levels[k].data() + (i * 4 + c) * 2, 2);
+            h.setBits(bits);
+            t[c] = double(float(h));
+        }
+        return t;
+    };
+    const double alpha0 = 0.25; // roughness 0.5
+    for (size_t k = 0; k < 10; ++k) {
+        const size_t n = lobes[0].levels[k].size() / 8;
+        double widened = 0.0;
+        for (size_t i = 0; i < n; ++i) {
+            const auto t0 = texel(0, k, i), t1 = texel(1, k, i);
+            ASSERT_NEAR(t0[0] + t1[0], 1.0, 2e-3) << "level " << k << " texel " << i;
+            for (const auto& t : {t0, t1}) {
+                const MixtureGgxLobe l = mixtureGgxLobe(t, t0[0] + t1[0], alpha0);
+                ASSERT_TRUE(std::isfinite(l.alpha) && l.alpha >= alpha0 - 1e-9);
+                if (k == 0 && t[0] > 0.0) {
+                    ASSERT_EQ(t[0], 1.0); // one finest normal, whole
+                    // No spread: w·S = |w·b|² to half-float precision.
+                    ASSERT_NEAR(t[3], t[1] * t[1] + t[2] * t[2], 2e-3 * (1.0 + t[3])) << i;
+                }
+                widened += l.share * (l.alpha - alpha0);
+            }
+        }
+        // The treads' slopes widen the lobes at every level above the finest, not at it.
+        if (k == 0) EXPECT_LT(widened / double(n), 1e-3);
+        if (k >= 2) EXPECT_GT(widened / double(n), 1e-3) << "level " << k;
+    }
+
+    // A material with a roughness texture: the fitted lobe alone, and why.
+    std::vector<float> mr(16 * 16 * 3, 0.5f);
+    fs::create_directories(dir.path() / "in3");
+    writeRgb(dir.path() / "in3" / "mr.png", 16, 16, mr);
+    const fs::path textured = planeAsset(dir.path() / "in3", [](json& d) {
+        d["materials"][0]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {{"index", 1}};
+        d["textures"].push_back({{"source", 1}});
+        d["images"].push_back({{"uri", "mr.png"}});
+    });
+    auto withTexture = processGltf(textured, dir.path() / "out3", o);
+    ASSERT_TRUE(withTexture) << withTexture.error();
+    EXPECT_EQ(withTexture->materials[0].mixture.rfind("off: ", 0), 0u);
+    const json t = readJson(withTexture->asset);
+    EXPECT_FALSE(t["materials"][0].contains("extensions") &&
+                 t["materials"][0]["extensions"].contains("BURNISH_lobe_mixture"));
 }
 
 } // namespace

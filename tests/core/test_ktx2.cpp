@@ -78,13 +78,15 @@ TEST(Ktx2, HeaderLevelIndexAndAlignmentFollowTheSpecification) {
 
 TEST(Ktx2, EveryFormatRoundTripsWithItsKeyValues) {
     for (Ktx2Format format : {Ktx2Format::R8, Ktx2Format::Rg8, Ktx2Format::Rgba8, Ktx2Format::Bc3,
-                              Ktx2Format::Bc4, Ktx2Format::Bc5}) {
+                              Ktx2Format::Bc4, Ktx2Format::Bc5, Ktx2Format::Rgba16f}) {
         SCOPED_TRACE(std::string(ktx2FormatName(format)));
         Ktx2Texture t = chain(format, 13, 6); // not a power of two: 13x6, 6x3, 3x1, 1x1
         t.keyValues = {{"burnish:role", "roughness"}};
         auto bytes = encodeKtx2(t);
         ASSERT_TRUE(bytes) << bytes.error();
-        const size_t blockBytes = ktx2IsBlockCompressed(format) ? (format == Ktx2Format::Bc4 ? 8 : 16) : 4;
+        const size_t blockBytes = ktx2IsBlockCompressed(format)   ? (format == Ktx2Format::Bc4 ? 8 : 16)
+                                  : format == Ktx2Format::Rgba16f ? 8
+                                                                  : 4;
         for (size_t k = 0; k < t.levels.size(); ++k)
             EXPECT_EQ(u64(*bytes, 80 + k * 24) % blockBytes, 0u);
         auto back = decodeKtx2(*bytes);
@@ -98,6 +100,35 @@ TEST(Ktx2, EveryFormatRoundTripsWithItsKeyValues) {
         ASSERT_TRUE(again);
         EXPECT_EQ(*again, *bytes);
     }
+}
+
+TEST(Ktx2, HalfFloatsAreDescribedAsSignedFloatSamples) {
+    // VK_FORMAT_R16G16B16A16_SFLOAT: typeSize 2, 8 bytes a texel, four 16-bit samples each flagged signed
+    // and float (0xC0 beside the channel id) with the range -1.0f..1.0f, as toktx writes them.
+    auto bytes = encodeKtx2(chain(Ktx2Format::Rgba16f, 4, 2));
+    ASSERT_TRUE(bytes) << bytes.error();
+    const std::string& b = *bytes;
+    EXPECT_EQ(u32(b, 12), 97u);
+    EXPECT_EQ(u32(b, 16), 2u);
+    const std::uint32_t dfd = u32(b, 48);
+    EXPECT_EQ(u32(b, 52), 4u + 24 + 4 * 16);
+    EXPECT_EQ(static_cast<unsigned char>(b[dfd + 20]), 8); // bytesPlane0
+    const unsigned char channels[4] = {0, 1, 2, 15};
+    for (size_t i = 0; i < 4; ++i) {
+        const size_t at = dfd + 28 + i * 16;
+        EXPECT_EQ(u32(b, at), std::uint32_t(16 * i) | 15u << 16 | std::uint32_t(channels[i] | 0xC0) << 24);
+        EXPECT_EQ(u32(b, at + 8), 0xBF800000u);
+        EXPECT_EQ(u32(b, at + 12), 0x3F800000u);
+    }
+    // Every level at an offset that is a multiple of 8 (a texel), so a reader can view it as 16-bit words.
+    for (size_t k = 0; k < 3; ++k)
+        EXPECT_EQ(u64(b, 80 + k * 24) % 8, 0u);
+    // A typeSize of 1 does not describe half floats.
+    std::string wrong = b;
+    wrong[16] = 1;
+    auto r = decodeKtx2(wrong);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().find("typeSize"), std::string::npos) << r.error();
 }
 
 TEST(Ktx2, TheWriterRefusesAChainThatDoesNotFitItsExtent) {

@@ -32,9 +32,11 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -151,8 +153,17 @@ protected:
         ASSERT_TRUE(s_context->makeCurrent());
     }
 
-    // Evaluates twin `twin` on each argument set; one RGBA result per set.
+    // Evaluates twin `twin` of twins.frag on each argument set; one RGBA result per set.
     static std::vector<std::array<float, 4>> evaluate(int twin, const std::vector<Args>& args) {
+        auto fragment = assembleShader("twins.frag", {{"TWIN", std::to_string(twin)}});
+        EXPECT_TRUE(fragment) << fragment.error();
+        if (!fragment) return {};
+        return evaluateSource(*fragment, "twins.frag TWIN=" + std::to_string(twin), args);
+    }
+
+    // Evaluates a fragment shader that reads uInputs and uInputs2 at its pixel and writes fragColor.
+    static std::vector<std::array<float, 4>>
+    evaluateSource(const std::string& fragment, const std::string& label, const std::vector<Args>& args) {
         EXPECT_LE(args.size(), kCapacity);
         std::vector<float> a(kCapacity * 4, 0.0f);
         std::vector<float> b(kCapacity * 4, 0.0f);
@@ -166,11 +177,7 @@ protected:
         auto texB = Texture2D::create({TextureLevel{kSize, kSize, b}}, 4, TextureFilter::Nearest, false);
         EXPECT_TRUE(texA && texB) << (texA ? texB.error() : texA.error());
         if (!texA || !texB) return {};
-        auto fragment = assembleShader("twins.frag", {{"TWIN", std::to_string(twin)}});
-        EXPECT_TRUE(fragment) << fragment.error();
-        if (!fragment) return {};
-        auto program =
-            Program::fromSources(kVertexSource, *fragment, "twins.frag TWIN=" + std::to_string(twin));
+        auto program = Program::fromSources(kVertexSource, fragment, label);
         EXPECT_TRUE(program) << program.error();
         if (!program) return {};
         auto target = Framebuffer::create(kSize, kSize, ColorFormat::Rgba32f, false);
@@ -199,8 +206,14 @@ protected:
     // of core. Prints the largest error relative to the tolerance per channel (the measured margin).
     static void expectTwin(const char* label, int twin, const std::vector<Args>& args, const Ref& reference,
                            const std::array<Tolerance, 4>& tolerance, int channels) {
+        expectResults(label, evaluate(twin, args), args, reference, tolerance, channels);
+    }
+
+    // expectTwin's comparison of results `gpu` (one per argument set) with core.
+    static void expectResults(const char* label, const std::vector<std::array<float, 4>>& gpu,
+                              const std::vector<Args>& args, const Ref& reference,
+                              const std::array<Tolerance, 4>& tolerance, int channels) {
         ASSERT_LE(args.size(), kCapacity) << label;
-        const auto gpu = evaluate(twin, args);
         ASSERT_EQ(gpu.size(), args.size()) << label;
         std::array<double, 4> worst{};
         int failures = 0;
@@ -801,6 +814,85 @@ TEST_F(Twins, MixtureLobeDecodeAndValue) {
                                          0.0, 0.0};
         },
         {kExp, kExp, kExp, kExp}, 2);
+}
+
+// The GLSL of three.js's BURNISH_lobe_mixture module (resources/three/burnish-gltf.js, the text between its
+// markers, as the module injects it into three.js's shader) against core's mixtureGgxLobe. The module
+// computes in GLSL ES 3.0 float as this GLSL 3.30 core shader does.
+std::string threeJsMixtureFragment() {
+    std::ifstream in(std::string(BURNISH_SOURCE_DIR) + "/resources/three/burnish-gltf.js");
+    std::stringstream text;
+    text << in.rdbuf();
+    const std::string js = text.str(), begin = "/* BEGIN mixtureGgxLobe */", end = "/* END mixtureGgxLobe */";
+    const size_t from = js.find(begin), to = js.find(end);
+    if (from == std::string::npos || to == std::string::npos || to < from) return {};
+    return "#version 330 core\n" + js.substr(from, to + end.size() - from) + R"(
+uniform sampler2D uInputs;
+uniform sampler2D uInputs2;
+out vec4 fragColor;
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    vec4 a = texelFetch(uInputs, p, 0);
+    vec4 b = texelFetch(uInputs2, p, 0); // (total, alpha0, spreadScale, output: 0 share/alpha/n.xy, 1 n.z)
+    vec3 n;
+    float alpha;
+    float share = mixtureGgxLobe(a, b.x, b.y, b.z, n, alpha);
+    fragColor = b.w < 0.5 ? vec4(share, alpha * alpha, n.x, n.y) : vec4(n.z, alpha, 0.0, 0.0);
+}
+)";
+}
+
+TEST_F(Twins, ThreeJsMixtureGgxLobe) {
+    const std::string fragment = threeJsMixtureFragment();
+    ASSERT_FALSE(fragment.empty()) << "resources/three/burnish-gltf.js lacks the mixtureGgxLobe markers";
+    // a = a stored lobe (w, w·b.x, w·b.y, w·S), b = (total, α0, c, output): empty, tiny and whole weights,
+    // means to slope 3, spreads from negative (rounding: clamped) to wide, α0 from 0 to past 1, c 0 to 2.
+    std::vector<Args> args;
+    for (const float w : {0.0f, 1e-4f, 0.3f, 1.0f})
+        for (const glm::vec2 b : {glm::vec2(0.0f), glm::vec2(0.3f, -0.1f), glm::vec2(-3.0f, 1.0f)})
+            for (const float spread : {-1e-3f, 0.0f, 0.02f, 0.5f})
+                for (const float alpha0 : {0.0f, 0.088f, 0.5f, 1.5f})
+                    for (const float c : {0.0f, 1.0f, 2.0f})
+                        for (const float total : {0.0f, 1.0f}) {
+                            const float ws = w * (spread + glm::dot(b, b));
+                            const Args base{w, w * b.x, w * b.y, ws, std::max(total, w), alpha0, c, 0.0f};
+                            args.push_back(base);
+                        }
+    ASSERT_LE(args.size() * 2, kCapacity);
+    std::vector<Args> withZ = args;
+    for (Args& a : withZ)
+        a[7] = 1.0f;
+    auto lobe = [](const Args& a) {
+        return mixtureGgxLobe({d(a[0]), d(a[1]), d(a[2]), d(a[3])}, d(a[4]), d(a[5]), d(a[6]));
+    };
+    // S − |b|² cancels in float as LEAN's M − BBᵀ does: an absolute error of a few ε of c·(S/w + |b|²) on α²
+    // (|b|² up to 10, c up to 2: ~5e-6), which α's square root magnifies where α is near 0; so α² is compared
+    // at the unit scale, and α itself where no spread cancels (c = 0: α = α0 clamped).
+    constexpr Tolerance kCancelUnit{1e-5, 1.0};
+    expectResults(
+        "mixtureGgxLobe (three.js)", evaluateSource(fragment, "burnish-gltf.js mixtureGgxLobe", args), args,
+        [&](const Args& a) {
+            const MixtureGgxLobe l = lobe(a);
+            return std::array<double, 4>{l.share, l.alpha * l.alpha, l.normal.x, l.normal.y};
+        },
+        {kUnitRational, kCancelUnit, kUnitRational, kUnitRational}, 4);
+    std::vector<Args> noSpread;
+    for (const Args& a : withZ)
+        if (a[6] == 0.0f) noSpread.push_back(a);
+    expectResults(
+        "mixtureGgxLobe normal.z (three.js)",
+        evaluateSource(fragment, "burnish-gltf.js mixtureGgxLobe", withZ), withZ,
+        [&](const Args& a) {
+            return std::array<double, 4>{lobe(a).normal.z, 0.0, 0.0, 0.0};
+        },
+        {kUnitRational, kUnitRational, kUnitRational, kUnitRational}, 1);
+    expectResults(
+        "mixtureGgxLobe alpha, c = 0 (three.js)",
+        evaluateSource(fragment, "burnish-gltf.js mixtureGgxLobe", noSpread), noSpread,
+        [&](const Args& a) {
+            return std::array<double, 4>{lobe(a).normal.z, lobe(a).alpha, 0.0, 0.0};
+        },
+        {kUnitRational, kUnitRational, kUnitRational, kUnitRational}, 2);
 }
 
 TEST_F(Twins, StochasticTexelAndNumbers) {

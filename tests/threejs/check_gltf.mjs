@@ -5,7 +5,9 @@
 //     each level's size halving (rounded down), and byte counts matching the format;
 //   - with --bake DIR (a `burnish bake --preset gltf --format png8` set of the same map at the same
 //     options), every KTX2 level equals that bake's PNG mips code for code: the normal texture's RG
-//     against the normal PNGs' R and G, the metallicRoughness texture's G against theirs.
+//     against the normal PNGs' R and G, the metallicRoughness texture's G against theirs;
+//   - every BURNISH_lobe_mixture material's lobe textures are RGBA16F chains whose weights (R) sum to 1
+//     per texel at every level, within half-float rounding.
 // Prints one JSON object; exits 1 when a check fails.
 // With --input ORIGINAL (the asset `burnish gltf` read), errors the original already has (a real asset's
 // own defects) are listed but not counted: the check is that Burnish adds none.
@@ -84,7 +86,7 @@ function imageBytes(image) {
 
 // VkFormat → bytes per texel or per 4x4 block.
 const FORMATS = { 9: ['r8', 1, false], 16: ['rg8', 2, false], 37: ['rgba8', 4, false],
-  137: ['bc3', 16, true], 139: ['bc4', 8, true], 141: ['bc5', 16, true] };
+  137: ['bc3', 16, true], 139: ['bc4', 8, true], 141: ['bc5', 16, true], 97: ['rgba16f', 8, false] };
 
 const ktx = [];
 for (const [index, image] of (doc.images || []).entries()) {
@@ -109,6 +111,41 @@ for (const [index, image] of (doc.images || []).entries()) {
   if (container.levels.length !== k + 1) failures.push(`image ${index}: ${container.levels.length} levels, the chain has ${k + 1}`);
   entry.container = container;
   ktx.push(entry);
+}
+
+// The lobe mixture: per material, the lobe textures' R (w) summed over the lobes at every texel of every level.
+function halfToFloat(h) {
+  const e = (h >> 10) & 0x1f, m = h & 0x3ff, sign = h & 0x8000 ? -1 : 1;
+  if (e === 0) return sign * m * 2 ** -24;
+  if (e === 31) return m ? NaN : sign * Infinity;
+  return sign * (1 + m / 1024) * 2 ** (e - 15);
+}
+const mixtures = [];
+for (const [mi, material] of (doc.materials || []).entries()) {
+  const ext = material.extensions && material.extensions.BURNISH_lobe_mixture;
+  if (!ext) continue;
+  const chains = ext.lobeTextures.map((info) => {
+    const image = doc.textures[info.index].extensions.KHR_texture_ktx.source;
+    return ktx.find((e) => e.image === image);
+  });
+  if (chains.length !== ext.lobes || chains.some((c) => !c || c.format !== 'rgba16f')) {
+    failures.push(`material ${mi}: BURNISH_lobe_mixture's ${ext.lobes} lobes are not RGBA16F KTX2 chains`);
+    continue;
+  }
+  let worst = 0;
+  chains[0].container.levels.forEach((_, k) => {
+    const views = chains.map((c) => {
+      const d = c.container.levels[k].levelData;
+      return new Uint16Array(d.buffer, d.byteOffset, d.byteLength / 2);
+    });
+    for (let i = 0; i < views[0].length; i += 4) {
+      let sum = 0;
+      for (const v of views) sum += halfToFloat(v[i]);
+      worst = Math.max(worst, Math.abs(sum - 1));
+    }
+  });
+  if (!(worst <= 2e-3)) failures.push(`material ${mi}: the lobe weights sum to 1 within ${worst}, not 2e-3`);
+  mixtures.push({ material: mi, lobes: ext.lobes, levels: chains[0].levels, worstWeightSum: worst });
 }
 
 // A minimal PNG reader (8-bit grey/RGB/RGBA, not interlaced): enough for Burnish's own PNG mips.
@@ -153,6 +190,7 @@ if (bakeDir) {
   const bake = JSON.parse(fs.readFileSync(path.join(bakeDir, 'bake.json'), 'utf8'));
   const files = Object.fromEntries(bake.files.map((f) => [f.name, f.paths]));
   for (const entry of ktx) {
+    if (entry.format === 'rgba16f') continue; // the lobe mixture's, checked above: no bake file holds them
     const role = /normal/.test(entry.name) ? 'normal' : /metallicRoughness/.test(entry.name) ? 'metallicRoughness' : null;
     if (!role || !files[role]) { failures.push(`image ${entry.image}: no '${role}' file in the bake to compare with`); continue; }
     if (entry.format !== 'rg8' && entry.format !== 'rgba8') continue; // block-compressed: nothing to compare code for code
@@ -174,5 +212,5 @@ if (bakeDir) {
 
 for (const e of ktx) delete e.container;
 console.log(JSON.stringify({ asset: assetPath, validator: { errors: issues.numErrors, errorsOfTheInput: errors.length - newErrors.length, warnings: issues.numWarnings,
-  infos: issues.numInfos, codes }, ktx2: ktx, compared, failures }, null, 2));
+  infos: issues.numInfos, codes }, ktx2: ktx, compared, mixtures, failures }, null, 2));
 process.exit(failures.length ? 1 : 0);

@@ -3,7 +3,7 @@
 //
 //   node tests/threejs/compare.mjs --burnish build/bin/burnish --maps A.png,B.png [--distances 2,8,32]
 //        [--methods vmf,variance-to-gloss,fitted] [--power 256] [--supersample 32] [--previews DIR]
-//        [--assert-never-worse fitted] [--anisotropy N] [--anisotropy-on] [--json FILE] [--gltf]
+//        [--assert-never-worse fitted] [--assert-mixture M] [--anisotropy N] [--anisotropy-on] [--json FILE] [--gltf]
 //
 // Each map is baked with the gltf preset (8-bit PNG, one file per mip, as an engine receives it) once per
 // method; three.js draws the plane with the map's own PNG (its mips) and constant roughness ("three.js
@@ -22,7 +22,11 @@
 // GLTFLoader with three.js's KTX2Loader and resources/three/burnish-gltf.js (KHR_texture_ktx): the KTX2
 // normal and metallicRoughness chains as Burnish baked them. The reference is the original's normal map
 // without mips. A method "fitted+anisotropy=on" (or =auto) adds burnish gltf --anisotropy: the
-// anisotropic fit as KHR_materials_anisotropy, which three.js's MeshPhysicalMaterial draws.
+// anisotropic fit as KHR_materials_anisotropy, which three.js's MeshPhysicalMaterial draws. The method
+// "mixture" is `burnish gltf --method mixture`: BURNISH_lobe_mixture, drawn by burnish-gltf.js's patch of
+// the material (each lobe through three.js's own BRDF_GGX). --assert-mixture M exits 1 unless row M meets the
+// mixture's targets: never worse than three.js alone beyond the reference's noise, at most half its error
+// in the mean over maps at every distance of 8x and more, and energy within [0.9, 1.1] everywhere.
 import {spawnSync} from 'node:child_process';
 import fs from 'node:fs';
 import http from 'node:http';
@@ -35,7 +39,7 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 
 function parseArgs(argv) {
     const o = {distances: [2, 8, 32], methods: ['vmf', 'variance-to-gloss', 'fitted'], power: 256, supersample: 32,
-               maps: [], burnish: '', previews: '', assert: '', json: '', anisotropy: 1, anisotropyOn: false, gltf: false,
+               maps: [], burnish: '', previews: '', assert: '', assertMixture: '', json: '', anisotropy: 1, anisotropyOn: false, gltf: false,
                chromium: process.env.BURNISH_CHROMIUM || '/usr/bin/chromium'};
     for (let i = 2; i < argv.length; ++i) {
         const a = argv[i], v = argv[i + 1];
@@ -48,6 +52,7 @@ function parseArgs(argv) {
         else if (a === '--supersample') o.supersample = Number(take());
         else if (a === '--previews') o.previews = take();
         else if (a === '--assert-never-worse') o.assert = take();
+        else if (a === '--assert-mixture') o.assertMixture = take();
         else if (a === '--json') o.json = take();
         else if (a === '--chromium') o.chromium = take();
         else if (a === '--anisotropy') o.anisotropy = Number(take());
@@ -200,9 +205,19 @@ async function main() {
                         line.push(`  ${name.padEnd(18)} rel. L1 ${v.relativeL1.toFixed(4)}  energy ${v.energy.toFixed(3)}  ` +
                                   `ratio to three.js alone ${(v.relativeL1 / alone.relativeL1).toFixed(3)}`);
                     console.log(line.join('\n'));
-                    if (o.assert && r.results[o.assert] &&
-                        r.results[o.assert].relativeL1 > alone.relativeL1 + r.noise.relativeL1) {
-                        console.log(`  FAIL: ${o.assert} is worse than three.js alone beyond the reference's noise`);
+                    for (const m of [o.assert, o.assertMixture])
+                        if (m && r.results[m] && r.results[m].relativeL1 > alone.relativeL1 + r.noise.relativeL1) {
+                            console.log(`  FAIL: ${m} is worse than three.js alone beyond the reference's noise`);
+                            failed = true;
+                        }
+                    if (o.assertMixture && r.formats && !(r.formats[o.assertMixture] || {}).mixture) {
+                        // The module did not patch the material: the row would be the fitted lobe's.
+                        console.log(`  FAIL: ${o.assertMixture} was not drawn as a lobe mixture by burnish-gltf.js`);
+                        failed = true;
+                    }
+                    const mix = o.assertMixture && r.results[o.assertMixture];
+                    if (mix && !(mix.energy >= 0.9 && mix.energy <= 1.1)) {
+                        console.log(`  FAIL: ${o.assertMixture}'s energy ${mix.energy.toFixed(3)} is outside [0.9, 1.1]`);
                         failed = true;
                     }
                 }
@@ -223,9 +238,24 @@ async function main() {
             console.log(`| ${d}x | ` + names.map(n => `${mean(n, 'relativeL1').toFixed(4)} (${mean(n, 'energy').toFixed(3)})`).join(' | ') +
                         ' | ' + names.slice(1).map(n => ratio(n).toFixed(3)).join(' | ') + ' |');
         }
+        if (o.assertMixture)
+            for (const d of o.distances.filter(d => d >= 8)) {
+                const at = results.filter(r => r.distance === d && r.results[o.assertMixture]);
+                const mean = n => at.reduce((a, r) => a + r.results[n].relativeL1, 0) / at.length;
+                const ratio = mean(o.assertMixture) / mean('three.js alone');
+                if (!at.length) {
+                    console.log(`FAIL: no row ${o.assertMixture}`);
+                    failed = true;
+                } else if (!(ratio <= 0.5)) {
+                    console.log(`FAIL: ${o.assertMixture} at ${d}x: mean ${mean(o.assertMixture).toFixed(4)} is ` +
+                                `${ratio.toFixed(3)} of three.js alone's ${mean('three.js alone').toFixed(4)} (target 0.5)`);
+                    failed = true;
+                }
+            }
         if (o.json) fs.writeFileSync(o.json, JSON.stringify(results.map(({previews, ...r}) => r), null, 1));
-        if (o.assert) console.log(failed ? `${o.assert}: worse than three.js alone in some case` :
-                                           `${o.assert}: never worse than three.js alone beyond the reference's noise`);
+        if (o.assert || o.assertMixture)
+            console.log(failed ? `${o.assert || o.assertMixture}: a target is missed (above)` :
+                                 `${[o.assert, o.assertMixture].filter(Boolean).join(', ')}: every target met`);
         process.exitCode = failed ? 1 : 0;
     } finally {
         fs.rmSync(work, {recursive: true, force: true});

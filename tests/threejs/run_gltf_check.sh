@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The test suite's independent glTF check (CTest gltf_validator_ktx_parse): `burnish gltf` on the test
 # plane (a real map as its normal texture), as .gltf with raw and BC payloads, with
-# KHR_materials_anisotropy and as .glb, a material
+# KHR_materials_anisotropy, with BURNISH_lobe_mixture (RGBA16F lobe chains) and as .glb, a material
 # written from one map (`burnish gltf --normal-map`), and
 # Debian's assimp-testmodels ClearCoatTest.gltf where installed; Khronos's gltf-validator reports no
 # error Burnish added, ktx-parse reads every KTX2 chain back in full, and the raw plane's levels equal
@@ -24,7 +24,7 @@ check() { node "$here/check_gltf.mjs" "$@" > "$work/check.json" || { cat "$work/
   node -e 'const d=JSON.parse(require("fs").readFileSync(process.argv[1]));
     console.log(process.argv[2], "validator errors", d.validator.errors, "(of the input", d.validator.errorsOfTheInput + ")",
       "ktx2", d.ktx2.map(k => k.format + " " + k.width + "x" + k.height + "/" + k.levels).join(", "),
-      "compared", JSON.stringify(d.compared))' "$work/check.json" "$1"; }
+      "compared", JSON.stringify(d.compared), "mixtures", JSON.stringify(d.mixtures))' "$work/check.json" "$1"; }
 # The plane's roughnessFactor 0.5 is Blinn-Phong power 2/0.5^4 - 2 = 30 in the gltf preset's terms.
 "$burnish" gltf "$work/in/plane.gltf" --out "$work/raw" > /dev/null
 "$burnish" bake "$work/in/normal.png" --preset gltf --power 30 --format png8 --out "$work/bake" > /dev/null
@@ -33,6 +33,8 @@ check "$work/raw/plane.gltf" --bake "$work/bake"
 check "$work/bc/plane.gltf"
 "$burnish" gltf "$work/in/plane.gltf" --out "$work/aniso" --anisotropy on > /dev/null
 check "$work/aniso/plane.gltf"
+"$burnish" gltf "$work/in/plane.gltf" --out "$work/mixture" --method mixture > /dev/null
+check "$work/mixture/plane.gltf" --bake "$work/bake"
 node "$here/to_glb.mjs" "$work/in/plane.gltf" "$work/in/plane.glb"
 "$burnish" gltf "$work/in/plane.glb" --out "$work/glb" > /dev/null
 check "$work/glb/plane.glb" --bake "$work/bake"

@@ -8,10 +8,12 @@
 #include <burnish/core/io/image.h>
 #include <burnish/core/io/ktx2.h>
 #include <burnish/core/prefilter/fitted_lobe.h>
+#include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/shading/specular_terms.h>
 
 #include "io/png_encode.h"
 
+#include <Imath/half.h>
 #include <fmt/format.h>
 #include <glm/glm.hpp>
 
@@ -451,6 +453,33 @@ Result<std::string> encodeKtx2Chains(const Chains& c, Ktx2Format format, const s
     return encodeKtx2(t);
 }
 
+// Interleaved half floats (KTX2's RGBA16F payload) of four-channel chains, little-endian; values past
+// the half range clamped to it, NaN to 0.
+std::string halfLevel(const Chains& c, size_t k) {
+    const size_t n = c.channels[0][k].size(), channels = c.channels.size();
+    std::string out(n * channels * 2, '\0');
+    for (size_t i = 0; i < n; ++i)
+        for (size_t ch = 0; ch < channels; ++ch) {
+            const float v = c.channels[ch][k][i];
+            const float clamped = std::isnan(v) ? 0.0f : std::clamp(v, -65504.0f, 65504.0f);
+            const std::uint16_t bits = Imath::half(clamped).bits();
+            out[(i * channels + ch) * 2] = static_cast<char>(bits & 0xFF);
+            out[(i * channels + ch) * 2 + 1] = static_cast<char>(bits >> 8);
+        }
+    return out;
+}
+
+Result<std::string> encodeKtx2Half(const Chains& c, const std::string& role) {
+    Ktx2Texture t;
+    t.format = Ktx2Format::Rgba16f;
+    t.width = c.sizes[0].first;
+    t.height = c.sizes[0].second;
+    t.keyValues = {{"burnish:role", role}};
+    for (size_t k = 0; k < c.sizes.size(); ++k)
+        t.levels.push_back(halfLevel(c, k));
+    return encodeKtx2(t);
+}
+
 Result<std::string> encodePngLevel(const Chains& c) {
     const std::string level = unormLevel(c, 0);
     PngPixels p;
@@ -584,7 +613,10 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
     spec.input = name;
     spec.out = outDir.string();
     spec.preset = "gltf";
-    spec.method = options.method;
+    // The mixture rides beside the fitted lobe: clients without its module read the fitted roughness.
+    const bool mixture = options.method && *options.method == "mixture";
+    const int mixtureLobes = std::clamp(options.mixtureLobes, 1, kMaxMixtureLobes);
+    spec.method = mixture ? std::optional<std::string>("fitted") : options.method;
     spec.allowImplausible = options.allowImplausible;
     auto resolved = resolveBakeJob(spec);
     if (!resolved) return Error{resolved.error()};
@@ -707,7 +739,7 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
         return int(images.size() - 1);
     };
 
-    bool anisotropyUsed = false;
+    bool anisotropyUsed = false, mixtureUsed = false;
     for (size_t wi = 0; wi < work.size(); ++wi) {
         const Work& w = work[wi];
         json& m = materials[size_t(w.material)];
@@ -781,8 +813,9 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
         // one copy of the map.
         const bool fitAnisotropy =
             options.anisotropy != GltfAnisotropy::Off && job.method == Method::Fitted && !w.roughness;
+        const bool fitMixture = mixture && !w.roughness;
         const auto shared = std::make_shared<const NormalMap>(std::move(map.value()));
-        if (fitAnisotropy) bo.cachedPyramid = bakePyramid(shared, bo);
+        if (fitAnisotropy || fitMixture) bo.cachedPyramid = bakePyramid(shared, bo);
         auto baked = bake(*shared, bo);
         if (!baked && baked.error() == "cancelled") return Error{"cancelled"};
         if (!baked) return Error{fmt::format("{}: {}: {}", name, what, baked.error())};
@@ -892,6 +925,39 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
                 }
             }
         }
+        // BURNISH_lobe_mixture: the mixture's lobes fitted at the base roughness, each slot one RGBA16F chain
+        // of mixtureGgxTexel's (w, w·b.x, w·b.y, w·(tr M − 2v)), every level down to 1×1.
+        std::vector<Chains> lobeChains;
+        if (mixture && w.roughness) {
+            report.mixture = "off: fitted for a constant base roughness only (this material has a texture)";
+        } else if (mixture) {
+            if (!progress(done + 0.82 * span, "fitting the lobe mixture, " + what)) return Error{"cancelled"};
+            const double s = bo.basePower;
+            const MixturePyramid mix = MixturePyramid::build(*bo.cachedPyramid, s, mixtureLobes);
+            const double v = mixtureBaseVariance(s, mixtureLobes);
+            lobeChains.assign(size_t(mixtureLobes), Chains{});
+            for (Chains& c : lobeChains) {
+                c.sizes = mr.sizes;
+                c.channels.assign(4, std::vector<std::vector<float>>(mr.sizes.size()));
+            }
+            for (size_t k = 0; k < mr.sizes.size(); ++k) {
+                const auto [lw, lh] = mr.sizes[k];
+                for (Chains& c : lobeChains)
+                    for (auto& channel : c.channels)
+                        channel[k].assign(size_t(lw) * size_t(lh), 0.0f);
+                for (int y = 0; y < lh; ++y)
+                    for (int x = 0; x < lw; ++x) {
+                        const auto lobes = mix.storedTexel(*shared, int(k), x, y, s);
+                        const size_t i = size_t(y) * size_t(lw) + size_t(x);
+                        for (int l = 0; l < mixtureLobes; ++l) {
+                            const std::array<double, 4> t = mixtureGgxTexel(lobes[size_t(l)], v);
+                            for (size_t ch = 0; ch < 4; ++ch)
+                                lobeChains[size_t(l)].channels[ch][k][i] = float(t[ch]);
+                        }
+                    }
+            }
+            report.mixture = fmt::format("on, {} lobes", mixtureLobes);
+        }
         mr.channels = {constantOr(channelChain(0)), rough, constantOr(channelChain(2)),
                        std::vector<std::vector<float>>(mr.sizes.size())};
         mr.channels[3] = constantOr(std::move(mr.channels[3]));
@@ -977,6 +1043,39 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
                 {"anisotropyStrength", 1.0}, {"anisotropyRotation", 0.0}, {"anisotropyTexture", info}};
             anisotropyUsed = true;
         }
+        if (!lobeChains.empty()) {
+            json infos = json::array();
+            for (size_t l = 0; l < lobeChains.size(); ++l) {
+                const std::string role = fmt::format("mixtureLobe{}", l);
+                auto ktx = encodeKtx2Half(lobeChains[l], role);
+                if (!ktx)
+                    return Error{
+                        fmt::format("{}: {}: the {} texture's KTX2: {}", name, what, role, ktx.error())};
+                // KTX2 only: no PNG holds these values, and only a client that reads the extension reads
+                // them.
+                const int image =
+                    addImage(uniqueName(taken, base + "_" + role, ".ktx2"), *ktx, "image/ktx2", report);
+                json t = textures[size_t(w.normal.texture)];
+                t.erase("extensions");
+                t.erase("name");
+                t.erase("source");
+                t["extensions"] = json{{std::string(kKhrTextureKtx), json{{"source", image}}}};
+                t["name"] = fmt::format("{} {} (Burnish)", report.name, role);
+                textures.push_back(t);
+                json info = {{"index", int(textures.size() - 1)}};
+                if (w.normal.texCoord != 0) info["texCoord"] = w.normal.texCoord;
+                if (!w.normal.transform.is_null())
+                    info["extensions"] = json{{"KHR_texture_transform", w.normal.transform}};
+                infos.push_back(info);
+            }
+            json& ext = m["extensions"];
+            if (!ext.is_object()) ext = json::object();
+            ext[std::string(kBurnishLobeMixture)] = {{"lobes", mixtureLobes},
+                                                     {"roughnessFactor", factor},
+                                                     {"spreadScale", kMixtureGgxSpreadScale},
+                                                     {"lobeTextures", infos}};
+            mixtureUsed = true;
+        }
         m["extras"] = m.value("extras", json::object());
         if (m["extras"].is_object())
             m["extras"]["burnish"] = json{{"method", methodName(job.method)},
@@ -995,8 +1094,10 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
     if (!work.empty()) {
         json& used = a.doc["extensionsUsed"];
         if (!used.is_array()) used = json::array();
-        for (const std::string& ext : {std::string(kKhrTextureKtx), std::string("KHR_materials_anisotropy")})
+        for (const std::string& ext : {std::string(kKhrTextureKtx), std::string("KHR_materials_anisotropy"),
+                                       std::string(kBurnishLobeMixture)})
             if ((ext != "KHR_materials_anisotropy" || anisotropyUsed) &&
+                (ext != kBurnishLobeMixture || mixtureUsed) &&
                 std::find(used.begin(), used.end(), json(ext)) == used.end())
                 used.push_back(ext);
     }
@@ -1094,11 +1195,13 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
                         {"roughnessTexture", r.roughnessTexture},
                         {"meanRoughnessMip0", r.meanRoughnessMip0},
                         {"meanRoughnessLast", r.meanRoughnessLast},
+                        {"anisotropy", r.anisotropy},
+                        {"mixture", r.mixture},
                         {"files", r.files},
                         {"notes", r.notes}});
     result.summary = {{"input", name},
                       {"asset", result.asset.string()},
-                      {"method", methodName(job.method)},
+                      {"method", mixture ? "mixture" : methodName(job.method)},
                       {"coding", options.coding == GltfTextureCoding::Bc ? "bc" : "raw"},
                       {"materials", mats},
                       {"copied", result.copied},

@@ -88,8 +88,7 @@ private:
 std::vector<Method> methodsUnder(Brdf brdf) {
     std::vector<Method> out;
     for (Method m : allMethods())
-        if (brdf == Brdf::BlinnPhong || (m != Method::Lean && m != Method::Clean && m != Method::Mixture))
-            out.push_back(m);
+        if (brdf == Brdf::BlinnPhong || (m != Method::Lean && m != Method::Clean)) out.push_back(m);
     return out;
 }
 
@@ -419,6 +418,40 @@ void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, siz
                 k == 0 && texelPowers ? (*texelPowers)[size_t(yi) * size_t(map.width) + size_t(xi)] : s;
             return mixture.storedTexel(map, k, xi, yi, p);
         };
+        if (mix && brdf == Brdf::Ggx) {
+            // The GGX form (mixtureGgxLobe): the stored lobes bilinearly filtered at the corner, by slot, or
+            // after shading each texel's own.
+            const int lobes = mix->lobeCount();
+            std::vector<MixtureGgxStored> texels(n);
+            tbb::parallel_for(0, level.height, [&](int y) {
+                for (int x = 0; x < level.width; ++x)
+                    texels[size_t(y) * size_t(level.width) + size_t(x)] =
+                        mixtureGgxStored(*mix, map, k, x, y, s);
+            });
+            std::vector<std::array<size_t, 4>> corners(n);
+            std::vector<LobeTable::GgxMixtureTexel> decoded(n);
+            tbb::parallel_for(0, level.height, [&](int y) {
+                for (int x = 0; x < level.width; ++x) {
+                    const size_t i = size_t(y) * size_t(level.width) + size_t(x);
+                    corners[i] = cornerTexels(level, x, y, border);
+                    if (filtering == MixtureFiltering::Stochastic) {
+                        decoded[i] = mixtureGgxDecoded(texels[i], lobes, s);
+                        continue;
+                    }
+                    MixtureGgxStored sum{};
+                    for (size_t c = 0; c < 4; ++c)
+                        for (size_t l = 0; l < sum.size(); ++l)
+                            for (size_t j = 0; j < 4; ++j)
+                                sum[l][j] += 0.25 * texels[corners[i][c]][l][j];
+                    decoded[i] = mixtureGgxDecoded(sum, lobes, s);
+                }
+            });
+            pass.betweenTables[m][mi] =
+                filtering == MixtureFiltering::Stochastic
+                    ? LobeTable::ofGgxBlends(decoded, lobes, corners, {0.25, 0.25, 0.25, 0.25})
+                    : LobeTable::ofGgxMixture(decoded, lobes);
+            continue;
+        }
         if (mix && filtering == MixtureFiltering::Stochastic) {
             // Filtering after shading: the corner's value is ¼ of each of its four texels' mixture values.
             std::vector<DecodedMixture> texels(n);
@@ -481,6 +514,18 @@ void betweenLevel(const NormalMap& map, const NormalPyramid& pyramid, int k, siz
         });
         pass.betweenTables[m][mi] = LobeTable::of(out, brdf);
     }
+}
+
+// The mixture's lobes at every texel of level k (0 included) as an engine's GGX shades them.
+LobeTable ggxMixtureLevel(const MixturePyramid& mix, const NormalMap& map, const PyramidLevel& level, int k,
+                          double s) {
+    std::vector<LobeTable::GgxMixtureTexel> out(size_t(level.width) * size_t(level.height));
+    tbb::parallel_for(0, level.height, [&](int y) {
+        for (int x = 0; x < level.width; ++x)
+            out[size_t(y) * size_t(level.width) + size_t(x)] =
+                mixtureGgxDecoded(mixtureGgxStored(mix, map, k, x, y, s), mix.lobeCount(), s);
+    });
+    return LobeTable::ofGgxMixture(out, mix.lobeCount());
 }
 
 // The decoded mixture of every texel of level k (k >= 1).
@@ -678,6 +723,16 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
             "the anisotropic fit is KHR_materials_anisotropy's, under the GGX truth only (--brdf ggx)"};
     if (options.brdf == Brdf::Ggx) {
         if (options.energySplit) return Error{"the energy split is LEAN's, under the Blinn-Phong truth only"};
+        const bool mixture = std::find(options.methods.begin(), options.methods.end(), Method::Mixture) !=
+                             options.methods.end();
+        if (mixture && texelPowers)
+            return Error{
+                "the mixture under --brdf ggx is fitted for one base roughness, not authored gloss (each "
+                "texel's own), as burnish gltf writes it"};
+        if (mixture && options.params.mixtureShadedFit)
+            return Error{
+                "the mixture's shaded fit is the Blinn-Phong truth's; under --brdf ggx the lobes are the "
+                "moments' own"};
         const std::vector<Method> ggx = methodsUnder(Brdf::Ggx);
         for (Method m : options.methods)
             if (std::find(ggx.begin(), ggx.end(), m) == ggx.end()) {
@@ -686,7 +741,7 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                     names += (names.empty() ? "" : ", ") + std::string(methodName(g));
                 return Error{"method '" + std::string(methodName(m)) +
                              "' is a slope-space Gaussian with no GGX form; --brdf ggx evaluates the methods "
-                             "an engine stores as one roughness (" +
+                             "an engine shades as GGX lobes (" +
                              names + ")"};
             }
     }
@@ -743,7 +798,8 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
         std::vector<const MixturePyramid*> mixtures(methodCount, nullptr);
         for (size_t m = 0; m < methodCount; ++m) {
             const EvaluatedVariant& v = variants[m];
-            if (v.method != Method::Mixture || v.lobes < 2) continue;
+            // Under GGX every K, 1 included, is the mixture's own GGX form (no LEAN lobe there).
+            if (v.method != Method::Mixture || (v.lobes < 2 && options.brdf != Brdf::Ggx)) continue;
             if (cancelled()) return Error{std::string(kCancelledMessage)};
             auto& mix = mixturePyramids[size_t(v.lobes)];
             if (!mix)
@@ -782,6 +838,10 @@ Result<EvaluationResult> evaluateMethods(const NormalMap& map, const EvaluateOpt
                 if (cancelled()) return Error{std::string(kCancelledMessage)};
                 const EvaluatedVariant& v = variants[m];
                 auto& table = pass.tables[m][size_t(k - firstMip)];
+                if (mixtures[m] && options.brdf == Brdf::Ggx) {
+                    table = ggxMixtureLevel(*mixtures[m], map, pyramid.level(k), k, s);
+                    continue;
+                }
                 // A mixture's level 0 is each normal's own lobe: LEAN's of the one-texel footprint.
                 if (mixtures[m] && k > 0) {
                     table = LobeTable::of(decodedLevel(*mixtures[m], pyramid.level(k), k));

@@ -59,6 +59,16 @@ double medianNs(const LobeTable& table, const std::vector<DirectionPair>& direct
 double measureShadingNs(const NormalPyramid& pyramid, int mip, const EvaluatedVariant& v, double s,
                         const EvaluateOptions& options, const std::vector<DirectionPair>& directions) {
     const PyramidLevel& level = pyramid.level(mip);
+    if (v.method == Method::Mixture && options.brdf == Brdf::Ggx) {
+        // The mixture's GGX lobes at that mip, as evaluate and the engine draw them.
+        const MixturePyramid mix = MixturePyramid::build(pyramid, s, v.lobes, mip);
+        std::vector<LobeTable::GgxMixtureTexel> texels;
+        for (int y = 0; y < level.height && texels.size() < kCostTexels; ++y)
+            for (int x = 0; x < level.width && texels.size() < kCostTexels; ++x)
+                texels.push_back(
+                    mixtureGgxDecoded(mixtureGgxStored(mix, pyramid.finest(), mip, x, y, s), v.lobes, s));
+        return medianNs(LobeTable::ofGgxMixture(texels, v.lobes), directions);
+    }
     if (v.method == Method::Mixture && v.lobes > 1 && mip > 0) {
         // The mixture's own lobes at that mip, as evaluate draws them.
         const MixturePyramid mix = MixturePyramid::build(pyramid, s, v.lobes, mip);

@@ -78,6 +78,29 @@ BURNISH_AVX512_CLONES void gaussianValues(const LobeTable& t, size_t begin, size
     }
 }
 
+// Σ over the slots of share·ggxSpecularTerm about the slot's normal with its α.
+BURNISH_AVX512_CLONES void ggxMixtureValues(const LobeTable& t, size_t begin, size_t count,
+                                            const DirectionPair& d, double* out) {
+    std::fill(out, out + count, 0.0);
+    const double hx = d.h.x, hy = d.h.y, hz = d.h.z, lx = d.l.x, ly = d.l.y, lz = d.l.z;
+    const double vx = d.v.x, vy = d.v.y, vz = d.v.z;
+    for (int s = 0; s < t.slots; ++s) {
+        const size_t o = size_t(s) * t.count + begin;
+        const double *share = t.coef.data() + o, *alpha = t.power.data() + o;
+        const double *nx = t.nx.data() + o, *ny = t.ny.data() + o, *nz = t.nz.data() + o;
+        for (size_t i = 0; i < count; ++i)
+            out[i] += share[i] * ggxSpecularTerm(nx[i] * hx + ny[i] * hy + nz[i] * hz,
+                                                 nx[i] * lx + ny[i] * ly + nz[i] * lz,
+                                                 nx[i] * vx + ny[i] * vy + nz[i] * vz, alpha[i]);
+    }
+}
+
+void putGgxLobe(LobeTable& t, size_t i, double weight, const MixtureGgxLobe& l) {
+    t.coef[i] = weight * l.share;
+    t.power[i] = l.alpha;
+    t.nx[i] = l.normal.x, t.ny[i] = l.normal.y, t.nz[i] = l.normal.z;
+}
+
 // One Gaussian slot from its share, mean, covariance (xx, yy, xy) and normal.
 void putGaussian(LobeTable& t, size_t i, double share, const glm::dvec2& mean,
                  const std::array<double, 3>& cov, const glm::dvec3& normal) {
@@ -192,6 +215,59 @@ LobeTable LobeTable::ofBlends(const std::vector<DecodedMixture>& texels,
     return t;
 }
 
+LobeTable LobeTable::ofGgxMixture(const std::vector<GgxMixtureTexel>& texels, int lobes) {
+    LobeTable t;
+    t.kind = Kind::GgxMixture;
+    t.count = texels.size();
+    t.slots = std::clamp(lobes, 1, kMaxMixtureLobes);
+    for (auto* v : {&t.coef, &t.power, &t.nx, &t.ny, &t.nz})
+        v->assign(size_t(t.slots) * t.count, 0.0);
+    for (size_t i = 0; i < t.count; ++i)
+        for (int s = 0; s < t.slots; ++s)
+            putGgxLobe(t, size_t(s) * t.count + i, 1.0, texels[i][size_t(s)]);
+    return t;
+}
+
+LobeTable LobeTable::ofGgxBlends(const std::vector<GgxMixtureTexel>& texels, int lobes,
+                                 const std::vector<std::array<size_t, 4>>& at,
+                                 const std::array<double, 4>& weights) {
+    LobeTable t;
+    t.kind = Kind::GgxMixture;
+    t.count = at.size();
+    lobes = std::clamp(lobes, 1, kMaxMixtureLobes);
+    t.slots = 4 * lobes;
+    for (auto* v : {&t.coef, &t.power, &t.nx, &t.ny, &t.nz})
+        v->assign(size_t(t.slots) * t.count, 0.0);
+    for (size_t i = 0; i < t.count; ++i)
+        for (size_t c = 0; c < 4; ++c)
+            for (int s = 0; s < lobes; ++s)
+                putGgxLobe(t, (c * size_t(lobes) + size_t(s)) * t.count + i, weights[c],
+                           texels[at[i][c]][size_t(s)]);
+    return t;
+}
+
+MixtureGgxStored mixtureGgxStored(const MixturePyramid& mix, const NormalMap& map, int k, int x, int y,
+                                  double s) {
+    const auto lobes = mix.storedTexel(map, k, x, y, s);
+    const double v = mixtureBaseVariance(s, mix.lobeCount());
+    MixtureGgxStored out{};
+    for (size_t i = 0; i < lobes.size(); ++i)
+        out[i] = mixtureGgxTexel(lobes[i], v);
+    return out;
+}
+
+LobeTable::GgxMixtureTexel mixtureGgxDecoded(const MixtureGgxStored& stored, int lobes, double s) {
+    lobes = std::clamp(lobes, 1, kMaxMixtureLobes);
+    double total = 0.0;
+    for (int i = 0; i < lobes; ++i)
+        total += std::max(stored[size_t(i)][0], 0.0);
+    const double alpha0 = ggxAlphaFromPower(std::max(clampPower(s), kMinBasePower));
+    LobeTable::GgxMixtureTexel out{};
+    for (int i = 0; i < lobes; ++i)
+        out[size_t(i)] = mixtureGgxLobe(stored[size_t(i)], total, alpha0);
+    return out;
+}
+
 void lobeValues(const LobeTable& table, size_t begin, size_t end, const DirectionPair& d, double* out) {
     if (table.kind == LobeTable::Kind::BlinnPhong)
         blinnPhongValues(table, begin, end - begin, d, out);
@@ -199,6 +275,8 @@ void lobeValues(const LobeTable& table, size_t begin, size_t end, const Directio
         ggxValues(table, begin, end - begin, d, out);
     else if (table.kind == LobeTable::Kind::GgxAnisotropic)
         ggxAnisotropicValues(table, begin, end - begin, d, out);
+    else if (table.kind == LobeTable::Kind::GgxMixture)
+        ggxMixtureValues(table, begin, end - begin, d, out);
     else
         gaussianValues(table, begin, end - begin, d, out);
 }

@@ -23,7 +23,9 @@ struct LobeTable {
     /// Ggx: ggxSpecularTerm with α = ggxAlphaFromPower(p) about n (the isotropic methods under --brdf ggx).
     /// GgxAnisotropic: ggxAnisotropicSpecularTerm about n with α_b in `power`, α_t in `alphaT` and
     /// t = (cosA, sinA, 0), b = (−sinA, cosA, 0) (the anisotropic fit, as engines shade it).
-    enum class Kind { BlinnPhong, Gaussian, Ggx, GgxAnisotropic };
+    /// GgxMixture: `slots` GGX lobes per texel, each its share (in `coef`) times ggxSpecularTerm about its
+    /// normal with its α (in `power`): the mixture under --brdf ggx (mixtureGgxLobe).
+    enum class Kind { BlinnPhong, Gaussian, Ggx, GgxAnisotropic, GgxMixture };
     Kind kind = Kind::BlinnPhong;
     int slots = 1;
     size_t count = 0;
@@ -47,7 +49,22 @@ struct LobeTable {
     static LobeTable ofBlends(const std::vector<DecodedMixture>& texels,
                               const std::vector<std::array<size_t, 4>>& at,
                               const std::array<double, 4>& weights);
+    /// The mixture under GGX, `lobes` slots per texel (the rest of each array unread).
+    using GgxMixtureTexel = std::array<MixtureGgxLobe, kMaxMixtureLobes>;
+    static LobeTable ofGgxMixture(const std::vector<GgxMixtureTexel>& texels, int lobes);
+    /// Filtering after shading under GGX: point i blends texels[at[i][c]] with weights[c], as ofBlends.
+    static LobeTable ofGgxBlends(const std::vector<GgxMixtureTexel>& texels, int lobes,
+                                 const std::vector<std::array<size_t, 4>>& at,
+                                 const std::array<double, 4>& weights);
 };
+
+/// The stored lobes (mixtureGgxTexel per slot) of texel (x, y) of level k of a mixture fitted at base power
+/// s, as burnish gltf writes them for an engine's GGX: storedTexel's slots with s's base variance.
+using MixtureGgxStored = std::array<std::array<double, 4>, kMaxMixtureLobes>;
+MixtureGgxStored mixtureGgxStored(const MixturePyramid& mix, const NormalMap& map, int k, int x, int y,
+                                  double s);
+/// Stored lobes (filtered or not) decoded as the engine does (mixtureGgxLobe, α0 of power s).
+LobeTable::GgxMixtureTexel mixtureGgxDecoded(const MixtureGgxStored& stored, int lobes, double s);
 
 /// out[i] = the value of lobe begin + i for direction pair d, i < end − begin.
 void lobeValues(const LobeTable& table, size_t begin, size_t end, const DirectionPair& d, double* out);

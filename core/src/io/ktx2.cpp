@@ -25,6 +25,9 @@ constexpr std::string_view kWriter = "Burnish";
 constexpr std::uint8_t kModelRgbsda = 1, kModelBc3 = 130, kModelBc4 = 131, kModelBc5 = 132;
 constexpr std::uint8_t kPrimariesBt709 = 1, kTransferLinear = 1;
 constexpr std::uint8_t kChannelAlpha = 15;
+// A sample's qualifiers beside its channel: a signed IEEE float (KHR_DF_SAMPLE_DATATYPE_SIGNED | _FLOAT).
+constexpr std::uint8_t kSignedFloat = 0x40 | 0x80;
+constexpr std::uint32_t kFloatMinusOne = 0xBF800000u, kFloatOne = 0x3F800000u;
 
 struct FormatInfo {
     Ktx2Format format;
@@ -34,17 +37,19 @@ struct FormatInfo {
     int blockBytes; // bytes per texel (uncompressed) or per 4×4 block
     bool blocks;
     std::uint8_t model;
+    std::uint32_t typeSize; // the header's: bytes of the format's data type (1 for blocks)
 };
 
 // VK_FORMAT_R8_UNORM 9, R8G8_UNORM 16, R8G8B8A8_UNORM 37, BC3_UNORM_BLOCK 137, BC4_UNORM_BLOCK 139,
-// BC5_UNORM_BLOCK 141 (the Vulkan specification's VkFormat).
-constexpr std::array<FormatInfo, 6> kFormats = {{
-    {Ktx2Format::R8, 9, "r8", 1, 1, false, kModelRgbsda},
-    {Ktx2Format::Rg8, 16, "rg8", 2, 2, false, kModelRgbsda},
-    {Ktx2Format::Rgba8, 37, "rgba8", 4, 4, false, kModelRgbsda},
-    {Ktx2Format::Bc3, 137, "bc3", 4, 16, true, kModelBc3},
-    {Ktx2Format::Bc4, 139, "bc4", 1, 8, true, kModelBc4},
-    {Ktx2Format::Bc5, 141, "bc5", 2, 16, true, kModelBc5},
+// BC5_UNORM_BLOCK 141, R16G16B16A16_SFLOAT 97 (the Vulkan specification's VkFormat).
+constexpr std::array<FormatInfo, 7> kFormats = {{
+    {Ktx2Format::R8, 9, "r8", 1, 1, false, kModelRgbsda, 1},
+    {Ktx2Format::Rg8, 16, "rg8", 2, 2, false, kModelRgbsda, 1},
+    {Ktx2Format::Rgba8, 37, "rgba8", 4, 4, false, kModelRgbsda, 1},
+    {Ktx2Format::Bc3, 137, "bc3", 4, 16, true, kModelBc3, 1},
+    {Ktx2Format::Bc4, 139, "bc4", 1, 8, true, kModelBc4, 1},
+    {Ktx2Format::Bc5, 141, "bc5", 2, 16, true, kModelBc5, 1},
+    {Ktx2Format::Rgba16f, 97, "rgba16f", 4, 8, false, kModelRgbsda, 2},
 }};
 
 const FormatInfo& info(Ktx2Format format) {
@@ -55,8 +60,9 @@ const FormatInfo& info(Ktx2Format format) {
 struct Sample {
     std::uint16_t bitOffset;
     std::uint8_t bitLengthMinusOne;
-    std::uint8_t channel;
+    std::uint8_t channel; // channel id and qualifiers
     std::uint32_t upper;
+    std::uint32_t lower = 0;
 };
 
 std::vector<Sample> samples(Ktx2Format format) {
@@ -73,6 +79,11 @@ std::vector<Sample> samples(Ktx2Format format) {
         return {{0, 63, 0, 0xFFFFFFFFu}};
     case Ktx2Format::Bc5:
         return {{0, 63, 0, 0xFFFFFFFFu}, {64, 63, 1, 0xFFFFFFFFu}};
+    case Ktx2Format::Rgba16f: // floats: the range the values are normalised to, −1..1 as the format's own
+        return {{0, 15, kSignedFloat, kFloatOne, kFloatMinusOne},
+                {16, 15, 1 | kSignedFloat, kFloatOne, kFloatMinusOne},
+                {32, 15, 2 | kSignedFloat, kFloatOne, kFloatMinusOne},
+                {48, 15, kChannelAlpha | kSignedFloat, kFloatOne, kFloatMinusOne}};
     }
     return {};
 }
@@ -123,7 +134,7 @@ std::string dataFormatDescriptor(Ktx2Format format) {
         put32(out, std::uint32_t(sample.bitOffset) | std::uint32_t(sample.bitLengthMinusOne) << 16 |
                        std::uint32_t(sample.channel) << 24);
         put32(out, 0); // samplePosition0..3
-        put32(out, 0); // sampleLower
+        put32(out, sample.lower);
         put32(out, sample.upper);
     }
     return out;
@@ -204,7 +215,7 @@ Result<std::string> encodeKtx2(const Ktx2Texture& texture) {
     const std::uint32_t kvdOffset = dfdOffset + std::uint32_t(dfd.size());
     std::string out(reinterpret_cast<const char*>(kIdentifier.data()), kIdentifier.size());
     put32(out, f.vkFormat);
-    put32(out, 1); // typeSize
+    put32(out, f.typeSize);
     put32(out, std::uint32_t(texture.width));
     put32(out, std::uint32_t(texture.height));
     put32(out, 0); // pixelDepth
@@ -250,9 +261,10 @@ Result<Ktx2Texture> decodeKtx2(std::string_view bytes) {
     const auto found = std::find_if(kFormats.begin(), kFormats.end(),
                                     [&](const FormatInfo& f) { return f.vkFormat == vkFormat; });
     if (found == kFormats.end())
-        return Error{fmt::format("KTX2: vkFormat {} is not one Burnish reads (r8, rg8, rgba8, bc3, bc4, bc5)",
-                                 vkFormat)};
-    if (typeSize != 1) return Error{fmt::format("KTX2: typeSize {} for an 8-bit format (1)", typeSize)};
+        return Error{fmt::format(
+            "KTX2: vkFormat {} is not one Burnish reads (r8, rg8, rgba8, bc3, bc4, bc5, rgba16f)", vkFormat)};
+    if (typeSize != found->typeSize)
+        return Error{fmt::format("KTX2: typeSize {} for {} ({})", typeSize, found->name, found->typeSize)};
     if (width < 1 || height < 1 || width > std::uint32_t(kMaxImageSide) ||
         height > std::uint32_t(kMaxImageSide))
         return Error{

@@ -7,6 +7,7 @@
 #include <burnish/core/prefilter/lobe_mixture.h>
 
 #include <burnish/core/prefilter/methods.h>
+#include <burnish/core/shading/ggx_specular.h>
 #include <burnish/core/util/numeric.h>
 #include <burnish/core/util/simd.h>
 
@@ -1080,6 +1081,41 @@ double mixtureValue(const DecodedMixture& mixture, const glm::dvec3& lightDir, c
 double mixtureValue(const LobeMixture& mixture, const glm::dvec3& lightDir, const glm::dvec3& h,
                     double minVariance) {
     return mixtureValue(decodeMixture(mixture, minVariance), lightDir, h);
+}
+
+std::array<double, 4> mixtureGgxTexel(const LobeMoments& lobe, double baseVariance) {
+    return {lobe.w, lobe.bx, lobe.by, lobe.mxx + lobe.myy - 2.0 * baseVariance * lobe.w};
+}
+
+MixtureGgxLobe mixtureGgxLobe(const std::array<double, 4>& t, double total, double alpha0,
+                              double spreadScale) {
+    MixtureGgxLobe out;
+    const double a0 = std::isfinite(alpha0) ? std::clamp(alpha0, 0.0, 1.0) : 0.0;
+    out.alpha = a0;
+    const double w = t[0];
+    if (!(w > 0.0) || !(total > 0.0) || !std::isfinite(total)) return out;
+    const double r = 1.0 / w;
+    const glm::dvec2 b(t[1] * r, t[2] * r);
+    const double spread = t[3] * r - glm::dot(b, b);
+    const double c = std::isfinite(spreadScale) ? std::max(spreadScale, 0.0) : 0.0;
+    const double a2 = a0 * a0 + c * (spread > 0.0 && std::isfinite(spread) ? spread : 0.0);
+    out.alpha = std::min(std::sqrt(a2), 1.0);
+    out.share = std::min(w / total, 1.0);
+    const glm::dvec3 n(b, 1.0);
+    const double len = glm::length(n);
+    out.normal = std::isfinite(len) ? n / len : glm::dvec3(0, 0, 1);
+    return out;
+}
+
+double mixtureGgxValue(const std::array<MixtureGgxLobe, kMaxMixtureLobes>& lobes, int count,
+                       const glm::dvec3& l, const glm::dvec3& v, const glm::dvec3& h) {
+    double sum = 0.0;
+    for (int i = 0; i < std::clamp(count, 0, kMaxMixtureLobes); ++i) {
+        const MixtureGgxLobe& lobe = lobes[size_t(i)];
+        sum += lobe.share * ggxSpecularTerm(glm::dot(lobe.normal, h), glm::dot(lobe.normal, l),
+                                            glm::dot(lobe.normal, v), lobe.alpha);
+    }
+    return sum;
 }
 
 } // namespace burnish

@@ -47,9 +47,19 @@ enum class GltfAnisotropy { Off, Auto, On };
 /// The name of the draft extension that points a texture at a KTX2 image of any payload.
 inline constexpr std::string_view kKhrTextureKtx = "KHR_texture_ktx";
 
+/// Burnish's material extension for the lobe mixture (method "mixture"): {"lobes": K, "roughnessFactor":
+/// the base perceptual roughness the lobes widen, "spreadScale": mixtureGgxLobe's c, "lobeTextures": K
+/// textureInfos, each an RGBA16F KTX2 chain of mixtureGgxTexel's (w, w·b.x, w·b.y, w·(tr M − 2v)) in the
+/// normal texture's UV set and transform}. resources/three/burnish-mixture.js shades it in three.js;
+/// other clients ignore it and read the fitted lobe's roughness written beside it.
+inline constexpr std::string_view kBurnishLobeMixture = "BURNISH_lobe_mixture";
+
 struct GltfOptions {
     /// A method the gltf preset stores (normal + one roughness channel); the preset's default when unset.
+    /// "mixture": the fitted lobe as that, and BURNISH_lobe_mixture beside it (a constant base roughness).
     std::optional<std::string> method;
+    /// The mixture's lobes per texel (1..kMaxMixtureLobes), for method "mixture".
+    int mixtureLobes = kDefaultMixtureLobes;
     GltfTextureCoding coding = GltfTextureCoding::Raw;
     GltfAnisotropy anisotropy = GltfAnisotropy::Off;
     Overwrite overwrite = Overwrite::Refuse;
@@ -78,6 +88,8 @@ struct GltfMaterialReport {
     double meanRoughnessLast = 0.0; // ... and of the 1×1 level
     /// "on", or "off: " and why; empty when not asked (GltfAnisotropy::Off, or a method other than fitted).
     std::string anisotropy;
+    /// "on, K lobes", or "off: " and why; empty unless method "mixture" was asked.
+    std::string mixture;
     /// The isotropic and anisotropic fits' mean relative L1 over levels 1-6 (when the anisotropy was fitted).
     double isotropicError = 0.0, anisotropicError = 0.0;
     std::vector<std::string> files; // files written for it (empty inside a .glb)

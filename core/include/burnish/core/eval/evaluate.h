@@ -48,7 +48,8 @@ inline bool isCancelled(const Error& error) {
 }
 
 /// The methods that have a form under `brdf`, in report order: every method under Blinn-Phong; under GGX
-/// the isotropic ones an engine stores as one roughness (not LEAN, CLEAN or the mixture).
+/// the isotropic ones an engine stores as one roughness and the mixture, whose lobes an engine shades as GGX
+/// lobes (mixtureGgxLobe); not LEAN or CLEAN.
 std::vector<Method> methodsUnder(Brdf brdf);
 
 struct EvaluateOptions {

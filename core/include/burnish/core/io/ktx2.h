@@ -1,8 +1,9 @@
 // KTX 2.0 files (Khronos Texture 2.0: identifier, header, level index, Data Format Descriptor,
 // key/value data, levels), written and read by Burnish itself: one 2D texture (no layers, faces or
 // depth), no supercompression, every mip level given. Formats: uncompressed 8-bit unsigned normalized
-// R8/RG8/RGBA8 and the BC4/BC5/BC3 blocks NVIDIA Texture Tools makes. Levels are stored smallest
-// first, each at an offset aligned to lcm(texel block size, 4), rows top first (KTXorientation "rd",
+// R8/RG8/RGBA8, the BC4/BC5/BC3 blocks NVIDIA Texture Tools makes, and RGBA16F (half floats, for
+// values outside [0, 1] that filtering must keep linear: the lobe mixture's moments). Levels are stored
+// smallest first, each at an offset aligned to lcm(texel block size, 4), rows top first (KTXorientation "rd",
 // as glTF's UV origin expects). Output bytes depend only on the inputs.
 #pragma once
 
@@ -16,11 +17,11 @@
 
 namespace burnish {
 
-enum class Ktx2Format { R8, Rg8, Rgba8, Bc3, Bc4, Bc5 };
+enum class Ktx2Format { R8, Rg8, Rgba8, Bc3, Bc4, Bc5, Rgba16f };
 
 /// The Vulkan format code the file's header stores (VK_FORMAT_R8_UNORM = 9, ...).
 std::uint32_t ktx2VkFormat(Ktx2Format format);
-std::string_view ktx2FormatName(Ktx2Format format); // "r8", "rg8", "rgba8", "bc3", "bc4", "bc5"
+std::string_view ktx2FormatName(Ktx2Format format); // "r8", "rg8", "rgba8", "bc3", "bc4", "bc5", "rgba16f"
 /// Channels the format stores (BC3: 4, BC4: 1, BC5: 2).
 int ktx2Channels(Ktx2Format format);
 bool ktx2IsBlockCompressed(Ktx2Format format);

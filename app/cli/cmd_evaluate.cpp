@@ -182,7 +182,9 @@ const CommandRegistration registration{
         sub->add_option("--methods", o->methods,
                         "Methods to evaluate, comma separated (default all: naive, toksvig, toksvig-map, "
                         "variance-to-gloss, lean, clean, vmf, mixture, fitted; under --brdf ggx all but "
-                        "the slope-space lean, clean and mixture).")
+                        "the slope-space lean and clean, the mixture as an engine shades it: each lobe a GGX "
+                        "lobe about its mean slope's normal, widened by its slopes' spread, as burnish gltf "
+                        "--method mixture writes it for three.js).")
             ->delimiter(',')
             ->type_name("LIST");
         sub->add_option("--kernels", o->kernels,
@@ -219,7 +221,8 @@ const CommandRegistration registration{
         sub->add_option(
                "--lobes", o->lobes,
                "Lobe counts K of the mixture, comma separated, each its own row mixture-kK (default 3; "
-               "1,2,3,4 draws the error-against-cost curve; K = 1 is LEAN).")
+               "1,2,3,4 draws the error-against-cost curve; K = 1 is LEAN; under --brdf ggx one GGX lobe "
+               "widened by the whole footprint's spread).")
             ->delimiter(',')
             ->check(CLI::Range(1, 4))
             ->type_name("LIST");

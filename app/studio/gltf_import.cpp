@@ -9,11 +9,17 @@
 namespace burnish::studio {
 
 std::optional<std::string> gltfMethodFor(const MaterialDocument& doc) {
+    if (doc.settings().method == Method::Mixture) return std::string("mixture");
     if (doc.settings().preset != "gltf") return std::nullopt;
     const auto preset = findPreset("gltf");
     if (preset && checkPresetMethod(*preset, doc.settings().method))
         return std::string(methodName(doc.settings().method));
     return std::nullopt;
+}
+
+void setGltfMethod(const MaterialDocument& doc, GltfOptions& options) {
+    options.method = gltfMethodFor(doc);
+    options.mixtureLobes = doc.settings().mixtureLobes;
 }
 
 QString gltfSummaryText(const GltfResult& result) {
@@ -28,6 +34,7 @@ QString gltfSummaryText(const GltfResult& result) {
                     .arg(m.mipCount)
                     .arg(m.meanRoughnessMip0, 0, 'f', 3)
                     .arg(m.meanRoughnessLast, 0, 'f', 3);
+        if (!m.mixture.empty()) text += "  Lobe mixture: " + QString::fromStdString(m.mixture) + "\n";
         for (const std::string& note : m.notes)
             text += "  Note: " + QString::fromStdString(note) + "\n";
     }

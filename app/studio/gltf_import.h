@@ -21,8 +21,11 @@
 namespace burnish::studio {
 
 /// The document's method when its preset is gltf (what the viewport shows is what the asset gets),
-/// else none: the gltf preset's default (fitted), whatever another preset's method is.
+/// else none: the gltf preset's default (fitted), whatever another preset's method is. The lobe mixture,
+/// under any preset, is "mixture": the fitted lobe and BURNISH_lobe_mixture beside it.
 std::optional<std::string> gltfMethodFor(const MaterialDocument& doc);
+/// Sets options' method (gltfMethodFor) and, for the mixture, the document's lobe count.
+void setGltfMethod(const MaterialDocument& doc, GltfOptions& options);
 
 /// The document's material as exportMaterialGltf takes it: its normal map, its base gloss or authored
 /// gloss per texel (a gloss map, painted layers) as GGX perceptual roughness through the powers they

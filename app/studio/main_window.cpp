@@ -613,7 +613,7 @@ void MainWindow::chooseGltfAsset() {
 void MainWindow::processGltfAsset(const QString& input, const QString& outDir) {
     if (m_gltfRunner->running()) return;
     GltfOptions options;
-    options.method = gltfMethodFor(*m_doc);
+    setGltfMethod(*m_doc, options);
     const QFileInfo info(input);
     // The asset file is the set's index: it exists when a previous run of this asset is there.
     const QString target = QDir(outDir).filePath(info.completeBaseName() +
@@ -651,7 +651,7 @@ void MainWindow::exportGltf(const QString& outDir) {
         m_projectPath.isEmpty() ? "material" : QFileInfo(m_projectPath).completeBaseName().toStdString();
     GltfMaterialSource material = gltfMaterialSourceFor(*m_doc, name);
     GltfOptions options;
-    options.method = gltfMethodFor(*m_doc);
+    setGltfMethod(*m_doc, options);
     const QString target = QDir(outDir).filePath(QString::fromStdString(name) + ".gltf");
     if (!beginGltfJob("Exporting the material as glTF…", target, options)) return;
     m_gltfRunner->startExport(std::move(material), outDir, std::move(options));

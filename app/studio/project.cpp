@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <set>
 
@@ -89,7 +90,10 @@ public:
         const Json* v = get(key, true);
         if (!v) return std::nullopt;
         if (!v->is_number() || !(v->get<double>() >= min && v->get<double>() <= max)) {
-            fail(key, "a number in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+            char range[64];
+            std::snprintf(range, sizeof range, "a number in [%g, %g]", min,
+                          max); // [0, 64], not [0.000000, ...]
+            fail(key, range);
             return std::nullopt;
         }
         return v->get<double>();

@@ -220,7 +220,7 @@ TEST(CliBake, ReportWritesTheGroundTruthEvaluationBesideTheTextures) {
     EXPECT_EQ(evaluation["base_powers"][0], 300.0); // the bake's power
     EXPECT_EQ(evaluation["brdf"], "ggx");           // godot's engine shades GGX
     EXPECT_EQ(job["method"], "fitted");             // the roughness presets' default
-    EXPECT_EQ(evaluation["costs"].size(), 6u);      // every GGX method (godot), not only the baked one
+    EXPECT_EQ(evaluation["costs"].size(), 7u);      // every GGX method (godot), the mixture's GGX form too
     EXPECT_TRUE(fs::exists(dir / "o" / "report" / "evaluate-error-per-mip.png"));
 }
 

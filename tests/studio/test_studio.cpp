@@ -411,9 +411,9 @@ TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
          {environmentField("source", "sun"),
           "environment: 'source' must be \"off\", \"studio\" or \"file\""}},
         {"environment-intensity",
-         {environmentField("intensity", 5000), "'intensity' must be a number in [0"}},
+         {environmentField("intensity", 5000), "'intensity' must be a number in [0, 1024]"}},
         {"environment-rotation",
-         {environmentField("rotation", "left"), "'rotation' must be a number in [-180"}},
+         {environmentField("rotation", "left"), "'rotation' must be a number in [-180, 180]"}},
         {"environment-lobe",
          {environmentField("lobe", "ggx"), "'lobe' must be \"blinn-phong\" or \"phong\""}},
         {"environment-fis", {environmentField("fis", "yes"), "'fis' must be true or false"}},
@@ -608,6 +608,17 @@ TEST(MainWindow, ProcessGltfAssetWritesWhatBurnishGltfWritesAndAsksBeforeReplaci
     ASSERT_TRUE(w.window.document()->setPreset("gltf"));
     ASSERT_TRUE(w.window.document()->setMethod(Method::Vmf));
     EXPECT_EQ(gltfMethodFor(*w.window.document()), "vmf");
+    // The mixture the viewport shows goes out as BURNISH_lobe_mixture beside the fitted lobe, its lobe count
+    // too.
+    ASSERT_TRUE(w.window.document()->setPreset("mixture"));
+    ASSERT_TRUE(w.window.document()->setMethod(Method::Mixture));
+    w.window.document()->setMixtureLobes(2);
+    GltfOptions mixture;
+    setGltfMethod(*w.window.document(), mixture);
+    EXPECT_EQ(mixture.method, "mixture");
+    EXPECT_EQ(mixture.mixtureLobes, 2);
+    ASSERT_TRUE(w.window.document()->setPreset("gltf"));
+    ASSERT_TRUE(w.window.document()->setMethod(Method::Vmf));
     QSignalSpy finished(&w.window, &MainWindow::gltfFinished);
     QSignalSpy progress(w.window.gltfRunner(), &GltfRunner::progress);
     w.window.processGltfAsset(q(dir / "in" / "plane.gltf"), q(dir / "studio"));

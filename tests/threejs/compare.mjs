@@ -4,6 +4,7 @@
 //   node tests/threejs/compare.mjs --burnish build/bin/burnish --maps A.png,B.png [--distances 2,8,32]
 //        [--methods vmf,variance-to-gloss,fitted] [--power 256] [--supersample 32] [--previews DIR]
 //        [--assert-never-worse fitted] [--assert-mixture M] [--anisotropy N] [--anisotropy-on] [--json FILE] [--gltf]
+//        [--shape plane|sphere] [--orbit FRAMES] [--orbit-degrees D] [--orbit-supersample N]
 //
 // Each map is baked with the gltf preset (8-bit PNG, one file per mip, as an engine receives it) once per
 // method; three.js draws the plane with the map's own PNG (its mips) and constant roughness ("three.js
@@ -27,6 +28,12 @@
 // the material (each lobe through three.js's own BRDF_GGX). --assert-mixture M exits 1 unless row M meets the
 // mixture's targets: never worse than three.js alone beyond the reference's noise, at most half its error
 // in the mean over maps at every distance of 8x and more, and energy within [0.9, 1.1] everywhere.
+// With --gltf: --shape sphere draws a UV sphere (tangents from its UVs) instead of the asset's plane, the
+// minification then at its equator facing the camera; --orbit N also measures the shimmer of a slow orbit
+// (render/shimmer.h's measure: N frames, the camera and light turned --orbit-degrees, default 0.5, about
+// the up axis between them; the mean absolute change of a pixel's grey between consecutive frames) for the
+// reference (supersampled --orbit-supersample times, default 8) and every row, printed with each row's
+// ratio to the reference's: 1 is the motion alone, more is flicker.
 import {spawnSync} from 'node:child_process';
 import fs from 'node:fs';
 import http from 'node:http';
@@ -40,6 +47,7 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 function parseArgs(argv) {
     const o = {distances: [2, 8, 32], methods: ['vmf', 'variance-to-gloss', 'fitted'], power: 256, supersample: 32,
                maps: [], burnish: '', previews: '', assert: '', assertMixture: '', json: '', anisotropy: 1, anisotropyOn: false, gltf: false,
+               shape: 'plane', orbit: 0, orbitDegrees: 0.5, orbitSupersample: 8,
                chromium: process.env.BURNISH_CHROMIUM || '/usr/bin/chromium'};
     for (let i = 2; i < argv.length; ++i) {
         const a = argv[i], v = argv[i + 1];
@@ -58,11 +66,19 @@ function parseArgs(argv) {
         else if (a === '--anisotropy') o.anisotropy = Number(take());
         else if (a === '--anisotropy-on') o.anisotropyOn = true;
         else if (a === '--gltf') o.gltf = true;
+        else if (a === '--shape') o.shape = take();
+        else if (a === '--orbit') o.orbit = Number(take());
+        else if (a === '--orbit-degrees') o.orbitDegrees = Number(take());
+        else if (a === '--orbit-supersample') o.orbitSupersample = Number(take());
         else throw new Error(`unknown argument ${a}`);
     }
     if (!o.burnish || !o.maps.length) throw new Error('give --burnish BIN and --maps A.png[,B.png...]');
     if (o.distances.some(d => !(d > 0)) || !(o.power > 0) || !(o.supersample >= 1))
         throw new Error('distances, power and supersample must be positive');
+    if (!['plane', 'sphere'].includes(o.shape)) throw new Error('--shape is plane or sphere');
+    if ((o.shape !== 'plane' || o.orbit) && !o.gltf) throw new Error('--shape and --orbit go with --gltf');
+    if (o.orbit && !(o.orbit >= 2 && o.orbitDegrees > 0 && o.orbitSupersample >= 1))
+        throw new Error('--orbit takes at least 2 frames, a positive step and supersample');
     return o;
 }
 
@@ -186,7 +202,8 @@ async function main() {
                     const r = o.gltf
                         ? await page.evaluate(cfg => window.runGltfCase(cfg), {
                               original: c.original, assets: c.assets, minification: d, supersample: o.supersample,
-                              anisotropy: o.anisotropy, previews: Boolean(o.previews)})
+                              anisotropy: o.anisotropy, previews: Boolean(o.previews), shape: o.shape,
+                              orbitFrames: o.orbit, orbitDegrees: o.orbitDegrees, orbitSupersample: o.orbitSupersample})
                         : await page.evaluate(cfg => window.runCase(cfg), {
                               normal: c.normal, chains: c.chains, minification: d, roughness, supersample: o.supersample,
                               anisotropy: o.anisotropy, anisotropyOn: o.anisotropyOn,
@@ -204,6 +221,10 @@ async function main() {
                     for (const [name, v] of Object.entries(r.results))
                         line.push(`  ${name.padEnd(18)} rel. L1 ${v.relativeL1.toFixed(4)}  energy ${v.energy.toFixed(3)}  ` +
                                   `ratio to three.js alone ${(v.relativeL1 / alone.relativeL1).toFixed(3)}`);
+                    if (r.shimmer)
+                        line.push(`  shimmer of a ${o.orbit}-frame orbit (ratio to the reference's ${r.shimmer.reference.toExponential(3)}): ` +
+                                  Object.entries(r.shimmer).filter(([n]) => n !== 'reference')
+                                      .map(([n, v]) => `${n} ${(v / r.shimmer.reference).toFixed(3)}`).join(', '));
                     console.log(line.join('\n'));
                     for (const m of [o.assert, o.assertMixture])
                         if (m && r.results[m] && r.results[m].relativeL1 > alone.relativeL1 + r.noise.relativeL1) {
@@ -237,6 +258,15 @@ async function main() {
             const ratio = n => at.reduce((a, r) => a + r.results[n].relativeL1 / r.results['three.js alone'].relativeL1, 0) / at.length;
             console.log(`| ${d}x | ` + names.map(n => `${mean(n, 'relativeL1').toFixed(4)} (${mean(n, 'energy').toFixed(3)})`).join(' | ') +
                         ' | ' + names.slice(1).map(n => ratio(n).toFixed(3)).join(' | ') + ' |');
+        }
+        if (o.orbit) {
+            console.log('\n| distance | ' + names.map(n => `${n} shimmer / reference`).join(' | ') + ' |');
+            console.log('| --- |' + ' ---: |'.repeat(names.length));
+            for (const d of o.distances) {
+                const at = results.filter(r => r.distance === d);
+                const ratio = n => at.reduce((a, r) => a + r.shimmer[n] / r.shimmer.reference, 0) / at.length;
+                console.log(`| ${d}x | ` + names.map(n => ratio(n).toFixed(3)).join(' | ') + ' |');
+            }
         }
         if (o.assertMixture)
             for (const d of o.distances.filter(d => d >= 8)) {

@@ -261,7 +261,12 @@ std::string evaluationMarkdown(const EvaluationReport& r) {
               "the GGX specular term an engine shades, D_GGX(n_i.h) V(n_i.l, n_i.v)/4 max(0, n_i.l) with "
               "the height-correlated Smith visibility of glTF's reference BRDF and alpha^2 = 2/(s+2) of the "
               "base power s (Fresnel 1). Each method: one GGX lobe about its renormalized mean normal with "
-              "the alpha of its power, shaded the same way. ";
+              "the alpha of its power, shaded the same way; the mixture: per lobe its share times a GGX lobe "
+              "about the normal of its mean slope b with alpha^2 = alpha0^2 + "
+           << kMixtureGgxSpreadScale
+           << " (S - |b|^2), S - |b|^2 the "
+              "spread of its normals' slopes, from the stored lobes (w, w.b, w.S) as burnish gltf --method "
+              "mixture writes them and bilinear filtering merges them. ";
     else
         md << "Ground truth: for mip k, the mean over the texel's footprint of finest texels of "
               "D_s(n_i.h) max(0, n_i.l), D_s the normalized Blinn-Phong NDF of the base power s. "

@@ -11,6 +11,7 @@
 
 #include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -604,6 +605,25 @@ TEST(Gltf, TheMixtureRidesBesideTheFittedLobeAsRgba16fLobeChains) {
         // The treads' slopes widen the lobes at every level above the finest, not at it.
         if (k == 0) EXPECT_LT(widened / double(n), 1e-3);
         if (k >= 2) EXPECT_GT(widened / double(n), 1e-3) << "level " << k;
+    }
+
+    // A material of one map (the studio's export, whose replaced textures are pruned and the rest
+    // renumbered): the lobe textures still name the mixture's textures.
+    auto map = loadNormalMap(kData / "trak-rust1_nm.png");
+    ASSERT_TRUE(map) << map.error();
+    GltfMaterialSource source;
+    source.name = "rust";
+    source.normal = std::make_shared<const NormalMap>(std::move(*map));
+    auto exported = exportMaterialGltf(source, dir.path() / "material", o);
+    ASSERT_TRUE(exported) << exported.error();
+    const json e = readJson(exported->asset);
+    EXPECT_EQ(e["materials"][0]["extras"]["burnish"]["method"], "mixture");
+    const json& lobeInfos = e["materials"][0]["extensions"]["BURNISH_lobe_mixture"]["lobeTextures"];
+    ASSERT_EQ(lobeInfos.size(), 2u);
+    for (size_t l = 0; l < 2; ++l) {
+        const size_t index = lobeInfos[l]["index"].get<size_t>();
+        ASSERT_LT(index, e["textures"].size());
+        EXPECT_EQ(e["textures"][index]["name"], fmt::format("rust mixtureLobe{} (Burnish)", l));
     }
 
     // A material with a roughness texture: the fitted lobe alone, and why.

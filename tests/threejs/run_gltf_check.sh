@@ -42,6 +42,10 @@ check "$work/glb/plane.glb" --bake "$work/bake"
 "$burnish" gltf --normal-map "$work/in/normal.png" --dielectric --specular 0.02,0.03,0.04 --roughness 0.4 \
   --name plastic --out "$work/material" > /dev/null
 check "$work/material/plastic.gltf"
+# The same with the lobe mixture (the studio's export of a mixture: its pruned and renumbered textures).
+"$burnish" gltf --normal-map "$work/in/normal.png" --method mixture --lobes 2 --name mixed \
+  --out "$work/material-mixture" > /dev/null
+check "$work/material-mixture/mixed.gltf"
 clearcoat=/usr/share/assimp/models/glTF2/ClearCoat-glTF/ClearCoatTest.gltf
 if [ -f "$clearcoat" ]; then
   "$burnish" gltf "$clearcoat" --out "$work/clearcoat" > /dev/null

@@ -505,14 +505,22 @@ std::string safeStem(std::string s) {
     return s.empty() ? std::string("asset") : s;
 }
 
-// Every textureInfo of the document (an object under a key ending in "Texture" with an integer
-// "index"), visited with its index.
+// Every textureInfo of the document (an object under a key ending in "Texture", or in an array under a key
+// ending in "Textures" as BURNISH_lobe_mixture's lobeTextures, with an integer "index"), visited with its
+// index.
 void forEachTextureInfo(json& node, const std::function<void(json& info)>& visit) {
+    auto endsWith = [](const std::string& key, std::string_view end) {
+        return key.size() > end.size() && key.compare(key.size() - end.size(), end.size(), end) == 0;
+    };
+    auto isInfo = [](const json& v) {
+        return v.is_object() && v.contains("index") && v["index"].is_number_integer();
+    };
     if (node.is_object()) {
         for (auto& [key, value] : node.items()) {
-            if (key.size() > 7 && key.compare(key.size() - 7, 7, "Texture") == 0 && value.is_object() &&
-                value.contains("index") && value["index"].is_number_integer())
-                visit(value);
+            if (endsWith(key, "Texture") && isInfo(value)) visit(value);
+            if (endsWith(key, "Textures") && value.is_array())
+                for (json& item : value)
+                    if (isInfo(item)) visit(item);
             forEachTextureInfo(value, visit);
         }
     } else if (node.is_array()) {
@@ -1078,7 +1086,7 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
         }
         m["extras"] = m.value("extras", json::object());
         if (m["extras"].is_object())
-            m["extras"]["burnish"] = json{{"method", methodName(job.method)},
+            m["extras"]["burnish"] = json{{"method", mixture ? "mixture" : methodName(job.method)},
                                           {"normalScale", report.normalScale},
                                           {"roughnessFactor", report.roughnessFactor}};
         result.materials.push_back(std::move(report));

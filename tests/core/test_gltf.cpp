@@ -54,6 +54,17 @@ void writeRgb(const fs::path& p, int w, int h, const std::vector<float>& rgb) {
                 out->write_image(OIIO::TypeDesc::FLOAT, rgb.data()) && out->close());
 }
 
+// The test plane whose material also has a grey 16×16 metallicRoughness texture.
+fs::path texturedPlaneAsset(const fs::path& dir) {
+    fs::create_directories(dir);
+    writeRgb(dir / "mr.png", 16, 16, std::vector<float>(16 * 16 * 3, 0.5f));
+    return planeAsset(dir, [](json& d) {
+        d["materials"][0]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {{"index", 1}};
+        d["textures"].push_back({{"source", 1}});
+        d["images"].push_back({{"uri", "mr.png"}});
+    });
+}
+
 // The KTX2 file a material's texture (by role) points at through KHR_texture_ktx.
 Ktx2Texture materialKtx(const fs::path& out, const json& doc, const std::string& slot) {
     const json& m = doc["materials"][0];
@@ -479,14 +490,7 @@ TEST(Gltf, AnisotropyIsWrittenWhereTheAnisotropicFitIsCloser) {
     ASSERT_TRUE(off);
     EXPECT_TRUE(off->materials[0].anisotropy.empty());
     EXPECT_FALSE(readJson(off->asset)["materials"][0].contains("extensions"));
-    std::vector<float> mr(16 * 16 * 3, 0.5f);
-    fs::create_directories(dir.path() / "in3");
-    writeRgb(dir.path() / "in3" / "mr.png", 16, 16, mr);
-    const fs::path textured = planeAsset(dir.path() / "in3", [](json& d) {
-        d["materials"][0]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {{"index", 1}};
-        d["textures"].push_back({{"source", 1}});
-        d["images"].push_back({{"uri", "mr.png"}});
-    });
+    const fs::path textured = texturedPlaneAsset(dir.path() / "in3");
     auto withTexture = processGltf(textured, dir.path() / "out3", o);
     ASSERT_TRUE(withTexture);
     EXPECT_EQ(withTexture->materials[0].anisotropy.rfind("off: ", 0), 0u);
@@ -627,14 +631,7 @@ TEST(Gltf, TheMixtureRidesBesideTheFittedLobeAsRgba16fLobeChains) {
     }
 
     // A material with a roughness texture: the fitted lobe alone, and why.
-    std::vector<float> mr(16 * 16 * 3, 0.5f);
-    fs::create_directories(dir.path() / "in3");
-    writeRgb(dir.path() / "in3" / "mr.png", 16, 16, mr);
-    const fs::path textured = planeAsset(dir.path() / "in3", [](json& d) {
-        d["materials"][0]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {{"index", 1}};
-        d["textures"].push_back({{"source", 1}});
-        d["images"].push_back({{"uri", "mr.png"}});
-    });
+    const fs::path textured = texturedPlaneAsset(dir.path() / "in3");
     auto withTexture = processGltf(textured, dir.path() / "out3", o);
     ASSERT_TRUE(withTexture) << withTexture.error();
     EXPECT_EQ(withTexture->materials[0].mixture.rfind("off: ", 0), 0u);

@@ -33,6 +33,7 @@ struct EvaluateCliOptions {
     std::vector<std::string> methods;
     std::vector<std::string> kernels{"box"};
     std::string out = "burnish-evaluate";
+    bool outGiven = false; // --out on the command line
     bool errorMaps = false;
     bool betweenTexels = false;
     int bakeRuns = 3;
@@ -121,15 +122,19 @@ int runEvaluate(const EvaluateCliOptions& o) {
                                            : k == "gaussian" ? FilterKernel::Gaussian
                                                              : FilterKernel::Box);
 
+    // --json without --out (or --error-maps, which are files) prints the report and writes nothing: a script
+    // piping it runs again without tripping over its own last report.
+    const bool writeFiles = !o.json || o.outGiven || o.errorMaps;
     // One rule for every command: a previous report is replaced only with --force (checked before
     // the evaluation runs).
-    if (!o.force && std::filesystem::exists(std::filesystem::path(o.out) / "evaluate.json"))
+    if (writeFiles && !o.force && std::filesystem::exists(std::filesystem::path(o.out) / "evaluate.json"))
         return fail("refusing to replace the report in '" + o.out + "' (use --force)");
     ProgressBar bar("evaluating");
     auto report = buildEvaluationReport(*map, options, [&](double f) { bar.update(f); });
     bar.finish();
     if (!report) return fail(report.error());
-    if (auto st = writeEvaluationReport(*report, o.out); !st) return fail(st.error());
+    if (writeFiles)
+        if (auto st = writeEvaluationReport(*report, o.out); !st) return fail(st.error());
     if (o.json)
         std::printf("%s\n", evaluationJson(*report).dump(2).c_str());
     else
@@ -193,8 +198,11 @@ const CommandRegistration registration{
             ->delimiter(',')
             ->check(CLI::IsMember({"box", "tent", "gaussian"}))
             ->type_name("LIST");
-        sub->add_option("--out", o->out, "Folder for the report files (default burnish-evaluate).")
-            ->type_name("DIR");
+        auto* out =
+            sub->add_option("--out", o->out,
+                            "Folder for the report files (default burnish-evaluate; with --json and "
+                            "without --out or --error-maps nothing is written, the report is on stdout).")
+                ->type_name("DIR");
         sub->add_flag(
             "--error-maps", o->errorMaps,
             "Also write per-texel relative error maps as EXR (errors/<method>-s<power>-mip<k>.exr).");
@@ -274,7 +282,10 @@ const CommandRegistration registration{
             "Replace the report already in --out (its error maps included: exactly the new report is "
             "left)");
         addNormalMapOptions(sub, o->normalMap);
-        return [o] { return runEvaluate(*o); };
+        return [o, out] {
+            o->outGiven = out->count() > 0;
+            return runEvaluate(*o);
+        };
     }};
 
 } // namespace

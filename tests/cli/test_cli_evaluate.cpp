@@ -68,6 +68,31 @@ TEST(CliEvaluate, WritesTheReportAndNaiveIsWorst) {
     EXPECT_NE(ss.str().find("| variance-to-gloss |"), std::string::npos);
 }
 
+// --json without --out writes nothing, so a script runs it again; an explicit --out keeps the report and
+// its refusal to replace one.
+TEST(CliEvaluate, JsonWithoutOutWritesNothingAndRunsTwice) {
+    burnish::test::TempDir dir;
+    const std::string in = writeBumpyMap(dir);
+    const auto previous = std::filesystem::current_path();
+    std::filesystem::current_path(dir.path());
+    const std::string command = "evaluate " + in + " --methods naive,vmf --bake-runs 1 --json";
+    const auto first = runBurnish(command);
+    const auto second = runBurnish(command);
+    const bool wroteDefault = std::filesystem::exists(dir.path() / "burnish-evaluate");
+    const auto withOut = runBurnish(command + " --out " + (dir.path() / "r").string());
+    const auto again = runBurnish(command + " --out " + (dir.path() / "r").string());
+    std::filesystem::current_path(previous);
+    ASSERT_EQ(first.exitCode, 0) << first.err;
+    ASSERT_EQ(second.exitCode, 0) << second.err;
+    EXPECT_EQ(nlohmann::json::parse(first.out)["errors"].size(),
+              nlohmann::json::parse(second.out)["errors"].size());
+    EXPECT_FALSE(wroteDefault);
+    ASSERT_EQ(withOut.exitCode, 0) << withOut.err;
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / "r" / "evaluate.json"));
+    EXPECT_NE(again.exitCode, 0);
+    EXPECT_NE(again.err.find("refusing to replace"), std::string::npos) << again.err;
+}
+
 TEST(CliEvaluate, BadInputGivesOneLine) {
     burnish::test::TempDir dir;
     auto missing = runBurnish("evaluate " + (dir / "missing.png").string());
@@ -224,6 +249,14 @@ TEST(CliEvaluate, GgxTruthWithTheFloorAndThePresetsBrdf) {
     EXPECT_FALSE(rows.count("lean"));
     EXPECT_FALSE(rows.count("clean"));
     ASSERT_TRUE(rows.count("mixture-k3"));
+    // Its cost row is what burnish gltf --method mixture stores: the normal and three RGBA16F lobe textures.
+    for (const auto& c : j["costs"])
+        if (c["variant"] == "mixture-k3") {
+            EXPECT_EQ(c["texture_fetches"], 4);
+            EXPECT_EQ(c["bytes_per_texel"], 25.0);
+            EXPECT_NE(c["storage"].get<std::string>().find("3 lobes (w, w.b, w.S) RGBA16F"),
+                      std::string::npos);
+        }
     ASSERT_TRUE(rows.count("fitted") && rows.count("one-lobe floor") && rows.count("naive") &&
                 rows.count("vmf"));
     for (const auto& [mip, fitted] : rows["fitted"]) {

@@ -144,7 +144,9 @@ Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const Evalu
         cost.lobes = v.lobes;
         MethodParams params = options.evaluate.params;
         if (v.lobes > 0) params.mixtureLobes = v.lobes;
-        cost.storage = methodStorage(method, params);
+        cost.storage = method == Method::Mixture && options.evaluate.brdf == Brdf::Ggx
+                           ? mixtureGgxStorage(params.mixtureLobes)
+                           : methodStorage(method, params);
         BakeOptions bakeOptions;
         bakeOptions.method = method;
         bakeOptions.basePower = s;

@@ -1107,6 +1107,14 @@ MixtureGgxLobe mixtureGgxLobe(const std::array<double, 4>& t, double total, doub
     return out;
 }
 
+MethodStorage mixtureGgxStorage(int k) {
+    static const std::string_view layouts[kMaxMixtureLobes] = {
+        "normal BC5 + 1 lobe (w, w.b, w.S) RGBA16F", "normal BC5 + 2 lobes (w, w.b, w.S) RGBA16F",
+        "normal BC5 + 3 lobes (w, w.b, w.S) RGBA16F", "normal BC5 + 4 lobes (w, w.b, w.S) RGBA16F"};
+    k = std::clamp(k, 1, kMaxMixtureLobes);
+    return {k + 1, 8.0 * k + 1.0, layouts[k - 1]};
+}
+
 double mixtureGgxValue(const std::array<MixtureGgxLobe, kMaxMixtureLobes>& lobes, int count,
                        const glm::dvec3& l, const glm::dvec3& v, const glm::dvec3& h) {
     double sum = 0.0;

@@ -292,6 +292,10 @@ inline constexpr double kMixtureGgxSpreadScale = 0.625;
 MixtureGgxLobe mixtureGgxLobe(const std::array<double, 4>& t, double total, double alpha0,
                               double spreadScale = kMixtureGgxSpreadScale);
 
+/// What the mixture's GGX form stores and an engine fetches (burnish gltf --method mixture): the normal
+/// texture (BC5) and K RGBA16F lobe textures of mixtureGgxTexel's.
+MethodStorage mixtureGgxStorage(int k);
+
 /// The mixture's value under GGX for light l, view v and half vector h (tangent space): Σ share ·
 /// ggxSpecularTerm(n_i·h, n_i·l, n_i·v, α_i) over the first `count` lobes, each about its own normal with its
 /// own cosine, as burnish-gltf.js shades it through three.js's BRDF_GGX (Fresnel 1). The scalar reference of

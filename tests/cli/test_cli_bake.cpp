@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -21,6 +22,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <thread>
 #include <unistd.h>
 #include <vector>
 
@@ -625,3 +627,74 @@ TEST(CliBake, ShadedFitRefinesTheMixtureAndIsRecorded) {
     EXPECT_NE(lean.err.find("--shaded-fit applies to --method mixture only"), std::string::npos) << lean.err;
     EXPECT_FALSE(fs::exists(dir / "lean"));
 }
+
+namespace {
+
+// Two bakes of different maps with one stem into one folder at once (a resubmitted farm task and its slow
+// original), each with --force, several times: the folder's writer lock (util/files.h FolderLock) runs them
+// one after the other, so every time the folder holds exactly one of the two sets, each file byte for byte
+// that map's bake alone, and bake.json naming that map. Before the lock, 6 runs in 45 left a mixed set.
+// A file's bytes, or "" when it cannot be read.
+std::string bytesOf(const fs::path& p) {
+    auto r = burnish::readFile(p);
+    return r ? *r : std::string();
+}
+
+TEST(CliBake, TwoBakesIntoOneFolderAtOnceLeaveOneWholeSet) {
+    TempDir dir;
+    fs::create_directories(dir / "a");
+    fs::create_directories(dir / "b");
+    writeNormalMap(dir / "a" / "map.png", 256);
+    writeNormalMap(dir / "b" / "map.png", 512); // more mips: more files
+    auto bake = [&](const std::string& which, const fs::path& out) {
+        return runBurnish("bake " + quote((dir / which / "map.png").string()) +
+                          " --preset gltf --format png16 --force --out " + quote(out.string()));
+    };
+    for (const std::string which : {"a", "b"}) {
+        fs::create_directories(dir / ("ref-" + which));
+        const auto r = bake(which, dir / ("ref-" + which));
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+    }
+    ASSERT_NE(listFolder(dir / "ref-a"), listFolder(dir / "ref-b"));
+    // While another writer holds the folder (here this test), a bake into it waits and finishes after it.
+    {
+        fs::create_directories(dir / "held");
+        auto held = burnish::FolderLock::acquire(dir / "held");
+        ASSERT_TRUE(held && held->held());
+        RunResult r;
+        std::chrono::steady_clock::time_point finished;
+        std::thread t([&] {
+            r = bake("a", dir / "held");
+            finished = std::chrono::steady_clock::now();
+        });
+        std::this_thread::sleep_for(std::chrono::milliseconds(1500)); // the bake alone takes ~0.3 s
+        const auto released = std::chrono::steady_clock::now();
+        { burnish::FolderLock gone = std::move(held).value(); }
+        t.join();
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        EXPECT_GE(finished, released) << "the bake wrote into a folder another writer held";
+        EXPECT_EQ(listFolder(dir / "held"), listFolder(dir / "ref-a"));
+    }
+    for (int round = 0; round < 4; ++round) {
+        const fs::path out = dir / ("o" + std::to_string(round));
+        fs::create_directories(out);
+        RunResult ra, rb;
+        std::thread ta([&] { ra = bake("a", out); }), tb([&] { rb = bake("b", out); });
+        ta.join();
+        tb.join();
+        ASSERT_EQ(ra.exitCode, 0) << ra.err;
+        ASSERT_EQ(rb.exitCode, 0) << rb.err;
+        const std::vector<std::string> names = listFolder(out);
+        const auto manifest = nlohmann::json::parse(bytesOf(out / "bake.json"), nullptr, false);
+        ASSERT_FALSE(manifest.is_discarded()) << "round " << round;
+        const std::string which = manifest.dump().find((dir / "a").string()) != std::string::npos ? "a" : "b";
+        ASSERT_EQ(names, listFolder(dir / ("ref-" + which))) << "round " << round << ": a mixed set";
+        for (const std::string& name : names) {
+            if (name.find("bake.json") != std::string::npos) continue;
+            EXPECT_EQ(bytesOf(out / name), bytesOf(dir / ("ref-" + which) / name))
+                << "round " << round << " " << name;
+        }
+    }
+}
+
+} // namespace

@@ -833,6 +833,11 @@ Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, co
     std::error_code ec;
     if (!fs::is_directory(outDir, ec)) return Error{"output folder '" + outDir.string() + "' does not exist"};
 
+    // One writer at a time in this folder (FolderLock), from the checks below until the commit: a second
+    // bake into it waits, so neither leaves a mixed set nor removes the other's bake.json.
+    auto lock = FolderLock::acquire(outDir);
+    if (!lock) return Error{lock.error()};
+
     // Staging folders and temporaries that killed runs left here: an interrupted commit is finished
     // first, so the old set this one replaces is whole.
     const StagingRecovery recovered = recoverStaging(outDir);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -17,6 +18,7 @@
 #include <string>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <thread>
 #include <unistd.h>
 
 namespace burnish {
@@ -383,6 +385,18 @@ StagingRecovery recoverStaging(const fs::path& folder) {
             }
             fs::remove_all(entry, ec);
             ::close(fd);
+        } else if (name == kWriterLockName && S_ISREG(st.st_mode)) {
+            // A writer lock no live process holds (its writer was killed): removed under the lock, as its
+            // writer would have (FolderLock). One held here — by this process's own writer too — stays.
+            const int fd = ::open(entry.c_str(), O_RDWR | O_NOFOLLOW | O_CLOEXEC);
+            if (fd < 0) continue;
+            struct stat held {
+            }, current{};
+            if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &held) == 0 &&
+                ::stat(entry.c_str(), &current) == 0 && held.st_ino == current.st_ino &&
+                held.st_dev == current.st_dev)
+                ::unlink(entry.c_str());
+            ::close(fd);
         } else if (S_ISREG(st.st_mode)) {
             const pid_t pid = oldTemporaryPid(name);
             if (pid <= 0 || ::kill(pid, 0) == 0 || errno != ESRCH) continue; // not ours, or still running
@@ -396,11 +410,72 @@ StagingRecovery recoverStaging(const fs::path& folder) {
     return recovery;
 }
 
+Result<FolderLock> FolderLock::acquire(const fs::path& folder, double waitSeconds) {
+    FolderLock lock;
+    lock.m_path = folder / std::string(kWriterLockName);
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(std::max(waitSeconds, 0.0));
+    for (;;) {
+        const int fd = ::open(lock.m_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+        if (fd < 0) {
+            // A missing or read-only folder: the writer's own checks say so in their words.
+            if (errno == ENOENT || errno == EACCES || errno == EROFS || errno == ENOTDIR || errno == EPERM)
+                return lock;
+            return Error{"cannot lock '" + folder.string() + "' for writing: " + std::strerror(errno)};
+        }
+        if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {
+            struct stat held {
+            }, current{};
+            if (::fstat(fd, &held) == 0 && ::stat(lock.m_path.c_str(), &current) == 0 &&
+                held.st_ino == current.st_ino && held.st_dev == current.st_dev) {
+                const std::string pid = std::to_string(::getpid()) + "\n";
+                if (::ftruncate(fd, 0) == 0 && ::pwrite(fd, pid.data(), pid.size(), 0) < 0) {
+                    // The pid is for the message of a waiter only.
+                }
+                lock.m_fd = fd;
+                return lock;
+            }
+            ::close(fd); // its holder removed it before letting go: lock the file that is there now
+            continue;
+        }
+        const int error = errno;
+        char text[32] = {};
+        const ssize_t n = ::pread(fd, text, sizeof text - 1, 0);
+        ::close(fd);
+        if (error != EWOULDBLOCK)
+            return Error{"cannot lock '" + folder.string() + "' for writing: " + std::strerror(error)};
+        if (std::chrono::steady_clock::now() >= deadline) {
+            std::string holder(text, n > 0 ? size_t(n) : 0);
+            holder.erase(
+                std::remove_if(holder.begin(), holder.end(), [](char c) { return c < '0' || c > '9'; }),
+                holder.end());
+            return Error{"'" + folder.string() + "' is being written by another Burnish process" +
+                         (holder.empty() ? std::string() : " (pid " + holder + ")") + "; gave up after " +
+                         std::to_string(int(waitSeconds)) + " s, nothing written"};
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+}
+
+FolderLock::FolderLock(FolderLock&& other) noexcept
+    : m_fd(other.m_fd)
+    , m_path(std::move(other.m_path)) {
+    other.m_fd = -1;
+}
+
+FolderLock::~FolderLock() {
+    if (m_fd < 0) return;
+    ::unlink(m_path.c_str()); // while still held: a waiter that then gets this file sees it gone and retries
+    ::close(m_fd);
+}
+
 Result<FileSet> FileSet::begin(const fs::path& folder) {
+    auto lock = FolderLock::acquire(folder);
+    if (!lock) return Error{lock.error()};
     const StagingRecovery recovered = recoverStaging(folder);
     auto staging = StagingFolder::create(folder);
     if (!staging) return Error{staging.error()};
-    FileSet set(std::move(staging).value());
+    FileSet set(std::move(lock).value(), std::move(staging).value());
     set.m_notes = recovered.notes;
     return set;
 }

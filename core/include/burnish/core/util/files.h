@@ -30,6 +30,39 @@ enum class Overwrite { Allow, Refuse };
 /// Name prefix of staging folders (followed by mkdtemp's six characters).
 inline constexpr std::string_view kStagingPrefix = ".burnish-staging-";
 
+/// The name of a folder's writer lock file (FolderLock), present only while a writer holds it (or after a
+/// writer was killed, until recoverStaging or the next writer removes it).
+inline constexpr std::string_view kWriterLockName = ".burnish-writer.lock";
+
+/// How long a writer waits for another one to finish with a folder before it gives up (FolderLock).
+inline constexpr int kWriterLockWaitSeconds = 300;
+
+/// One writer at a time per output folder: an exclusive flock(2) on "<folder>/.burnish-writer.lock", held
+/// from before a set is staged until after it is committed, so two processes writing sets into one folder
+/// (a resubmitted farm task and its slow original, two studio exports) run one after the other and each set
+/// lands whole. The file names the holder's pid; the holder removes it while still holding it, so a finished
+/// folder has none, and a waiter that then locks the removed file tries again. A folder where the lock file
+/// cannot be made (missing, not writable) is not locked: the writer's own checks report that.
+class FolderLock {
+public:
+    /// Waits up to `waitSeconds` (polling) for the lock. Error, one line: another process holds it past the
+    /// wait ("... is being written by another Burnish process (pid N) ...").
+    static Result<FolderLock> acquire(const std::filesystem::path& folder,
+                                      double waitSeconds = kWriterLockWaitSeconds);
+    FolderLock(FolderLock&& other) noexcept;
+    FolderLock& operator=(FolderLock&&) = delete;
+    FolderLock(const FolderLock&) = delete;
+    FolderLock& operator=(const FolderLock&) = delete;
+    ~FolderLock();
+    /// Whether a lock is held (false for a folder that could not be locked: see above).
+    bool held() const { return m_fd >= 0; }
+
+private:
+    FolderLock() = default;
+    int m_fd = -1;
+    std::filesystem::path m_path;
+};
+
 /// A private, locked staging folder inside an existing folder. While the object lives it holds an
 /// exclusive flock(2) on the folder, which tells recoverStaging() of another process that it is in
 /// use; the destructor removes the folder and whatever is still in it.
@@ -117,7 +150,8 @@ struct StagingRecovery;
 /// last. Interrupted commits of killed runs in the folder are finished first (begin()).
 class FileSet {
 public:
-    /// recoverStaging(folder), then a StagingFolder inside it (which must exist).
+    /// The folder's writer lock (FolderLock: waits for another writer), recoverStaging(folder), then a
+    /// StagingFolder inside it (which must exist).
     static Result<FileSet> begin(const std::filesystem::path& folder);
     /// Stages the file `name` (a plain name in the folder) that `write(staged)` writes in full.
     Status add(const std::string& name,
@@ -141,8 +175,10 @@ public:
     const std::vector<std::string>& recoveryNotes() const { return m_notes; }
 
 private:
-    explicit FileSet(StagingFolder staging)
-        : m_staging(std::move(staging)) {}
+    FileSet(FolderLock lock, StagingFolder staging)
+        : m_lock(std::move(lock))
+        , m_staging(std::move(staging)) {}
+    FolderLock m_lock; // held until the set is committed or dropped
     StagingFolder m_staging;
     std::vector<std::string> m_names;
     std::vector<StagedFile> m_files;

@@ -429,9 +429,10 @@ Result<FolderLock> FolderLock::acquire(const fs::path& folder, double waitSecond
             if (::fstat(fd, &held) == 0 && ::stat(lock.m_path.c_str(), &current) == 0 &&
                 held.st_ino == current.st_ino && held.st_dev == current.st_dev) {
                 const std::string pid = std::to_string(::getpid()) + "\n";
-                if (::ftruncate(fd, 0) == 0 && ::pwrite(fd, pid.data(), pid.size(), 0) < 0) {
-                    // The pid is for the message of a waiter only.
-                }
+                // The pid is only for a waiter's message: a failed write costs that line its pid, nothing
+                // else.
+                const bool named = ::ftruncate(fd, 0) == 0 && ::pwrite(fd, pid.data(), pid.size(), 0) > 0;
+                static_cast<void>(named);
                 lock.m_fd = fd;
                 return lock;
             }

@@ -126,8 +126,10 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     cmd->add_option("--compression", spec->compression,
                     "DDS compression for every file (default: each file's preset choice): " +
                         joined(compressionNames()));
-    cmd->add_option("--kernel", spec->kernel,
-                    "Per-mip filter standing in for bilinear filtering: box, tent (default), gaussian");
+    cmd->add_option(
+        "--kernel", spec->kernel,
+        "Per-mip filter standing in for bilinear filtering: box, tent (default; box for --method fitted), "
+        "gaussian");
     cmd->add_option("--border", spec->border, "Texture border: wrap (default) or clamp");
     cmd->add_option("--green", spec->green,
                     "Green convention of the INPUT map: opengl (+Y, default) or directx (-Y)");

@@ -90,7 +90,7 @@ struct RenderCliOptions {
     bool ubershader = false;
     int sequence = 0;
     int compare = 0;
-    std::string kernel = "tent";
+    std::string kernel; // empty: the method's default
     float orbitDegrees = 0.5f;
     std::string framesDir;
     std::string shimmerSpace = "hdr";
@@ -180,9 +180,10 @@ Result<Scene> buildScene(const RenderCliOptions& o) {
     m.methodParams.mixtureShadedFit = o.shadedFit;
     m.mixtureFiltering = *parseMixtureFiltering(o.mixtureFiltering); // checked by CLI11
     m.mixtureSamples = o.mixtureSamples;
-    m.kernel = o.kernel == "box"        ? FilterKernel::Box
-               : o.kernel == "gaussian" ? FilterKernel::Gaussian
-                                        : FilterKernel::Tent;
+    if (!o.kernel.empty())
+        m.kernel = o.kernel == "box"        ? FilterKernel::Box
+                   : o.kernel == "gaussian" ? FilterKernel::Gaussian
+                                            : FilterKernel::Tent;
 
     // Base power: --power, or --gloss as a value in the encoding or as an authored gloss map (read
     // after the normal map, whose size it must have).
@@ -681,9 +682,10 @@ const CommandRegistration registration{
         sub->add_option("--mixture-samples", o->mixtureSamples,
                         "Passes averaged with --mixture-filtering stochastic (default 16).")
             ->check(CLI::Range(1, 4096));
-        sub->add_option("--kernel", o->kernel,
-                        "Per-mip filter of the moments the bake stores, as burnish bake --kernel: box, "
-                        "tent (default) or gaussian.")
+        sub->add_option(
+               "--kernel", o->kernel,
+               "Per-mip filter of the moments the bake stores, as burnish bake --kernel: box, "
+               "tent or gaussian (default: as the bake's, box for --method fitted, tent for the rest).")
             ->check(CLI::IsMember({"box", "tent", "gaussian"}));
         sub->add_option("--power", o->power, "Base Blinn-Phong power (default 1024).")
             ->check(CLI::Range(1.0, 1e9))

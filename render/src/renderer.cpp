@@ -141,7 +141,7 @@ BakeKey bakeKeyOf(const MaterialSettings& m, int largestLevel) {
                    m.method == Method::Mixture ? m.methodParams.mixtureLobes : 0,
                    m.method == Method::Mixture && m.methodParams.mixtureShadedFit,
                    largestLevel,
-                   m.kernel};
+                   m.kernel.value_or(defaultKernel(m.method))};
 }
 
 // The CPU half of a material's bake (any thread): core's bake, and the mixture's covariance floor.
@@ -185,7 +185,7 @@ CpuBake cpuBake(const MaterialSettings& m, int largestLevel, std::function<bool(
     options.encoding = m.glossEncoding;
     options.basePower = m.basePower;
     options.params = m.methodParams;
-    options.pyramid.kernel = m.kernel;
+    options.pyramid.kernel = m.kernel.value_or(defaultKernel(m.method));
     if (m.glossMap) options.authoredGloss = *m.glossMap;
     CpuBake b;
     if (largestLevel > 0) options.cachedPyramid = sharedBakePyramid(m.normalMap, options);

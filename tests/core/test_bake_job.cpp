@@ -487,6 +487,32 @@ TEST(BakeNinja, TheJobCommandMeansTheSameJob) {
     EXPECT_EQ(bakeJobCommand(exe, *sample).at(2), spec.input) << "a sample's name is not made a path";
 }
 
+TEST(BakeJob, TheFittedLobeBakesOverTheBoxChainUnlessToldOtherwise) {
+    test::TempDir dir;
+    // Each method's default kernel (defaultKernel): box for the fitted lobe, tent for the rest, --kernel
+    // wins.
+    for (const char* method : {"fitted", "vmf", "naive"}) {
+        BakeJobSpec spec = specFor(dir / "out");
+        spec.preset = "gltf";
+        spec.method = method;
+        const auto job = resolveBakeJob(spec);
+        ASSERT_TRUE(job) << job.error();
+        const FilterKernel expected =
+            std::string(method) == "fitted" ? FilterKernel::Box : FilterKernel::Tent;
+        EXPECT_EQ(job->bake.pyramid.kernel, expected) << method;
+        EXPECT_EQ(defaultKernel(job->method), expected) << method;
+        // The Ninja command spells the kernel out, so a rebuild bakes the same chain.
+        const auto args = bakeJobCommand("/opt/burnish", *job);
+        const auto at = std::find(args.begin(), args.end(), "--kernel");
+        ASSERT_NE(at, args.end());
+        EXPECT_EQ(at[1], kernelName(expected)) << method;
+        spec.kernel = "tent";
+        const auto told = resolveBakeJob(spec);
+        ASSERT_TRUE(told) << told.error();
+        EXPECT_EQ(told->bake.pyramid.kernel, FilterKernel::Tent) << method;
+    }
+}
+
 TEST(BakeNinja, OutputsAreExactlyWhatTheJobWrites) {
     test::TempDir dir;
     const fs::path manifest = dir / "m.json"; // only named: a job's dependency, never read here

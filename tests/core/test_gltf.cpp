@@ -12,6 +12,8 @@
 #include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -450,12 +452,30 @@ TEST(Gltf, AMaterialExportsWithItsSpecularColourInGltfTerms) {
 namespace burnish {
 namespace {
 
+// The test plane with a 128² map of grooves along y: slopes across them only, 0.6·sin(2πx/6), so every
+// footprint past mip 0 spreads one way and the anisotropic fit is clearly the closer one.
+fs::path groovedPlaneAsset(const fs::path& dir) {
+    const fs::path asset = planeAsset(dir);
+    std::vector<float> rgb(128 * 128 * 3);
+    for (int y = 0; y < 128; ++y)
+        for (int x = 0; x < 128; ++x) {
+            const glm::vec3 n =
+                glm::normalize(glm::vec3(0.6f * std::sin(2.0f * 3.14159265f * x / 6.0f), 0.0f, 1.0f));
+            for (int c = 0; c < 3; ++c)
+                rgb[3 * size_t(y * 128 + x) + size_t(c)] = 0.5f * n[c] + 0.5f;
+        }
+    writeRgb(dir / "normal.png", 128, 128, rgb);
+    return asset;
+}
+
 TEST(Gltf, AnisotropyIsWrittenWhereTheAnisotropicFitIsCloser) {
     test::TempDir dir;
     GltfOptions o;
     o.anisotropy = GltfAnisotropy::Auto;
-    // The tread plate: its anisotropic fit is closer (evaluate --anisotropic says the same).
-    auto r = processGltf(planeAsset(dir.path() / "in"), dir.path() / "out", o);
+    // Grooves: the anisotropic fit is closer (evaluate --anisotropic says the same). (The tread plate, this
+    // test's map before the fitted lobe's chain became the box one, is a near tie there: anisotropic 0.0511,
+    // isotropic 0.0502 over mips 1-6, so Auto leaves it off.)
+    auto r = processGltf(groovedPlaneAsset(dir.path() / "in"), dir.path() / "out", o);
     ASSERT_TRUE(r) << r.error();
     ASSERT_EQ(r->materials[0].anisotropy, "on");
     EXPECT_LT(r->materials[0].anisotropicError, r->materials[0].isotropicError);
@@ -471,7 +491,7 @@ TEST(Gltf, AnisotropyIsWrittenWhereTheAnisotropicFitIsCloser) {
     auto ktx = decodeKtx2(*bytes);
     ASSERT_TRUE(ktx) << ktx.error();
     EXPECT_EQ(ktx->format, Ktx2Format::Rgba8);
-    ASSERT_EQ(ktx->levels.size(), 10u);
+    ASSERT_EQ(ktx->levels.size(), 8u);
     // Level 0 is the base lobe, round; coarser levels hold unit directions and some strength.
     for (size_t i = 0; i < ktx->levels[0].size(); i += 4)
         ASSERT_EQ(static_cast<unsigned char>(ktx->levels[0][i + 2]), 0);
@@ -607,8 +627,12 @@ TEST(Gltf, TheMixtureRidesBesideTheFittedLobeAsRgba16fLobeChains) {
             }
         }
         // The treads' slopes widen the lobes at every level above the finest, not at it.
-        if (k == 0) EXPECT_LT(widened / double(n), 1e-3);
-        if (k >= 2) EXPECT_GT(widened / double(n), 1e-3) << "level " << k;
+        if (k == 0) {
+            EXPECT_LT(widened / double(n), 1e-3);
+        }
+        if (k >= 2) {
+            EXPECT_GT(widened / double(n), 1e-3) << "level " << k;
+        }
     }
 
     // A material of one map (the studio's export, whose replaced textures are pruned and the rest

@@ -70,13 +70,14 @@ function parseArgs(argv) {
         else if (a === '--orbit') o.orbit = Number(take());
         else if (a === '--orbit-degrees') o.orbitDegrees = Number(take());
         else if (a === '--orbit-supersample') o.orbitSupersample = Number(take());
+        else if (a === '--probe-lod') o.probeLod = true;
         else throw new Error(`unknown argument ${a}`);
     }
-    if (!o.burnish || !o.maps.length) throw new Error('give --burnish BIN and --maps A.png[,B.png...]');
+    if (!o.probeLod && (!o.burnish || !o.maps.length)) throw new Error('give --burnish BIN and --maps A.png[,B.png...]');
     if (o.distances.some(d => !(d > 0)) || !(o.power > 0) || !(o.supersample >= 1))
         throw new Error('distances, power and supersample must be positive');
     if (!['plane', 'sphere'].includes(o.shape)) throw new Error('--shape is plane or sphere');
-    if ((o.shape !== 'plane' || o.orbit) && !o.gltf) throw new Error('--shape and --orbit go with --gltf');
+    if ((o.shape !== 'plane' || o.orbit) && !o.gltf && !o.probeLod) throw new Error('--shape and --orbit go with --gltf');
     if (o.orbit && !(o.orbit >= 2 && o.orbitDegrees > 0 && o.orbitSupersample >= 1))
         throw new Error('--orbit takes at least 2 frames, a positive step and supersample');
     return o;
@@ -197,6 +198,12 @@ async function main() {
             page.on('pageerror', e => console.error(`page error: ${e.message}`));
             await page.goto(`http://127.0.0.1:${port}/page.html`);
             await page.waitForFunction('window.ready === true', {timeout: 60000});
+            if (o.probeLod)
+                for (const d of o.distances) {
+                    const p = await page.evaluate(cfg => window.probeLod(cfg), {shape: o.shape, minification: d});
+                    console.log(`${o.shape} ${d}x: mip level mean ${p.mean.toFixed(2)}, 10/50/90th percentiles ` +
+                                `${p.p10.toFixed(2)}/${p.p50.toFixed(2)}/${p.p90.toFixed(2)} over ${p.pixels} pixels`);
+                }
             for (const c of cases)
                 for (const d of o.distances) {
                     const r = o.gltf
@@ -247,6 +254,7 @@ async function main() {
             await browser.close();
             server.close();
         }
+        if (!results.length) return;
         // Means per distance, each method's ratio to three.js alone.
         const names = Object.keys(results[0].results);
         console.log('\n| distance | ' + names.map(n => `${n} rel. L1 (energy)`).join(' | ') + ' | ' +

@@ -269,6 +269,8 @@ Result<BakeJob> resolveBakeJob(const BakeJobSpec& spec) {
             {{"box", FilterKernel::Box}, {"tent", FilterKernel::Tent}, {"gaussian", FilterKernel::Gaussian}});
         if (!k) return Error{k.error()};
         job.bake.pyramid.kernel = *k;
+    } else {
+        job.bake.pyramid.kernel = defaultKernel(job.method);
     }
     if (spec.border) {
         const auto b = choice<BorderMode>("--border", *spec.border,
@@ -588,7 +590,7 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
         {"compression", job.exportOptions.compression
                             ? Json(std::string(ddsCompressionName(*job.exportOptions.compression)))
                             : Json(nullptr)},
-        {"kernel", job.spec.kernel.value_or("tent")},
+        {"kernel", std::string(kernelName(job.bake.pyramid.kernel))},
         {"border", job.spec.border.value_or("wrap")},
         {"green", job.spec.green.value_or("opengl")},
         {"layout", job.spec.layout.value_or("auto")},

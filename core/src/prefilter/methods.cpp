@@ -275,6 +275,10 @@ const std::vector<Method>& allMethods() {
     return methods;
 }
 
+FilterKernel defaultKernel(Method method) {
+    return method == Method::Fitted ? FilterKernel::Box : FilterKernel::Tent;
+}
+
 std::string_view methodName(Method method) {
     return methodSpec(method).name;
 }

@@ -19,6 +19,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -79,9 +80,9 @@ struct MaterialSettings {
     GlossEncoding glossEncoding = GlossEncoding::blackOps();
     Method method = Method::VarianceToGloss;
     MethodParams methodParams;
-    /// The per-mip filter the bake applies to the moments (BakeOptions::pyramid.kernel; the bake's
-    /// default, tent).
-    FilterKernel kernel = FilterKernel::Tent;
+    /// The per-mip filter the bake applies to the moments (BakeOptions::pyramid.kernel); none: the
+    /// method's default (defaultKernel: box for the fitted lobe, tent for the rest), as a bake's.
+    std::optional<FilterKernel> kernel;
     /// The tangent-space normal map, or none (a flat surface with the base power).
     std::shared_ptr<const NormalMap> normalMap;
     /// An optional detail normal map, tiled `detailUvScale` times over the base map.

@@ -184,6 +184,14 @@ bool hasTexture(Method method, TextureRole role);
 /// All methods, in report order.
 const std::vector<Method>& allMethods();
 std::string_view methodName(Method method);
+
+/// The per-mip filter a bake of `method` uses unless told otherwise: box for Fitted, tent for the rest.
+/// The fitted lobe is fitted about the normal its chain stores, against the box footprint's truth, and
+/// an engine rebuilds that normal by bilinear filtering of the chain: the box chain (three.js's own
+/// generateMipmap) keeps the detail a pixel's footprint keeps, where the tent's smoother normals forced
+/// wider lobes — in three.js on a sphere at 2× (two maps), the fitted lobe over the tent chain was 1.35×
+/// three.js alone's error, over the box chain 0.95× (README, "One roughness for engines").
+FilterKernel defaultKernel(Method method);
 Result<Method> methodFromName(std::string_view name);
 /// A one-line description of what the method stores and what its shader does.
 std::string_view methodDescription(Method method);

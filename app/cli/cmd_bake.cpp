@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -108,7 +109,7 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     auto manifest = std::make_shared<std::string>();
     auto json = std::make_shared<bool>(false);
     auto ninja = std::make_shared<std::string>();
-    auto outRoot = std::make_shared<std::string>();
+    auto outRoot = std::make_shared<std::optional<std::string>>();
 
     cmd->add_option("input", spec->input, "Tangent-space normal map (PNG, TGA, EXR, TIFF, DDS, ...)");
     cmd->add_option("--preset", spec->preset,
@@ -209,7 +210,12 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
             jobs.push_back(std::move(job.value()));
         }
         std::optional<fs::path> root;
-        if (!outRoot->empty()) root = fs::path(*outRoot);
+        if (*outRoot) {
+            // An empty root would hold every path "inside" it: the guard off without a word.
+            if ((*outRoot)->empty())
+                return fail("--out-root needs a folder (an empty value would guard nothing)");
+            root = fs::path(**outRoot);
+        }
         if (!manifest->empty() || root)
             if (const Status s = checkBakeJobs(jobs, root, !manifest->empty()); !s) return fail(s.error());
         if (!ninja->empty()) {

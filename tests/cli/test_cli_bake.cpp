@@ -275,7 +275,8 @@ TEST(CliBake, BadManifestEntryFailsBeforeAnythingIsWritten) {
 }
 
 // Every job of a manifest is checked before the first writes anything: two jobs writing one file,
-// a job whose input is not a readable image, a NUL in a string, an output outside --out-root.
+// a job whose input is not a readable image, a NUL in a string, an output outside --out-root, an
+// empty --out-root (which would hold every folder).
 TEST(CliBake, ManifestJobsAreAllCheckedBeforeTheFirstRuns) {
     TempDir dir;
     writeNormalMap(dir / "one.png");
@@ -295,7 +296,8 @@ TEST(CliBake, ManifestJobsAreAllCheckedBeforeTheFirstRuns) {
              {"garbage.json", "garbage.png"},
              {"missing.json", "does not exist"},
              {"nul.json", "NUL"},
-             {"away.json --out-root " + quote((dir / "inside").string()), "outside --out-root"}}) {
+             {"away.json --out-root " + quote((dir / "inside").string()), "outside --out-root"},
+             {"away.json --out-root ''", "--out-root needs a folder"}}) {
         SCOPED_TRACE(manifest);
         const auto r =
             runBurnish("bake --manifest " + quote((dir / manifest.substr(0, manifest.find(' '))).string()) +

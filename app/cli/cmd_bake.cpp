@@ -18,7 +18,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <optional>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -109,7 +108,7 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     auto manifest = std::make_shared<std::string>();
     auto json = std::make_shared<bool>(false);
     auto ninja = std::make_shared<std::string>();
-    auto outRoot = std::make_shared<std::optional<std::string>>();
+    auto outRoot = std::make_shared<std::string>();
 
     cmd->add_option("input", spec->input, "Tangent-space normal map (PNG, TGA, EXR, TIFF, DDS, ...)");
     cmd->add_option("--preset", spec->preset,
@@ -127,10 +126,8 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     cmd->add_option("--compression", spec->compression,
                     "DDS compression for every file (default: each file's preset choice): " +
                         joined(compressionNames()));
-    cmd->add_option(
-        "--kernel", spec->kernel,
-        "Per-mip filter standing in for bilinear filtering: box, tent (default; box for --method fitted), "
-        "gaussian");
+    cmd->add_option("--kernel", spec->kernel,
+                    "Per-mip filter standing in for bilinear filtering: box, tent (default), gaussian");
     cmd->add_option("--border", spec->border, "Texture border: wrap (default) or clamp");
     cmd->add_option("--green", spec->green,
                     "Green convention of the INPUT map: opengl (+Y, default) or directx (-Y)");
@@ -210,12 +207,7 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
             jobs.push_back(std::move(job.value()));
         }
         std::optional<fs::path> root;
-        if (*outRoot) {
-            // An empty root would hold every path "inside" it: the guard off without a word.
-            if ((*outRoot)->empty())
-                return fail("--out-root needs a folder (an empty value would guard nothing)");
-            root = fs::path(**outRoot);
-        }
+        if (!outRoot->empty()) root = fs::path(*outRoot);
         if (!manifest->empty() || root)
             if (const Status s = checkBakeJobs(jobs, root, !manifest->empty()); !s) return fail(s.error());
         if (!ninja->empty()) {

@@ -60,7 +60,16 @@ void requireFiniteNumbers(CLI::App& app) {
             return {};
         },
         "");
+    // An empty value is an error, never the option's default (`--mips ""` baked every mip, `--yaw ""` drew
+    // at 0): a script that lost a variable should hear of it.
+    const CLI::Validator nonEmpty(
+        [](std::string& value) -> std::string {
+            return value.empty() ? "an empty value (give one, or leave the option out for its default)" : "";
+        },
+        "");
     for (CLI::Option* option : app.get_options()) {
+        if (option->get_type_size() == 0) continue; // a flag takes no value
+        option->check(nonEmpty);
         const std::string type = option->get_type_name();
         if (pathTypes.count(type.substr(0, type.find(':')))) continue;
         option->check(finite);

@@ -186,6 +186,8 @@ void TexturePane::startBake() {
     options.method = m_doc->settings().method;
     options.encoding = m_doc->preset().encoding;
     options.basePower = m_doc->power();
+    // The chain the viewport and the exports bake: the method's own kernel (box for the fitted lobe).
+    options.pyramid.kernel = defaultKernel(options.method);
     std::shared_ptr<const NormalMap> map = m_doc->maps().normal;
     // Only the texture the view shows (each texture is the same whatever others are baked).
     if (const auto shape = bakeShape(options, map->width, map->height))

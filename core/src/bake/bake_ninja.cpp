@@ -165,7 +165,7 @@ std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& j
         "--format",
         std::string(exportFormatName(job.exportOptions.format.value_or(job.preset.format))),
         "--kernel",
-        s.kernel.value_or(std::string(kernelName(job.bake.pyramid.kernel))),
+        std::string(kernelName(job.bake.pyramid.kernel)),
         "--border",
         s.border.value_or("wrap"),
         "--green",

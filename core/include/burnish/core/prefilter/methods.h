@@ -189,8 +189,8 @@ std::string_view methodName(Method method);
 /// The fitted lobe is fitted about the normal its chain stores, against the box footprint's truth, and
 /// an engine rebuilds that normal by bilinear filtering of the chain: the box chain (three.js's own
 /// generateMipmap) keeps the detail a pixel's footprint keeps, where the tent's smoother normals forced
-/// wider lobes — in three.js on a sphere at 2× (two maps), the fitted lobe over the tent chain was 1.35×
-/// three.js alone's error, over the box chain 0.95× (README, "One roughness for engines").
+/// wider lobes — in three.js on a sphere at 2× (six maps), the fitted lobe over the tent chain was 1.48×
+/// three.js alone's error, over the box chain 1.08× (README, "One roughness for engines").
 FilterKernel defaultKernel(Method method);
 Result<Method> methodFromName(std::string_view name);
 /// A one-line description of what the method stores and what its shader does.

@@ -58,7 +58,9 @@ int main(int argc, char** argv) {
             QApplication::exit(ok ? 0 : 1);
         });
     } else {
-        QTimer::singleShot(0, &window, [&window] { window.offerRecovery(); });
+        // Work a crashed or killed studio left behind (projects and untitled alike) is offered now.
+        const QString opened = parser.positionalArguments().value(0);
+        QTimer::singleShot(0, &window, [&window, opened] { window.offerRecoveryAtLaunch(opened); });
     }
     return app.exec();
 }

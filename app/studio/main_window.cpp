@@ -1,5 +1,6 @@
 #include "main_window.h"
 
+#include "autosave_writer.h"
 #include "bake_dialog.h"
 #include "charts/charts_panel.h"
 #include "environment_panel.h"
@@ -51,8 +52,9 @@ namespace {
 
 // Recent projects kept in the File menu: as many as fit a glance.
 constexpr int kMaxRecent = 8;
-// Autosave every two minutes unless the settings say otherwise (Blender's default interval).
-constexpr int kDefaultAutosaveSeconds = 120;
+// Autosave this long after an edit unless the settings ("autosaveDelaySeconds") say otherwise: soon
+// enough that a crash loses seconds, late enough that a burst of edits makes one write.
+constexpr int kDefaultAutosaveDelaySeconds = 3;
 // Below this window width the first layout stacks the Paint panel behind Material (see
 // applyDefaultDockSizes): paint, views and material side by side need about 1500 px.
 constexpr int kStackedDocksBelowWidth = 1500;
@@ -249,8 +251,31 @@ MainWindow::MainWindow(QWidget* parent)
     connect(m_panel, &MaterialPanel::errorOccurred, this,
             [this](const QString& title, const QString& text) { showMessage(title, text); });
 
+    m_autosaveWriter = new AutosaveWriter(this);
+    connect(m_autosaveWriter, &AutosaveWriter::finished, this, [this](bool ok, const QString& error) {
+        if (ok) {
+            statusBar()->showMessage("Autosaved", 2000);
+            return;
+        }
+        m_autosavedIndex = -1; // the next edit tries again
+        // Autosave runs unattended: a failure goes to the status bar, not a modal box every time.
+        statusBar()->showMessage("Autosave failed: " + error, 8000);
+    });
     m_autosaveTimer = new QTimer(this);
-    connect(m_autosaveTimer, &QTimer::timeout, this, &MainWindow::autosave);
+    m_autosaveTimer->setSingleShot(true);
+    connect(m_autosaveTimer, &QTimer::timeout, this, [this] {
+        // A write still running (a big painted layer): try again after another delay.
+        if (m_autosaveWriter->busy() && isModified())
+            m_autosaveTimer->start(m_autosaveDelayMs);
+        else
+            autosave();
+    });
+    // The first edit after an autosave starts the clock; edits while it runs join that autosave.
+    connect(m_doc->undoStack(), &QUndoStack::indexChanged, this, [this] {
+        if (m_autosaveDelayMs > 0 && !m_autosaveTimer->isActive()) m_autosaveTimer->start(m_autosaveDelayMs);
+    });
+    m_untitledCopy = newUntitledAutosavePath();
+    claimAutosaveCopy();
     resize(1400, 880);
     restoreSettings();
     updateStatus();
@@ -432,7 +457,10 @@ bool MainWindow::maybeSave() {
     const auto answer = ask("Unsaved changes", "The material has unsaved changes. Save them?",
                             QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel);
     if (answer == QMessageBox::Save) return save();
-    return answer == QMessageBox::Discard;
+    if (answer != QMessageBox::Discard) return false;
+    // Discarded means gone: the autosave copy of those changes must not come back at the next start.
+    removeAutosave();
+    return true;
 }
 
 bool MainWindow::newDocument() {
@@ -443,21 +471,25 @@ bool MainWindow::newDocument() {
         return false;
     }
     m_projectPath.clear();
+    claimAutosaveCopy();
     m_autosavedIndex = -1;
     updateTitle();
     return true;
 }
 
 void MainWindow::open() {
-    if (!maybeSave()) return;
-    // A project, or an image to open as the normal map (what the command line and a drop do).
+    // A project, or an image to open as the normal map (what the command line and a drop do). The file
+    // first: a cancelled dialog leaves the document and its unsaved changes alone.
     const QString filter =
         QString("Projects and normal maps (*.%1 *.png *.tga *.jpg *.jpeg *.exr *.tif *.tiff "
                 "*.dds *.hdr);;Burnish projects (*.%1);;All files (*)")
             .arg(kProjectSuffix);
     const QString path = QFileDialog::getOpenFileName(
         this, "Open project or normal map", QSettings().value("folders/projects").toString(), filter);
-    if (!path.isEmpty()) openFile(path);
+    if (path.isEmpty()) return;
+    // A project replaces the document (after asking about unsaved changes); an image becomes its
+    // normal map, one undoable step.
+    if (!isProjectFile(path) || maybeSave()) openFile(path);
 }
 
 bool MainWindow::openProject(const QString& path) {
@@ -473,6 +505,7 @@ bool MainWindow::openProject(const QString& path) {
         return false;
     }
     m_projectPath = absolute;
+    claimAutosaveCopy();
     m_autosavedIndex = -1;
     addRecent(absolute);
     updateTitle();
@@ -516,10 +549,11 @@ bool MainWindow::saveProjectAs(const QString& path) {
         showMessage("Cannot save project", QString::fromStdString(st.error()));
         return false;
     }
-    const QString oldAutosave = autosavePathFor(m_projectPath);
-    m_projectPath = absolute;
-    (void)removeProject(oldAutosave);
+    // The copy of the old name (or of the untitled work) is saved now: it goes.
     removeAutosave();
+    m_projectPath = absolute;
+    claimAutosaveCopy();
+    removeAutosave(); // an old copy of the new name, if any: what it held is saved now too
     m_doc->undoStack()->setClean();
     addRecent(absolute);
     updateTitle();
@@ -528,65 +562,120 @@ bool MainWindow::saveProjectAs(const QString& path) {
 }
 
 bool MainWindow::autosave() {
-    if (!isModified() || m_doc->undoStack()->index() == m_autosavedIndex) return false;
-    QDir().mkpath(autosaveFolder());
-    const QString path = autosavePathFor(m_projectPath);
-    if (const Status st = saveProject(
-            m_doc->settings(), path, m_projectPath,
-            {&m_doc->paintLayer(PaintLayerKind::Gloss), &m_doc->paintLayer(PaintLayerKind::VarianceOffset)});
-        !st) {
-        // Autosave runs unattended: a failure goes to the status bar, not a modal box every interval.
-        statusBar()->showMessage("Autosave failed: " + QString::fromStdString(st.error()), 8000);
+    if (!isModified() || m_doc->undoStack()->index() == m_autosavedIndex || m_autosaveWriter->busy())
         return false;
-    }
+    AutosaveWriter::Snapshot snapshot{m_doc->settings(), autosaveCopy(), m_projectPath, {}};
+    // Copies of the painted layers: the artist paints on while the worker encodes them.
+    for (const PaintLayerKind kind : {PaintLayerKind::Gloss, PaintLayerKind::VarianceOffset})
+        if (const PaintLayer& layer = m_doc->paintLayer(kind); layer.painted())
+            snapshot.layers.push_back(std::make_shared<const PaintLayer>(layer));
+    if (!m_autosaveWriter->start(std::move(snapshot))) return false;
     m_autosavedIndex = m_doc->undoStack()->index();
-    statusBar()->showMessage("Autosaved", 2000);
     return true;
 }
 
-void MainWindow::setAutosaveInterval(int seconds) {
-    if (seconds <= 0) {
-        m_autosaveTimer->stop();
-        return;
-    }
-    m_autosaveTimer->start(seconds * 1000);
+Status MainWindow::waitForAutosave() {
+    return m_autosaveWriter->wait();
+}
+
+void MainWindow::setAutosaveDelay(int milliseconds) {
+    m_autosaveDelayMs = std::max(0, milliseconds);
+    if (m_autosaveDelayMs == 0) m_autosaveTimer->stop();
+}
+
+QString MainWindow::autosaveCopy() const {
+    return m_projectPath.isEmpty() ? m_untitledCopy : autosavePathFor(m_projectPath);
+}
+
+void MainWindow::claimAutosaveCopy() {
+    m_autosaveLock.reset();
+    m_autosaveLock = claimAutosave(autosaveCopy());
+    if (!m_autosaveLock)
+        statusBar()->showMessage("This project is open in another Burnish window too: the last one to save "
+                                 "keeps its changes",
+                                 10000);
 }
 
 void MainWindow::removeAutosave() {
-    (void)removeProject(autosavePathFor(m_projectPath));
+    // A write in flight would put the copy back after it was removed.
+    (void)m_autosaveWriter->wait();
+    // Another live window's copy of the same project is its work, not this window's to delete.
+    if (m_autosaveLock) (void)removeProject(autosaveCopy());
     m_autosavedIndex = -1;
 }
 
 void MainWindow::offerRecovery() {
+    // A copy another live window holds is that window's unsaved work, not a crash's.
+    if (!m_autosaveLock || m_projectPath.isEmpty()) return;
     const auto copy = recoverableAutosave(m_projectPath);
     if (!copy) return;
-    const QString what =
-        m_projectPath.isEmpty() ? "an unsaved material" : QFileInfo(m_projectPath).fileName();
-    const auto answer =
-        ask("Recover autosave",
-            QString("An autosave of %1 from %2 %3. Recover it? (No keeps the autosave for later; Discard "
-                    "deletes it.)")
-                .arg(what, QFileInfo(*copy).lastModified().toString(Qt::TextDate),
-                     m_projectPath.isEmpty() ? "was found" : "is newer than the saved project"),
-            QMessageBox::Yes | QMessageBox::No | QMessageBox::Discard);
+    const auto answer = ask(
+        "Recover autosave",
+        QString("An autosave of %1 from %2 is newer than the saved project. Recover it? "
+                "(No keeps the autosave for later; Discard deletes it.)")
+            .arg(QFileInfo(m_projectPath).fileName(), QFileInfo(*copy).lastModified().toString(Qt::TextDate)),
+        QMessageBox::Yes | QMessageBox::No | QMessageBox::Discard);
     // Only an explicit Discard deletes the artist's unsaved work; anything else keeps the copy.
     if (answer == QMessageBox::Discard) {
         (void)removeProject(*copy);
         return;
     }
-    if (answer != QMessageBox::Yes) return;
-    const auto project = loadProject(*copy);
+    if (answer == QMessageBox::Yes) (void)recoverFrom(*copy, m_projectPath);
+}
+
+void MainWindow::offerRecoveryAtLaunch(const QString& opened) {
+    // A project named on the command line had its own copy offered as it opened; the others wait for
+    // a start that names none rather than replace what the artist asked for.
+    if (!opened.isEmpty() && isProjectFile(opened)) return;
+    const auto copies = recoverableAutosaves();
+    for (const AutosaveCopy& copy : copies) {
+        if (copy.path == autosaveCopy()) continue; // this window's own (nothing written yet)
+        const QString what =
+            copy.autosaveOf.isEmpty() ? QString("unsaved work") : QFileInfo(copy.autosaveOf).fileName();
+        QString text = QString("Burnish Studio did not close normally. An autosave of %1 from %2 was found")
+                           .arg(what, copy.modified.toString(Qt::TextDate));
+        if (copies.size() > 1) text += QString(" (%1 in all, newest first)").arg(copies.size());
+        text += ". Recover it?";
+        text += opened.isEmpty()
+                    ? QString(" (No keeps it for the next start; Discard deletes it.)")
+                    : QString(" Recovering replaces %1, which you opened; No opens %1 and keeps the "
+                              "autosave for the next start; Discard deletes it.")
+                          .arg(QFileInfo(opened).fileName());
+        const auto answer =
+            ask("Recover autosave", text, QMessageBox::Yes | QMessageBox::No | QMessageBox::Discard);
+        if (answer == QMessageBox::Discard) {
+            (void)removeProject(copy.path);
+            continue;
+        }
+        if (answer == QMessageBox::Yes && recoverFrom(copy.path, copy.autosaveOf)) return;
+    }
+}
+
+bool MainWindow::recoverFrom(const QString& copy, const QString& projectPath) {
+    const auto project = loadProject(copy);
     if (!project) {
         showMessage("Cannot recover autosave", QString::fromStdString(project.error()));
-        return;
+        return false;
     }
     if (const Status st = m_doc->reset(project->settings, project->layers); !st) {
         showMessage("Cannot recover autosave", QString::fromStdString(st.error()));
-        return;
+        return false;
+    }
+    // The copy becomes this window's: its next autosave replaces it, saving or discarding removes it.
+    if (projectPath != m_projectPath || (projectPath.isEmpty() && copy != m_untitledCopy)) {
+        removeAutosave(); // this window's own copy, superseded
+        if (projectPath.isEmpty()) m_untitledCopy = copy;
+        m_projectPath = projectPath;
+        claimAutosaveCopy();
+        if (!projectPath.isEmpty()) addRecent(projectPath);
     }
     // The recovered state is not what the project file holds: it stays unsaved until saved.
     m_doc->undoStack()->resetClean();
+    m_autosavedIndex = -1;
     updateTitle();
+    statusBar()->showMessage(
+        "Recovered the autosave of " + (projectPath.isEmpty() ? QString("unsaved work") : projectPath), 6000);
+    return true;
 }
 
 void MainWindow::exportTextures() {
@@ -698,7 +787,7 @@ void MainWindow::restoreSettings() {
     }
     if (settings.contains("window/state")) restoreState(settings.value("window/state").toByteArray());
     m_defaultLayoutPending = !settings.contains("window/state");
-    setAutosaveInterval(settings.value("autosaveSeconds", kDefaultAutosaveSeconds).toInt());
+    setAutosaveDelay(settings.value("autosaveDelaySeconds", kDefaultAutosaveDelaySeconds).toInt() * 1000);
 }
 
 void MainWindow::fitToScreen() {

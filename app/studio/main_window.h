@@ -13,8 +13,10 @@
 #include <QMessageBox>
 
 #include <functional>
+#include <memory>
 
 class QDialog;
+class QLockFile;
 class QDockWidget;
 class QLabel;
 class QMenu;
@@ -24,6 +26,7 @@ class QTimer;
 
 namespace burnish::studio {
 
+class AutosaveWriter;
 class BakeDialog;
 class GltfRunner;
 class MaterialPanel;
@@ -63,11 +66,22 @@ public:
     bool saveProjectAs(const QString& path);
     /// New document (the built-in sample), after asking about unsaved changes.
     bool newDocument();
-    /// Writes the autosave copy when there are changes since the last save or autosave.
+    /// Starts writing the autosave copy (on a worker thread) when there are changes since the last
+    /// save or autosave; false when there is nothing to write or a write is still running.
     bool autosave();
-    void setAutosaveInterval(int seconds);
-    /// Offers to recover an autosave copy newer than the project (or of the untitled document).
+    /// Waits for an autosave write in flight; its outcome (ok when none runs).
+    Status waitForAutosave();
+    /// Autosave this long after an edit (0: never). Edits while it waits join that autosave.
+    void setAutosaveDelay(int milliseconds);
+    /// The copy this window autosaves to: its project's, or its own untitled one.
+    QString autosaveCopy() const;
+    /// Offers to recover this project's autosave copy where it is newer than the project.
     void offerRecovery();
+    /// At start-up: offers, newest first, the copies of windows that did not close (a crash, a kill),
+    /// saved projects and untitled work alike. `opened` is the file named on the command line: a
+    /// project's own copy was offered when it opened and others wait for a start without one; over an
+    /// opened image the question says that recovering replaces it.
+    void offerRecoveryAtLaunch(const QString& opened = {});
     QStringList recentProjects() const;
     /// Processes a glTF asset into `outDir` as `burnish gltf` does (gltfMethodFor's method), on a worker
     /// thread with a progress dialog that can cancel; an existing output is replaced only after asking.
@@ -116,7 +130,12 @@ private:
     void chooseGltfExport();
     /// The progress dialog of a glTF job; false when `target` exists and replacing it was declined.
     bool beginGltfJob(const QString& label, const QString& target, GltfOptions& options);
+    /// Deletes this window's autosave copy (after any write in flight).
     void removeAutosave();
+    /// Claims the lock of autosaveCopy() (after the project path changed), releasing the old one.
+    void claimAutosaveCopy();
+    /// Replaces the document with an autosave copy, which becomes this window's copy; unsaved.
+    bool recoverFrom(const QString& copy, const QString& projectPath);
     void restoreSettings();
     void saveSettings();
     /// The first-run proportions of the docks, for the window's actual size: the Material panel
@@ -147,6 +166,12 @@ private:
     QLabel* m_statusMethod;
     QLabel* m_statusPreset;
     QTimer* m_autosaveTimer;
+    int m_autosaveDelayMs = 0;
+    AutosaveWriter* m_autosaveWriter;
+    /// The lock on autosaveCopy(): tells this window's copy from a crashed one's (null if another
+    /// live window holds it, which then owns that copy).
+    std::unique_ptr<QLockFile> m_autosaveLock;
+    QString m_untitledCopy;
     QString m_projectPath;
     /// Undo index at the last autosave (-1: none since the last save).
     int m_autosavedIndex = -1;

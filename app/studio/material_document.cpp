@@ -548,6 +548,9 @@ Status MaterialDocument::reset(const MaterialSettings& settings, const std::vect
         if (!layer) return Error{layer.error()};
         (file.kind == PaintLayerKind::Gloss ? gloss : offset) = std::move(layer);
     }
+    // A map still decoding for the old document must not land in the new one.
+    for (size_t i = 0; i < std::size(m_loadGeneration); ++i)
+        m_loadDone[i] = ++m_loadGeneration[i];
     m_undo.clear();
     m_glossLayer = std::move(gloss).value();
     m_offsetLayer = std::move(offset).value();

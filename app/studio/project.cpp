@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <QCoreApplication>
 #include <QCryptographicHash>
 #include <QDir>
 #include <QFileInfo>
@@ -13,6 +14,7 @@
 #include <QStandardPaths>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -445,6 +447,7 @@ QString autosaveFolder() {
 }
 
 QString autosavePathFor(const QString& projectFile) {
+    // An empty path: the one untitled copy studios before per-window copies wrote (still recovered).
     if (projectFile.isEmpty()) return autosaveFolder() + "/untitled." + kProjectSuffix;
     const QString absolute = QFileInfo(projectFile).absoluteFilePath();
     // The name keeps copies recognisable; the hash of the whole path keeps two "material.burnish"
@@ -453,6 +456,48 @@ QString autosavePathFor(const QString& projectFile) {
         QCryptographicHash::hash(absolute.toUtf8(), QCryptographicHash::Sha1).toHex().left(16);
     return autosaveFolder() + "/" + QFileInfo(projectFile).completeBaseName() + "-" + hash + "." +
            kProjectSuffix;
+}
+
+QString newUntitledAutosavePath() {
+    static std::atomic<int> serial{0};
+    return autosaveFolder() + QString("/untitled-%1-%2-%3.%4")
+                                  .arg(QDateTime::currentDateTime().toString("yyyyMMdd-HHmmss"))
+                                  .arg(QCoreApplication::applicationPid())
+                                  .arg(++serial)
+                                  .arg(kProjectSuffix);
+}
+
+std::unique_ptr<QLockFile> claimAutosave(const QString& copy) {
+    QDir().mkpath(QFileInfo(copy).absolutePath());
+    auto lock = std::make_unique<QLockFile>(copy + ".lock");
+    // Held as long as its process lives, however long that is; a dead process's lock is stale.
+    lock->setStaleLockTime(0);
+    if (!lock->tryLock(0)) return nullptr;
+    return lock;
+}
+
+std::vector<AutosaveCopy> recoverableAutosaves() {
+    std::vector<AutosaveCopy> out;
+    const QFileInfoList files =
+        QDir(autosaveFolder()).entryInfoList({QString("*.") + kProjectSuffix}, QDir::Files, QDir::Time);
+    for (const QFileInfo& info : files) {
+        const QString path = info.absoluteFilePath();
+        if (!claimAutosave(path)) continue; // a live window's work in progress (the claim ends at once)
+        AutosaveCopy copy{path, {}, info.lastModified()};
+        // Only the owner is read here; a copy that does not parse is still offered (its error shows
+        // when it is chosen, and Discard removes it).
+        if (const auto text = readFile(path.toStdString())) {
+            const Json root = Json::parse(*text, nullptr, false);
+            if (root.is_object() && root.contains("autosaveOf") && root["autosaveOf"].is_string())
+                copy.autosaveOf = QString::fromStdString(root["autosaveOf"].get<std::string>());
+        }
+        if (!copy.autosaveOf.isEmpty()) {
+            const QFileInfo project(copy.autosaveOf);
+            if (project.exists() && project.lastModified() >= copy.modified) continue; // saved since
+        }
+        out.push_back(std::move(copy));
+    }
+    return out; // QDir::Time: newest first
 }
 
 std::optional<QString> recoverableAutosave(const QString& projectFile) {

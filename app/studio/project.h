@@ -26,8 +26,11 @@
 
 #include <burnish/core/util/result.h>
 
+#include <QDateTime>
+#include <QLockFile>
 #include <QString>
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -77,11 +80,29 @@ Result<ParsedProject> loadProject(const QString& projectFile);
 
 /// The folder autosave copies go to: <AppDataLocation>/autosave.
 QString autosaveFolder();
-/// The autosave copy of a project (an empty path: the untitled document):
-/// <autosaveFolder>/<id>.burnish with id = "<name>-<hash of the absolute path>" or "untitled".
+/// The autosave copy of a project: <autosaveFolder>/<name>-<hash of the absolute path>.burnish.
 QString autosavePathFor(const QString& projectFile);
+/// A fresh name for an untitled document's copy, unique to this process and moment
+/// (<autosaveFolder>/untitled-<date>-<time>-<pid>-<n>.burnish): one window's untitled work never
+/// overwrites another's, nor a crashed run's.
+QString newUntitledAutosavePath();
 /// The autosave copy to offer for recovery: it exists and is newer than the project (or the
 /// project file is missing). Empty when there is nothing to recover.
 std::optional<QString> recoverableAutosave(const QString& projectFile);
+
+/// The lock a window holds on the autosave copy it writes (<copy>.lock, QLockFile: the process id,
+/// never stale while that process lives). A copy whose lock a live process holds is that window's
+/// work in progress, not a crash's leftover. Null when another live process (or window) holds it.
+std::unique_ptr<QLockFile> claimAutosave(const QString& copy);
+
+/// An autosave copy left by a window that is gone (a crash, a kill).
+struct AutosaveCopy {
+    QString path;
+    QString autosaveOf; // the project it belongs to; empty for untitled work (or an unreadable copy)
+    QDateTime modified;
+};
+/// Every copy in autosaveFolder() worth offering after a crash, newest first: not held by a live
+/// window, and untitled, or newer than its project, or its project gone.
+std::vector<AutosaveCopy> recoverableAutosaves();
 
 } // namespace burnish::studio

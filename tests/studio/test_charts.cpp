@@ -526,7 +526,7 @@ TEST(ErrorCostChart, CancellingTheApproximationsShowsCancelled) {
 
 TEST(ChartsPanel, TheMainWindowHasAChartsDockWithAViewToggle) {
     MainWindow window;
-    window.setAutosaveInterval(0);
+    window.setAutosaveDelay(0);
     auto* panel = window.findChild<ChartsPanel*>("chartsDock");
     ASSERT_NE(panel, nullptr);
     window.document()->setGloss(0.25);

@@ -145,7 +145,7 @@ public:
         {
             // First launch: no saved geometry.
             MainWindow window;
-            window.setAutosaveInterval(0);
+            window.setAutosaveDelay(0);
             settle(window);
             const QStringList problems = layoutProblems(window, available);
             EXPECT_TRUE(problems.isEmpty()) << problems.join("\n").toStdString();
@@ -161,12 +161,12 @@ public:
             // A geometry saved on a 2560×1440 screen by a window wider than this screen (the old
             // layout's 1995 px) is clamped to this one on the next launch.
             MainWindow wide;
-            wide.setAutosaveInterval(0);
+            wide.setAutosaveDelay(0);
             wide.setGeometry(400, 200, 1995, 1300);
             QSettings().setValue("window/geometry", wide.saveGeometry());
         }
         MainWindow window;
-        window.setAutosaveInterval(0);
+        window.setAutosaveDelay(0);
         settle(window);
         const QStringList problems = layoutProblems(window, available);
         EXPECT_TRUE(problems.isEmpty()) << problems.join("\n").toStdString();

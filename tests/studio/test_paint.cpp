@@ -113,7 +113,7 @@ bool writeFloatExr(const fs::path& path, const std::vector<float>& values, int w
 
 TEST(StudioPaint, StrokeOnTheViewChangesTheLayerAndUndoRestoresIt) {
     MainWindow window;
-    window.setAutosaveInterval(0);
+    window.setAutosaveDelay(0);
     window.resize(1200, 800);
     window.show();
     PaintTool* tool = window.paintTool();
@@ -183,7 +183,7 @@ TEST(StudioPaint, LayersSurviveASaveAndLoad) {
     test::TempDir dir;
     const QString file = QString::fromStdString((dir.path() / "painted.burnish").string());
     MainWindow window;
-    window.setAutosaveInterval(0);
+    window.setAutosaveDelay(0);
     MaterialDocument* doc = window.document();
     PaintTool* tool = window.paintTool();
     Brush b;
@@ -208,7 +208,7 @@ TEST(StudioPaint, LayersSurviveASaveAndLoad) {
     EXPECT_TRUE(QFileInfo::exists(offsetFile));
 
     MainWindow other;
-    other.setAutosaveInterval(0);
+    other.setAutosaveDelay(0);
     other.showMessage = [](const QString&, const QString& text) { ADD_FAILURE() << text.toStdString(); };
     ASSERT_TRUE(other.openProject(file));
     const MaterialDocument* loaded = other.document();
@@ -220,7 +220,7 @@ TEST(StudioPaint, LayersSurviveASaveAndLoad) {
     // A project naming a missing layer file loads nothing half-way.
     QFile::remove(glossFile);
     MainWindow third;
-    third.setAutosaveInterval(0);
+    third.setAutosaveDelay(0);
     QString message;
     third.showMessage = [&](const QString&, const QString& text) { message = text; };
     EXPECT_FALSE(third.openProject(file));
@@ -235,7 +235,7 @@ TEST(StudioPaint, LayersSurviveASaveAndLoad) {
 TEST(StudioPaint, PaintSurvivesAMapOfAnotherSizeAndUndoRestoresItExactly) {
     test::TempDir dir;
     MainWindow window;
-    window.setAutosaveInterval(0);
+    window.setAutosaveDelay(0);
     MaterialDocument* doc = window.document();
     QStringList notices;
     QObject::connect(doc, &MaterialDocument::notice, [&](const QString& text) { notices << text; });
@@ -278,7 +278,7 @@ TEST(StudioPaint, PaintSurvivesAMapOfAnotherSizeAndUndoRestoresItExactly) {
     const QString file = QString::fromStdString((dir / "carried.burnish").string());
     ASSERT_TRUE(window.saveProjectAs(file));
     MainWindow reopened;
-    reopened.setAutosaveInterval(0);
+    reopened.setAutosaveDelay(0);
     reopened.showMessage = [](const QString&, const QString& text) { ADD_FAILURE() << text.toStdString(); };
     ASSERT_TRUE(reopened.openProject(file));
     const MaterialDocument* loaded = reopened.document();
@@ -290,7 +290,7 @@ TEST(StudioPaint, PaintSurvivesAMapOfAnotherSizeAndUndoRestoresItExactly) {
 // undo gives back the values as painted.
 TEST(StudioPaint, APresetChangeReencodesThePaintedGlossAndUndoRestoresIt) {
     MainWindow window;
-    window.setAutosaveInterval(0);
+    window.setAutosaveDelay(0);
     MaterialDocument* doc = window.document();
     ASSERT_EQ(doc->settings().preset, "blackops");
     stroke(*window.paintTool(), PaintLayerKind::Gloss, 0.6f, 25.0, {200.0, 200.0}, {260.0, 240.0});
@@ -315,7 +315,7 @@ TEST(StudioPaint, SavesAndAutosavesLeaveNoStrayLayerFiles) {
     test::TempDir dir;
     const QString file = QString::fromStdString((dir / "m.burnish").string());
     MainWindow window;
-    window.setAutosaveInterval(0);
+    window.setAutosaveDelay(0);
     MaterialDocument* doc = window.document();
     stroke(*window.paintTool(), PaintLayerKind::Gloss, 0.9f, 20.0, {100.0, 100.0}, {150.0, 100.0});
     ASSERT_TRUE(window.saveProjectAs(file));
@@ -342,6 +342,7 @@ TEST(StudioPaint, SavesAndAutosavesLeaveNoStrayLayerFiles) {
     // An autosave with paint, then the project saved: the copy and its layer folder are removed.
     stroke(*window.paintTool(), PaintLayerKind::Gloss, 0.7f, 20.0, {200.0, 200.0}, {250.0, 200.0});
     ASSERT_TRUE(window.autosave());
+    ASSERT_TRUE(window.waitForAutosave());
     const QString copy = autosavePathFor(file);
     ASSERT_TRUE(QFileInfo::exists(copy));
     ASSERT_TRUE(QDir(layerFolderFor(copy)).exists());

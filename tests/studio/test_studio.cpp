@@ -74,13 +74,17 @@ QString q(const fs::path& p) {
 struct TestWindow {
     MainWindow window;
     QStringList messages;
-    QStringList results; // showResult's summaries
+    QStringList results;   // showResult's summaries
+    QStringList questions; // every question asked, in order
     QMessageBox::StandardButton answer = QMessageBox::Discard;
     TestWindow() {
         window.showMessage = [this](const QString&, const QString& text) { messages << text; };
         window.showResult = [this](const QString&, const QString& text) { results << text; };
-        window.ask = [this](const QString&, const QString&, QMessageBox::StandardButtons) { return answer; };
-        window.setAutosaveInterval(0);
+        window.ask = [this](const QString&, const QString& text, QMessageBox::StandardButtons) {
+            questions << text;
+            return answer;
+        };
+        window.setAutosaveDelay(0);
     }
 };
 
@@ -690,6 +694,7 @@ TEST(Project, AutosaveIsWrittenAndOfferedForRecovery) {
         EXPECT_FALSE(w.window.autosave()) << "nothing to autosave in a clean document";
         w.window.document()->setGloss(0.125);
         ASSERT_TRUE(w.window.autosave());
+        ASSERT_TRUE(w.window.waitForAutosave());
         const QString copy = autosavePathFor(file);
         ASSERT_TRUE(QFile::exists(copy));
         const auto parsed = loadProject(copy);
@@ -705,33 +710,210 @@ TEST(Project, AutosaveIsWrittenAndOfferedForRecovery) {
         ASSERT_TRUE(recoverableAutosave(file).has_value());
         // The window "crashes" here: its destructor runs no close event, so the copy stays.
     }
-    TestWindow again;
+    auto again = std::make_unique<TestWindow>();
     // Opening the project offers its newer autosave: No keeps the copy for later.
-    again.answer = QMessageBox::No;
-    ASSERT_TRUE(again.window.openProject(file));
-    EXPECT_NE(again.window.document()->settings().gloss, 0.125) << "the saved project has the old gloss";
+    again->answer = QMessageBox::No;
+    ASSERT_TRUE(again->window.openProject(file));
+    EXPECT_NE(again->window.document()->settings().gloss, 0.125) << "the saved project has the old gloss";
     EXPECT_TRUE(recoverableAutosave(file).has_value()) << "No keeps the autosave";
-    again.answer = QMessageBox::Yes;
-    again.window.offerRecovery();
-    EXPECT_EQ(again.window.document()->settings().gloss, 0.125);
-    EXPECT_TRUE(again.window.isModified()) << "recovered changes are not saved yet";
-    ASSERT_TRUE(again.window.saveProjectAs(file));
+    again->answer = QMessageBox::Yes;
+    again->window.offerRecovery();
+    EXPECT_EQ(again->window.document()->settings().gloss, 0.125);
+    EXPECT_TRUE(again->window.isModified()) << "recovered changes are not saved yet";
+    ASSERT_TRUE(again->window.saveProjectAs(file));
     EXPECT_FALSE(QFile::exists(autosavePathFor(file))) << "saving removes the autosave copy";
     EXPECT_FALSE(recoverableAutosave(file).has_value());
 
     // Only an explicit Discard deletes an autosave the artist was offered.
-    again.window.document()->setGloss(0.25);
-    ASSERT_TRUE(again.window.autosave());
+    again->window.document()->setGloss(0.25);
+    ASSERT_TRUE(again->window.autosave());
+    ASSERT_TRUE(again->window.waitForAutosave());
     QFile project(file);
     ASSERT_TRUE(project.open(QIODevice::ReadWrite));
     ASSERT_TRUE(
         project.setFileTime(QDateTime::currentDateTime().addSecs(-60), QFileDevice::FileModificationTime));
     project.close();
+    {
+        // While the window that wrote it lives, the copy is its work in progress: not offered.
+        TestWindow other;
+        other.answer = QMessageBox::Discard;
+        ASSERT_TRUE(other.window.openProject(file));
+        EXPECT_TRUE(other.questions.isEmpty()) << other.questions.join('\n').toStdString();
+        EXPECT_TRUE(QFile::exists(autosavePathFor(file)));
+    }
+    again.reset(); // "crashes"
     TestWindow third;
     third.answer = QMessageBox::Discard;
     ASSERT_TRUE(third.window.openProject(file));
     EXPECT_FALSE(QFile::exists(autosavePathFor(file)));
     EXPECT_NE(third.window.document()->settings().gloss, 0.25);
+}
+
+/// Points the user's data (autosave copies, settings) at a folder of its own for one test: other test
+/// processes running beside it leave copies of their own in the shared test location.
+class PrivateUserData {
+public:
+    PrivateUserData()
+        : m_home(qgetenv("HOME")) {
+        qputenv("HOME", QByteArray::fromStdString(m_dir.path().string()));
+    }
+    ~PrivateUserData() { qputenv("HOME", m_home); }
+    PrivateUserData(const PrivateUserData&) = delete;
+    PrivateUserData& operator=(const PrivateUserData&) = delete;
+
+private:
+    test::TempDir m_dir;
+    QByteArray m_home;
+};
+
+/// Sets a file's modification time `secondsAgo` before now.
+void age(const QString& path, int secondsAgo) {
+    QFile file(path);
+    ASSERT_TRUE(file.open(QIODevice::ReadWrite)) << path.toStdString();
+    ASSERT_TRUE(file.setFileTime(QDateTime::currentDateTime().addSecs(-secondsAgo),
+                                 QFileDevice::FileModificationTime));
+}
+
+TEST(Project, AStartWithNothingNamedOffersWhatEveryCrashedWindowLeft) {
+    PrivateUserData data;
+    ASSERT_TRUE(autosaveFolder().startsWith(qEnvironmentVariable("HOME")));
+    test::TempDir dir;
+    const QString file = q(dir / "saved.burnish");
+    QString savedCopy, untitledCopy;
+    {
+        // A saved project edited, and an untitled document edited, in two windows that crash.
+        TestWindow saved, untitled;
+        ASSERT_TRUE(saved.window.saveProjectAs(file));
+        saved.window.document()->setGloss(0.125);
+        ASSERT_TRUE(saved.window.autosave());
+        ASSERT_TRUE(saved.window.waitForAutosave());
+        savedCopy = saved.window.autosaveCopy();
+        untitled.window.document()->setGloss(0.375);
+        ASSERT_TRUE(untitled.window.autosave());
+        ASSERT_TRUE(untitled.window.waitForAutosave());
+        untitledCopy = untitled.window.autosaveCopy();
+        EXPECT_NE(untitledCopy, autosavePathFor({})) << "each window's untitled work has a copy of its own";
+    }
+    age(file, 300);
+    age(savedCopy, 120);
+    age(untitledCopy, 60); // the newest
+    {
+        // A third window stays open with unsaved work: its copy is not a crash's.
+        TestWindow live;
+        live.window.document()->setGloss(0.625);
+        ASSERT_TRUE(live.window.autosave());
+        ASSERT_TRUE(live.window.waitForAutosave());
+        TestWindow start;
+        start.answer = QMessageBox::No;
+        start.window.offerRecoveryAtLaunch();
+        ASSERT_EQ(start.questions.size(), 2) << start.questions.join('\n').toStdString();
+        EXPECT_TRUE(start.questions[0].contains("unsaved work")) << start.questions[0].toStdString();
+        EXPECT_TRUE(start.questions[1].contains("saved.burnish")) << start.questions[1].toStdString();
+    }
+    // Before: a start with no arguments offered the untitled copy only, and only "untitled.burnish".
+    TestWindow start;
+    start.answer = QMessageBox::No;
+    start.window.offerRecoveryAtLaunch();
+    ASSERT_EQ(start.questions.size(), 3)
+        << "the live window has gone too: " << start.questions.join('\n').toStdString();
+    EXPECT_TRUE(QFile::exists(savedCopy) && QFile::exists(untitledCopy)) << "No keeps every copy";
+
+    // Yes on the saved project's copy: the project opens with the recovered state, unsaved.
+    TestWindow again;
+    again.window.setAutosaveDelay(0);
+    int asked = 0;
+    again.window.ask = [&](const QString&, const QString& text, QMessageBox::StandardButtons) {
+        ++asked;
+        return text.contains("saved.burnish") ? QMessageBox::Yes : QMessageBox::No;
+    };
+    again.window.offerRecoveryAtLaunch();
+    EXPECT_EQ(again.window.projectPath(), QFileInfo(file).absoluteFilePath());
+    EXPECT_EQ(again.window.document()->settings().gloss, 0.125);
+    EXPECT_TRUE(again.window.isModified());
+    EXPECT_EQ(again.window.autosaveCopy(), savedCopy) << "the recovered copy is the window's own now";
+    ASSERT_TRUE(again.window.saveProjectAs(file));
+    EXPECT_FALSE(QFile::exists(savedCopy));
+    EXPECT_TRUE(QFile::exists(untitledCopy)) << "the untitled work waits for the next start";
+}
+
+TEST(Project, DiscardedWorkIsNotOfferedAgain) {
+    PrivateUserData data;
+    QString copy;
+    {
+        TestWindow w;
+        w.window.document()->setGloss(0.125);
+        ASSERT_TRUE(w.window.autosave());
+        ASSERT_TRUE(w.window.waitForAutosave());
+        copy = w.window.autosaveCopy();
+        ASSERT_TRUE(QFile::exists(copy));
+        // New ▸ Discard: the changes are gone, and so is their copy. (Before: the copy stayed and the
+        // next start offered it again.)
+        w.answer = QMessageBox::Discard;
+        ASSERT_TRUE(w.window.newDocument());
+        EXPECT_FALSE(QFile::exists(copy));
+        // Edited again, then closed with Discard.
+        w.window.document()->setGloss(0.25);
+        ASSERT_TRUE(w.window.autosave());
+        ASSERT_TRUE(w.window.waitForAutosave());
+        ASSERT_TRUE(QFile::exists(w.window.autosaveCopy()));
+        EXPECT_TRUE(w.window.close());
+        EXPECT_FALSE(QFile::exists(w.window.autosaveCopy()));
+    }
+    TestWindow start;
+    start.window.offerRecoveryAtLaunch();
+    EXPECT_TRUE(start.questions.isEmpty()) << start.questions.join('\n').toStdString();
+}
+
+TEST(Project, AutosaveFollowsAnEditWithinItsDelay) {
+    PrivateUserData data;
+    TestWindow w;
+    w.window.setAutosaveDelay(100);
+    const QString copy = w.window.autosaveCopy();
+    QTest::qWait(300);
+    EXPECT_FALSE(QFile::exists(copy)) << "nothing edited, nothing written";
+    w.window.document()->setGloss(0.125);
+    w.window.document()->setGloss(0.25); // a burst of edits: one autosave
+    // Before: the first autosave came on a two-minute clock, whenever the edit was.
+    EXPECT_TRUE(QTest::qWaitFor([&] { return QFile::exists(copy); }, kWorkerTimeoutMs));
+    ASSERT_TRUE(w.window.waitForAutosave());
+    auto parsed = loadProject(copy);
+    ASSERT_TRUE(parsed) << parsed.error();
+    EXPECT_EQ(parsed->settings.gloss, 0.25);
+    // A later edit is written too.
+    w.window.document()->setGloss(0.5);
+    EXPECT_TRUE(QTest::qWaitFor(
+        [&] {
+            auto p = loadProject(copy);
+            return p && p->settings.gloss == 0.5;
+        },
+        kWorkerTimeoutMs));
+}
+
+TEST(Project, RecoveryNeverSilentlyReplacesAnImageNamedAtStart) {
+    PrivateUserData data;
+    {
+        TestWindow crashed;
+        crashed.window.document()->setGloss(0.125);
+        ASSERT_TRUE(crashed.window.autosave());
+        ASSERT_TRUE(crashed.window.waitForAutosave());
+    }
+    // burnish-studio IMAGE: the map opens; the offer says recovering would replace it, and No keeps it.
+    TestWindow w;
+    ASSERT_TRUE(w.window.openFile(kNormalMap));
+    w.answer = QMessageBox::No;
+    w.window.offerRecoveryAtLaunch(kNormalMap);
+    ASSERT_EQ(w.questions.size(), 1);
+    EXPECT_TRUE(w.questions[0].contains("replaces trak-rust1_nm.png")) << w.questions[0].toStdString();
+    EXPECT_EQ(w.window.document()->settings().normalMapPath, kNormalMap);
+    EXPECT_EQ(w.window.document()->undoStack()->count(), 1) << "History keeps the map's load";
+    // A project named at start: other copies wait for a start that names nothing.
+    test::TempDir dir;
+    const QString file = q(dir / "named.burnish");
+    ASSERT_TRUE(w.window.saveProjectAs(file));
+    TestWindow named;
+    ASSERT_TRUE(named.window.openProject(file));
+    named.window.offerRecoveryAtLaunch(file);
+    EXPECT_TRUE(named.questions.isEmpty()) << named.questions.join('\n').toStdString();
 }
 
 std::map<std::string, std::string> folderBytes(const fs::path& folder) {
@@ -895,7 +1077,7 @@ StudioRun runStudioWithoutDisplay(const std::string& args) {
 // while typed text is not committed yet, the shortcut stays the field's.
 TEST(StudioKeys, UndoFromANumberFieldUndoesTheDocument) {
     MainWindow window;
-    window.setAutosaveInterval(0);
+    window.setAutosaveDelay(0);
     window.show();
     window.activateWindow();
     ASSERT_TRUE(QTest::qWaitForWindowActive(&window));

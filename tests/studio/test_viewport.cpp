@@ -523,7 +523,7 @@ TEST(Viewport, AtRestTheMixtureFilteredAfterShadingAddsAPassAFrame) {
 
 TEST(Viewport, MainWindowShowsTheRenderedViewport) {
     MainWindow window;
-    window.setAutosaveInterval(0);
+    window.setAutosaveDelay(0);
     window.resize(1400, 880);
     window.show();
     QApplication::processEvents();

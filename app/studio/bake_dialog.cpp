@@ -1,6 +1,7 @@
 #include "bake_dialog.h"
 
 #include <burnish/core/bake/bake_ninja.h>
+#include <burnish/core/util/numeric.h>
 
 #include <QCheckBox>
 #include <QComboBox>
@@ -13,6 +14,7 @@
 #include <QProgressDialog>
 #include <QPushButton>
 #include <QSettings>
+#include <QShowEvent>
 #include <QSpinBox>
 
 #include <QVBoxLayout>
@@ -31,25 +33,52 @@ QString qs(std::string_view s) {
 // Progress bar resolution: per mille of the job.
 constexpr int kProgressSteps = 1000;
 
+const Preset* presetNamed(const QString& name) {
+    for (const auto& p : builtinPresets())
+        if (QString::fromStdString(p.name) == name) return &p;
+    return nullptr;
+}
+
+Method exportMethodFor(const MaterialDocument& doc, const QString& presetName, std::optional<Method> method) {
+    const Method wanted = method.value_or(doc.settings().method);
+    const Preset* preset = presetNamed(presetName);
+    if (!preset || checkPresetMethod(*preset, wanted)) return wanted;
+    return preset->method; // the document's method cannot be stored by this preset: its default
+}
+
 } // namespace
 
-BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc) {
+BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc, const QString& presetName,
+                           std::optional<Method> method) {
     const MaterialSettings& s = doc.settings();
+    const QString exportPreset = presetName.isEmpty() ? s.preset : presetName;
+    const Preset* preset = presetNamed(exportPreset);
+    const Preset& encodingPreset = preset ? *preset : doc.preset();
+    const Method exportMethod = exportMethodFor(doc, exportPreset, method);
+    // Another preset's gloss encoding: the authored gloss (gloss map and paint) keeps its powers, as a
+    // preset change in the document keeps them (MaterialDocument::setPreset), without the document changing.
+    const bool reencode = encodingPreset.encoding.name() != doc.preset().encoding.name();
     BakeJobSpec spec;
     spec.input = s.normalMapPath.isEmpty() ? std::string(kSampleInputPrefix) + kSampleName
                                            : s.normalMapPath.toStdString();
     spec.out = s.exportSettings.outputFolder.toStdString();
-    spec.preset = s.preset.toStdString();
-    spec.method = std::string(methodName(s.method));
+    spec.preset = exportPreset.toStdString();
+    spec.method = std::string(methodName(exportMethod));
     if (!s.glossMapPath.isEmpty()) spec.gloss = s.glossMapPath.toStdString();
     const bool painted = doc.paintLayer(PaintLayerKind::Gloss).painted() ||
                          doc.paintLayer(PaintLayerKind::VarianceOffset).painted();
-    if (painted && doc.authoredGloss()) {
+    if ((painted || (reencode && !s.glossMapPath.isEmpty())) && doc.authoredGloss()) {
         // The layers composited over the gloss map (or the base gloss): what the views show. It
         // overrides the gloss file (then only named in bake.json) and holds the base power per texel.
         // The document copies before its next edit while this is shared, so the worker reads a
         // snapshot.
         spec.authoredGloss = doc.authoredGloss();
+        if (reencode) {
+            auto values = std::make_shared<std::vector<float>>(*doc.authoredGloss());
+            for (float& v : *values)
+                v = float(saturate(encodingPreset.encoding.value(doc.preset().encoding.power(v))));
+            spec.authoredGloss = std::move(values);
+        }
     } else if (s.glossMapPath.isEmpty()) {
         spec.power = doc.power();
     }
@@ -58,16 +87,16 @@ BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc) {
         spec.compression = s.exportSettings.compression.toStdString();
     if (s.exportSettings.mips > 0) spec.mips = s.exportSettings.mips;
     if (!s.detailMapPath.isEmpty()) spec.detail = s.detailMapPath.toStdString();
-    if (doc.preset().findParameter("metallic"))
+    if (encodingPreset.findParameter("metallic"))
         spec.metallic = s.materialClass == MaterialClass::Metal ? 1.0 : 0.0;
     // The picked colour as numbers (a calibrated pick is its table value), so bake.json records it in the
     // preset engine's terms as `burnish bake --specular R,G,B --material-class C` does.
     spec.specular = fmt::format("{:.17g},{:.17g},{:.17g}", s.specular.r, s.specular.g, s.specular.b);
     spec.materialClass = s.materialClass == MaterialClass::Metal ? "metal" : "dielectric";
     spec.force = s.exportSettings.overwrite;
-    spec.shadedFit = s.method == Method::Mixture && s.exportSettings.shadedFit;
+    spec.shadedFit = exportMethod == Method::Mixture && s.exportSettings.shadedFit;
     // The lobes the viewport draws; a preset laid out as the mixture's writes that many lobe files.
-    if (s.method == Method::Mixture) spec.lobes = s.mixtureLobes;
+    if (exportMethod == Method::Mixture) spec.lobes = s.mixtureLobes;
     return spec;
 }
 
@@ -116,6 +145,9 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
     m_shadedFit->setToolTip("The mixture's lobes on mips 2 and up refined against the ground truth itself "
                             "(burnish bake --shaded-fit): closer highlights at texel centres, about the "
                             "same between texels, and tens of times the moment fit's bake time.");
+    m_choiceNote = new QLabel(this);
+    m_choiceNote->setWordWrap(true);
+    m_choiceNote->setVisible(false);
     m_result = new QLabel(this);
     m_result->setWordWrap(true);
     m_result->setTextInteractionFlags(Qt::TextSelectableByMouse);
@@ -124,6 +156,7 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
     auto* form = new QFormLayout;
     form->addRow("Preset", m_preset);
     form->addRow("Method", m_method);
+    form->addRow("", m_choiceNote);
     form->addRow("Format", m_format);
     form->addRow("DDS compression", m_compression);
     form->addRow("Mip levels", m_mips);
@@ -147,20 +180,11 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
     layout->addWidget(buttons);
     resize(560, 360);
 
-    connect(m_preset, &QComboBox::activated, this, [this](int i) {
-        if (const Status st = m_doc->setPreset(m_preset->itemData(i).toString()); !st)
-            m_result->setText(QString::fromStdString(st.error()));
-    });
-    connect(m_method, &QComboBox::activated, this, [this](int i) {
-        if (const Status st = m_doc->setMethod(Method(m_method->itemData(i).toInt())); !st)
-            m_result->setText(QString::fromStdString(st.error()));
-    });
-    connect(m_format, &QComboBox::currentIndexChanged, this, [this] {
-        const QString f = m_format->currentData().toString();
-        const bool dds = f == "dds" || (f.isEmpty() && m_doc->preset().format == ExportFormat::Dds);
-        m_compression->setEnabled(dds);
-        if (!dds) m_compression->setCurrentIndex(0);
-    });
+    connect(m_preset, &QComboBox::activated, this,
+            [this](int i) { choosePreset(m_preset->itemData(i).toString()); });
+    connect(m_method, &QComboBox::activated, this,
+            [this](int i) { chooseMethod(Method(m_method->itemData(i).toInt())); });
+    connect(m_format, &QComboBox::currentIndexChanged, this, &BakeDialog::updateCompression);
     // Kept at once: a document change before the bake redraws the dialog from the settings.
     connect(m_shadedFit, &QCheckBox::clicked, this, [this] { commitSettings(); });
     connect(m_doc, &MaterialDocument::changed, this, &BakeDialog::refresh);
@@ -212,20 +236,72 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
     refresh();
 }
 
+QString BakeDialog::exportPreset() const {
+    return m_chosenPreset.isEmpty() ? m_doc->settings().preset : m_chosenPreset;
+}
+
+Method BakeDialog::exportMethod() const {
+    return exportMethodFor(*m_doc, exportPreset(), m_chosenMethod);
+}
+
+void BakeDialog::choosePreset(const QString& name) {
+    if (!presetNamed(name)) {
+        m_result->setText(QString("Preset '%1' is not known.").arg(name));
+        return;
+    }
+    m_chosenPreset = name;
+    refreshChoice(); // the fields typed but not yet committed stay
+}
+
+void BakeDialog::chooseMethod(Method method) {
+    m_chosenMethod = method;
+    refreshChoice();
+}
+
+void BakeDialog::showEvent(QShowEvent* event) {
+    // Opened again: the export starts from the material as it is now.
+    m_chosenPreset.clear();
+    m_chosenMethod.reset();
+    refresh();
+    QDialog::showEvent(event);
+}
+
 void BakeDialog::refresh() {
     const MaterialSettings& s = m_doc->settings();
-    m_preset->setCurrentIndex(m_preset->findData(s.preset));
-    m_method->clear();
-    for (Method m : m_doc->availableMethods())
-        m_method->addItem(qs(methodName(m)), int(m));
-    m_method->setCurrentIndex(m_method->findData(int(s.method)));
     m_format->setCurrentIndex(m_format->findData(s.exportSettings.format));
     m_compression->setCurrentIndex(std::max(0, m_compression->findData(s.exportSettings.compression)));
     m_mips->setValue(s.exportSettings.mips);
     if (!m_output->hasFocus()) m_output->setText(s.exportSettings.outputFolder);
     m_overwrite->setChecked(s.exportSettings.overwrite);
     m_shadedFit->setChecked(s.exportSettings.shadedFit);
-    m_shadedFit->setEnabled(s.method == Method::Mixture);
+    refreshChoice();
+}
+
+void BakeDialog::refreshChoice() {
+    const MaterialSettings& s = m_doc->settings();
+    const QString preset = exportPreset();
+    const Method method = exportMethod();
+    m_preset->setCurrentIndex(m_preset->findData(preset));
+    m_method->clear();
+    if (const Preset* p = presetNamed(preset))
+        for (Method m : compatibleMethods(*p))
+            m_method->addItem(qs(methodName(m)), int(m));
+    m_method->setCurrentIndex(m_method->findData(int(method)));
+    const bool differs = preset != s.preset || method != s.method;
+    m_choiceNote->setVisible(differs);
+    if (differs)
+        m_choiceNote->setText(QString("For this export only: the material keeps preset %1 and method %2.")
+                                  .arg(s.preset, qs(methodName(s.method))));
+    m_shadedFit->setEnabled(method == Method::Mixture);
+    updateCompression(); // the format "preset default" may mean DDS now
+}
+
+void BakeDialog::updateCompression() {
+    const QString f = m_format->currentData().toString();
+    const Preset* preset = presetNamed(exportPreset());
+    const bool dds = f == "dds" || (f.isEmpty() && preset && preset->format == ExportFormat::Dds);
+    m_compression->setEnabled(dds);
+    if (!dds) m_compression->setCurrentIndex(0);
 }
 
 void BakeDialog::browse() {
@@ -257,7 +333,7 @@ void BakeDialog::startBake() {
         emit bakeFinished(false, m_result->text());
         return;
     }
-    BakeJobSpec spec = bakeJobSpecFor(*m_doc);
+    BakeJobSpec spec = bakeJobSpecFor(*m_doc, exportPreset(), m_chosenMethod);
     if (!spec.force) {
         // The files this export writes, from the plan (nothing baked yet): ask before replacing.
         QStringList existing;

@@ -15,6 +15,7 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <optional>
 
 class QCheckBox;
 class QComboBox;
@@ -30,7 +31,12 @@ namespace burnish::studio {
 /// from the gloss unless a gloss map is set, metallic 1/0 for presets that store it). With painted
 /// layers, the document's composited authored gloss goes in as the job's in-memory authored gloss
 /// (overriding the gloss map, which bake.json names as what was painted over; no base power).
-BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc);
+/// `preset` and `method` export with another preset or method than the document's (empty / none:
+/// the document's; a method the preset cannot store: the preset's default). The powers are the
+/// document's: under a preset of another gloss encoding a gloss map or paint goes in re-encoded, as
+/// the authored gloss.
+BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc, const QString& preset = {},
+                           std::optional<Method> method = std::nullopt);
 
 /// Runs one bake job on a worker thread (WorkerRunner); finished carries the summary JSON text.
 class BakeRunner : public WorkerRunner {
@@ -46,13 +52,23 @@ class BakeDialog : public QDialog {
 public:
     explicit BakeDialog(MaterialDocument* doc, QWidget* parent = nullptr);
 
+    QComboBox* presetCombo() const { return m_preset; }
+    QComboBox* methodCombo() const { return m_method; }
     QComboBox* formatCombo() const { return m_format; }
     QComboBox* compressionCombo() const { return m_compression; }
     QSpinBox* mipsSpin() const { return m_mips; }
     QLineEdit* outputEdit() const { return m_output; }
     QLabel* resultLabel() const { return m_result; }
-    /// The dialog's fields written to the document (one undo step when anything changed).
+    /// The dialog's export fields (format, compression, mips, folder, replace, shaded fit) written to
+    /// the document's export settings, which the project keeps (one undo step when anything changed).
     void commitSettings();
+    /// The preset and method this export uses. They are the dialog's own: choosing them leaves the
+    /// document (its preset, method, painted layers, history) as it was. Each time the dialog opens
+    /// they start from the document's.
+    void choosePreset(const QString& name);
+    void chooseMethod(Method method);
+    QString exportPreset() const;
+    Method exportMethod() const;
     /// Commits the settings and starts the bake; bakeFinished reports the outcome. When the folder
     /// already holds files of this export and replacing is not ticked, asks "Overwrite…?" first.
     void startBake();
@@ -65,9 +81,17 @@ public:
 signals:
     void bakeFinished(bool ok, const QString& message);
 
+protected:
+    void showEvent(QShowEvent* event) override;
+
 private:
+    /// Every field from the document's export settings, then refreshChoice().
     void refresh();
+    /// The preset and method combos, their note, and what they enable.
+    void refreshChoice();
     void browse();
+    /// DDS compression applies only where the format (or the export preset's default) is DDS.
+    void updateCompression();
 
     MaterialDocument* m_doc;
     QComboBox* m_preset;
@@ -78,7 +102,11 @@ private:
     QLineEdit* m_output;
     QCheckBox* m_overwrite;
     QCheckBox* m_shadedFit;
+    QLabel* m_choiceNote; // where the export's preset or method is not the document's
     QLabel* m_result;
+    QString m_chosenPreset; // the export's preset; empty: the document's
+    std::optional<Method>
+        m_chosenMethod; // the export's method; none: the document's (or the preset's default)
     QPushButton* m_bake;
     BakeRunner* m_runner;
     QProgressDialog* m_progress = nullptr;

@@ -27,6 +27,7 @@
 #include <QSignalSpy>
 #include <QTest>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -349,6 +350,108 @@ TEST(StudioPaint, SavesAndAutosavesLeaveNoStrayLayerFiles) {
     ASSERT_TRUE(window.saveProjectAs(file));
     EXPECT_FALSE(QFileInfo::exists(copy));
     EXPECT_FALSE(QDir(layerFolderFor(copy)).exists()) << "no stray autosave layer folder";
+}
+
+// Choosing a preset or method in the export dialog used to set it on the document: the Material
+// panel's preset changed, History grew, the project was marked modified and painted layers were
+// re-encoded. The choice is now the export's own; only the export fields (folder, format, mips) go
+// into the project's export settings, one undo step.
+TEST(StudioPaint, TheExportDialogsPresetAndMethodAreTheExportsOwn) {
+    const auto exportWith = [](MaterialDocument& doc, const fs::path& out, const QString& preset) {
+        BakeDialog dialog(&doc);
+        if (!preset.isEmpty()) dialog.choosePreset(preset);
+        dialog.outputEdit()->setText(QString::fromStdString(out.string()));
+        QSignalSpy finished(&dialog, &BakeDialog::bakeFinished);
+        dialog.startBake();
+        EXPECT_TRUE(finished.count() > 0 || finished.wait(kWorkerTimeoutMs));
+        EXPECT_TRUE(!finished.isEmpty() && finished.at(0).at(0).toBool())
+            << dialog.resultLabel()->text().toStdString();
+    };
+    test::TempDir dir;
+    // No paint, no gloss map: the dialog's unreal writes what a document set to unreal writes.
+    {
+        MaterialDocument doc, unreal;
+        ASSERT_TRUE(doc.setPreset("blackops"));
+        doc.setGloss(0.6);
+        ASSERT_TRUE(unreal.setPreset("blackops"));
+        unreal.setGloss(0.6);
+        ASSERT_TRUE(unreal.setPreset("unreal"));
+        exportWith(doc, dir / "dialog", "unreal");
+        exportWith(unreal, dir / "document", {});
+        EXPECT_EQ(doc.settings().preset, "blackops");
+        const auto a = folderBytes(dir / "dialog"), b = folderBytes(dir / "document");
+        ASSERT_FALSE(b.empty());
+        ASSERT_EQ(a.size(), b.size());
+        for (const auto& [name, bytes] : b) {
+            ASSERT_TRUE(a.count(name)) << name;
+            if (name != "bake.json") {
+                EXPECT_TRUE(a.at(name) == bytes) << name << " differs";
+                continue;
+            }
+            // The document set to unreal holds its gloss in unreal's encoding: its power comes back
+            // from that gloss a rounding away (222.86094420380775 against ...78).
+            auto dialogRecord = nlohmann::json::parse(a.at(name)),
+                 documentRecord = nlohmann::json::parse(bytes);
+            EXPECT_NEAR(dialogRecord["options"]["power"].get<double>() /
+                            documentRecord["options"]["power"].get<double>(),
+                        1.0, 1e-12);
+            dialogRecord["options"].erase("power");
+            documentRecord["options"].erase("power");
+            EXPECT_EQ(dialogRecord, documentRecord);
+        }
+    }
+    // Painted: the document, its layers and its history stay as they were; the export keeps the powers.
+    MaterialDocument doc;
+    ASSERT_TRUE(doc.setPreset("blackops"));
+    doc.setGloss(0.6);
+    {
+        TextureView canvas;
+        PaintTool tool(&doc, &canvas);
+        stroke(tool, PaintLayerKind::Gloss, 0.95f, 40.0, {60.0, 60.0}, {300.0, 200.0});
+    }
+    doc.undoStack()->setClean();
+    const int steps = doc.undoStack()->count();
+    const MaterialSettings before = doc.settings();
+    const PaintLayer layer = doc.paintLayer(PaintLayerKind::Gloss);
+    ASSERT_TRUE(doc.authoredGloss());
+    const std::vector<float> authored = *doc.authoredGloss();
+    {
+        BakeDialog dialog(&doc);
+        dialog.choosePreset("unreal");
+        EXPECT_EQ(dialog.presetCombo()->currentData().toString(), "unreal");
+        const Preset* unreal = nullptr;
+        for (const auto& p : builtinPresets())
+            if (p.name == "unreal") unreal = &p;
+        ASSERT_NE(unreal, nullptr);
+        const auto methods = compatibleMethods(*unreal);
+        EXPECT_NE(std::find(methods.begin(), methods.end(), dialog.exportMethod()), methods.end());
+        dialog.chooseMethod(methods.front());
+        EXPECT_EQ(dialog.exportMethod(), methods.front());
+        // The spec carries the painted gloss in unreal's encoding at the document's powers.
+        const BakeJobSpec spec = bakeJobSpecFor(doc, "unreal", methods.front());
+        ASSERT_TRUE(spec.authoredGloss);
+        ASSERT_EQ(spec.authoredGloss->size(), authored.size());
+        for (size_t i = 0; i < authored.size(); i += 997) {
+            const double want = doc.preset().encoding.power(authored[i]);
+            EXPECT_NEAR(unreal->encoding.power((*spec.authoredGloss)[i]) / want, 1.0, 1e-3) << i;
+        }
+        dialog.outputEdit()->setText(QString::fromStdString((dir / "painted").string()));
+        QSignalSpy finished(&dialog, &BakeDialog::bakeFinished);
+        dialog.startBake();
+        ASSERT_TRUE(finished.count() > 0 || finished.wait(kWorkerTimeoutMs));
+        ASSERT_TRUE(finished.at(0).at(0).toBool()) << dialog.resultLabel()->text().toStdString();
+    }
+    auto record = readFile(dir / "painted" / "bake.json");
+    ASSERT_TRUE(record);
+    EXPECT_EQ(nlohmann::json::parse(*record)["preset"]["name"], "unreal");
+    MaterialSettings after = doc.settings();
+    EXPECT_EQ(after.exportSettings.outputFolder, QString::fromStdString((dir / "painted").string()));
+    after.exportSettings = before.exportSettings;
+    EXPECT_TRUE(after == before) << "preset, method and gloss as they were";
+    EXPECT_EQ(doc.undoStack()->count(), steps + 1) << "one step: the export settings";
+    EXPECT_EQ(doc.undoStack()->text(steps), "Export settings");
+    EXPECT_TRUE(samePaint(doc.paintLayer(PaintLayerKind::Gloss), layer)) << "the layer is not re-encoded";
+    EXPECT_EQ(*doc.authoredGloss(), authored);
 }
 
 TEST(StudioPaint, TexturePaneShowsThePaintedGlossAndItsBake) {

@@ -6,16 +6,25 @@
 //   - method: from a method change to the first frame that draws the new method;
 //   - gloss: from a base-gloss change to the first frame that draws it (median of N changes);
 //   - landing frame: the viewport frame that takes a bake in (its upload included);
-// and the peak resident memory of the process. Figures, not a pass/fail test: core/bench/
-// studio_latency.sh runs it on a real map at several sizes.
+//   - a stroke painted on the texture view (Paint on, a gloss stroke of 24 dabs across the map, one dab
+//     per 16 ms as a mouse sends them): to 2D, from the first dab to the texture view's first paint
+//     after it; to 3D, from the first dab to the first viewport frame drawing the stroke with no bake
+//     pending; after release, from the stroke's end to the frame that draws all of it; and the longest
+//     the GUI thread did not answer (gap between 1 ms timer ticks) from the first dab to that frame;
+// and the peak resident memory of the process (after the stroke). Figures, not a pass/fail test:
+// core/bench/studio_latency.sh runs it on a real map at several sizes.
 #include "main_window.h"
 #include "material_document.h"
+#include "paint_tool.h"
+#include "texture_pane.h"
+#include "texture_view.h"
 #include "viewport.h"
 
 #include <QApplication>
 #include <QCommandLineParser>
 #include <QElapsedTimer>
 #include <QSurfaceFormat>
+#include <QTimer>
 
 #include <algorithm>
 #include <cstdio>
@@ -61,6 +70,90 @@ Landing timeUntilDrawn(Viewport& view, Request request, Applied applied) {
 
 template <typename Request> Landing timeUntilDrawn(Viewport& view, Request request) {
     return timeUntilDrawn(view, request, [] { return true; });
+}
+
+struct StrokeFigures {
+    double to2d = -1.0, to3d = -1.0, afterRelease = -1.0, longestStall = 0.0;
+};
+
+// Records when a widget starts painting.
+class PaintSpy : public QObject {
+public:
+    QElapsedTimer* clock = nullptr;
+    double firstPaintMs = -1.0;
+    bool armed = false;
+
+protected:
+    bool eventFilter(QObject* watched, QEvent* event) override {
+        if (armed && event->type() == QEvent::Paint && firstPaintMs < 0.0)
+            firstPaintMs = double(clock->nsecsElapsed()) / 1e6;
+        return QObject::eventFilter(watched, event);
+    }
+};
+
+// Paints one gloss stroke across the middle of the map as a mouse would (a dab every 16 ms) and times
+// what the artist sees.
+StrokeFigures timeStroke(MainWindow& window, Viewport& view, int width, int height) {
+    constexpr int kDabs = 24;
+    constexpr int kDabIntervalMs = 16;
+    burnish::studio::PaintTool& tool = *window.paintTool();
+    tool.setPaintMode(true);
+    burnish::Brush brush = tool.brush();
+    brush.radius = std::max(16.0, width / 128.0);
+    brush.value = 0.95f;
+    tool.setBrush(brush);
+    // Settle: paint mode's live bake and a frame drawn before the clock starts.
+    (void)timeUntilDrawn(view, [&] {
+        view.update();
+        return true;
+    });
+    QWidget* canvas = window.texturePane()->view();
+    QElapsedTimer clock;
+    PaintSpy spy;
+    spy.clock = &clock;
+    canvas->installEventFilter(&spy);
+    StrokeFigures f;
+    double lastTick = 0.0;
+    QTimer ticker;
+    ticker.setInterval(1);
+    QObject::connect(&ticker, &QTimer::timeout, [&] {
+        const double now = double(clock.nsecsElapsed()) / 1e6;
+        f.longestStall = std::max(f.longestStall, now - lastTick);
+        lastTick = now;
+    });
+    bool released = false;
+    double releaseMs = 0.0;
+    const auto frame = QObject::connect(&view, &Viewport::frameRendered, [&](double) {
+        if (view.bakingShown()) return;
+        const double now = double(clock.nsecsElapsed()) / 1e6;
+        if (f.to3d < 0.0) f.to3d = now;
+        if (released && f.afterRelease < 0.0) f.afterRelease = now - releaseMs;
+    });
+    auto runFor = [&](double ms) {
+        const double until = double(clock.nsecsElapsed()) / 1e6 + ms;
+        while (double(clock.nsecsElapsed()) / 1e6 < until)
+            QCoreApplication::processEvents(QEventLoop::AllEvents, 1);
+    };
+    clock.start();
+    ticker.start();
+    spy.armed = true;
+    const double y = height * 0.5;
+    tool.pressAt(QPointF(width * 0.25, y));
+    for (int i = 1; i <= kDabs; ++i) {
+        runFor(kDabIntervalMs);
+        tool.moveTo(QPointF(width * (0.25 + 0.5 * i / kDabs), y));
+    }
+    runFor(kDabIntervalMs);
+    tool.release();
+    releaseMs = double(clock.nsecsElapsed()) / 1e6;
+    released = true;
+    while (f.afterRelease < 0.0 && clock.elapsed() < kTimeoutMs)
+        QCoreApplication::processEvents(QEventLoop::AllEvents, 1);
+    runFor(50.0); // the ticker's next tick: the landing frame's own time counts as a stall too
+    QObject::disconnect(frame);
+    f.to2d = spy.firstPaintMs;
+    canvas->removeEventFilter(&spy);
+    return f;
 }
 
 double peakResidentMb() {
@@ -123,10 +216,17 @@ int main(int argc, char** argv) {
 
     // A method change: to LEAN, or to the preset's default when it is already LEAN.
     const std::vector<Method> methods = doc.availableMethods();
-    Method other = methods.front();
+    // A change to a method that bakes from the moments (LEAN where the preset stores it): the fitted lobe
+    // and the mixture fit per texel, which is the bake's time, not the studio's.
+    Method other = doc.settings().method;
     for (const Method m : methods)
-        if (m != doc.settings().method) other = m;
+        if (m != doc.settings().method && m != Method::Fitted && m != Method::Mixture &&
+            (other == doc.settings().method || m == Method::Lean))
+            other = m;
     const Landing method = timeUntilDrawn(*view, [&] { return bool(doc.setMethod(other)); });
+    std::fprintf(stderr, "burnish_studio_latency: method %s -> %s, preset %s\n",
+                 std::string(burnish::methodName(doc.preset().method)).c_str(),
+                 std::string(burnish::methodName(other)).c_str(), qPrintable(doc.settings().preset));
 
     std::vector<Landing> gloss;
     for (int i = 0; i < repeats; ++i) {
@@ -143,8 +243,21 @@ int main(int argc, char** argv) {
                      static_cast<long long>(kTimeoutMs / 1000));
         return 1;
     }
-    std::printf("| %d×%d | %.0f | %.0f | %.0f (%.0f–%.0f) | %.0f | %.0f |\n", normal.width, normal.height,
-                load.ms, method.ms, median.ms, gloss.front().ms, gloss.back().ms, median.frameMs,
-                peakResidentMb());
+    const double peakBeforeStroke = peakResidentMb();
+    // The stroke under the preset's own method (the method change above may have left a slow one).
+    if (doc.settings().method != doc.preset().method &&
+        timeUntilDrawn(*view, [&] { return bool(doc.setMethod(doc.preset().method)); }).ms < 0.0)
+        return 1;
+    const StrokeFigures stroke = timeStroke(window, *view, normal.width, normal.height);
+    if (stroke.afterRelease < 0.0) {
+        std::fprintf(stderr, "burnish_studio_latency: the stroke was not drawn in %lld s\n",
+                     static_cast<long long>(kTimeoutMs / 1000));
+        return 1;
+    }
+    std::printf(
+        "| %d×%d | %.0f | %.0f | %.0f (%.0f–%.0f) | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f | %.0f |\n",
+        normal.width, normal.height, load.ms, method.ms, median.ms, gloss.front().ms, gloss.back().ms,
+        median.frameMs, peakBeforeStroke, stroke.to2d, stroke.to3d, stroke.afterRelease, stroke.longestStall,
+        peakResidentMb());
     return 0;
 }

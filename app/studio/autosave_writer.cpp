@@ -5,6 +5,8 @@
 #include <QCoreApplication>
 #include <QPointer>
 
+#include <chrono>
+
 namespace burnish::studio {
 
 AutosaveWriter::AutosaveWriter(QObject* parent)
@@ -12,6 +14,8 @@ AutosaveWriter::AutosaveWriter(QObject* parent)
 
 AutosaveWriter::~AutosaveWriter() {
     if (m_job.valid()) m_job.wait();
+    for (LayerCopy& c : m_layers)
+        if (c.making.valid()) c.making.wait();
 }
 
 bool AutosaveWriter::start(Snapshot snapshot) {
@@ -34,6 +38,76 @@ bool AutosaveWriter::start(Snapshot snapshot) {
         return st;
     });
     return true;
+}
+
+namespace {
+
+// Layers up to this many texels are copied at once; bigger ones get their copy's memory on a worker
+// first (on these machines a fresh 8192² layer's page faults alone took over a second).
+constexpr size_t kCopyAtOnceTexels = size_t(2048) * 2048;
+
+std::shared_ptr<PaintLayer> emptyCopyOf(PaintLayerKind kind, int width, int height) {
+    auto copy = std::make_shared<PaintLayer>();
+    copy->kind = kind;
+    copy->width = width;
+    copy->height = height;
+    copy->allocate(); // zero-filled: every page touched here
+    return copy;
+}
+
+void copyRect(const std::vector<float>& from, std::vector<float>& to, int width, const TexelRect& r) {
+    for (int y = r.y0; y < r.y1; ++y) {
+        const size_t row = size_t(y) * size_t(width);
+        std::copy(from.begin() + ptrdiff_t(row + size_t(r.x0)), from.begin() + ptrdiff_t(row + size_t(r.x1)),
+                  to.begin() + ptrdiff_t(row + size_t(r.x0)));
+    }
+}
+
+} // namespace
+
+bool AutosaveWriter::syncLayer(const PaintLayer& layer, const TexelRect& stale) {
+    if (busy() || !layer.allocated()) return false;
+    LayerCopy& c = m_layers[size_t(layer.kind)];
+    if (c.copy && (c.copy->width != layer.width || c.copy->height != layer.height)) c.copy.reset();
+    if (!c.copy) {
+        if (!c.making.valid()) {
+            if (layer.texelCount() <= kCopyAtOnceTexels) {
+                c.copy = emptyCopyOf(layer.kind, layer.width, layer.height);
+            } else {
+                c.making = std::async(std::launch::async, emptyCopyOf, layer.kind, layer.width, layer.height);
+                return false;
+            }
+        } else {
+            if (c.making.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
+            c.copy = c.making.get();
+            if (c.copy->width != layer.width || c.copy->height != layer.height) {
+                c.copy.reset(); // made for a layer of another size
+                return false;
+            }
+        }
+        c.whole = false;
+    }
+    if (!c.whole) {
+        c.copy->value = layer.value; // into the touched pages: no allocation
+        c.copy->coverage = layer.coverage;
+        c.whole = true;
+        return true;
+    }
+    const TexelRect r{std::max(stale.x0, 0), std::max(stale.y0, 0), std::min(stale.x1, layer.width),
+                      std::min(stale.y1, layer.height)};
+    if (r.empty()) return true;
+    copyRect(layer.value, c.copy->value, layer.width, r);
+    copyRect(layer.coverage, c.copy->coverage, layer.width, r);
+    return true;
+}
+
+std::shared_ptr<const PaintLayer> AutosaveWriter::layerCopy(PaintLayerKind kind) const {
+    return m_layers[size_t(kind)].copy;
+}
+
+void AutosaveWriter::forgetLayers() {
+    for (LayerCopy& c : m_layers)
+        c.whole = false;
 }
 
 Status AutosaveWriter::wait() {

@@ -10,6 +10,7 @@
 #include <QObject>
 #include <QString>
 
+#include <array>
 #include <future>
 #include <memory>
 #include <vector>
@@ -32,6 +33,15 @@ public:
     ~AutosaveWriter() override;
 
     bool busy() const { return m_job.valid(); }
+    /// Brings the writer's own copy of `layer` (kept between autosaves) up to date: the texels in
+    /// `stale` (those edited since the last call), or all of it the first time and after forgetLayers()
+    /// or a size change. A copy of a big layer (over 2048²) is allocated on a worker thread first, its
+    /// pages touched there: false until it is ready (try again later). Only while no write runs.
+    bool syncLayer(const PaintLayer& layer, const TexelRect& stale);
+    /// The copy syncLayer() keeps for `kind` (null before the first).
+    std::shared_ptr<const PaintLayer> layerCopy(PaintLayerKind kind) const;
+    /// The next syncLayer() copies whole layers (the document's layers were replaced).
+    void forgetLayers();
     /// Starts writing `snapshot`; false (nothing started) while another write is in flight.
     bool start(Snapshot snapshot);
     /// Waits for the write in flight and returns its outcome (ok when none is running). finished is
@@ -48,6 +58,12 @@ private:
 
     std::future<Status> m_job;
     quint64 m_generation = 0;
+    struct LayerCopy {
+        std::shared_ptr<PaintLayer> copy;
+        bool whole = false; // equal to the layer but for the stale texels
+        std::future<std::shared_ptr<PaintLayer>> making;
+    };
+    std::array<LayerCopy, 2> m_layers; // by PaintLayerKind
 };
 
 } // namespace burnish::studio

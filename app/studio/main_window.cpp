@@ -276,6 +276,10 @@ MainWindow::MainWindow(QWidget* parent)
     });
     m_untitledCopy = newUntitledAutosavePath();
     claimAutosaveCopy();
+    connect(m_doc, &MaterialDocument::layersChanged, this, [this](const TexelRect& rect) {
+        for (TexelRect& stale : m_layerStale)
+            stale.unite(rect);
+    });
     resize(1400, 880);
     restoreSettings();
     updateStatus();
@@ -470,6 +474,7 @@ bool MainWindow::newDocument() {
         showMessage("New material", QString::fromStdString(st.error()));
         return false;
     }
+    m_autosaveWriter->forgetLayers(); // other layers: the next autosave copies them whole
     m_projectPath.clear();
     claimAutosaveCopy();
     m_autosavedIndex = -1;
@@ -504,6 +509,7 @@ bool MainWindow::openProject(const QString& path) {
                     QString("project '%1': %2").arg(absolute, QString::fromStdString(st.error())));
         return false;
     }
+    m_autosaveWriter->forgetLayers(); // other layers: the next autosave copies them whole
     m_projectPath = absolute;
     claimAutosaveCopy();
     m_autosavedIndex = -1;
@@ -565,10 +571,20 @@ bool MainWindow::autosave() {
     if (!isModified() || m_doc->undoStack()->index() == m_autosavedIndex || m_autosaveWriter->busy())
         return false;
     AutosaveWriter::Snapshot snapshot{m_doc->settings(), autosaveCopy(), m_projectPath, {}};
-    // Copies of the painted layers: the artist paints on while the worker encodes them.
-    for (const PaintLayerKind kind : {PaintLayerKind::Gloss, PaintLayerKind::VarianceOffset})
-        if (const PaintLayer& layer = m_doc->paintLayer(kind); layer.painted())
-            snapshot.layers.push_back(std::make_shared<const PaintLayer>(layer));
+    // The writer's own copies of the layers (the artist paints on while the worker encodes them),
+    // brought up to date where they were edited since the last autosave: a stroke's rectangle, not an
+    // 8192² layer's 512 MB. The worker skips layers with no paint.
+    for (const PaintLayerKind kind : {PaintLayerKind::Gloss, PaintLayerKind::VarianceOffset}) {
+        const PaintLayer& layer = m_doc->paintLayer(kind);
+        if (!layer.allocated()) continue;
+        if (!m_autosaveWriter->syncLayer(layer, m_layerStale[size_t(kind)])) {
+            // A big layer's copy is still being made off this thread: the next autosave takes it.
+            if (m_autosaveDelayMs > 0) m_autosaveTimer->start(m_autosaveDelayMs);
+            return false;
+        }
+        m_layerStale[size_t(kind)] = {};
+        snapshot.layers.push_back(m_autosaveWriter->layerCopy(kind));
+    }
     if (!m_autosaveWriter->start(std::move(snapshot))) return false;
     m_autosavedIndex = m_doc->undoStack()->index();
     return true;
@@ -661,6 +677,7 @@ bool MainWindow::recoverFrom(const QString& copy, const QString& projectPath) {
         showMessage("Cannot recover autosave", QString::fromStdString(st.error()));
         return false;
     }
+    m_autosaveWriter->forgetLayers(); // other layers: the next autosave copies them whole
     // The copy becomes this window's: its next autosave replaces it, saving or discarding removes it.
     if (projectPath != m_projectPath || (projectPath.isEmpty() && copy != m_untitledCopy)) {
         removeAutosave(); // this window's own copy, superseded

@@ -12,6 +12,7 @@
 #include <QMainWindow>
 #include <QMessageBox>
 
+#include <array>
 #include <functional>
 #include <memory>
 
@@ -172,6 +173,8 @@ private:
     /// live window holds it, which then owns that copy).
     std::unique_ptr<QLockFile> m_autosaveLock;
     QString m_untitledCopy;
+    /// Per painted layer, the texels edited since the autosave writer's copy was last brought up to date.
+    std::array<TexelRect, 2> m_layerStale;
     QString m_projectPath;
     /// Undo index at the last autosave (-1: none since the last save).
     int m_autosavedIndex = -1;

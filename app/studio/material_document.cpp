@@ -555,6 +555,9 @@ Status MaterialDocument::reset(const MaterialSettings& settings, const std::vect
     m_glossLayer = std::move(gloss).value();
     m_offsetLayer = std::move(offset).value();
     m_authored.reset(); // recomposited by apply()
+    m_published.reset();
+    m_snapshots.clear();
+    m_preparedAuthored = {};
     apply(settings, *maps);
     m_undo.setClean();
     return {};
@@ -606,29 +609,162 @@ void MaterialDocument::applyPaintPatch(PaintLayerKind kind, const PaintPatch& pa
     emit changed();
 }
 
+namespace {
+
+// Snapshot buffers kept for reuse: the newest handed out, the one the renderer may still hold, a spare.
+constexpr size_t kMaxAuthoredSnapshots = 3;
+
+bool anyCoverage(const PaintLayer& layer, const TexelRect& r) {
+    if (!layer.allocated()) return false;
+    for (int y = std::max(r.y0, 0); y < std::min(r.y1, layer.height); ++y)
+        for (int x = std::max(r.x0, 0); x < std::min(r.x1, layer.width); ++x)
+            if (layer.coverage[layer.index(x, y)] > 0.0f) return true;
+    return false;
+}
+
+} // namespace
+
+std::shared_ptr<const std::vector<float>> MaterialDocument::authoredGloss() const {
+    if (!m_authored) return nullptr;
+    if (m_published) return m_published;
+    const int w = m_maps.normal->width;
+    for (AuthoredSnapshot& snapshot : m_snapshots) {
+        if (snapshot.values.use_count() != 1 || snapshot.values->size() != m_authored->size()) continue;
+        // Nobody else holds it: bring the rectangle edited since its last use up to date, in place.
+        const TexelRect& r = snapshot.stale;
+        for (int y = r.y0; y < r.y1; ++y) {
+            const size_t row = size_t(y) * size_t(w);
+            std::copy(m_authored->begin() + ptrdiff_t(row + size_t(r.x0)),
+                      m_authored->begin() + ptrdiff_t(row + size_t(r.x1)),
+                      snapshot.values->begin() + ptrdiff_t(row + size_t(r.x0)));
+        }
+        snapshot.stale = {};
+        m_published = snapshot.values;
+        return m_published;
+    }
+    // Every buffer is held (the renderer's cache, a bake): a new one, the oldest let go to its holders.
+    auto values = std::make_shared<std::vector<float>>(*m_authored);
+    if (m_snapshots.size() >= kMaxAuthoredSnapshots) m_snapshots.erase(m_snapshots.begin());
+    m_snapshots.push_back({values, {}});
+    m_published = values;
+    return m_published;
+}
+
+void MaterialDocument::prepareForPainting(PaintLayerKind kind) {
+    const std::shared_ptr<const NormalMap> normal = m_maps.normal;
+    if (!normal) return;
+    const size_t n = normal->texelCount();
+    const bool layer = !paintLayer(kind).allocated();
+    const bool authored = !m_authored && !m_maps.gloss;
+    size_t spare = 0;
+    for (const AuthoredSnapshot& snapshot : m_snapshots)
+        spare += snapshot.values->size() == n ? 1 : 0;
+    const size_t snapshots = kMaxAuthoredSnapshots - std::min(spare, kMaxAuthoredSnapshots);
+    if (!layer && !authored && snapshots == 0) return;
+    const quint64 generation = ++m_prepareGeneration;
+    const double gloss = m_settings.gloss;
+    const QString preset = m_settings.preset;
+    const GlossEncoding encoding = this->preset().encoding;
+    QPointer<MaterialDocument> self(this);
+    QThread* worker = QThread::create([=] {
+        struct Made {
+            std::vector<float> value, coverage;
+            std::shared_ptr<std::vector<float>> authored;
+            std::vector<std::shared_ptr<std::vector<float>>> snapshots;
+        };
+        auto made = std::make_shared<Made>();
+        if (layer) made->value.assign(n, 0.0f), made->coverage.assign(n, 0.0f);
+        if (authored) {
+            // What recomposite() would write before any paint: the same function over unpainted layers.
+            const auto none = PaintLayer::create(PaintLayerKind::Gloss, normal->width, normal->height);
+            const auto noOffset =
+                PaintLayer::create(PaintLayerKind::VarianceOffset, normal->width, normal->height);
+            made->authored = std::make_shared<std::vector<float>>(n);
+            if (!none || !noOffset ||
+                !compositeAuthoredGloss(nullptr, gloss, &*none, &*noOffset, encoding, normal->width,
+                                        normal->height, TexelRect::full(normal->width, normal->height),
+                                        *made->authored))
+                made->authored.reset();
+        }
+        for (size_t i = 0; i < snapshots; ++i)
+            // Holding the prepared values when there are some: the first snapshots of the stroke then
+            // copy its dabs, not the map.
+            made->snapshots.push_back(made->authored ? std::make_shared<std::vector<float>>(*made->authored)
+                                                     : std::make_shared<std::vector<float>>(n));
+        QMetaObject::invokeMethod(
+            QCoreApplication::instance(),
+            [self, made, generation, normal, gloss, preset, kind] {
+                if (!self || self->m_prepareGeneration != generation || self->m_maps.normal != normal) return;
+                PaintLayer& l = self->editablePaintLayer(kind);
+                if (!l.allocated() && made->value.size() == l.texelCount()) {
+                    l.value.swap(made->value);
+                    l.coverage.swap(made->coverage);
+                }
+                if (made->authored) {
+                    self->m_preparedAuthored = {made->authored, normal, gloss, preset,
+                                                std::move(made->snapshots)};
+                    return;
+                }
+                for (auto& values : made->snapshots)
+                    if (self->m_snapshots.size() < kMaxAuthoredSnapshots)
+                        self->m_snapshots.push_back({values, TexelRect::full(normal->width, normal->height)});
+            },
+            Qt::QueuedConnection);
+    });
+    worker->setParent(this); // deleted with the document if it goes before the thread's finished()
+    m_loaders.push_back(worker);
+    connect(worker, &QThread::finished, this, [this, worker] {
+        m_loaders.erase(std::remove(m_loaders.begin(), m_loaders.end(), worker), m_loaders.end());
+        worker->deleteLater();
+    });
+    worker->start();
+}
+
 void MaterialDocument::recomposite(const TexelRect& rect, bool full) {
     const int w = m_maps.normal->width, h = m_maps.normal->height;
-    std::vector<float> base;
-    if (m_maps.gloss) {
+    if (!m_maps.gloss) {
+        m_baseGloss.reset();
+        m_baseGlossOf.reset();
+    } else if (m_baseGlossOf != m_maps.gloss || !m_baseGloss ||
+               m_baseGloss->size() != size_t(w) * size_t(h)) {
         auto gloss = glossFromImage(*m_maps.gloss, w, h);
-        if (gloss) base = std::move(gloss).value();
+        m_baseGloss = gloss ? std::make_shared<const std::vector<float>>(std::move(gloss).value()) : nullptr;
+        m_baseGlossOf = m_maps.gloss;
     }
-    const bool painted = m_glossLayer.painted() || m_offsetLayer.painted();
-    if (base.empty() && !painted) {
+    // The edited rectangle first: a dab's own texels answer at once; only an erase looks further.
+    const bool painted = (!full && (anyCoverage(m_glossLayer, rect) || anyCoverage(m_offsetLayer, rect))) ||
+                         m_glossLayer.painted() || m_offsetLayer.painted();
+    m_published.reset();
+    if (!m_baseGloss && !painted) {
         m_authored.reset(); // nothing authored per texel: the bake uses the base power
         return;
     }
     TexelRect region = rect;
-    if (full || !m_authored) {
+    const PreparedAuthored prepared = std::exchange(m_preparedAuthored, {});
+    if (!full && !m_authored && !m_baseGloss && prepared.values && prepared.normal == m_maps.normal &&
+        prepared.gloss == m_settings.gloss && prepared.preset == m_settings.preset) {
+        // Nothing was painted before this edit (there was no authored gloss) and the prepared values
+        // are this document's unpainted ones: only the edited rectangle changes them.
+        m_authored = prepared.values;
+        for (AuthoredSnapshot& snapshot : m_snapshots)
+            snapshot.stale = TexelRect::full(w, h); // spare buffers: nothing of these values yet
+        for (const auto& values : prepared.snapshots)
+            if (m_snapshots.size() < kMaxAuthoredSnapshots)
+                m_snapshots.push_back({values, {}}); // equal so far
+    } else if (full || !m_authored) {
         m_authored = std::make_shared<std::vector<float>>(size_t(w) * size_t(h));
         region = TexelRect::full(w, h);
-    } else if (m_authored.use_count() > 1) {
-        // Someone (the renderer, a bake) holds the current values: write a new copy.
-        m_authored = std::make_shared<std::vector<float>>(*m_authored);
     }
+    // Buffers of another map size are no use any more (their holders keep theirs).
+    std::erase_if(m_snapshots, [&](const AuthoredSnapshot& snapshot) {
+        return snapshot.values->size() != m_authored->size();
+    });
+    region = {std::max(region.x0, 0), std::max(region.y0, 0), std::min(region.x1, w), std::min(region.y1, h)};
+    for (AuthoredSnapshot& snapshot : m_snapshots)
+        snapshot.stale.unite(region);
     // Sizes match by construction (layers follow the normal map, loadMaps checks the gloss map).
-    (void)compositeAuthoredGloss(base.empty() ? nullptr : &base, m_settings.gloss, &m_glossLayer,
-                                 &m_offsetLayer, preset().encoding, w, h, region, *m_authored);
+    (void)compositeAuthoredGloss(m_baseGloss.get(), m_settings.gloss, &m_glossLayer, &m_offsetLayer,
+                                 preset().encoding, w, h, region, *m_authored);
 }
 
 } // namespace burnish::studio

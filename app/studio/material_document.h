@@ -196,14 +196,29 @@ public:
     const PaintLayer& paintLayer(PaintLayerKind kind) const;
     /// The authored gloss with the layers applied, one value per normal-map texel in the preset's
     /// encoding; null when there is no gloss map and nothing is painted (the base power applies).
-    /// A new pointer after every change, so the renderer's bake cache (keyed on it) sees it.
-    std::shared_ptr<const std::vector<float>> authoredGloss() const { return m_authored; }
+    /// A snapshot: later edits never change what a caller holds, and the first call after a change
+    /// returns a new pointer, so the renderer's bake cache (keyed on it) sees it. Taking one after a
+    /// stroke's dab copies the texels changed since that buffer was last handed out, not the map
+    /// (buffers nobody else holds any more are reused).
+    std::shared_ptr<const std::vector<float>> authoredGloss() const;
+    /// Makes, on a worker thread, the big arrays a first stroke on `kind` needs (the layer's value and
+    /// coverage, the authored gloss before any paint, the snapshot buffers), and hands them to the
+    /// document when ready if nothing they depend on changed meanwhile: on an 8192² map allocating them
+    /// at the first dab stalled it for seconds. The values are exactly those the stroke would make.
+    void prepareForPainting(PaintLayerKind kind);
+    /// The current authored values (null where authoredGloss() is), read in place: for readers on the
+    /// GUI thread that use them at once (the paint tool's live bake on each dab), never to keep.
+    const std::vector<float>* authoredValues() const { return m_authored.get(); }
     /// The layer a stroke in progress paints into; report each change with layerEdited().
     PaintLayer& editablePaintLayer(PaintLayerKind kind);
     /// Recomposites the authored gloss inside `rect` and emits layersChanged(rect).
     void layerEdited(PaintLayerKind kind, const TexelRect& rect);
     /// Writes a patch into a layer (the paint undo commands), then as layerEdited and changed().
     void applyPaintPatch(PaintLayerKind kind, const PaintPatch& patch);
+    /// A stroke whose dabs were reported through layerEdited() became an undo step: emits changed()
+    /// (the layers and the authored gloss already hold it; writing the stroke's rectangle again would
+    /// rebake it for nothing).
+    void strokeCommitted() { emit changed(); }
 
 signals:
     /// Any setting changed (by an edit, undo/redo or reset).
@@ -241,7 +256,29 @@ private:
     int m_mergeEpoch = 0;
     PaintLayer m_glossLayer;
     PaintLayer m_offsetLayer;
-    std::shared_ptr<std::vector<float>> m_authored;
+    std::shared_ptr<std::vector<float>> m_authored; // the working values, edited in place
+    // Snapshots authoredGloss() handed out, each with the rectangle edited since it was last brought up
+    // to date; one nobody else holds is brought up to date and handed out again.
+    struct AuthoredSnapshot {
+        std::shared_ptr<std::vector<float>> values;
+        TexelRect stale;
+    };
+    mutable std::vector<AuthoredSnapshot> m_snapshots;
+    mutable std::shared_ptr<const std::vector<float>> m_published; // null: an edit since the last one
+    // The authored gloss before any paint (the base gloss everywhere), made by prepareForPainting() for
+    // what it was made from; the first dab takes it instead of compositing the whole map.
+    struct PreparedAuthored {
+        std::shared_ptr<std::vector<float>> values;
+        std::shared_ptr<const NormalMap> normal;
+        double gloss = 0.0;
+        QString preset;
+        std::vector<std::shared_ptr<std::vector<float>>> snapshots; // spare buffers holding the same values
+    };
+    PreparedAuthored m_preparedAuthored;
+    quint64 m_prepareGeneration = 0;
+    // The gloss map as values of the normal map's size (what recomposite() blends over), made once per map.
+    std::shared_ptr<const std::vector<float>> m_baseGloss;
+    std::shared_ptr<const Image> m_baseGlossOf;
     // Background loads per slot: the newest request's number and the last one that arrived.
     std::array<quint64, 3> m_loadGeneration{};
     std::array<quint64, 3> m_loadDone{};

@@ -30,17 +30,26 @@ constexpr double kOverShineMix = 0.65;
 /// One stroke (or a clear) on a layer: the changed rectangle before and after.
 class PaintCommand : public QUndoCommand {
 public:
+    /// `painted`: the layer already holds `after` (a stroke's dabs wrote it as they came).
     PaintCommand(MaterialDocument* doc, PaintLayerKind kind, PaintPatch before, PaintPatch after,
-                 const QString& text)
+                 const QString& text, bool painted)
         : QUndoCommand(text)
         , m_doc(doc)
         , m_kind(kind)
         , m_before(std::move(before))
-        , m_after(std::move(after)) {}
+        , m_after(std::move(after))
+        , m_first(painted) {}
 
-    // The first redo (from push) writes what the stroke already painted: harmless, and it tells
-    // the document's listeners that the stroke is done.
-    void redo() override { m_doc->applyPaintPatch(m_kind, m_after); }
+    // A stroke's first redo (from push) finds it already painted: it only tells the document's
+    // listeners that the stroke is done. Later ones (redo after undo) write it again.
+    void redo() override {
+        if (m_first) {
+            m_first = false;
+            m_doc->strokeCommitted();
+            return;
+        }
+        m_doc->applyPaintPatch(m_kind, m_after);
+    }
     void undo() override { m_doc->applyPaintPatch(m_kind, m_before); }
 
 private:
@@ -48,6 +57,7 @@ private:
     PaintLayerKind m_kind;
     PaintPatch m_before;
     PaintPatch m_after;
+    bool m_first;
 };
 
 QString qs(std::string_view s) {
@@ -196,6 +206,7 @@ void PaintTool::setBrush(const Brush& brush) {
 
 void PaintTool::setLayer(PaintLayerKind kind) {
     m_layer = kind;
+    if (m_paintMode) m_doc->prepareForPainting(kind);
     syncWidgets();
 }
 
@@ -210,6 +221,8 @@ void PaintTool::setPaintMode(bool on) {
     if (m_viewport) m_viewport->setPaintMode(on);
     syncWidgets();
     if (on) {
+        // The arrays a first stroke needs, made off the GUI thread while the artist aims.
+        m_doc->prepareForPainting(m_layer);
         rebuildLive();
     } else {
         m_view->setOverlay({});
@@ -228,7 +241,7 @@ void PaintTool::setOverShineMip(int mip) {
 }
 
 std::vector<float> PaintTool::currentAuthored() const {
-    if (const auto gloss = m_doc->authoredGloss()) return *gloss;
+    if (const std::vector<float>* gloss = m_doc->authoredValues()) return *gloss;
     return std::vector<float>(m_doc->maps().normal->texelCount(), float(m_doc->settings().gloss));
 }
 
@@ -242,7 +255,7 @@ float PaintTool::pickAt(QPointF texel) const {
         const PaintLayer& l = m_doc->paintLayer(PaintLayerKind::VarianceOffset);
         return l.coverageAt(i) > 0.0f ? l.valueAt(i) : 0.0f;
     }
-    if (const auto gloss = m_doc->authoredGloss()) return (*gloss)[i];
+    if (const std::vector<float>* gloss = m_doc->authoredValues()) return (*gloss)[i];
     return float(m_doc->settings().gloss);
 }
 
@@ -278,7 +291,7 @@ void PaintTool::release() {
     m_lastPoint.reset();
     if (stroke.dirty().empty()) return;
     const QString text = m_layer == PaintLayerKind::Gloss ? "Paint gloss" : "Paint variance offset";
-    m_doc->undoStack()->push(new PaintCommand(m_doc, m_layer, stroke.before(), stroke.after(), text));
+    m_doc->undoStack()->push(new PaintCommand(m_doc, m_layer, stroke.before(), stroke.after(), text, true));
 }
 
 void PaintTool::clearLayer() {
@@ -291,7 +304,7 @@ void PaintTool::clearLayer() {
     std::fill(after.value.begin(), after.value.end(), 0.0f);
     std::fill(after.coverage.begin(), after.coverage.end(), 0.0f);
     m_doc->undoStack()->push(new PaintCommand(m_doc, m_layer, std::move(before), std::move(after),
-                                              "Clear " + qs(paintLayerName(m_layer)) + " layer"));
+                                              "Clear " + qs(paintLayerName(m_layer)) + " layer", false));
 }
 
 void PaintTool::onDocumentChanged() {
@@ -344,12 +357,14 @@ void PaintTool::onLayersChanged(const TexelRect& rect) {
         rebuildLive();
         return;
     }
-    const std::vector<float> authored = currentAuthored();
-    if (!m_live->rebakeRegion(authored, rect)) {
+    // The document's values in place: a dab changes a few texels, and copying an 8192² map's 256 MB on
+    // each would freeze the stroke.
+    const std::vector<float>* authored = m_doc->authoredValues();
+    if (!authored || !m_live->rebakeRegion(*authored, rect)) {
         rebuildLive();
         return;
     }
-    (void)overShine(*m_live, authored, m_overShineMip, kOverShineStops,
+    (void)overShine(*m_live, *authored, m_overShineMip, kOverShineStops,
                     &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine, rect);
     updateOverlay(rect);
     emit liveUpdated();
@@ -366,19 +381,23 @@ void PaintTool::updateOverlay(const std::optional<TexelRect>& rect) {
                 const int g = toByte(mip.texels[size_t(y) * size_t(mip.width) + size_t(x)]);
                 image.setPixel(x, y, qRgb(g, g, g));
             }
-        m_overlay = image;
+        m_view->setOverlay(image);
     } else {
         const int w = m_live->width(), h = m_live->height();
         TexelRect r = rect.value_or(TexelRect::full(w, h));
-        if (m_overlay.width() != w || m_overlay.height() != h) {
-            m_overlay = QImage(w, h, QImage::Format_ARGB32);
+        // Written in place into the view's overlay (an opaque RGB32 image): a dab rewrites its own
+        // rectangle, never the whole image.
+        if (m_view->overlay().width() != w || m_view->overlay().height() != h ||
+            m_view->overlay().format() != QImage::Format_RGB32) {
+            m_view->setOverlay(QImage(w, h, QImage::Format_RGB32));
             r = TexelRect::full(w, h);
         }
+        QImage& overlay = m_view->overlayForEdit();
         const std::vector<float>& authored = m_live->authoredGloss();
         const bool warn = m_overShineCheck->isChecked() && m_overShine.flagged.size() == authored.size();
         const QColor warning = QColor::fromRgba(kOverShineColor);
         for (int y = r.y0; y < r.y1; ++y) {
-            auto* row = reinterpret_cast<QRgb*>(m_overlay.scanLine(y));
+            auto* row = reinterpret_cast<QRgb*>(overlay.scanLine(y));
             for (int x = r.x0; x < r.x1; ++x) {
                 const size_t i = size_t(y) * size_t(w) + size_t(x);
                 const double g = std::clamp(double(authored[i]), 0.0, 1.0);
@@ -393,8 +412,8 @@ void PaintTool::updateOverlay(const std::optional<TexelRect>& rect) {
                 }
             }
         }
+        m_view->overlayChanged(QRect(r.x0, r.y0, r.width(), r.height()));
     }
-    m_view->setOverlay(m_overlay);
     m_status->setText(QString("%1 of %2 texels over-shine at mip %3 (painted gloss above what the normal "
                               "variance permits); last update recomputed %4 baked texels")
                           .arg(m_overShine.flaggedMipTexels)

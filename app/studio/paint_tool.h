@@ -92,7 +92,6 @@ private:
     std::optional<LiveGlossBake> m_live;
     QString m_liveKey; // what the live bake was made from (rebuilt when it changes)
     OverShineMap m_overShine;
-    QImage m_overlay;
 
     QPushButton* m_paintButton;
     QComboBox* m_layerCombo;

@@ -82,7 +82,21 @@ void TextureView::paintEvent(QPaintEvent*) {
     } else {
         p.drawImage(target, m_image);
     }
-    if (!m_overlay.isNull()) p.drawImage(target, m_overlay);
+    if (!m_overlay.isNull()) {
+        if (m_zoom < 1.0 && drawn.width() * 2 < m_overlay.width() &&
+            m_overlay.format() == QImage::Format_RGB32) {
+            // Drawn from its minified copy: scaling the whole overlay on each paint of a stroke is what
+            // an 8192² map cannot afford.
+            if (!m_overlayMinifiedValid || m_overlayMinified.size() != drawn) {
+                m_overlayMinified = QImage(drawn, QImage::Format_RGB32);
+                minifyRegion(m_overlay, m_overlayMinified, m_overlayMinified.rect());
+                m_overlayMinifiedValid = true;
+            }
+            p.drawImage(target, m_overlayMinified);
+        } else {
+            p.drawImage(target, m_overlay);
+        }
+    }
     p.setPen(QPen(palette().color(QPalette::Mid), 1.0));
     p.drawRect(target.adjusted(-0.5, -0.5, 0.5, 0.5));
     if (m_paintMode && m_cursor) {
@@ -112,7 +126,44 @@ void TextureView::setBrushRadius(double texels) {
 
 void TextureView::setOverlay(const QImage& overlay) {
     m_overlay = overlay;
+    m_overlayMinifiedValid = false;
     update();
+}
+
+void TextureView::overlayChanged(const QRect& texels) {
+    if (m_overlayMinifiedValid && !m_overlay.isNull()) {
+        // The drawn pixels whose squares hold an edited texel.
+        const double sx = double(m_overlayMinified.width()) / m_overlay.width();
+        const double sy = double(m_overlayMinified.height()) / m_overlay.height();
+        const QRect r = texels.intersected(m_overlay.rect());
+        const int x0 = int(std::floor(r.left() * sx)), y0 = int(std::floor(r.top() * sy));
+        const int x1 = int(std::ceil((r.right() + 1) * sx)), y1 = int(std::ceil((r.bottom() + 1) * sy));
+        minifyRegion(m_overlay, m_overlayMinified, QRect(x0, y0, x1 - x0, y1 - y0));
+    }
+    update();
+}
+
+void minifyRegion(const QImage& source, QImage& target, const QRect& targetRect) {
+    const QRect r = targetRect.intersected(target.rect());
+    const int sw = source.width(), sh = source.height(), tw = target.width(), th = target.height();
+    for (int y = r.top(); y <= r.bottom(); ++y) {
+        const int sy0 = int(qint64(y) * sh / th), sy1 = std::max(sy0 + 1, int(qint64(y + 1) * sh / th));
+        auto* out = reinterpret_cast<QRgb*>(target.scanLine(y));
+        for (int x = r.left(); x <= r.right(); ++x) {
+            const int sx0 = int(qint64(x) * sw / tw), sx1 = std::max(sx0 + 1, int(qint64(x + 1) * sw / tw));
+            quint64 red = 0, green = 0, blue = 0;
+            for (int v = sy0; v < sy1; ++v) {
+                const auto* in = reinterpret_cast<const QRgb*>(source.constScanLine(v));
+                for (int u = sx0; u < sx1; ++u) {
+                    red += quint64(qRed(in[u]));
+                    green += quint64(qGreen(in[u]));
+                    blue += quint64(qBlue(in[u]));
+                }
+            }
+            const quint64 n = quint64(sy1 - sy0) * quint64(sx1 - sx0);
+            out[x] = qRgb(int((red + n / 2) / n), int((green + n / 2) / n), int((blue + n / 2) / n));
+        }
+    }
 }
 
 void TextureView::wheelEvent(QWheelEvent* event) {

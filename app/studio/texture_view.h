@@ -44,6 +44,11 @@ public:
     /// painted layer and over-shine warnings); a null image draws nothing.
     void setOverlay(const QImage& overlay);
     const QImage& overlay() const { return m_overlay; }
+    /// The overlay to edit in place (a stroke's dab changes a few texels of what may be an 8192² image:
+    /// no copy); call overlayChanged() with the texels edited.
+    QImage& overlayForEdit() { return m_overlay; }
+    /// Redraws the overlay's texels inside `texels` after an edit through overlayForEdit().
+    void overlayChanged(const QRect& texels);
 
 signals:
     void zoomChanged(double zoom);
@@ -78,6 +83,13 @@ private:
     double m_brushRadius = 16.0;
     std::optional<QPointF> m_cursor; // widget position of the brush outline
     QImage m_overlay;
+    // The overlay box-filtered to its drawn size, kept up to date rectangle by rectangle while painting.
+    QImage m_overlayMinified;
+    bool m_overlayMinifiedValid = false;
 };
+
+/// Box-filters `source` into `target` (smaller) over `targetRect`: each target pixel the mean of the
+/// source pixels its square covers (RGB32).
+void minifyRegion(const QImage& source, QImage& target, const QRect& targetRect);
 
 } // namespace burnish::studio

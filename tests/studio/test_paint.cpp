@@ -564,3 +564,163 @@ TEST(StudioPaint, ExportOfPaintedLayersWritesTheBytesOfBurnishBakeWithTheSameGlo
         EXPECT_EQ(studioRecord, cliRecord);
     }
 }
+
+namespace burnish::studio {
+namespace {
+
+QString kNormalMapPath() {
+    return QString(BURNISH_TEST_DATA_DIR) + "/trak-rust1_nm.png";
+}
+
+// The authored gloss as a full composite of the document's layers now (what recomposite() writes
+// over the whole map).
+std::vector<float> fullComposite(const MaterialDocument& doc) {
+    const NormalMap& map = *doc.maps().normal;
+    std::vector<float> out(map.texelCount());
+    EXPECT_TRUE(compositeAuthoredGloss(nullptr, doc.settings().gloss, &doc.paintLayer(PaintLayerKind::Gloss),
+                                       &doc.paintLayer(PaintLayerKind::VarianceOffset), doc.preset().encoding,
+                                       map.width, map.height, TexelRect::full(map.width, map.height), out));
+    return out;
+}
+
+} // namespace
+
+// A stroke on a big map copied the whole authored gloss (and more) on every dab. Snapshots are now
+// handed out from reused buffers brought up to date rectangle by rectangle: each must still equal the
+// whole composite at its moment, and one held must never change.
+TEST(StudioPaint, AuthoredSnapshotsAreExactAndNeverChangeUnderTheirHolder) {
+    MaterialDocument doc;
+    TextureView canvas;
+    PaintTool tool(&doc, &canvas);
+    std::vector<std::shared_ptr<const std::vector<float>>> held;
+    std::vector<std::vector<float>> expected;
+    for (int i = 0; i < 8; ++i) {
+        stroke(tool, i % 3 == 2 ? PaintLayerKind::VarianceOffset : PaintLayerKind::Gloss, 0.1f * float(i + 1),
+               12.0 + i, {30.0 + 50.0 * i, 40.0}, {60.0 + 40.0 * i, 300.0 - 20.0 * i});
+        const auto snapshot = doc.authoredGloss();
+        ASSERT_TRUE(snapshot);
+        EXPECT_EQ(doc.authoredGloss(), snapshot) << "no edit, the same snapshot";
+        const std::vector<float> now = fullComposite(doc);
+        EXPECT_TRUE(sameBits(*snapshot, now)) << "stroke " << i;
+        ASSERT_NE(doc.authoredValues(), nullptr);
+        EXPECT_TRUE(sameBits(*doc.authoredValues(), now)) << "stroke " << i;
+        // Hold every other one (as the renderer's cache would); the rest go back for reuse.
+        if (i % 2 == 0) {
+            held.push_back(snapshot);
+            expected.push_back(now);
+        }
+    }
+    for (size_t k = 0; k < held.size(); ++k)
+        EXPECT_TRUE(sameBits(*held[k], expected[k])) << "held snapshot " << k << " changed";
+    // Undo and redo go through the same path.
+    doc.undoStack()->undo();
+    EXPECT_TRUE(sameBits(*doc.authoredGloss(), fullComposite(doc)));
+    doc.undoStack()->redo();
+    EXPECT_TRUE(sameBits(*doc.authoredGloss(), fullComposite(doc)));
+}
+
+// Paint on: the arrays of the first stroke are made on a worker. The stroke must come out bit for bit
+// as without them.
+TEST(StudioPaint, PreparedArraysGiveTheSameStrokeAsNone) {
+    MaterialDocument prepared, plain;
+    ASSERT_TRUE(prepared.loadMap(MapSlot::Normal, kNormalMapPath()));
+    ASSERT_TRUE(plain.loadMap(MapSlot::Normal, kNormalMapPath()));
+    prepared.prepareForPainting(PaintLayerKind::Gloss);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return prepared.paintLayer(PaintLayerKind::Gloss).allocated(); },
+                                kWorkerTimeoutMs));
+    QTest::qWait(50); // the landing call also brought the prepared authored values
+    EXPECT_FALSE(prepared.paintLayer(PaintLayerKind::Gloss).painted());
+    EXPECT_EQ(prepared.authoredGloss(), nullptr) << "prepared, nothing painted: the base power applies";
+    for (MaterialDocument* doc : {&prepared, &plain}) {
+        TextureView canvas;
+        PaintTool tool(doc, &canvas);
+        stroke(tool, PaintLayerKind::Gloss, 0.9f, 20.0, {100.0, 100.0}, {300.0, 140.0});
+        stroke(tool, PaintLayerKind::Gloss, 0.2f, 10.0, {120.0, 300.0}, {140.0, 310.0});
+    }
+    EXPECT_TRUE(
+        samePaint(prepared.paintLayer(PaintLayerKind::Gloss), plain.paintLayer(PaintLayerKind::Gloss)));
+    ASSERT_TRUE(prepared.authoredGloss() && plain.authoredGloss());
+    EXPECT_TRUE(sameBits(*prepared.authoredGloss(), *plain.authoredGloss()));
+    EXPECT_TRUE(sameBits(*prepared.authoredGloss(), fullComposite(prepared)));
+}
+
+// The overlay of a big map is drawn from a minified copy kept up to date rectangle by rectangle: the
+// view after an edit must look exactly as a view given the edited overlay whole.
+TEST(StudioPaint, OverlayEditsInPlaceDrawAsTheWholeOverlay) {
+    QImage overlay(1000, 700, QImage::Format_RGB32);
+    for (int y = 0; y < overlay.height(); ++y)
+        for (int x = 0; x < overlay.width(); ++x)
+            overlay.setPixel(x, y, qRgb((x * 7) % 256, (y * 5) % 256, (x + y) % 256));
+    TextureView edited, whole;
+    for (TextureView* view : {&edited, &whole}) {
+        view->resize(300, 240);
+        view->setImage(overlay);
+        view->fit();
+    }
+    edited.setOverlay(overlay);
+    (void)edited.grab(); // draws once: the minified copy is made
+    QImage& image = edited.overlayForEdit();
+    const QRect rect(333, 101, 57, 211);
+    for (int y = rect.top(); y <= rect.bottom(); ++y)
+        for (int x = rect.left(); x <= rect.right(); ++x)
+            image.setPixel(x, y, qRgb(255 - (x % 256), 200, y % 256));
+    edited.overlayChanged(rect);
+    whole.setOverlay(edited.overlay().copy());
+    EXPECT_EQ(edited.grab().toImage(), whole.grab().toImage());
+}
+
+// Autosave keeps its own copy of a painted layer and brings only the edited texels up to date: what
+// it writes must still be the document's layer, after every stroke, for a map above the size whose copy
+// is made on a worker too.
+TEST(StudioPaint, AutosaveCopiesOfPaintedLayersFollowEveryStroke) {
+    test::TempDir dir;
+    // 4096×1100: over 2048² texels, so the writer's copy is made off the GUI thread.
+    const fs::path big = dir / "big.png";
+    {
+        QImage flat(4096, 1100, QImage::Format_RGB888);
+        flat.fill(QColor(128, 128, 255));
+        ASSERT_TRUE(flat.save(QString::fromStdString(big.string())));
+    }
+    for (const QString& map : {kNormalMapPath(), QString::fromStdString(big.string())}) {
+        SCOPED_TRACE(map.toStdString());
+        MainWindow window;
+        window.setAutosaveDelay(0);
+        window.ask = [](const QString&, const QString&, QMessageBox::StandardButtons) {
+            return QMessageBox::Discard;
+        };
+        MaterialDocument& doc = *window.document();
+        ASSERT_TRUE(doc.loadMap(MapSlot::Normal, map));
+        const QString copy = window.autosaveCopy();
+        auto autosaved = [&] {
+            // The first autosave of a big layer waits for its copy's memory: try until it starts.
+            EXPECT_TRUE(QTest::qWaitFor([&] { return window.autosave(); }, kWorkerTimeoutMs));
+            EXPECT_TRUE(window.waitForAutosave());
+            const auto project = loadProject(copy);
+            EXPECT_TRUE(project) << (project ? "" : project.error());
+            return project ? project->layers : std::vector<LayerFile>{};
+        };
+        for (int i = 0; i < 3; ++i) {
+            stroke(*window.paintTool(), PaintLayerKind::Gloss, 0.3f * float(i + 1), 15.0,
+                   {40.0 + 90.0 * i, 30.0 + 20.0 * i}, {200.0 + 60.0 * i, 90.0});
+            const auto layers = autosaved();
+            ASSERT_EQ(layers.size(), 1u);
+            const auto read = readPaintLayerExr(layers[0].path.toStdString(), PaintLayerKind::Gloss,
+                                                doc.paintLayer(PaintLayerKind::Gloss).width,
+                                                doc.paintLayer(PaintLayerKind::Gloss).height);
+            ASSERT_TRUE(read) << read.error();
+            EXPECT_TRUE(samePaint(*read, doc.paintLayer(PaintLayerKind::Gloss))) << "after stroke " << i;
+        }
+        // Undo is an edit like any other.
+        doc.undoStack()->undo();
+        const auto layers = autosaved();
+        ASSERT_EQ(layers.size(), 1u);
+        const auto read = readPaintLayerExr(layers[0].path.toStdString(), PaintLayerKind::Gloss,
+                                            doc.paintLayer(PaintLayerKind::Gloss).width,
+                                            doc.paintLayer(PaintLayerKind::Gloss).height);
+        ASSERT_TRUE(read) << read.error();
+        EXPECT_TRUE(samePaint(*read, doc.paintLayer(PaintLayerKind::Gloss))) << "after undo";
+        (void)removeProject(copy);
+    }
+}
+
+} // namespace burnish::studio

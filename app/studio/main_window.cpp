@@ -523,6 +523,7 @@ bool MainWindow::openProject(const QString& path) {
 
 void MainWindow::setBackgroundLoads(bool on) {
     m_panel->setBackgroundLoads(on);
+    m_paintTool->setBackgroundBakes(on);
     if (auto* panel = findChild<ViewportPanel*>("viewportPanel")) panel->viewport()->setBackgroundBakes(on);
 }
 

@@ -5,12 +5,15 @@
 
 #include <QCheckBox>
 #include <QComboBox>
+#include <QCoreApplication>
 #include <QDoubleSpinBox>
 #include <QFormLayout>
 #include <QHBoxLayout>
 #include <QLabel>
+#include <QPointer>
 #include <QPushButton>
 #include <QSpinBox>
+#include <QThread>
 #include <QUndoCommand>
 
 #include <algorithm>
@@ -148,7 +151,11 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     connect(m_doc, &MaterialDocument::layersChanged, this, &PaintTool::onLayersChanged);
 }
 
-PaintTool::~PaintTool() = default;
+PaintTool::~PaintTool() {
+    // A live bake still building finishes (it touches nothing of the tool) before the tool goes.
+    for (QThread* worker : m_liveWorkers)
+        worker->wait();
+}
 
 void PaintTool::attachViewport(Viewport* viewport) {
     m_viewport = viewport;
@@ -321,6 +328,10 @@ void PaintTool::onDocumentChanged() {
 
 void PaintTool::rebuildLive() {
     m_live.reset();
+    const quint64 generation = ++m_liveGeneration;
+    m_liveBuilding = false;
+    m_liveMissed = {};
+    m_overlayPending = false;
     const MaterialSettings& s = m_doc->settings();
     m_liveKey = QString("%1/%2/%3/%4/%5")
                     .arg(quintptr(m_doc->maps().normal.get()))
@@ -336,14 +347,96 @@ void PaintTool::rebuildLive() {
                          : Method::VarianceToGloss;
     options.encoding = m_doc->preset().encoding;
     options.basePower = m_doc->power();
-    options.authoredGloss = currentAuthored();
-    auto live = LiveGlossBake::create(m_doc->maps().normal, options);
+    if (!m_background) {
+        options.authoredGloss = currentAuthored();
+        liveBuilt(generation, LiveGlossBake::create(m_doc->maps().normal, options));
+        return;
+    }
+    // On a worker: the map, a snapshot of the authored gloss (never changed under it) or the base
+    // gloss, and the options. Strokes meanwhile are remembered and rebaked when it lands.
+    m_liveBuilding = true;
+    m_status->setText("Preparing the live bake of the painted gloss… (paint away: it catches up)");
+    const std::shared_ptr<const NormalMap> normal = m_doc->maps().normal;
+    const std::shared_ptr<const std::vector<float>> authored = m_doc->authoredGloss();
+    const float base = float(s.gloss);
+    QPointer<PaintTool> self(this);
+    QThread* worker = QThread::create([self, generation, normal, authored, base, options]() mutable {
+        options.authoredGloss = authored ? *authored : std::vector<float>(normal->texelCount(), base);
+        auto live = std::make_shared<Result<LiveGlossBake>>(LiveGlossBake::create(normal, options));
+        QMetaObject::invokeMethod(
+            QCoreApplication::instance(),
+            [self, generation, live] {
+                if (self) self->liveBuilt(generation, std::move(*live));
+            },
+            Qt::QueuedConnection);
+    });
+    m_liveWorkers.push_back(worker);
+    connect(worker, &QThread::finished, this, [this, worker] {
+        std::erase(m_liveWorkers, worker);
+        worker->deleteLater();
+    });
+    worker->start();
+    // The overlay (the authored gloss in grey: an 8192² image is 256 MB to fill) on a worker as well;
+    // dabs before it lands are drawn into it when it does.
+    m_overlayPending = true;
+    m_overlayMissed = {};
+    QThread* painter = QThread::create([self, generation, normal, authored, base] {
+        QImage image(normal->width, normal->height, QImage::Format_RGB32);
+        for (int y = 0; y < normal->height; ++y) {
+            auto* row = reinterpret_cast<QRgb*>(image.scanLine(y));
+            for (int x = 0; x < normal->width; ++x) {
+                const float g = authored ? (*authored)[size_t(y) * size_t(normal->width) + size_t(x)] : base;
+                const int v = toByte(std::clamp(double(g), 0.0, 1.0));
+                row[x] = qRgb(v, v, v);
+            }
+        }
+        QMetaObject::invokeMethod(
+            QCoreApplication::instance(),
+            [self, generation, image = std::move(image)] {
+                if (self && self->m_liveGeneration == generation) self->overlayBuilt(image);
+            },
+            Qt::QueuedConnection);
+    });
+    m_liveWorkers.push_back(painter);
+    connect(painter, &QThread::finished, this, [this, painter] {
+        std::erase(m_liveWorkers, painter);
+        painter->deleteLater();
+    });
+    painter->start();
+}
+
+void PaintTool::overlayBuilt(const QImage& image) {
+    m_overlayPending = false;
+    if (!m_paintMode || m_live) return; // the live bake landed first and drew the overlay itself
+    m_view->setOverlay(image);
+    if (const TexelRect missed = std::exchange(m_overlayMissed, {}); !missed.empty()) updateOverlay(missed);
+}
+
+void PaintTool::liveBuilt(quint64 generation, Result<LiveGlossBake> live) {
+    if (generation != m_liveGeneration) return; // superseded by a newer build
+    m_liveBuilding = false;
     if (!live) {
         m_status->setText("live bake failed: " + QString::fromStdString(live.error()));
         m_view->setOverlay({});
         return;
     }
     m_live.emplace(std::move(live).value());
+    // Strokes painted while it was built: their rectangle, from the document's values now.
+    const TexelRect missed = std::exchange(m_liveMissed, {});
+    if (!missed.empty()) {
+        const std::vector<float>* authored = m_doc->authoredValues();
+        const std::vector<float> base =
+            authored ? std::vector<float>()
+                     : std::vector<float>(m_live->authoredGloss().size(), float(m_doc->settings().gloss));
+        if (!m_live->rebakeRegion(authored ? *authored : base, missed)) {
+            rebuildLive();
+            return;
+        }
+    }
+    liveReady();
+}
+
+void PaintTool::liveReady() {
     m_mipSpin->setRange(0, m_live->levelCount() - 1);
     (void)overShine(*m_live, m_live->authoredGloss(), m_overShineMip, kOverShineStops,
                     &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine);
@@ -353,6 +446,11 @@ void PaintTool::rebuildLive() {
 
 void PaintTool::onLayersChanged(const TexelRect& rect) {
     if (!m_paintMode) return;
+    if (m_liveBuilding) {
+        m_liveMissed.unite(rect);
+        updateOverlay(rect);
+        return;
+    }
     if (!m_live) {
         rebuildLive();
         return;
@@ -371,8 +469,15 @@ void PaintTool::onLayersChanged(const TexelRect& rect) {
 }
 
 void PaintTool::updateOverlay(const std::optional<TexelRect>& rect) {
-    if (!m_paintMode || !m_live) return;
+    if (!m_paintMode || (!m_live && !m_liveBuilding)) return;
+    if (!m_live && m_overlayPending) {
+        // The overlay is still being made: the dab is drawn into it when it lands.
+        m_overlayMissed.unite(
+            rect.value_or(TexelRect::full(m_doc->maps().normal->width, m_doc->maps().normal->height)));
+        return;
+    }
     if (m_showBakedCheck->isChecked()) {
+        if (!m_live) return; // the live bake is still being built: nothing baked to show yet
         const int k = std::clamp(m_overShineMip, 0, m_live->levelCount() - 1);
         const TextureMip& mip = m_live->gloss().mips[size_t(k)];
         QImage image(mip.width, mip.height, QImage::Format_ARGB32);
@@ -383,7 +488,8 @@ void PaintTool::updateOverlay(const std::optional<TexelRect>& rect) {
             }
         m_view->setOverlay(image);
     } else {
-        const int w = m_live->width(), h = m_live->height();
+        const NormalMap& map = *m_doc->maps().normal;
+        const int w = map.width, h = map.height;
         TexelRect r = rect.value_or(TexelRect::full(w, h));
         // Written in place into the view's overlay (an opaque RGB32 image): a dab rewrites its own
         // rectangle, never the whole image.
@@ -393,14 +499,18 @@ void PaintTool::updateOverlay(const std::optional<TexelRect>& rect) {
             r = TexelRect::full(w, h);
         }
         QImage& overlay = m_view->overlayForEdit();
-        const std::vector<float>& authored = m_live->authoredGloss();
-        const bool warn = m_overShineCheck->isChecked() && m_overShine.flagged.size() == authored.size();
+        // While a background build runs, the document's values (the over-shine warning comes with it).
+        const std::vector<float>* values = m_live ? &m_live->authoredGloss() : m_doc->authoredValues();
+        const float base = float(m_doc->settings().gloss);
+        auto authoredAt = [&](size_t i) { return values ? (*values)[i] : base; };
+        const bool warn =
+            m_live && m_overShineCheck->isChecked() && m_overShine.flagged.size() == map.texelCount();
         const QColor warning = QColor::fromRgba(kOverShineColor);
         for (int y = r.y0; y < r.y1; ++y) {
             auto* row = reinterpret_cast<QRgb*>(overlay.scanLine(y));
             for (int x = r.x0; x < r.x1; ++x) {
                 const size_t i = size_t(y) * size_t(w) + size_t(x);
-                const double g = std::clamp(double(authored[i]), 0.0, 1.0);
+                const double g = std::clamp(double(authoredAt(i)), 0.0, 1.0);
                 if (warn && m_overShine.flagged[i]) {
                     auto mix = [&](int c) {
                         return toByte((kOverShineMix * c / 255.0) + (1 - kOverShineMix) * g);
@@ -414,6 +524,7 @@ void PaintTool::updateOverlay(const std::optional<TexelRect>& rect) {
         }
         m_view->overlayChanged(QRect(r.x0, r.y0, r.width(), r.height()));
     }
+    if (!m_live) return; // the status says the live bake is being prepared
     m_status->setText(QString("%1 of %2 texels over-shine at mip %3 (painted gloss above what the normal "
                               "variance permits); last update recomputed %4 baked texels")
                           .arg(m_overShine.flaggedMipTexels)

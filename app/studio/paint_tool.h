@@ -22,6 +22,7 @@ class QDoubleSpinBox;
 class QLabel;
 class QPushButton;
 class QSpinBox;
+class QThread;
 
 namespace burnish::studio {
 
@@ -42,6 +43,12 @@ public:
 
     void setPaintMode(bool on);
     bool paintMode() const { return m_paintMode; }
+    /// The live bake is built on a worker thread (the studio; an 8192² map's took half a minute on the
+    /// GUI thread); strokes paint meanwhile and it catches up with them when it lands. Off (tests that
+    /// read it right after a change): built at once.
+    void setBackgroundBakes(bool on) { m_background = on; }
+    /// A background live bake is being built.
+    bool liveBuilding() const { return m_liveBuilding; }
     void setLayer(PaintLayerKind kind);
     PaintLayerKind layer() const { return m_layer; }
     void setBrush(const Brush& brush);
@@ -76,6 +83,12 @@ private:
     void onDocumentChanged();
     void onLayersChanged(const TexelRect& rect);
     void rebuildLive();
+    /// A live bake built for generation `generation` arrived (background builds).
+    void liveBuilt(quint64 generation, Result<LiveGlossBake> live);
+    /// Over-shine over the whole map, the overlay and liveUpdated, once a live bake is in place.
+    void liveReady();
+    /// The first overlay of a background build arrived.
+    void overlayBuilt(const QImage& image);
     void updateOverlay(const std::optional<TexelRect>& rect);
     std::vector<float> currentAuthored() const;
 
@@ -90,7 +103,14 @@ private:
     std::optional<PaintStroke> m_stroke;
     std::optional<glm::dvec2> m_lastPoint;
     std::optional<LiveGlossBake> m_live;
-    QString m_liveKey; // what the live bake was made from (rebuilt when it changes)
+    bool m_background = false;
+    bool m_liveBuilding = false;
+    quint64 m_liveGeneration = 0;
+    TexelRect m_liveMissed;              // painted while a background build ran: rebaked when it lands
+    std::vector<QThread*> m_liveWorkers; // in flight, waited for by the destructor
+    bool m_overlayPending = false;       // the first overlay of a background build is being made
+    TexelRect m_overlayMissed;           // dabs before it landed
+    QString m_liveKey;                   // what the live bake was made from (rebuilt when it changes)
     OverShineMap m_overShine;
 
     QPushButton* m_paintButton;

@@ -723,4 +723,34 @@ TEST(StudioPaint, AutosaveCopiesOfPaintedLayersFollowEveryStroke) {
     }
 }
 
+// Paint on an 8192² map held the GUI for half a minute building the live bake; it is now built on a
+// worker while strokes go on. When it lands it must have caught up with them: the same baked gloss and
+// the same overlay as a tool that built it at once and painted the same strokes.
+TEST(StudioPaint, ABackgroundLiveBakeCatchesUpWithStrokesPaintedMeanwhile) {
+    MaterialDocument background, atOnce;
+    for (MaterialDocument* doc : {&background, &atOnce})
+        ASSERT_TRUE(doc->loadMap(MapSlot::Normal, kNormalMapPath()));
+    TextureView backgroundView, atOnceView;
+    PaintTool backgroundTool(&background, &backgroundView), atOnceTool(&atOnce, &atOnceView);
+    backgroundTool.setBackgroundBakes(true);
+    for (PaintTool* tool : {&backgroundTool, &atOnceTool}) {
+        tool->setPaintMode(true);
+        // Painted at once: for the background tool, before its live bake (and maybe its overlay) lands.
+        stroke(*tool, PaintLayerKind::Gloss, 0.95f, 24.0, {80.0, 90.0}, {350.0, 160.0});
+        stroke(*tool, PaintLayerKind::VarianceOffset, 0.1f, 12.0, {300.0, 300.0}, {320.0, 420.0});
+    }
+    EXPECT_TRUE(backgroundTool.liveBuilding()) << "a 512² live bake takes longer than two strokes";
+    ASSERT_TRUE(QTest::qWaitFor([&] { return !backgroundTool.liveBuilding(); }, kWorkerTimeoutMs));
+    QTest::qWait(50); // the overlay's own worker
+    ASSERT_NE(backgroundTool.liveBake(), nullptr);
+    ASSERT_NE(atOnceTool.liveBake(), nullptr);
+    const auto& a = backgroundTool.liveBake()->gloss().mips;
+    const auto& b = atOnceTool.liveBake()->gloss().mips;
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t k = 0; k < a.size(); ++k)
+        EXPECT_TRUE(a[k].texels == b[k].texels) << "mip " << k;
+    EXPECT_EQ(backgroundTool.overShineMap().flaggedCount, atOnceTool.overShineMap().flaggedCount);
+    EXPECT_EQ(backgroundView.overlay(), atOnceView.overlay());
+}
+
 } // namespace burnish::studio

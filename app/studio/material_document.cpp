@@ -416,6 +416,10 @@ void MaterialDocument::loadMapInBackground(MapSlot slot, const QString& path) {
             },
             Qt::QueuedConnection);
     });
+    startWorker(worker);
+}
+
+void MaterialDocument::startWorker(QThread* worker) {
     worker->setParent(this); // deleted with the document if it goes before the thread's finished()
     m_loaders.push_back(worker);
     connect(worker, &QThread::finished, this, [this, worker] {
@@ -711,13 +715,7 @@ void MaterialDocument::prepareForPainting(PaintLayerKind kind) {
             },
             Qt::QueuedConnection);
     });
-    worker->setParent(this); // deleted with the document if it goes before the thread's finished()
-    m_loaders.push_back(worker);
-    connect(worker, &QThread::finished, this, [this, worker] {
-        m_loaders.erase(std::remove(m_loaders.begin(), m_loaders.end(), worker), m_loaders.end());
-        worker->deleteLater();
-    });
-    worker->start();
+    startWorker(worker);
 }
 
 void MaterialDocument::recomposite(const TexelRect& rect, bool full) {

@@ -249,6 +249,8 @@ private:
                               const GlossEncoding& encoding);
     /// Recomputes the authored gloss inside `rect` (all of it when the inputs changed).
     void recomposite(const TexelRect& rect, bool full);
+    /// Starts a worker thread the destructor waits for (m_loaders), deleted once finished.
+    void startWorker(QThread* worker);
 
     MaterialSettings m_settings;
     LoadedMaps m_maps;

@@ -370,12 +370,7 @@ void PaintTool::rebuildLive() {
             },
             Qt::QueuedConnection);
     });
-    m_liveWorkers.push_back(worker);
-    connect(worker, &QThread::finished, this, [this, worker] {
-        std::erase(m_liveWorkers, worker);
-        worker->deleteLater();
-    });
-    worker->start();
+    startWorker(worker);
     // The overlay (the authored gloss in grey: an 8192² image is 256 MB to fill) on a worker as well;
     // dabs before it lands are drawn into it when it does.
     m_overlayPending = true;
@@ -397,12 +392,7 @@ void PaintTool::rebuildLive() {
             },
             Qt::QueuedConnection);
     });
-    m_liveWorkers.push_back(painter);
-    connect(painter, &QThread::finished, this, [this, painter] {
-        std::erase(m_liveWorkers, painter);
-        painter->deleteLater();
-    });
-    painter->start();
+    startWorker(painter);
 }
 
 void PaintTool::overlayBuilt(const QImage& image) {
@@ -410,6 +400,15 @@ void PaintTool::overlayBuilt(const QImage& image) {
     if (!m_paintMode || m_live) return; // the live bake landed first and drew the overlay itself
     m_view->setOverlay(image);
     if (const TexelRect missed = std::exchange(m_overlayMissed, {}); !missed.empty()) updateOverlay(missed);
+}
+
+void PaintTool::startWorker(QThread* worker) {
+    m_liveWorkers.push_back(worker);
+    connect(worker, &QThread::finished, this, [this, worker] {
+        std::erase(m_liveWorkers, worker);
+        worker->deleteLater();
+    });
+    worker->start();
 }
 
 void PaintTool::liveBuilt(quint64 generation, Result<LiveGlossBake> live) {

@@ -87,6 +87,8 @@ private:
     void liveBuilt(quint64 generation, Result<LiveGlossBake> live);
     /// Over-shine over the whole map, the overlay and liveUpdated, once a live bake is in place.
     void liveReady();
+    /// Starts a worker the destructor waits for (m_liveWorkers), deleted once finished.
+    void startWorker(QThread* worker);
     /// The first overlay of a background build arrived.
     void overlayBuilt(const QImage& image);
     void updateOverlay(const std::optional<TexelRect>& rect);

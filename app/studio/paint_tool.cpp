@@ -75,6 +75,10 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     , m_view(view) {
     m_paintButton = new QPushButton("Paint", this);
     m_paintButton->setCheckable(true);
+    m_paintButton->setObjectName("paintButton");
+    // On and off must look different: a checked button in the studio's dark style barely does.
+    m_paintButton->setStyleSheet("QPushButton:checked { background: palette(highlight); "
+                                 "color: palette(highlighted-text); font-weight: bold; }");
     m_paintButton->setToolTip("Paint mode: the left button paints on the texture view and the 3D view");
     m_layerCombo = new QComboBox(this);
     m_layerCombo->addItem("Gloss", int(PaintLayerKind::Gloss));
@@ -192,6 +196,7 @@ void PaintTool::syncWidgets() {
     m_layerCombo->setCurrentIndex(m_layerCombo->findData(int(m_layer)));
     m_eyedropperButton->setChecked(m_eyedropper);
     m_paintButton->setChecked(m_paintMode);
+    m_paintButton->setText(m_paintMode ? "Painting" : "Paint");
     m_view->setBrushRadius(m_brush.radius);
 }
 

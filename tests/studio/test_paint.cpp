@@ -23,6 +23,7 @@
 #include <QImage>
 #include <QLabel>
 #include <QLineEdit>
+#include <QPushButton>
 #include <QRegularExpression>
 #include <QSignalSpy>
 #include <QTest>
@@ -743,6 +744,26 @@ TEST(StudioPaint, ABackgroundLiveBakeCatchesUpWithStrokesPaintedMeanwhile) {
         EXPECT_TRUE(a[k].texels == b[k].texels) << "mip " << k;
     EXPECT_EQ(backgroundTool.overShineMap().flaggedCount, atOnceTool.overShineMap().flaggedCount);
     EXPECT_EQ(backgroundView.overlay(), atOnceView.overlay());
+}
+
+// The Paint button looked the same on and off (issue 44, point 7): it now says so and is highlighted.
+TEST(StudioPaint, ThePaintButtonShowsItsState) {
+    MaterialDocument doc;
+    TextureView canvas;
+    PaintTool tool(&doc, &canvas);
+    auto* button = tool.findChild<QPushButton*>("paintButton");
+    ASSERT_NE(button, nullptr);
+    EXPECT_EQ(button->text(), "Paint");
+    button->resize(200, 30);
+    const QImage off = button->grab().toImage();
+    button->click();
+    EXPECT_TRUE(tool.paintMode());
+    EXPECT_EQ(button->text(), "Painting");
+    button->setText("Paint"); // the same words: only the look differs below
+    EXPECT_NE(button->grab().toImage(), off) << "checked looks like unchecked";
+    button->click();
+    EXPECT_FALSE(tool.paintMode());
+    EXPECT_EQ(button->text(), "Paint");
 }
 
 } // namespace burnish::studio

@@ -176,6 +176,7 @@ MainWindow::MainWindow(QWidget* parent)
 
     m_paintTool = new PaintTool(m_doc, m_texturePane->view(), this);
     m_paintTool->attachViewport(viewport->viewport());
+    connect(m_paintTool, &PaintTool::paintModeChanged, m_texturePane, &TexturePane::setPaintOverlay);
     m_paintDock = new QDockWidget("Paint", this);
     m_paintDock->setObjectName("paintDock");
     m_paintDock->setWidget(m_paintTool);

@@ -228,6 +228,7 @@ void PaintTool::setEyedropper(bool on) {
 }
 
 void PaintTool::setPaintMode(bool on) {
+    const bool changed = on != m_paintMode;
     m_paintMode = on;
     m_view->setPaintMode(on);
     if (m_viewport) m_viewport->setPaintMode(on);
@@ -240,6 +241,7 @@ void PaintTool::setPaintMode(bool on) {
         m_view->setOverlay({});
         m_status->clear();
     }
+    if (changed) emit paintModeChanged(on);
 }
 
 void PaintTool::setOverShineMip(int mip) {

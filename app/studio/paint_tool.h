@@ -76,6 +76,8 @@ public:
 signals:
     /// The live bake or the over-shine map changed.
     void liveUpdated();
+    /// Paint mode was switched on or off.
+    void paintModeChanged(bool on);
 
 private:
     void syncWidgets();

@@ -124,6 +124,22 @@ void TexturePane::setMip(int mip) {
     refresh();
 }
 
+void TexturePane::setPaintOverlay(bool on) {
+    m_paintOverlay = on;
+    refresh();
+}
+
+QString TexturePane::infoText() const {
+    return m_info->text();
+}
+
+void TexturePane::setInfo(const QString& text) {
+    // In Paint mode the view shows the authored values drawn over whatever the mode shows: say so.
+    m_info->setText(m_paintOverlay ? QString("Authored %1 shown (Paint on; orange: over-shine) · %2")
+                                         .arg(glossQuantity(m_doc->preset().encoding, false), text)
+                                   : text);
+}
+
 void TexturePane::refresh() {
     m_mipSpin->setEnabled(m_mode == TextureMode::BakedGloss);
     const NormalMap& normal = *m_doc->maps().normal;
@@ -135,7 +151,7 @@ void TexturePane::refresh() {
             m_normalImageOf = m_doc->maps().normal;
         }
         m_view->setImage(m_normalImage);
-        m_info->setText(QString("normal map %1×%2").arg(normal.width).arg(normal.height));
+        setInfo(QString("normal map %1×%2").arg(normal.width).arg(normal.height));
         emit imageUpdated();
         return;
     case TextureMode::Gloss:
@@ -146,19 +162,18 @@ void TexturePane::refresh() {
             m_view->setImage(bakedChannelImage(mip, 1, 0));
             const bool painted = m_doc->paintLayer(PaintLayerKind::Gloss).painted() ||
                                  m_doc->paintLayer(PaintLayerKind::VarianceOffset).painted();
-            m_info->setText(QString("authored gloss %1×%2: %3")
-                                .arg(normal.width)
-                                .arg(normal.height)
-                                .arg(!painted              ? QString("gloss map (first channel)")
-                                     : m_doc->maps().gloss ? QString("painted layers over the gloss map")
-                                                           : QString("painted layers over base gloss %1")
-                                                                 .arg(m_doc->settings().gloss, 0, 'f', 3)));
+            setInfo(QString("authored gloss %1×%2: %3")
+                        .arg(normal.width)
+                        .arg(normal.height)
+                        .arg(!painted              ? QString("gloss map (first channel)")
+                             : m_doc->maps().gloss ? QString("painted layers over the gloss map")
+                                                   : QString("painted layers over base gloss %1")
+                                                         .arg(m_doc->settings().gloss, 0, 'f', 3)));
         } else if (const auto& gloss = m_doc->maps().gloss) {
             TextureMip mip{gloss->width, gloss->height,
                            TexelVector(gloss->pixels.begin(), gloss->pixels.end())};
             m_view->setImage(bakedChannelImage(mip, gloss->channels, 0));
-            m_info->setText(
-                QString("authored gloss map %1×%2 (first channel)").arg(gloss->width).arg(gloss->height));
+            setInfo(QString("authored gloss map %1×%2 (first channel)").arg(gloss->width).arg(gloss->height));
         } else {
             // No map: the bake uses the base gloss on every texel, and that is what is shown.
             QImage flat(normal.width, normal.height, QImage::Format_Grayscale8);
@@ -166,8 +181,8 @@ void TexturePane::refresh() {
             // not move the unpainted texels by a grey level.
             flat.fill(toByte(double(float(m_doc->settings().gloss))));
             m_view->setImage(flat);
-            m_info->setText(QString("no gloss map: base gloss %1 on every texel")
-                                .arg(m_doc->settings().gloss, 0, 'f', 3));
+            setInfo(QString("no gloss map: base gloss %1 on every texel")
+                        .arg(m_doc->settings().gloss, 0, 'f', 3));
         }
         emit imageUpdated();
         return;
@@ -205,7 +220,7 @@ void TexturePane::startBake() {
                 [progressTarget, generation, percent] {
                     if (progressTarget && generation == progressTarget->m_generation &&
                         progressTarget->m_bakeRunning && progressTarget->m_mode == TextureMode::BakedGloss)
-                        progressTarget->m_info->setText(QString("baking… %1%").arg(percent));
+                        progressTarget->setInfo(QString("baking… %1%").arg(percent));
                 },
                 Qt::QueuedConnection);
         }
@@ -253,11 +268,11 @@ void TexturePane::startBake() {
 void TexturePane::showBaked() {
     if (m_mode != TextureMode::BakedGloss) return;
     if (m_bakeRunning) {
-        m_info->setText("baking…");
+        setInfo("baking…");
         return;
     }
     if (!m_baked) {
-        m_info->setText("bake failed: " + m_bakeError);
+        setInfo("bake failed: " + m_bakeError);
         return;
     }
     const BakedTexture* texture = displayedBakedTexture(*m_baked);
@@ -278,15 +293,14 @@ void TexturePane::showBaked() {
     } else {
         m_view->setImage(bakedChannelImage(level, texture->channels, channel));
     }
-    m_info->setText(
-        QString("%1 · %2 (%3) · mip %4: %5×%6")
-            .arg(QString::fromUtf8(methodName(m_baked->method).data(),
-                                   int(methodName(m_baked->method).size())),
-                 QString::fromUtf8(roleName(texture->role).data(), int(roleName(texture->role).size())),
-                 QString::fromStdString(texture->decode.empty() ? "" : texture->decode[0].name))
-            .arg(mip)
-            .arg(level.width)
-            .arg(level.height));
+    setInfo(QString("%1 · %2 (%3) · mip %4: %5×%6")
+                .arg(QString::fromUtf8(methodName(m_baked->method).data(),
+                                       int(methodName(m_baked->method).size())),
+                     QString::fromUtf8(roleName(texture->role).data(), int(roleName(texture->role).size())),
+                     QString::fromStdString(texture->decode.empty() ? "" : texture->decode[0].name))
+                .arg(mip)
+                .arg(level.width)
+                .arg(level.height));
     emit imageUpdated();
 }
 

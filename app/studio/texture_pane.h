@@ -43,6 +43,9 @@ public:
     TextureMode mode() const { return m_mode; }
     void setMode(TextureMode mode);
     void setMip(int mip);
+    /// Paint mode draws the authored values over the view: the info line says so.
+    void setPaintOverlay(bool on);
+    QString infoText() const;
     /// True while a bake for the baked view is running.
     bool baking() const { return m_bakeRunning; }
 
@@ -60,6 +63,8 @@ private:
     QComboBox* m_modeCombo;
     QSpinBox* m_mipSpin;
     ElidedLabel* m_info;
+    bool m_paintOverlay = false;
+    void setInfo(const QString& text);
     TextureMode m_mode = TextureMode::Normal;
     int m_mip = 0;
     std::shared_ptr<const BakeOutput> m_baked;

@@ -766,4 +766,21 @@ TEST(StudioPaint, ThePaintButtonShowsItsState) {
     EXPECT_EQ(button->text(), "Paint");
 }
 
+// In Paint mode the texture view showed the painted layer under the words "normal map 512×512"
+// (issue 44, point 7): the info line now says what is drawn, in the preset's own term.
+TEST(StudioPaint, TheTextureViewSaysWhatPaintModeShows) {
+    MainWindow window;
+    window.setAutosaveDelay(0);
+    TexturePane& pane = *window.texturePane();
+    EXPECT_EQ(pane.infoText(), "normal map 512×512");
+    window.paintTool()->setPaintMode(true);
+    EXPECT_TRUE(pane.infoText().startsWith("Authored gloss shown (Paint on; orange: over-shine)"))
+        << pane.infoText().toStdString();
+    EXPECT_TRUE(pane.infoText().contains("normal map 512×512"));
+    ASSERT_TRUE(window.document()->setPreset("gltf"));
+    EXPECT_TRUE(pane.infoText().startsWith("Authored roughness shown")) << pane.infoText().toStdString();
+    window.paintTool()->setPaintMode(false);
+    EXPECT_EQ(pane.infoText(), "normal map 512×512");
+}
+
 } // namespace burnish::studio

@@ -55,14 +55,6 @@ std::shared_ptr<PaintLayer> emptyCopyOf(PaintLayerKind kind, int width, int heig
     return copy;
 }
 
-void copyRect(const std::vector<float>& from, std::vector<float>& to, int width, const TexelRect& r) {
-    for (int y = r.y0; y < r.y1; ++y) {
-        const size_t row = size_t(y) * size_t(width);
-        std::copy(from.begin() + ptrdiff_t(row + size_t(r.x0)), from.begin() + ptrdiff_t(row + size_t(r.x1)),
-                  to.begin() + ptrdiff_t(row + size_t(r.x0)));
-    }
-}
-
 } // namespace
 
 bool AutosaveWriter::syncLayer(const PaintLayer& layer, const TexelRect& stale) {
@@ -96,8 +88,8 @@ bool AutosaveWriter::syncLayer(const PaintLayer& layer, const TexelRect& stale) 
     const TexelRect r{std::max(stale.x0, 0), std::max(stale.y0, 0), std::min(stale.x1, layer.width),
                       std::min(stale.y1, layer.height)};
     if (r.empty()) return true;
-    copyRect(layer.value, c.copy->value, layer.width, r);
-    copyRect(layer.coverage, c.copy->coverage, layer.width, r);
+    copyTexelRect(layer.value, c.copy->value, layer.width, r);
+    copyTexelRect(layer.coverage, c.copy->coverage, layer.width, r);
     return true;
 }
 

@@ -635,13 +635,7 @@ std::shared_ptr<const std::vector<float>> MaterialDocument::authoredGloss() cons
     for (AuthoredSnapshot& snapshot : m_snapshots) {
         if (snapshot.values.use_count() != 1 || snapshot.values->size() != m_authored->size()) continue;
         // Nobody else holds it: bring the rectangle edited since its last use up to date, in place.
-        const TexelRect& r = snapshot.stale;
-        for (int y = r.y0; y < r.y1; ++y) {
-            const size_t row = size_t(y) * size_t(w);
-            std::copy(m_authored->begin() + ptrdiff_t(row + size_t(r.x0)),
-                      m_authored->begin() + ptrdiff_t(row + size_t(r.x1)),
-                      snapshot.values->begin() + ptrdiff_t(row + size_t(r.x0)));
-        }
+        copyTexelRect(*m_authored, *snapshot.values, w, snapshot.stale);
         snapshot.stale = {};
         m_published = snapshot.values;
         return m_published;

@@ -63,6 +63,12 @@ private:
     bool m_first;
 };
 
+// An authored value as the overlay draws it where nothing warns.
+QRgb authoredGrey(float g) {
+    const int v = toByte(std::clamp(double(g), 0.0, 1.0));
+    return qRgb(v, v, v);
+}
+
 QString qs(std::string_view s) {
     return QString::fromUtf8(s.data(), int(s.size()));
 }
@@ -388,8 +394,7 @@ void PaintTool::rebuildLive() {
             auto* row = reinterpret_cast<QRgb*>(image.scanLine(y));
             for (int x = 0; x < normal->width; ++x) {
                 const float g = authored ? (*authored)[size_t(y) * size_t(normal->width) + size_t(x)] : base;
-                const int v = toByte(std::clamp(double(g), 0.0, 1.0));
-                row[x] = qRgb(v, v, v);
+                row[x] = authoredGrey(g);
             }
         }
         QMetaObject::invokeMethod(
@@ -430,19 +435,13 @@ void PaintTool::liveBuilt(quint64 generation, Result<LiveGlossBake> live) {
     // Strokes painted while it was built: their rectangle, from the document's values now.
     const TexelRect missed = std::exchange(m_liveMissed, {});
     if (!missed.empty()) {
+        // (No authored values left after those strokes: the paint was all erased. Built again.)
         const std::vector<float>* authored = m_doc->authoredValues();
-        const std::vector<float> base =
-            authored ? std::vector<float>()
-                     : std::vector<float>(m_live->authoredGloss().size(), float(m_doc->settings().gloss));
-        if (!m_live->rebakeRegion(authored ? *authored : base, missed)) {
+        if (!authored || !m_live->rebakeRegion(*authored, missed)) {
             rebuildLive();
             return;
         }
     }
-    liveReady();
-}
-
-void PaintTool::liveReady() {
     m_mipSpin->setRange(0, m_live->levelCount() - 1);
     (void)overShine(*m_live, m_live->authoredGloss(), m_overShineMip, kOverShineStops,
                     &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine);
@@ -523,8 +522,7 @@ void PaintTool::updateOverlay(const std::optional<TexelRect>& rect) {
                     };
                     row[x] = qRgb(mix(warning.red()), mix(warning.green()), mix(warning.blue()));
                 } else {
-                    const int v = toByte(g);
-                    row[x] = qRgb(v, v, v);
+                    row[x] = authoredGrey(float(g));
                 }
             }
         }

@@ -85,10 +85,9 @@ private:
     void onDocumentChanged();
     void onLayersChanged(const TexelRect& rect);
     void rebuildLive();
-    /// A live bake built for generation `generation` arrived (background builds).
+    /// A live bake built for generation `generation` arrived (at once, or from a background build):
+    /// catches up with strokes painted meanwhile, then over-shine, the overlay and liveUpdated.
     void liveBuilt(quint64 generation, Result<LiveGlossBake> live);
-    /// Over-shine over the whole map, the overlay and liveUpdated, once a live bake is in place.
-    void liveReady();
     /// Starts a worker the destructor waits for (m_liveWorkers), deleted once finished.
     void startWorker(QThread* worker);
     /// The first overlay of a background build arrived.

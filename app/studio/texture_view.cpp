@@ -15,6 +15,31 @@ constexpr double kMinZoom = 1.0 / 64.0;
 constexpr double kMaxZoom = 64.0;
 // One wheel notch (120 units) zooms by 2^(1/4): four notches double the size.
 constexpr double kZoomPerNotch = 1.189207115002721;
+// Box-filters `source` into `target` (smaller) over `targetRect`: each target pixel the mean of the
+// source pixels its square covers (RGB32).
+void minifyRegion(const QImage& source, QImage& target, const QRect& targetRect) {
+    const QRect r = targetRect.intersected(target.rect());
+    const int sw = source.width(), sh = source.height(), tw = target.width(), th = target.height();
+    for (int y = r.top(); y <= r.bottom(); ++y) {
+        const int sy0 = int(qint64(y) * sh / th), sy1 = std::max(sy0 + 1, int(qint64(y + 1) * sh / th));
+        auto* out = reinterpret_cast<QRgb*>(target.scanLine(y));
+        for (int x = r.left(); x <= r.right(); ++x) {
+            const int sx0 = int(qint64(x) * sw / tw), sx1 = std::max(sx0 + 1, int(qint64(x + 1) * sw / tw));
+            quint64 red = 0, green = 0, blue = 0;
+            for (int v = sy0; v < sy1; ++v) {
+                const auto* in = reinterpret_cast<const QRgb*>(source.constScanLine(v));
+                for (int u = sx0; u < sx1; ++u) {
+                    red += quint64(qRed(in[u]));
+                    green += quint64(qGreen(in[u]));
+                    blue += quint64(qBlue(in[u]));
+                }
+            }
+            const quint64 n = quint64(sy1 - sy0) * quint64(sx1 - sx0);
+            out[x] = qRgb(int((red + n / 2) / n), int((green + n / 2) / n), int((blue + n / 2) / n));
+        }
+    }
+}
+
 } // namespace
 
 TextureView::TextureView(QWidget* parent)
@@ -141,29 +166,6 @@ void TextureView::overlayChanged(const QRect& texels) {
         minifyRegion(m_overlay, m_overlayMinified, QRect(x0, y0, x1 - x0, y1 - y0));
     }
     update();
-}
-
-void minifyRegion(const QImage& source, QImage& target, const QRect& targetRect) {
-    const QRect r = targetRect.intersected(target.rect());
-    const int sw = source.width(), sh = source.height(), tw = target.width(), th = target.height();
-    for (int y = r.top(); y <= r.bottom(); ++y) {
-        const int sy0 = int(qint64(y) * sh / th), sy1 = std::max(sy0 + 1, int(qint64(y + 1) * sh / th));
-        auto* out = reinterpret_cast<QRgb*>(target.scanLine(y));
-        for (int x = r.left(); x <= r.right(); ++x) {
-            const int sx0 = int(qint64(x) * sw / tw), sx1 = std::max(sx0 + 1, int(qint64(x + 1) * sw / tw));
-            quint64 red = 0, green = 0, blue = 0;
-            for (int v = sy0; v < sy1; ++v) {
-                const auto* in = reinterpret_cast<const QRgb*>(source.constScanLine(v));
-                for (int u = sx0; u < sx1; ++u) {
-                    red += quint64(qRed(in[u]));
-                    green += quint64(qGreen(in[u]));
-                    blue += quint64(qBlue(in[u]));
-                }
-            }
-            const quint64 n = quint64(sy1 - sy0) * quint64(sx1 - sx0);
-            out[x] = qRgb(int((red + n / 2) / n), int((green + n / 2) / n), int((blue + n / 2) / n));
-        }
-    }
 }
 
 void TextureView::wheelEvent(QWheelEvent* event) {

@@ -88,8 +88,4 @@ private:
     bool m_overlayMinifiedValid = false;
 };
 
-/// Box-filters `source` into `target` (smaller) over `targetRect`: each target pixel the mean of the
-/// source pixels its square covers (RGB32).
-void minifyRegion(const QImage& source, QImage& target, const QRect& targetRect);
-
 } // namespace burnish::studio

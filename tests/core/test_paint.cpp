@@ -543,3 +543,25 @@ TEST(Paint, ResampledLayersKeepPaintWhereItWasAndRoundTripExactly) {
 
 } // namespace
 } // namespace burnish
+
+namespace burnish {
+namespace {
+
+TEST(TexelRectCopy, CopiesTheRectangleAndNothingElse) {
+    constexpr int kWidth = 7, kHeight = 5;
+    std::vector<float> from(size_t(kWidth) * kHeight), to(from.size(), -1.0f);
+    for (size_t i = 0; i < from.size(); ++i)
+        from[i] = float(i);
+    const TexelRect r{2, 1, 5, 4};
+    copyTexelRect(from, to, kWidth, r);
+    for (int y = 0; y < kHeight; ++y)
+        for (int x = 0; x < kWidth; ++x) {
+            const size_t i = size_t(y) * kWidth + size_t(x);
+            EXPECT_EQ(to[i], r.contains(x, y) ? from[i] : -1.0f) << x << "," << y;
+        }
+    copyTexelRect(from, to, kWidth, TexelRect{}); // an empty rectangle copies nothing
+    EXPECT_EQ(to[0], -1.0f);
+}
+
+} // namespace
+} // namespace burnish

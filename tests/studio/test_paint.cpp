@@ -755,12 +755,20 @@ TEST(StudioPaint, ThePaintButtonShowsItsState) {
     ASSERT_NE(button, nullptr);
     EXPECT_EQ(button->text(), "Paint");
     button->resize(200, 30);
-    const QImage off = button->grab().toImage();
+    // The button's face beside its text: the highlight colour while on, far from it while off.
+    const QColor highlight = button->palette().color(QPalette::Highlight);
+    auto faceDistance = [&] {
+        const QColor face = button->grab().toImage().pixelColor(12, 15);
+        return std::abs(face.red() - highlight.red()) + std::abs(face.green() - highlight.green()) +
+               std::abs(face.blue() - highlight.blue());
+    };
+    const int off = faceDistance(); // a dark grey face: about 180 from the highlight
     button->click();
     EXPECT_TRUE(tool.paintMode());
     EXPECT_EQ(button->text(), "Painting");
-    button->setText("Paint"); // the same words: only the look differs below
-    EXPECT_NE(button->grab().toImage(), off) << "checked looks like unchecked";
+    const int on = faceDistance(); // the highlight, a little lighter: about 50
+    EXPECT_LT(2 * on, off) << "on does not show the highlight (distance " << on << " against " << off
+                           << " off)";
     button->click();
     EXPECT_FALSE(tool.paintMode());
     EXPECT_EQ(button->text(), "Paint");

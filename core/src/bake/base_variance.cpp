@@ -4,6 +4,15 @@
 
 namespace burnish {
 
+void copyTexelRect(const std::vector<float>& from, std::vector<float>& to, int width, const TexelRect& rect) {
+    for (int y = rect.y0; y < rect.y1; ++y) {
+        const size_t row = size_t(y) * size_t(width);
+        std::copy(from.begin() + ptrdiff_t(row + size_t(rect.x0)),
+                  from.begin() + ptrdiff_t(row + size_t(rect.x1)),
+                  to.begin() + ptrdiff_t(row + size_t(rect.x0)));
+    }
+}
+
 void TexelRect::unite(const TexelRect& other) {
     if (other.empty()) return;
     if (empty()) {

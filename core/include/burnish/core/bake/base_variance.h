@@ -31,6 +31,10 @@ struct TexelRect {
     friend bool operator==(const TexelRect&, const TexelRect&) = default;
 };
 
+/// Copies the texels inside `rect` (which lies inside both) between two row-major arrays of the same
+/// `width`: what keeps a copy of a big array up to date where it was edited.
+void copyTexelRect(const std::vector<float>& from, std::vector<float>& to, int width, const TexelRect& rect);
+
 class BaseVariancePyramid {
 public:
     BaseVariancePyramid() = default;

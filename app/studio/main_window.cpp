@@ -29,10 +29,10 @@
 #include <QProgressDialog>
 #include <QScreen>
 #include <QScrollArea>
+#include <QScrollBar>
 #include <QSettings>
 #include <QShowEvent>
 #include <QSpinBox>
-#include <QSplitter>
 #include <QStatusBar>
 #include <QTextBrowser>
 #include <QTimer>
@@ -43,7 +43,7 @@
 #include <algorithm>
 
 namespace burnish::resources {
-extern const std::string_view kReadme;
+extern const std::string_view kStudioGuide;
 } // namespace burnish::resources
 
 namespace burnish::studio {
@@ -55,9 +55,10 @@ constexpr int kMaxRecent = 8;
 // Autosave this long after an edit unless the settings ("autosaveDelaySeconds") say otherwise: soon
 // enough that a crash loses seconds, late enough that a burst of edits makes one write.
 constexpr int kDefaultAutosaveDelaySeconds = 3;
-// Below this window width the first layout stacks the Paint panel behind Material (see
-// applyDefaultDockSizes): paint, views and material side by side need about 1500 px.
-constexpr int kStackedDocksBelowWidth = 1500;
+// Below this window size the first layout is the compact one (see applyDefaultDockSizes): paint,
+// viewport and material side by side need about 1500 px, the charts under the viewport about 900.
+constexpr int kCompactLayoutBelowWidth = 1500;
+constexpr int kCompactLayoutBelowHeight = 900;
 
 QString qs(std::string_view s) {
     return QString::fromUtf8(s.data(), int(s.size()));
@@ -164,15 +165,15 @@ MainWindow::MainWindow(QWidget* parent)
     setAcceptDrops(true);
     setDockNestingEnabled(true);
 
-    m_central = new QSplitter(Qt::Horizontal, this);
-    m_texturePane = new TexturePane(m_doc, m_central);
-    m_central->addWidget(m_texturePane);
-    // The 3D viewport left of the 2D texture view, the larger of the two.
-    auto* viewport = new ViewportPanel(m_doc, m_central);
-    m_central->insertWidget(0, viewport);
-    m_central->setStretchFactor(0, 3);
-    m_central->setStretchFactor(1, 2);
-    setCentralWidget(m_central);
+    // The 3D viewport is the central widget: every other panel is a dock an artist can move, tab,
+    // float or close (View menu), and the first layout gives the viewport the most room
+    // (applyDefaultDockSizes).
+    auto* viewport = new ViewportPanel(m_doc, this);
+    setCentralWidget(viewport);
+    m_texturePane = new TexturePane(m_doc, this);
+    m_textureDock = new QDockWidget("Texture", this);
+    m_textureDock->setObjectName("textureDock");
+    m_textureDock->setWidget(m_texturePane);
 
     m_paintTool = new PaintTool(m_doc, m_texturePane->view(), this);
     m_paintTool->attachViewport(viewport->viewport());
@@ -180,7 +181,6 @@ MainWindow::MainWindow(QWidget* parent)
     m_paintDock = new QDockWidget("Paint", this);
     m_paintDock->setObjectName("paintDock");
     m_paintDock->setWidget(m_paintTool);
-    addDockWidget(Qt::LeftDockWidgetArea, m_paintDock);
 
     m_panel = new MaterialPanel(m_doc, this);
     auto* scroll = new QScrollArea(this);
@@ -188,6 +188,9 @@ MainWindow::MainWindow(QWidget* parent)
     scroll->setWidgetResizable(true);
     scroll->setFrameShape(QFrame::NoFrame);
     scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+    // Never narrower than the panel's rows (with no horizontal scroll bar they would be cut off).
+    scroll->setMinimumWidth(m_panel->minimumSizeHint().width() +
+                            scroll->verticalScrollBar()->sizeHint().width() + 2 * scroll->frameWidth());
     m_materialDock = new QDockWidget("Material", this);
     m_materialDock->setObjectName("materialDock");
     m_materialDock->setWidget(scroll);
@@ -218,6 +221,12 @@ MainWindow::MainWindow(QWidget* parent)
     auto* charts = new ChartsPanel(m_doc, this);
     m_chartsDock = charts;
     addDockWidget(Qt::BottomDockWidgetArea, charts);
+    // The wide arrangement (a compact window rearranges it: applyDefaultDockSizes): the 2D texture
+    // view left of the viewport, the Paint panel a tab beside History and Environment.
+    addDockWidget(Qt::LeftDockWidgetArea, m_textureDock);
+    addDockWidget(Qt::RightDockWidgetArea, m_paintDock);
+    tabifyDockWidget(m_historyDock, m_paintDock);
+    m_paintDock->raise();
 
     m_statusPower = new QLabel(this);
     m_statusGloss = new QLabel(this);
@@ -347,15 +356,28 @@ void MainWindow::buildMenus() {
         environmentToggle->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_5));
         m_viewMenu->addAction(environmentToggle);
     }
+    QAction* texture = m_textureDock->toggleViewAction();
+    texture->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_6));
+    m_viewMenu->addAction(texture);
     m_viewMenu->addSeparator();
+    // Each shows the texture view (raised from behind its tabs) in that mode; the gloss entries
+    // take the preset's own word (retitled by updateStatus).
+    auto showTexture = [this](TextureMode mode) {
+        m_textureDock->show();
+        m_textureDock->raise();
+        m_texturePane->setMode(mode);
+    };
     m_viewMenu->addAction("Normal Map", QKeySequence(Qt::Key_1), this,
-                          [this] { m_texturePane->setMode(TextureMode::Normal); });
-    m_viewMenu->addAction("Authored Gloss", QKeySequence(Qt::Key_2), this,
-                          [this] { m_texturePane->setMode(TextureMode::Gloss); });
-    m_viewMenu->addAction("Baked Gloss", QKeySequence(Qt::Key_3), this,
-                          [this] { m_texturePane->setMode(TextureMode::BakedGloss); });
-    m_viewMenu->addAction("Fit Texture", QKeySequence(Qt::Key_F), this,
-                          [this] { m_texturePane->view()->fit(); });
+                          [showTexture] { showTexture(TextureMode::Normal); });
+    m_authoredAction = m_viewMenu->addAction("Authored Gloss", QKeySequence(Qt::Key_2), this,
+                                             [showTexture] { showTexture(TextureMode::Gloss); });
+    m_bakedAction = m_viewMenu->addAction("Baked Gloss", QKeySequence(Qt::Key_3), this,
+                                          [showTexture] { showTexture(TextureMode::BakedGloss); });
+    m_viewMenu->addAction("Fit Texture", QKeySequence(Qt::Key_F), this, [this] {
+        m_textureDock->show();
+        m_textureDock->raise();
+        m_texturePane->view()->fit();
+    });
 
     QMenu* help = menuBar()->addMenu("&Help");
     help->addAction("Studio &Guide", QKeySequence::HelpContents, this, &MainWindow::showGuide);
@@ -373,12 +395,7 @@ void MainWindow::buildMenus() {
 }
 
 QString studioGuideMarkdown() {
-    // The README's "## Studio" section, up to the next second-level heading.
-    const QString readme = QString::fromUtf8(resources::kReadme.data(), qsizetype(resources::kReadme.size()));
-    const qsizetype start = readme.indexOf("\n## Studio\n");
-    if (start < 0) return readme;
-    const qsizetype end = readme.indexOf("\n## ", start + 1);
-    return readme.mid(start + 1, end < 0 ? -1 : end - start - 1);
+    return QString::fromUtf8(resources::kStudioGuide.data(), qsizetype(resources::kStudioGuide.size()));
 }
 
 void MainWindow::showGuide() {
@@ -391,7 +408,7 @@ void MainWindow::showGuide() {
         text->setOpenExternalLinks(true);
         auto* layout = new QVBoxLayout(m_guide);
         layout->addWidget(text);
-        m_guide->resize(640, 480);
+        m_guide->resize(720, 560);
     }
     m_guide->show();
     m_guide->raise();
@@ -424,6 +441,11 @@ void MainWindow::updateStatus() {
     m_statusGloss->setText(
         QString("%1 %2").arg(glossQuantity(m_doc->preset().encoding, false)).arg(glossText(s.gloss)));
     m_statusPower->setText(QString("power %1").arg(m_doc->power(), 0, 'g', 5));
+    if (m_authoredAction) {
+        const QString term = glossQuantity(m_doc->preset().encoding);
+        m_authoredAction->setText("Authored " + term);
+        m_bakedAction->setText("Baked " + term);
+    }
 }
 
 QStringList MainWindow::recentProjects() const {
@@ -835,17 +857,24 @@ void MainWindow::showEvent(QShowEvent* event) {
 }
 
 void MainWindow::applyDefaultDockSizes() {
-    // A window narrower than the three columns need (a 1280 or 1366 px screen) stacks the Paint
-    // panel as a tab behind Material, so the views keep their width; a wide one keeps it at the left.
-    if (width() < kStackedDocksBelowWidth && !tabifiedDockWidgets(m_materialDock).contains(m_paintDock)) {
+    const int w = width(), h = height();
+    if (w < kCompactLayoutBelowWidth || h < kCompactLayoutBelowHeight) {
+        // Compact: nothing under or beside the viewport. Paint and the charts (their rows scroll) are
+        // tabs behind Material, the texture view a tab over History and Environment.
         tabifyDockWidget(m_materialDock, m_paintDock);
+        tabifyDockWidget(m_materialDock, m_chartsDock);
+        tabifyDockWidget(m_historyDock, m_textureDock);
         m_materialDock->raise();
+        m_textureDock->raise();
+        resizeDocks({m_materialDock, m_textureDock}, {h * 3 / 5, h * 2 / 5}, Qt::Vertical);
+        resizeDocks({m_materialDock}, {std::min(w * 9 / 25, 440)}, Qt::Horizontal);
+        return;
     }
-    const int h = height();
-    // Material 70% of the right column, its history and environment tabs the rest; the charts
-    // half the height under the views (the gloss spheres and their power labels fit at 880).
-    resizeDocks({m_materialDock, m_historyDock}, {h * 7 / 10, h * 3 / 10}, Qt::Vertical);
+    // Material 60% of the right column, Paint, History and Environment the rest; the charts half
+    // the height under the texture view and the viewport; the texture view about square.
+    resizeDocks({m_materialDock, m_historyDock}, {h * 3 / 5, h * 2 / 5}, Qt::Vertical);
     resizeDocks({m_chartsDock}, {h / 2}, Qt::Vertical);
+    resizeDocks({m_textureDock}, {h / 2}, Qt::Horizontal);
 }
 
 void MainWindow::saveSettings() {

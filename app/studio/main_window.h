@@ -18,11 +18,11 @@
 
 class QDialog;
 class QLockFile;
+class QAction;
 class QDockWidget;
 class QLabel;
 class QMenu;
 class QProgressDialog;
-class QSplitter;
 class QTimer;
 
 namespace burnish::studio {
@@ -34,7 +34,7 @@ class MaterialPanel;
 class PaintTool;
 class TexturePane;
 
-/// The README's "Studio" section (Markdown), which Help ▸ Studio Guide shows.
+/// docs/studio-guide.md (Markdown, written for artists), which Help ▸ Studio Guide shows.
 QString studioGuideMarkdown();
 
 /// `window` moved and shrunk as little as it takes to lie inside `available` (a screen's free area).
@@ -50,8 +50,8 @@ public:
     MaterialPanel* materialPanel() const { return m_panel; }
     TexturePane* texturePane() const { return m_texturePane; }
     PaintTool* paintTool() const { return m_paintTool; }
-    /// The central splitter: the texture pane now, the 3D viewport beside it later.
-    QSplitter* centralSplitter() const { return m_central; }
+    /// The dock holding the texture pane (the 2D view).
+    QDockWidget* textureDock() const { return m_textureDock; }
     BakeDialog* bakeDialog();
     QString projectPath() const { return m_projectPath; }
     bool isModified() const;
@@ -139,15 +139,20 @@ private:
     bool recoverFrom(const QString& copy, const QString& projectPath);
     void restoreSettings();
     void saveSettings();
-    /// The first-run proportions of the docks, for the window's actual size: the Material panel
-    /// gets most of the right column, the charts under the views enough height for their labels.
+    /// The first-run arrangement of the docks for the window's actual size. A wide window: the
+    /// texture view left of the viewport, the charts under both, Material over Paint, History and
+    /// Environment at the right. A compact one (a 1280 or 1366 px screen): the viewport gets the
+    /// whole middle, at least half the window; Paint and the charts are tabs behind Material, the
+    /// texture view a tab over History and Environment.
     void applyDefaultDockSizes();
     void showGuide();
     void fitToScreen();
 
     MaterialDocument* m_doc;
-    QSplitter* m_central;
     TexturePane* m_texturePane;
+    QDockWidget* m_textureDock;
+    QAction* m_authoredAction = nullptr; // View ▸ Authored Gloss/Roughness
+    QAction* m_bakedAction = nullptr;
     MaterialPanel* m_panel;
     QDockWidget* m_materialDock;
     QDockWidget* m_historyDock;

@@ -1,5 +1,6 @@
 #include "material_panel.h"
 
+#include <QCheckBox>
 #include <QColorDialog>
 #include <QComboBox>
 #include <QDoubleSpinBox>
@@ -7,6 +8,7 @@
 #include <QFileDialog>
 #include <QFileInfo>
 #include <QFormLayout>
+#include <QGridLayout>
 #include <QGroupBox>
 #include <QHBoxLayout>
 #include <QLabel>
@@ -167,7 +169,35 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
     m_specular->addItem("Custom colour…", QString());
     m_specular->setToolTip("Calibrated specular colour (F0) from core's material table, or a custom colour");
     m_specularSwatch = swatch(this);
-    m_specularValues = new QLabel(this);
+    // F0 as numbers: linear (what the shading and the exports use) and 8-bit sRGB (what charts and
+    // colour pickers print); either edits the colour, which becomes a custom one.
+    const char* channelNames[3] = {"red", "green", "blue"};
+    for (int c = 0; c < 3; ++c) {
+        auto* linear = new QDoubleSpinBox(this);
+        linear->setRange(0.0, 1.0);
+        linear->setDecimals(kF0Decimals);
+        linear->setSingleStep(0.005);
+        linear->setKeyboardTracking(false); // commit on Enter or focus-out, not per keystroke
+        linear->setButtonSymbols(QAbstractSpinBox::NoButtons);
+        linear->setObjectName(QString("specularLinear%1").arg(c));
+        linear->setToolTip(
+            QString("Linear F0, %1 channel (0.04 is a common dielectric)").arg(channelNames[c]));
+        m_specularLinear[c] = linear;
+        auto* srgb = new QSpinBox(this);
+        srgb->setRange(0, 255);
+        srgb->setKeyboardTracking(false);
+        srgb->setButtonSymbols(QAbstractSpinBox::NoButtons);
+        srgb->setObjectName(QString("specularSrgb%1").arg(c));
+        srgb->setToolTip(QString("F0 as 8-bit sRGB, %1 channel").arg(channelNames[c]));
+        m_specularSrgb[c] = srgb;
+    }
+    m_specularGrey = new QCheckBox("grey (one value for all)", this);
+    m_specularGrey->setObjectName("specularGrey");
+    m_specularGrey->setChecked(true);
+    m_specularGrey->setToolTip("On: a number typed into one channel sets all three (a grey F0, as "
+                               "dielectrics have); off: each channel on its own (a tinted metal)");
+    auto* pickSpecular = new QPushButton("Pick…", this);
+    pickSpecular->setToolTip("Choose a custom specular colour in a colour dialog (sRGB)");
     m_albedoSwatch = swatch(this);
     m_albedoValues = new QLabel(this);
     auto* albedoButton = new QPushButton("Choose…", this);
@@ -194,10 +224,19 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
     form->addRow("Lobes", m_lobes);
     form->addRow("Class", m_class);
     form->addRow("Specular", m_specular);
-    auto* specRow = new QHBoxLayout;
-    specRow->addWidget(m_specularSwatch);
-    specRow->addWidget(m_specularValues, 1);
-    form->addRow("", specRow);
+    auto* specGrid = new QGridLayout;
+    specGrid->setHorizontalSpacing(4);
+    specGrid->addWidget(m_specularSwatch, 0, 0);
+    specGrid->addWidget(new QLabel("linear", this), 0, 1);
+    specGrid->addWidget(new QLabel("sRGB", this), 1, 1);
+    for (int c = 0; c < 3; ++c) {
+        specGrid->addWidget(m_specularLinear[c], 0, 2 + c);
+        specGrid->addWidget(m_specularSrgb[c], 1, 2 + c);
+        specGrid->setColumnStretch(2 + c, 1);
+    }
+    specGrid->addWidget(pickSpecular, 1, 0);
+    specGrid->addWidget(m_specularGrey, 2, 2, 1, 3);
+    form->addRow("F0", specGrid);
     auto* albedoRow = new QHBoxLayout;
     albedoRow->addWidget(m_albedoSwatch);
     albedoRow->addWidget(m_albedoValues, 1);
@@ -227,7 +266,6 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
         c->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
         c->setMinimumContentsLength(12);
     }
-    m_specularValues->setWordWrap(true);
     m_albedoValues->setWordWrap(true);
     m_encoding->setWordWrap(true);
 
@@ -261,6 +299,13 @@ MaterialPanel::MaterialPanel(MaterialDocument* doc, QWidget* parent)
         if (const Status st = m_doc->setSpecularMaterial(name); !st)
             emit errorOccurred("Specular colour", QString::fromStdString(st.error()));
     });
+    for (int c = 0; c < 3; ++c) {
+        connect(m_specularLinear[c], &QDoubleSpinBox::valueChanged, this,
+                [this, c](double v) { editSpecularChannel(c, v); });
+        connect(m_specularSrgb[c], &QSpinBox::valueChanged, this,
+                [this, c](int v) { editSpecularChannel(c, srgb8ToLinear(uint8_t(v))); });
+    }
+    connect(pickSpecular, &QPushButton::clicked, this, &MaterialPanel::chooseCustomSpecular);
     connect(albedoButton, &QPushButton::clicked, this, &MaterialPanel::chooseAlbedo);
     connect(m_glossSlider, &QSlider::valueChanged, this, [this](int v) {
         if (!m_refreshing) m_doc->setGloss(double(v) / kGlossSteps, m_glossSlider->isSliderDown());
@@ -304,6 +349,17 @@ void MaterialPanel::chooseCustomSpecular() {
     if (c.isValid()) m_doc->setCustomSpecular(fromQColor(c));
 }
 
+void MaterialPanel::editSpecularChannel(int channel, double linear) {
+    if (m_refreshing) return;
+    LinearRgb f0 = m_doc->settings().specular;
+    double* channels[3] = {&f0.r, &f0.g, &f0.b};
+    if (m_specularGrey->isChecked())
+        f0 = LinearRgb::grey(linear);
+    else
+        *channels[channel] = linear;
+    m_doc->setCustomSpecular(f0);
+}
+
 void MaterialPanel::chooseAlbedo() {
     const QColor c = QColorDialog::getColor(toQColor(m_doc->settings().albedo), this, "Albedo (sRGB)");
     if (c.isValid()) m_doc->setAlbedo(fromQColor(c));
@@ -326,10 +382,19 @@ void MaterialPanel::refresh() {
     m_class->setCurrentIndex(m_class->findData(int(s.materialClass)));
     m_specular->setCurrentIndex(m_specular->findData(s.specularName));
     paintSwatch(m_specularSwatch, s.specular);
-    m_specularValues->setText(colorText(s.specular));
     const F0Classification f0 = classifyF0(builtinMaterialTable(), s.specular);
-    m_specularValues->setToolTip(
-        QString("classified as %1%2").arg(toString(f0.f0Class), f0.tinted ? ", tinted" : ""));
+    m_specularSwatch->setToolTip(
+        QString("%1 — classified as %2%3")
+            .arg(colorText(s.specular), toString(f0.f0Class), f0.tinted ? ", tinted" : ""));
+    const Srgb8 srgb = toSrgb8(s.specular);
+    const double linear[3] = {s.specular.r, s.specular.g, s.specular.b};
+    const int srgbChannels[3] = {srgb.r, srgb.g, srgb.b};
+    for (int c = 0; c < 3; ++c) {
+        m_specularLinear[c]->setValue(linear[c]);
+        m_specularSrgb[c]->setValue(srgbChannels[c]);
+    }
+    // A tinted colour is edited per channel; a grey one keeps the artist's choice.
+    if (!(s.specular.r == s.specular.g && s.specular.g == s.specular.b)) m_specularGrey->setChecked(false);
     paintSwatch(m_albedoSwatch, s.albedo);
     m_albedoValues->setText(colorText(s.albedo));
 

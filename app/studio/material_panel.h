@@ -60,6 +60,10 @@ public:
     QDoubleSpinBox* glossSpin() const { return m_glossSpin; }
     /// The mixture's lobe count K (its row shows while the method is the mixture).
     QSpinBox* lobesSpin() const { return m_lobes; }
+    /// F0 as numbers: linear and 8-bit sRGB per channel, and whether one typed value sets all three.
+    QDoubleSpinBox* specularLinearSpin(int channel) const { return m_specularLinear[channel]; }
+    QSpinBox* specularSrgbSpin(int channel) const { return m_specularSrgb[channel]; }
+    QCheckBox* specularGreyCheck() const { return m_specularGrey; }
     MapSlotWidget* slotWidget(MapSlot slot) const;
 
     /// Loads a map into a slot (a file dialog when path is empty). False when it is not loaded: an
@@ -72,6 +76,8 @@ public:
 
     /// Slider steps across the gloss range [0, 1].
     static constexpr int kGlossSteps = 1000;
+    /// Places of the linear F0 fields (0.0400; iron's 0.5620).
+    static constexpr int kF0Decimals = 4;
 
 signals:
     /// A one-line message for the user (a map that failed to load, ...).
@@ -80,6 +86,8 @@ signals:
 private:
     void refresh();
     void chooseCustomSpecular();
+    /// A number typed into an F0 field: that channel (or, with "grey" on, all three), as a custom colour.
+    void editSpecularChannel(int channel, double linear);
     void chooseAlbedo();
 
     MaterialDocument* m_doc;
@@ -90,7 +98,9 @@ private:
     QComboBox* m_class;
     QComboBox* m_specular;
     QLabel* m_specularSwatch;
-    QLabel* m_specularValues;
+    QDoubleSpinBox* m_specularLinear[3];
+    QSpinBox* m_specularSrgb[3];
+    QCheckBox* m_specularGrey;
     QLabel* m_albedoSwatch;
     QLabel* m_albedoValues;
     QSlider* m_glossSlider;

@@ -89,8 +89,6 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     m_layerCombo = new QComboBox(this);
     m_layerCombo->addItem("Gloss", int(PaintLayerKind::Gloss));
     m_layerCombo->addItem("Variance offset", int(PaintLayerKind::VarianceOffset));
-    m_layerCombo->setToolTip(
-        "Gloss replaces the authored gloss; a variance offset adds roughness as 1/(n+1)");
     auto spin = [this](double lo, double hi, double step, int decimals, const QString& tip) {
         auto* s = new QDoubleSpinBox(this);
         s->setRange(lo, hi);
@@ -103,7 +101,7 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     m_radiusSpin = spin(kMinBrushRadius, 1024.0, 1.0, 1, "Brush radius in texels of the finest level");
     m_hardnessSpin = spin(0.0, 1.0, 0.05, 2, "Fraction of the radius painted at full strength");
     m_opacitySpin = spin(0.0, 1.0, 0.05, 2, "The most one stroke changes a texel");
-    m_valueSpin = spin(0.0, 1.0, 0.01, kGlossDecimals, "Gloss (preset encoding) or variance painted");
+    m_valueSpin = spin(0.0, 1.0, 0.01, kGlossDecimals, {}); // its tooltip names the preset's term: retitle
     m_radiusSpin->setObjectName("paintRadius");
     m_hardnessSpin->setObjectName("paintHardness");
     m_opacitySpin->setObjectName("paintOpacity");
@@ -114,9 +112,6 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     m_clearButton = new QPushButton("Clear layer", this);
     m_overShineCheck = new QCheckBox("Show over-shine", this);
     m_overShineCheck->setChecked(true);
-    m_overShineCheck->setToolTip(
-        "Mark texels whose painted gloss asks for more shine than the normal variance "
-        "at the chosen mip permits: there the highlight aliases");
     m_showBakedCheck = new QCheckBox("Show the live bake at the mip", this);
     m_mipSpin = new QSpinBox(this);
     m_mipSpin->setPrefix("mip ");
@@ -142,6 +137,7 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     form->addRow(m_status);
 
     syncWidgets();
+    retitle();
     m_mipSpin->setValue(m_overShineMip);
     connect(m_paintButton, &QPushButton::toggled, this, &PaintTool::setPaintMode);
     connect(m_eyedropperButton, &QPushButton::toggled, this, &PaintTool::setEyedropper);
@@ -157,6 +153,7 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     connect(m_view, &TextureView::paintPressed, this, &PaintTool::pressAt);
     connect(m_view, &TextureView::paintMoved, this, &PaintTool::moveTo);
     connect(m_view, &TextureView::paintReleased, this, &PaintTool::release);
+    connect(m_doc, &MaterialDocument::changed, this, &PaintTool::retitle);
     connect(m_doc, &MaterialDocument::changed, this, &PaintTool::onDocumentChanged);
     connect(m_doc, &MaterialDocument::layersChanged, this, &PaintTool::onLayersChanged);
 }
@@ -310,7 +307,7 @@ void PaintTool::release() {
     m_stroke.reset();
     m_lastPoint.reset();
     if (stroke.dirty().empty()) return;
-    const QString text = m_layer == PaintLayerKind::Gloss ? "Paint gloss" : "Paint variance offset";
+    const QString text = "Paint " + layerTitle(m_layer);
     m_doc->undoStack()->push(new PaintCommand(m_doc, m_layer, stroke.before(), stroke.after(), text, true));
 }
 
@@ -324,7 +321,29 @@ void PaintTool::clearLayer() {
     std::fill(after.value.begin(), after.value.end(), 0.0f);
     std::fill(after.coverage.begin(), after.coverage.end(), 0.0f);
     m_doc->undoStack()->push(new PaintCommand(m_doc, m_layer, std::move(before), std::move(after),
-                                              "Clear " + qs(paintLayerName(m_layer)) + " layer", false));
+                                              "Clear " + layerTitle(m_layer) + " layer", false));
+}
+
+QString PaintTool::term(bool capitalised) const {
+    return glossQuantity(m_doc->preset().encoding, capitalised);
+}
+
+QString PaintTool::layerTitle(PaintLayerKind kind) const {
+    return kind == PaintLayerKind::Gloss ? term(false) : QString("variance offset");
+}
+
+void PaintTool::retitle() {
+    // The preset's own word (roughness for gltf, unreal, …) wherever the gloss layer is named.
+    m_layerCombo->setItemText(m_layerCombo->findData(int(PaintLayerKind::Gloss)), term());
+    m_layerCombo->setToolTip(QString("%1 replaces the authored %2 (in the preset's encoding); a variance "
+                                     "offset adds roughness as 1/(n+1)")
+                                 .arg(term(), term(false)));
+    m_valueSpin->setToolTip(
+        QString("The value painted: %1 in the preset's encoding (0 to 1), or the variance offset")
+            .arg(term(false)));
+    m_overShineCheck->setToolTip(QString("Mark texels whose painted %1 asks for more shine than the normal "
+                                         "variance at the chosen mip permits: there the highlight aliases")
+                                     .arg(term(false)));
 }
 
 void PaintTool::onDocumentChanged() {
@@ -368,7 +387,8 @@ void PaintTool::rebuildLive() {
     // On a worker: the map, a snapshot of the authored gloss (never changed under it) or the base
     // gloss, and the options. Strokes meanwhile are remembered and rebaked when it lands.
     m_liveBuilding = true;
-    m_status->setText("Preparing the live bake of the painted gloss… (paint away: it catches up)");
+    m_status->setText(
+        QString("Preparing the live bake of the painted %1… (paint away: it catches up)").arg(term(false)));
     const std::shared_ptr<const NormalMap> normal = m_doc->maps().normal;
     const std::shared_ptr<const std::vector<float>> authored = m_doc->authoredGloss();
     const float base = float(s.gloss);
@@ -529,12 +549,13 @@ void PaintTool::updateOverlay(const std::optional<TexelRect>& rect) {
         m_view->overlayChanged(QRect(r.x0, r.y0, r.width(), r.height()));
     }
     if (!m_live) return; // the status says the live bake is being prepared
-    m_status->setText(QString("%1 of %2 texels over-shine at mip %3 (painted gloss above what the normal "
+    m_status->setText(QString("%1 of %2 texels over-shine at mip %3 (painted %5 shinier than the normal "
                               "variance permits); last update recomputed %4 baked texels")
                           .arg(m_overShine.flaggedMipTexels)
                           .arg(qulonglong(m_overShine.mipWidth) * qulonglong(m_overShine.mipHeight))
                           .arg(m_overShine.mip)
-                          .arg(m_live->lastRecomputedTexels()));
+                          .arg(m_live->lastRecomputedTexels())
+                          .arg(term(false)));
 }
 
 } // namespace burnish::studio

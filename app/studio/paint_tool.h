@@ -81,6 +81,10 @@ signals:
 
 private:
     void syncWidgets();
+    /// The gloss layer and its tooltips in the preset's own word (gloss or roughness).
+    void retitle();
+    QString term(bool capitalised = true) const;
+    QString layerTitle(PaintLayerKind kind) const;
     void readWidgets();
     void onDocumentChanged();
     void onLayersChanged(const TexelRect& rect);

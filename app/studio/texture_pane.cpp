@@ -62,7 +62,7 @@ TexturePane::TexturePane(MaterialDocument* doc, QWidget* parent)
     m_view = new TextureView(this);
     m_modeCombo = new QComboBox(this);
     m_modeCombo->addItem("Normal map", int(TextureMode::Normal));
-    m_modeCombo->addItem("Authored gloss", int(TextureMode::Gloss));
+    m_modeCombo->addItem("Authored gloss", int(TextureMode::Gloss)); // retitled in the preset's word
     m_modeCombo->addItem("Baked gloss (method)", int(TextureMode::BakedGloss));
     m_modeCombo->setToolTip("Which texture the view shows");
     m_mipSpin = new QSpinBox(this);
@@ -141,6 +141,11 @@ void TexturePane::setInfo(const QString& text) {
 }
 
 void TexturePane::refresh() {
+    // The preset's own word (roughness for gltf, unreal, …; gloss for the log-power presets).
+    const QString term = glossQuantity(m_doc->preset().encoding, false);
+    m_modeCombo->setItemText(m_modeCombo->findData(int(TextureMode::Gloss)), "Authored " + term);
+    m_modeCombo->setItemText(m_modeCombo->findData(int(TextureMode::BakedGloss)),
+                             QString("Baked %1 (method)").arg(term));
     m_mipSpin->setEnabled(m_mode == TextureMode::BakedGloss);
     const NormalMap& normal = *m_doc->maps().normal;
     switch (m_mode) {
@@ -162,18 +167,22 @@ void TexturePane::refresh() {
             m_view->setImage(bakedChannelImage(mip, 1, 0));
             const bool painted = m_doc->paintLayer(PaintLayerKind::Gloss).painted() ||
                                  m_doc->paintLayer(PaintLayerKind::VarianceOffset).painted();
-            setInfo(QString("authored gloss %1×%2: %3")
+            setInfo(QString("authored %1 %2×%3: %4")
+                        .arg(term)
                         .arg(normal.width)
                         .arg(normal.height)
-                        .arg(!painted              ? QString("gloss map (first channel)")
-                             : m_doc->maps().gloss ? QString("painted layers over the gloss map")
-                                                   : QString("painted layers over base gloss %1")
-                                                         .arg(m_doc->settings().gloss, 0, 'f', 3)));
+                        .arg(!painted              ? QString("%1 map (first channel)").arg(term)
+                             : m_doc->maps().gloss ? QString("painted layers over the %1 map").arg(term)
+                                                   : QString("painted layers over base %1 %2")
+                                                         .arg(term, glossText(m_doc->settings().gloss))));
         } else if (const auto& gloss = m_doc->maps().gloss) {
             TextureMip mip{gloss->width, gloss->height,
                            TexelVector(gloss->pixels.begin(), gloss->pixels.end())};
             m_view->setImage(bakedChannelImage(mip, gloss->channels, 0));
-            setInfo(QString("authored gloss map %1×%2 (first channel)").arg(gloss->width).arg(gloss->height));
+            setInfo(QString("authored %1 map %2×%3 (first channel)")
+                        .arg(term)
+                        .arg(gloss->width)
+                        .arg(gloss->height));
         } else {
             // No map: the bake uses the base gloss on every texel, and that is what is shown.
             QImage flat(normal.width, normal.height, QImage::Format_Grayscale8);
@@ -181,8 +190,8 @@ void TexturePane::refresh() {
             // not move the unpainted texels by a grey level.
             flat.fill(toByte(double(float(m_doc->settings().gloss))));
             m_view->setImage(flat);
-            setInfo(QString("no gloss map: base gloss %1 on every texel")
-                        .arg(m_doc->settings().gloss, 0, 'f', 3));
+            setInfo(QString("no %1 map: base %1 %2 on every texel")
+                        .arg(term, glossText(m_doc->settings().gloss)));
         }
         emit imageUpdated();
         return;
@@ -293,11 +302,15 @@ void TexturePane::showBaked() {
     } else {
         m_view->setImage(bakedChannelImage(level, texture->channels, channel));
     }
+    // The gloss texture in the preset's own word; the other roles (Toksvig map, LEAN moments) by name.
+    const QString role =
+        texture->role == TextureRole::Gloss
+            ? glossQuantity(m_doc->preset().encoding, false)
+            : QString::fromUtf8(roleName(texture->role).data(), int(roleName(texture->role).size()));
     setInfo(QString("%1 · %2 (%3) · mip %4: %5×%6")
                 .arg(QString::fromUtf8(methodName(m_baked->method).data(),
                                        int(methodName(m_baked->method).size())),
-                     QString::fromUtf8(roleName(texture->role).data(), int(roleName(texture->role).size())),
-                     QString::fromStdString(texture->decode.empty() ? "" : texture->decode[0].name))
+                     role, QString::fromStdString(texture->decode.empty() ? "" : texture->decode[0].name))
                 .arg(mip)
                 .arg(level.width)
                 .arg(level.height));

@@ -46,7 +46,7 @@ TextureView::TextureView(QWidget* parent)
     : QWidget(parent) {
     setMouseTracking(false);
     setFocusPolicy(Qt::WheelFocus);
-    setMinimumSize(200, 200);
+    setMinimumSize(160, 160);
     setAttribute(Qt::WA_OpaquePaintEvent);
 }
 

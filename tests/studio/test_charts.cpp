@@ -25,6 +25,7 @@
 #include <QElapsedTimer>
 #include <QImage>
 #include <QLineSeries>
+#include <QLogValueAxis>
 #include <QMenu>
 #include <QMenuBar>
 #include <QPointer>
@@ -36,6 +37,7 @@
 #include <QTableWidget>
 #include <QTest>
 #include <QThread>
+#include <QValueAxis>
 
 #include <algorithm>
 #include <atomic>
@@ -77,6 +79,29 @@ void expectSeriesEquals(QXYSeries* s, const std::function<double(double)>& f, co
 }
 
 constexpr double kDeg = kPi<double> / 180.0;
+
+// Error vs cost's axes carry several labels: values within one decade (the ns costs 1.4–4.4, errors
+// 0.15–0.6) had a log axis labelled at the decade's two ends only, one of them cut off.
+TEST(ErrorCostChart, AxesWithinOneDecadeAreLinearWithRoundedTicks) {
+    std::unique_ptr<QAbstractAxis> narrow(errorCostAxis("relative L1 error", 0.15, 0.6));
+    auto* linear = qobject_cast<QValueAxis*>(narrow.get());
+    ASSERT_NE(linear, nullptr) << "a log axis within one decade";
+    EXPECT_GE(linear->tickCount(), 5);
+    EXPECT_LE(linear->min(), 0.15);
+    EXPECT_GE(linear->max(), 0.6);
+    EXPECT_LE(linear->max(), 1.0) << "rounded to the values, not to the decade";
+    EXPECT_EQ(linear->titleText(), "relative L1 error");
+
+    // Wider spans keep the log axis over whole decades, every value inside.
+    std::unique_ptr<QAbstractAxis> wide(errorCostAxis("relative L1 error", 0.004, 0.6));
+    auto* log = qobject_cast<QLogValueAxis*>(wide.get());
+    ASSERT_NE(log, nullptr);
+    EXPECT_DOUBLE_EQ(log->min(), 0.001);
+    EXPECT_DOUBLE_EQ(log->max(), 1.0);
+    // Nothing to show (no points, or non-finite ones) still gives a valid axis.
+    std::unique_ptr<QAbstractAxis> empty(errorCostAxis("x", std::numeric_limits<double>::infinity(), 0.0));
+    ASSERT_NE(empty, nullptr);
+}
 
 TEST(SpecularChart, ClickingAMarkerPicksThatMaterialAndUndoRestores) {
     MaterialDocument doc;

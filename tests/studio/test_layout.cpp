@@ -156,6 +156,17 @@ public:
                     colours.insert(shot.pixel(x, y));
             EXPECT_GE(colours.size(), 50) << "the window drew nothing";
             EXPECT_TRUE(shot.save(args[2]));
+            // On a small screen the 3D picture (not its control rows) gets at least half the window
+            // by default; at 1280×720 it had 550×210 pixels under the charts' half.
+            if (size.height() <= 768) {
+                auto* panel = window.findChild<ViewportPanel*>();
+                ASSERT_NE(panel, nullptr);
+                const QSize picture = panel->viewport()->size();
+                const double share =
+                    double(picture.width()) * picture.height() / (double(window.width()) * window.height());
+                EXPECT_GE(share, 0.5) << "the 3D view is " << picture.width() << "x" << picture.height()
+                                      << " of a " << window.width() << "x" << window.height() << " window";
+            }
         }
         {
             // A geometry saved on a 2560×1440 screen by a window wider than this screen (the old

@@ -1166,10 +1166,22 @@ TEST(MainWindow, MenusListEveryPanelSaveAsAndHelp) {
         helpItems << a->text();
     EXPECT_TRUE(helpItems.contains("Studio &Guide") && helpItems.contains("&About Burnish Studio"))
         << helpItems.join(", ").toStdString();
+    // The guide is written for artists: how to open, choose, look, paint, export and recover, and
+    // none of the developers' matters (environment variables, tests, build) the README's section held.
     const QString guide = studioGuideMarkdown();
-    EXPECT_TRUE(guide.startsWith("## Studio\n")) << guide.left(80).toStdString();
-    EXPECT_TRUE(guide.contains("Panels")) << "the section's text, not an empty page";
-    EXPECT_FALSE(guide.contains("\n## Architecture")) << "only the Studio section";
+    EXPECT_TRUE(guide.startsWith("# Burnish Studio Guide\n")) << guide.left(80).toStdString();
+    for (const char* heading : {"\n## Your first ten minutes\n", "\n## Painting\n", "\n## Exporting\n",
+                                "\n## Saving and crashes\n"})
+        EXPECT_TRUE(guide.contains(heading)) << heading;
+    for (const char* developers : {"BURNISH_", "ctest", "offscreen", "cmake", "test", "EGL"})
+        EXPECT_FALSE(guide.contains(developers, Qt::CaseInsensitive)) << developers;
+    // Every shortcut it names is one the menus have.
+    QStringList shortcuts;
+    for (QAction* a : w.window.findChildren<QAction*>())
+        if (!a->shortcut().isEmpty()) shortcuts << a->shortcut().toString();
+    for (const char* keys : {"Ctrl+O", "Ctrl+S", "Ctrl+Shift+S", "Ctrl+E", "Ctrl+Alt+G", "Ctrl+Shift+G",
+                             "Ctrl+1", "Ctrl+6", "F"})
+        EXPECT_TRUE(shortcuts.contains(keys)) << keys << " in the guide, not in the menus";
 }
 
 // Presets that store roughness or smoothness say so in the panel, the history and the status bar
@@ -1199,11 +1211,77 @@ TEST(MainWindow, WordsFollowThePresetsQuantity) {
             status << l->text();
         EXPECT_TRUE(status.join(" ").contains(QString(word).toLower() + " 0.450"))
             << status.join(" | ").toStdString();
+        // The Paint panel, its History entries, the texture view and the View menu (they said
+        // "Gloss", "Paint gloss", "Authored gloss" and "Baked gloss" under every preset).
+        const QString lower = QString(word).toLower();
+        PaintTool* tool = w.window.paintTool();
+        auto* layer = tool->findChild<QComboBox*>();
+        ASSERT_NE(layer, nullptr);
+        EXPECT_EQ(layer->itemText(layer->findData(int(PaintLayerKind::Gloss))), QString(word)) << preset;
+        tool->setPaintMode(true);
+        tool->pressAt({100.0, 100.0});
+        tool->moveTo({120.0, 110.0});
+        tool->release();
+        tool->setPaintMode(false);
+        EXPECT_EQ(doc->undoStack()->text(doc->undoStack()->count() - 1), "Paint " + lower) << preset;
+        QStringList modes;
+        auto* modeCombo = w.window.texturePane()->findChild<QComboBox*>();
+        for (int i = 0; i < modeCombo->count(); ++i)
+            modes << modeCombo->itemText(i);
+        EXPECT_TRUE(modes.contains("Authored " + lower) && modes.contains("Baked " + lower + " (method)"))
+            << modes.join(", ").toStdString();
+        QStringList viewItems;
+        for (QAction* a : w.window.menuBar()->actions())
+            if (a->menu() && a->text() == "&View")
+                for (QAction* item : a->menu()->actions())
+                    viewItems << item->text();
+        EXPECT_TRUE(viewItems.contains(QString("Authored ") + word) &&
+                    viewItems.contains(QString("Baked ") + word))
+            << viewItems.join(", ").toStdString();
+        w.window.texturePane()->setMode(TextureMode::Gloss);
+        EXPECT_TRUE(w.window.texturePane()->infoText().startsWith("authored " + lower))
+            << w.window.texturePane()->infoText().toStdString();
+        if (lower != "gloss") {
+            EXPECT_FALSE(w.window.texturePane()->infoText().contains("gloss"))
+                << w.window.texturePane()->infoText().toStdString();
+        }
     }
     QSet<QRgb> colours;
     for (Method m : allMethods())
         colours.insert(methodColour(m).rgb());
     EXPECT_EQ(colours.size(), qsizetype(allMethods().size()));
+}
+
+// F0 is typed as numbers, linear or 8-bit sRGB, beside the colour dialog (there was only an 8-bit
+// dialog: 0.04 could not be typed). With "grey" one number sets all three channels; without it, one.
+TEST(MainWindow, SpecularColourIsTypedAsNumbers) {
+    TestWindow w;
+    MaterialDocument* doc = w.window.document();
+    MaterialPanel* panel = w.window.materialPanel();
+    panel->specularGreyCheck()->setChecked(true);
+    panel->specularLinearSpin(0)->setValue(0.04);
+    EXPECT_EQ(doc->settings().specular, LinearRgb::grey(0.04));
+    EXPECT_TRUE(doc->settings().specularName.isEmpty()) << "a typed colour is a custom one";
+    EXPECT_EQ(panel->specularSrgbSpin(1)->value(), int(toSrgb8(LinearRgb::grey(0.04)).g)) << "sRGB follows";
+    EXPECT_EQ(panel->specularLinearSpin(2)->value(), 0.04);
+
+    panel->specularGreyCheck()->setChecked(false);
+    panel->specularSrgbSpin(0)->setValue(255);
+    EXPECT_EQ(doc->settings().specular, (LinearRgb{1.0, 0.04, 0.04}));
+    panel->specularLinearSpin(2)->setValue(0.0123);
+    EXPECT_DOUBLE_EQ(doc->settings().specular.b, 0.0123) << "four places kept";
+    EXPECT_DOUBLE_EQ(doc->settings().specular.g, 0.04);
+
+    // A tinted material turns "grey" off, so typing a channel never flattens it.
+    ASSERT_TRUE(doc->setSpecularMaterial("gold"));
+    EXPECT_FALSE(panel->specularGreyCheck()->isChecked());
+    const LinearRgb gold = doc->settings().specular;
+    panel->specularLinearSpin(0)->setValue(0.9);
+    EXPECT_EQ(doc->settings().specular, (LinearRgb{0.9, gold.g, gold.b}));
+    doc->undoStack()->undo();
+    EXPECT_EQ(doc->settings().specular, gold);
+    EXPECT_EQ(doc->settings().specularName, "gold");
+    EXPECT_EQ(panel->specularLinearSpin(0)->value(), std::round(gold.r * 1e4) / 1e4) << "fields follow undo";
 }
 
 TEST(MainWindow, ScreenshotIsNotBlank) {

@@ -314,9 +314,12 @@ void BrdfPlots::buildVisibility() {
 void BrdfPlots::buildGloss() {
     const Preset& preset = m_doc->preset();
     const GlossEncoding& enc = preset.encoding;
+    // In the preset's own word: roughness for gltf, unreal, …, gloss for the log-power presets.
+    const QString term = glossQuantity(enc), lower = glossQuantity(enc, false);
+    setTabText(indexOf(m_gloss), term + " → power");
     QChart* chart =
-        newChart(QString("Gloss encoding of preset %1: %2")
-                     .arg(QString::fromStdString(preset.name), QString::fromStdString(enc.formula())));
+        newChart(QString("%1 encoding of preset %2: %3")
+                     .arg(term, QString::fromStdString(preset.name), QString::fromStdString(enc.formula())));
     QLineSeries* curve = addCurve(
         chart, "power", "power n(g)", [&](double g) { return enc.power(g); }, 0.0, 1.0, true);
     auto* current = new QScatterSeries;
@@ -333,7 +336,7 @@ void BrdfPlots::buildGloss() {
         lo = std::min(lo, p.y());
         hi = std::max(hi, p.y());
     }
-    attachAxes(chart, valueAxis("stored gloss g", 0.0, 1.0, "%.1f"),
+    attachAxes(chart, valueAxis(QString("stored %1 g").arg(lower), 0.0, 1.0, "%.1f"),
                logAxis("Blinn-Phong power n", lo / 2.0, hi * 2.0));
     setChart(m_gloss, chart);
 }

@@ -20,6 +20,7 @@
 #include <QThread>
 #include <QTimer>
 #include <QVBoxLayout>
+#include <QValueAxis>
 
 #include <algorithm>
 #include <cmath>
@@ -56,13 +57,9 @@ void setChart(QChartView* view, QChart* chart) {
     delete old;
 }
 
-/// A log axis around [lo, hi] widened to whole decades (at least one), so every point sits inside.
-QLogValueAxis* decadeAxis(const QString& title, double lo, double hi) {
-    auto* a = new QLogValueAxis;
-    a->setTitleText(title);
-    a->setBase(10.0);
-    a->setLabelFormat("%.3g");
-    a->setMinorTickCount(-1);
+} // namespace
+
+QAbstractAxis* errorCostAxis(const QString& title, double lo, double hi) {
     if (!(lo > 0.0) || !(hi >= lo) || !std::isfinite(hi)) {
         lo = 0.1;
         hi = 1.0;
@@ -70,11 +67,23 @@ QLogValueAxis* decadeAxis(const QString& title, double lo, double hi) {
     double a0 = std::pow(10.0, std::floor(std::log10(lo)));
     double a1 = std::pow(10.0, std::ceil(std::log10(hi)));
     if (a1 <= a0) a1 = a0 * 10.0;
+    if (a1 / a0 <= 10.0 * (1.0 + 1e-9)) {
+        auto* a = new QValueAxis;
+        a->setTitleText(title);
+        a->setRange(0.0, hi * 1.1);
+        a->setTickCount(6);
+        a->applyNiceNumbers();
+        a->setLabelFormat("%.3g");
+        return a;
+    }
+    auto* a = new QLogValueAxis;
+    a->setTitleText(title);
+    a->setBase(10.0);
+    a->setLabelFormat("%.3g");
+    a->setMinorTickCount(-1);
     a->setRange(a0, a1);
     return a;
 }
-
-} // namespace
 
 ErrorCostChart::ErrorCostChart(MaterialDocument* doc, QWidget* parent)
     : QTabWidget(parent)
@@ -519,8 +528,8 @@ void ErrorCostChart::showMethods() {
     } else if (!m_evaluating && m_status->text().isEmpty()) {
         m_status->setText("not evaluated yet: shows when the panel is visible, or press Evaluate now");
     }
-    attachAxes(chart, decadeAxis(ns ? "ns per lobe evaluation" : "bytes per texel", xLo, xHi),
-               decadeAxis("relative L1 error", yLo, yHi));
+    attachAxes(chart, errorCostAxis(ns ? "ns per lobe evaluation" : "bytes per texel", xLo, xHi),
+               errorCostAxis("relative L1 error", yLo, yHi));
     setChart(m_methodsView, chart);
     showEnergy();
 }
@@ -626,8 +635,8 @@ void ErrorCostChart::showApproximations() {
                 .arg(QString::fromStdString(m_approximations->cpuModel))
                 .arg(QString::fromStdString(m_approximations->compiler)));
     }
-    attachAxes(chart, decadeAxis("ns per evaluation (float kernel)", xLo, xHi),
-               decadeAxis("headline error (max abs or max rel)", yLo, yHi));
+    attachAxes(chart, errorCostAxis("ns per evaluation (float kernel)", xLo, xHi),
+               errorCostAxis("headline error (max abs or max rel)", yLo, yHi));
     setChart(m_approxView, chart);
 }
 

@@ -20,6 +20,7 @@
 #include <memory>
 #include <optional>
 
+class QAbstractAxis;
 class QChartView;
 class QComboBox;
 class QLabel;
@@ -36,6 +37,11 @@ namespace burnish::studio {
 /// Each method's colour in the charts: one of ten distinct colours, by the method's place in the
 /// method table.
 QColor methodColour(Method method);
+
+/// The axis the error-vs-cost charts draw values in [lo, hi] on: a log axis over whole decades when
+/// they span more than one decade; within one, a linear axis with rounded ticks (a log axis there
+/// labels only the decade's two ends, one of them often cut off, so it read as one label).
+QAbstractAxis* errorCostAxis(const QString& title, double lo, double hi);
 
 class ErrorCostChart : public QTabWidget {
     Q_OBJECT

@@ -13,6 +13,7 @@
 #include <QLineEdit>
 #include <QProgressDialog>
 #include <QPushButton>
+#include <QRegularExpression>
 #include <QSettings>
 #include <QShowEvent>
 #include <QSpinBox>
@@ -226,14 +227,19 @@ BakeDialog::BakeDialog(MaterialDocument* doc, QWidget* parent)
                 m_result->setText(text);
             }
         } else {
-            // The command line's advice ("use --force") in the studio's words.
-            QString text = message;
-            text.replace("(use --force to replace the set)", "(tick \"Replace an existing set\")");
-            m_result->setText("Not exported: " + text);
+            m_result->setText("Not exported: " + inStudioWords(message));
         }
         emit bakeFinished(ok, message);
     });
     refresh();
+}
+
+QString inStudioWords(QString message) {
+    // The bake's advice names command-line options; the dialog's controls say the same.
+    message.replace("(use --force to replace the set)", "(tick \"Replace an existing set\")");
+    message.replace(QRegularExpression("\\(choose png16[^()]*--allow-8bit\\)"),
+                    "(choose a 16-bit or float Format, or DDS with the rgba16f compression)");
+    return message;
 }
 
 QString BakeDialog::exportPreset() const {

@@ -38,6 +38,10 @@ namespace burnish::studio {
 BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc, const QString& preset = {},
                            std::optional<Method> method = std::nullopt);
 
+/// A bake's message with its command-line advice ("use --force", "--allow-8bit") put in the
+/// dialog's own words: no message in the studio names a command-line option.
+QString inStudioWords(QString message);
+
 /// Runs one bake job on a worker thread (WorkerRunner); finished carries the summary JSON text.
 class BakeRunner : public WorkerRunner {
     Q_OBJECT

@@ -966,6 +966,27 @@ TEST(BakeDialog, ExportIntoAFilledFolderAsksBeforeOverwriting) {
     EXPECT_FALSE(doc.settings().exportSettings.overwrite) << "the setting itself is not changed";
 }
 
+// A refused export says what to change in the dialog, never a command-line option: LEAN's moments
+// into 8-bit PNG read "(choose png16, … or allow 8-bit storage with --allow-8bit)".
+TEST(BakeDialog, ARefusedExportSpeaksOfTheDialogNotTheCommandLine) {
+    test::TempDir dir;
+    MaterialDocument doc;
+    ASSERT_TRUE(doc.setPreset("lean"));
+    BakeDialog dialog(&doc);
+    ASSERT_GE(dialog.formatCombo()->findData(QString("png8")), 0);
+    dialog.formatCombo()->setCurrentIndex(dialog.formatCombo()->findData(QString("png8")));
+    dialog.outputEdit()->setText(q(dir / "out"));
+    QSignalSpy finished(&dialog, &BakeDialog::bakeFinished);
+    dialog.startBake();
+    ASSERT_TRUE(finished.count() > 0 || finished.wait(kWorkerTimeoutMs));
+    EXPECT_FALSE(finished.at(0).at(0).toBool());
+    const QString shown = dialog.resultLabel()->text();
+    EXPECT_TRUE(shown.contains("choose a 16-bit or float Format")) << shown.toStdString();
+    EXPECT_FALSE(shown.contains("--")) << shown.toStdString();
+    EXPECT_EQ(inStudioWords("refusing to overwrite x (use --force to replace the set)"),
+              "refusing to overwrite x (tick \"Replace an existing set\")");
+}
+
 TEST(BakeDialog, ExportWritesTheBytesOfBurnishBake) {
     struct Case {
         const char* preset;

@@ -58,6 +58,9 @@ constexpr int kDefaultAutosaveDelaySeconds = 3;
 // Below this window size the first layout is the compact one (see applyDefaultDockSizes): paint,
 // viewport and material side by side need about 1500 px, the charts under the viewport about 900.
 constexpr int kCompactLayoutBelowWidth = 1500;
+// The docks' arrangement a saved window state belongs to: 2 since the texture view became a dock
+// (a state from 1, with the texture view beside the viewport, hid the viewport behind it).
+constexpr int kLayoutVersion = 2;
 constexpr int kCompactLayoutBelowHeight = 900;
 
 QString qs(std::string_view s) {
@@ -826,8 +829,10 @@ void MainWindow::restoreSettings() {
         resize(size);
         move(free.center() - QPoint(size.width() / 2, size.height() / 2));
     }
-    if (settings.contains("window/state")) restoreState(settings.value("window/state").toByteArray());
-    m_defaultLayoutPending = !settings.contains("window/state");
+    // A state saved by another arrangement of the docks (kLayoutVersion) is not restored: its
+    // splits would cover the viewport with docks it never held. The first layout is made instead.
+    m_defaultLayoutPending = !(settings.contains("window/state") &&
+                               restoreState(settings.value("window/state").toByteArray(), kLayoutVersion));
     setAutosaveDelay(settings.value("autosaveDelaySeconds", kDefaultAutosaveDelaySeconds).toInt() * 1000);
 }
 
@@ -880,7 +885,7 @@ void MainWindow::applyDefaultDockSizes() {
 void MainWindow::saveSettings() {
     QSettings settings;
     settings.setValue("window/geometry", saveGeometry());
-    settings.setValue("window/state", saveState());
+    settings.setValue("window/state", saveState(kLayoutVersion));
 }
 
 } // namespace burnish::studio

@@ -187,6 +187,17 @@ void PaintTool::attachViewport(Viewport* viewport) {
         moveTo(texel);
     });
     connect(viewport, &Viewport::strokeFinished, this, &PaintTool::release);
+    // The view draws a stroke from the live bake's rebaked texels instead of baking the map again.
+    viewport->setLiveGloss([this]() -> const LiveGlossBake* { return currentLive(); });
+}
+
+const LiveGlossBake* PaintTool::currentLive() const {
+    // Every stroke so far is in it: it exists, is not being built, and missed nothing.
+    return m_paintMode && m_live && !m_liveBuilding && m_liveMissed.empty() ? &*m_live : nullptr;
+}
+
+void PaintTool::liveRebaked() {
+    if (m_viewport && m_live) m_viewport->liveGlossRebaked(m_live->lastRecomputedRects());
 }
 
 void PaintTool::syncWidgets() {
@@ -452,6 +463,8 @@ void PaintTool::liveBuilt(quint64 generation, Result<LiveGlossBake> live) {
         return;
     }
     m_live.emplace(std::move(live).value());
+    // A new live chain: the view takes it whole once before it takes regions of it again.
+    if (m_viewport) m_viewport->liveGlossRebuilt();
     // Strokes painted while it was built: their rectangle, from the document's values now.
     const TexelRect missed = std::exchange(m_liveMissed, {});
     if (!missed.empty()) {
@@ -487,6 +500,7 @@ void PaintTool::onLayersChanged(const TexelRect& rect) {
         rebuildLive();
         return;
     }
+    liveRebaked();
     (void)overShine(*m_live, *authored, m_overShineMip, kOverShineStops,
                     &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine, rect);
     updateOverlay(rect);

@@ -49,6 +49,9 @@ public:
     void setBackgroundBakes(bool on) { m_background = on; }
     /// A background live bake is being built.
     bool liveBuilding() const { return m_liveBuilding; }
+    /// The live bake when it holds every stroke so far (paint mode on, built, nothing missed), else
+    /// null: what the 3D view draws a stroke from.
+    const LiveGlossBake* currentLive() const;
     void setLayer(PaintLayerKind kind);
     PaintLayerKind layer() const { return m_layer; }
     void setBrush(const Brush& brush);
@@ -81,6 +84,8 @@ signals:
 
 private:
     void syncWidgets();
+    /// Hands the last rebakeRegion's rectangles to the attached viewport.
+    void liveRebaked();
     /// The gloss layer and its tooltips in the preset's own word (gloss or roughness).
     void retitle();
     QString term(bool capitalised = true) const;

@@ -2,6 +2,7 @@
 
 #include "scene_from_document.h"
 
+#include <burnish/core/bake/paint.h>
 #include <burnish/core/eval/evaluate.h>
 #include <burnish/render/context.h>
 #include <burnish/render/gpu_resources.h>
@@ -345,6 +346,22 @@ Viewport::Viewport(MaterialDocument* doc, QWidget* parent)
     layoutOverlays();
 }
 
+void Viewport::setLiveGloss(std::function<const LiveGlossBake*()> live) {
+    m_liveGloss = std::move(live);
+    liveGlossRebuilt();
+}
+
+void Viewport::liveGlossRebuilt() {
+    m_liveGlossBase.reset();
+    m_liveGlossDirty.clear();
+}
+
+void Viewport::liveGlossRebaked(const std::vector<TexelRect>& rects) {
+    if (m_liveGlossDirty.size() < rects.size()) m_liveGlossDirty.resize(rects.size());
+    for (size_t k = 0; k < rects.size(); ++k)
+        m_liveGlossDirty[k].unite(rects[k]);
+}
+
 Viewport::~Viewport() {
     // The GL surface releases the renderers in its own context; it goes first, while the engine
     // still exists (children are otherwise deleted after the members). The headless context's are
@@ -485,7 +502,21 @@ void Viewport::drawInto(unsigned framebuffer, int width, int height) {
         right.scissorWidth = std::max(width - splitX, 1);
         right.scissorHeight = height;
     }
-    Status status = e.a->setScene(scene);
+    // Painting: the gloss the stroke changed, from the paint tool's live bake, instead of a bake.
+    Status status;
+    if (const LiveGlossBake* live = m_liveGloss ? m_liveGloss() : nullptr;
+        live && scene.material.glossMap && scene.material.glossMap != e.a->drawnGlossMap()) {
+        // Only the rebaked rectangles when the drawn texture holds what this path made it last.
+        const bool regions = m_liveGlossBase && e.a->drawnGlossMap() == m_liveGlossBase;
+        const auto replaced = e.a->replaceGloss(scene.material, *live, regions ? &m_liveGlossDirty : nullptr);
+        if (!replaced) status = Error{replaced.error()};
+        if (replaced && *replaced) {
+            m_liveGlossBase = scene.material.glossMap;
+            m_liveGlossDirty.clear();
+            ++m_liveGlossFrames;
+        }
+    }
+    if (status) status = e.a->setScene(scene);
     if (status) status = e.a->render(left);
     if (status && m_view.split) {
         if (m_view.right.reference) {

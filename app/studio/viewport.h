@@ -23,8 +23,10 @@
 #include <QString>
 #include <QWidget>
 
+#include <functional>
 #include <memory>
 #include <optional>
+#include <vector>
 
 class QLabel;
 class QTimer;
@@ -136,6 +138,18 @@ public:
     /// new one is in. The studio turns it on; tests that read the frame right after a change leave
     /// it off.
     void setBackgroundBakes(bool on);
+    /// Painting: where the view takes the painted gloss from instead of baking it again. `live`
+    /// returns the paint tool's live gloss bake when it holds every stroke so far (else null); each
+    /// region it rebakes is passed to liveGlossRebaked. A frame then uploads only those texels of
+    /// the drawn gloss texture (render::Renderer::replaceGloss), or its whole chain once after the
+    /// view baked otherwise; where the live chain cannot stand for the view's bake (another method
+    /// or kernel, a reference or second method beside), the view bakes as before.
+    void setLiveGloss(std::function<const LiveGlossBake*()> live);
+    void liveGlossRebaked(const std::vector<TexelRect>& rects);
+    /// The live bake was made anew: the next frame takes its whole chain.
+    void liveGlossRebuilt();
+    /// Frames whose gloss came from the live bake (replaceGloss), whole chains and regions.
+    int liveGlossFrames() const { return m_liveGlossFrames; }
     /// Whether the view says a bake is running (the last baked material is drawn meanwhile).
     bool bakingShown() const;
     bool paintMode() const { return m_paintMode; }
@@ -215,9 +229,15 @@ private:
     QTimer* m_bakingTimer = nullptr; // reads the bake's progress into the label while it shows
     QTimer* m_orbitTimer = nullptr;
     QTimer* m_restTimer = nullptr;
-    QTimer* m_passTimer = nullptr;    // the next pass of a progressive frame, once events are handled
-    bool m_grabbing = false;          // grabFrame's frame: every pass at once
-    QTimer* m_dabTimer = nullptr;     // throttles redraws during a stroke (kDabRedrawIntervalMs)
+    QTimer* m_passTimer = nullptr; // the next pass of a progressive frame, once events are handled
+    bool m_grabbing = false;       // grabFrame's frame: every pass at once
+    QTimer* m_dabTimer = nullptr;  // throttles redraws during a stroke (kDabRedrawIntervalMs)
+    // The live gloss (setLiveGloss): its source, the values the drawn gloss texture was last made
+    // from by it, and per level the texels rebaked since.
+    std::function<const LiveGlossBake*()> m_liveGloss;
+    std::shared_ptr<const std::vector<float>> m_liveGlossBase;
+    std::vector<TexelRect> m_liveGlossDirty;
+    int m_liveGlossFrames = 0;
     bool m_dabPending = false;        // a dab arrived while m_dabTimer ran: redraw when it fires
     bool m_dabFrameRequested = false; // a dab redraw is requested and not drawn yet
     QString m_contextDescription;

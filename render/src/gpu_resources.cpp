@@ -260,7 +260,9 @@ Texture2D::Texture2D(Texture2D&& other) noexcept
     : m_id(std::exchange(other.m_id, 0u))
     , m_width(std::exchange(other.m_width, 0))
     , m_height(std::exchange(other.m_height, 0))
-    , m_levels(std::exchange(other.m_levels, 0)) {}
+    , m_levels(std::exchange(other.m_levels, 0))
+    , m_channels(std::exchange(other.m_channels, 0))
+    , m_half(std::exchange(other.m_half, false)) {}
 
 Texture2D& Texture2D::operator=(Texture2D&& other) noexcept {
     if (this != &other) {
@@ -269,6 +271,8 @@ Texture2D& Texture2D::operator=(Texture2D&& other) noexcept {
         m_width = std::exchange(other.m_width, 0);
         m_height = std::exchange(other.m_height, 0);
         m_levels = std::exchange(other.m_levels, 0);
+        m_channels = std::exchange(other.m_channels, 0);
+        m_half = std::exchange(other.m_half, false);
     }
     return *this;
 }
@@ -337,6 +341,8 @@ Result<Texture2D> Texture2D::create(const std::vector<TextureLevel>& levels, int
     Texture2D texture;
     texture.m_width = width;
     texture.m_height = height;
+    texture.m_channels = channels;
+    texture.m_half = half;
     glGenTextures(1, &texture.m_id);
     glBindTexture(GL_TEXTURE_2D, texture.m_id);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
@@ -383,6 +389,48 @@ Result<Texture2D> Texture2D::create(const std::vector<TextureLevel>& levels, int
                      ": upload failed (GL error " + code + ")"};
     }
     return texture;
+}
+
+Status Texture2D::updateRegion(int level, int x, int y, int width, int height,
+                               const std::vector<float>& texels) {
+    if (!m_id) return Error{"texture update: no texture"};
+    if (level < 0 || level >= m_levels)
+        return Error{"texture update: level " + std::to_string(level) + " outside 0.." +
+                     std::to_string(m_levels - 1)};
+    const int levelWidth = std::max(1, m_width >> level), levelHeight = std::max(1, m_height >> level);
+    if (width <= 0 || height <= 0 || x < 0 || y < 0 || x + width > levelWidth || y + height > levelHeight)
+        return Error{"texture update: rectangle " + std::to_string(x) + "," + std::to_string(y) + " " +
+                     std::to_string(width) + "x" + std::to_string(height) + " outside level " +
+                     std::to_string(level) + "'s " + std::to_string(levelWidth) + "x" +
+                     std::to_string(levelHeight)};
+    const size_t row = size_t(width) * size_t(m_channels);
+    if (texels.size() != row * size_t(height))
+        return Error{"texture update: " + std::to_string(texels.size()) + " floats for " +
+                     std::to_string(width) + "x" + std::to_string(height) + " texels of " +
+                     std::to_string(m_channels) + " channels"};
+    constexpr float kHalfMax = 65504.0f;
+    for (const float t : texels)
+        if (!std::isfinite(t) || (m_half && std::abs(t) > kHalfMax))
+            return Error{"texture update: a texel is non-finite or beyond the storage's range"};
+    // Image rows top first; GL's rows bottom first: the rectangle's bottom row goes first, at
+    // GL row levelHeight - (y + height).
+    std::vector<float> flipped(texels);
+    flipRows(flipped.data(), row * sizeof(float), height);
+    static constexpr GLenum kFormats[] = {GL_RED, GL_RG, GL_RGB, GL_RGBA};
+    drainGlErrors();
+    GLint previousTexture = 0;
+    GLint previousAlignment = 4;
+    glGetIntegerv(GL_TEXTURE_BINDING_2D, &previousTexture);
+    glGetIntegerv(GL_UNPACK_ALIGNMENT, &previousAlignment);
+    glBindTexture(GL_TEXTURE_2D, m_id);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexSubImage2D(GL_TEXTURE_2D, level, x, levelHeight - (y + height), width, height,
+                    kFormats[m_channels - 1], GL_FLOAT, flipped.data());
+    glPixelStorei(GL_UNPACK_ALIGNMENT, previousAlignment);
+    glBindTexture(GL_TEXTURE_2D, GLuint(previousTexture));
+    if (const GLenum error = glGetError(); error != GL_NO_ERROR)
+        return Error{"texture update: GL error " + std::to_string(unsigned(error))};
+    return {};
 }
 
 void Texture2D::bind(int unit) const {

@@ -1,6 +1,7 @@
 #include <burnish/render/renderer.h>
 
 #include <burnish/core/bake/bake.h>
+#include <burnish/core/bake/paint.h>
 #include <burnish/core/env/sampling.h>
 #include <burnish/core/prefilter/detail.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
@@ -63,10 +64,23 @@ Status ensureTarget(std::optional<Framebuffer>& target, int width, int height, b
     return {};
 }
 
-// A baked texture on the GPU, holding decoded values (stored·scale + bias, its ChannelDecode).
+// A baked texture on the GPU, holding decoded values (stored·scale + bias, its ChannelDecode), from
+// the baked chain's level `firstLevel` on (setMaxTextureSize).
 struct GpuBaked {
     Texture2D texture;
+    int firstLevel = 0;
 };
+
+// Each channel's decode (stored·scale + bias), as uploadBaked applies it.
+void channelDecode(const BakedTexture& baked, std::vector<float>& scale, std::vector<float>& bias) {
+    const size_t channels = size_t(baked.channels);
+    scale.assign(channels, 1.0f);
+    bias.assign(channels, 0.0f);
+    for (size_t c = 0; c < baked.decode.size() && c < channels; ++c) {
+        scale[c] = float(baked.decode[c].scale);
+        bias[c] = float(baked.decode[c].bias);
+    }
+}
 
 // `maxSize` > 0: the chain from its first level no larger than that on a side (a display needs no
 // more; an 8192² chain took most of 23 s to upload on llvmpipe), so the texture is that level's size
@@ -83,11 +97,8 @@ Result<GpuBaked> uploadBaked(const BakedTexture& baked, int maxSize = 0) {
     // stored ones, and the shader reads physical values without a uniform per channel (on llvmpipe
     // each uniform read is a gather: the decode of the mixture's five textures took 3 ms a frame).
     const size_t channels = size_t(baked.channels);
-    std::vector<float> scale(channels, 1.0f), bias(channels, 0.0f);
-    for (size_t c = 0; c < baked.decode.size() && c < channels; ++c) {
-        scale[c] = float(baked.decode[c].scale);
-        bias[c] = float(baked.decode[c].bias);
-    }
+    std::vector<float> scale, bias;
+    channelDecode(baked, scale, bias);
     for (size_t k = first; k < baked.mips.size(); ++k) {
         const auto& mip = baked.mips[k];
         // Decoded bottom row first, GL's order: the one copy the upload makes on this side (appended
@@ -107,7 +118,7 @@ Result<GpuBaked> uploadBaked(const BakedTexture& baked, int maxSize = 0) {
     auto texture = Texture2D::create(levels, baked.channels, TextureFilter::LinearMipLinear, true);
     if (!texture)
         return Error{"uploading the '" + std::string(roleName(baked.role)) + "' texture: " + texture.error()};
-    return GpuBaked{std::move(texture).value()};
+    return GpuBaked{std::move(texture).value(), int(first)};
 }
 
 // What a bake depends on; shared_ptrs keep the identities alive so an address is never reused.
@@ -367,6 +378,8 @@ struct Renderer::Impl {
     Status prepareBake();
     Status prepareFinest();
     Status uploadBake(const BakeKey& key, const CpuBake& cpu);
+    Result<bool> replaceGloss(const MaterialSettings& m, const LiveGlossBake& live,
+                              const std::vector<TexelRect>* dirty);
     /// Background bakes: whether the bake of `m` is in (a finished worker's bake is taken in now),
     /// else starts it unless another runs, and returns false.
     Result<bool> backgroundBake(const MaterialSettings& m);
@@ -510,6 +523,63 @@ Status Renderer::Impl::uploadBake(const BakeKey& key, const CpuBake& cpu) {
     }
     bakeKey = key;
     return {};
+}
+
+Result<bool> Renderer::Impl::replaceGloss(const MaterialSettings& m, const LiveGlossBake& live,
+                                          const std::vector<TexelRect>* dirty) {
+    // Only where the live chain is exactly what a bake of `m` would upload: the drawn bake is of
+    // `m` but for its gloss values, and the live bake was made with the options this bake uses.
+    if (!bakeKey || !bakedMaterial || !m.glossMap || !m.normalMap) return false;
+    BakeKey key = bakeKeyOf(m, maxTextureSize);
+    key.glossMap = bakeKey->glossMap;
+    if (!(key == *bakeKey)) return false;
+    const BakeOptions& o = live.options();
+    const BakeOptions defaults;
+    if (o.method != m.method || o.encoding.name() != m.glossEncoding.name() || o.basePower != m.basePower ||
+        o.pyramid.kernel != key.kernel || o.pyramid.border != defaults.pyramid.border || o.mipCount != 0 ||
+        o.params.toksvigMapPower != m.methodParams.toksvigMapPower || live.width() != m.normalMap->width ||
+        live.height() != m.normalMap->height)
+        return false;
+    const auto found = baked.find(TextureRole::Gloss);
+    if (found == baked.end()) return false;
+    GpuBaked& gpu = found->second;
+    const BakedTexture& gloss = live.gloss();
+    if (gloss.channels != gpu.texture.channels()) return false;
+    for (int level = 0; level < gpu.texture.levels(); ++level) {
+        const size_t k = size_t(gpu.firstLevel + level);
+        if (k >= gloss.mips.size() || gloss.mips[k].width != std::max(1, gpu.texture.width() >> level) ||
+            gloss.mips[k].height != std::max(1, gpu.texture.height() >> level))
+            return false;
+    }
+    // A bake still running is older than the live chain: it is stopped and dropped (taking it in
+    // would draw the values before the last strokes).
+    if (pending) pending->cancel->store(true);
+    std::vector<float> scale, bias, texels;
+    channelDecode(gloss, scale, bias);
+    const size_t channels = size_t(gloss.channels);
+    for (int level = 0; level < gpu.texture.levels(); ++level) {
+        const size_t k = size_t(gpu.firstLevel + level);
+        const TextureMip& mip = gloss.mips[k];
+        TexelRect r = TexelRect::full(mip.width, mip.height);
+        if (dirty) {
+            r = k < dirty->size() ? (*dirty)[k] : TexelRect{};
+            r = {std::max(r.x0, 0), std::max(r.y0, 0), std::min(r.x1, mip.width), std::min(r.y1, mip.height)};
+        }
+        if (r.empty()) continue;
+        texels.clear();
+        texels.reserve(r.texelCount() * channels);
+        for (int y = r.y0; y < r.y1; ++y) {
+            const float* in = mip.texels.data() + (size_t(y) * size_t(mip.width) + size_t(r.x0)) * channels;
+            for (size_t i = 0; i < size_t(r.width()) * channels; i += channels)
+                for (size_t c = 0; c < channels; ++c)
+                    texels.push_back(in[i + c] * scale[c] + bias[c]);
+        }
+        if (const Status st = gpu.texture.updateRegion(level, r.x0, r.y0, r.width(), r.height(), texels); !st)
+            return Error{"updating the gloss texture: " + st.error()};
+    }
+    bakeKey->glossMap = m.glossMap;
+    bakedMaterial->glossMap = m.glossMap;
+    return true;
 }
 
 Result<bool> Renderer::Impl::backgroundBake(const MaterialSettings& m) {
@@ -1131,6 +1201,15 @@ Status Renderer::setScene(const Scene& requested) {
     impl.program = *program;
     impl.hasScene = true;
     return {};
+}
+
+Result<bool> Renderer::replaceGloss(const MaterialSettings& material, const LiveGlossBake& live,
+                                    const std::vector<TexelRect>* dirty) {
+    return m_impl->replaceGloss(material, live, dirty);
+}
+
+std::shared_ptr<const std::vector<float>> Renderer::drawnGlossMap() const {
+    return m_impl->bakeKey ? m_impl->bakeKey->glossMap : nullptr;
 }
 
 void Renderer::setBackgroundBakes(bool on, std::function<void()> onReady) {

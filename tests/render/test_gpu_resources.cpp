@@ -204,6 +204,52 @@ TEST_F(GpuResources, TextureRoundTripKeepsValuesAndOrientation) {
     }
 }
 
+// A region update writes exactly its rectangle of its level, upright (image rows top first, as the
+// upload): the rest of the texture and the other levels keep their texels; bad requests change
+// nothing.
+TEST_F(GpuResources, UpdateRegionWritesItsRectangleOfItsLevelOnly) {
+    constexpr int kWidth = 6, kHeight = 4, kChannels = 2;
+    std::vector<TextureLevel> levels;
+    for (int k = 0, w = kWidth, h = kHeight; k < 2; ++k, w /= 2, h /= 2) {
+        TextureLevel level{w, h, {}};
+        for (int i = 0; i < w * h * kChannels; ++i)
+            level.texels.push_back(float(k * 100 + i));
+        levels.push_back(level);
+    }
+    auto created = Texture2D::create(levels, kChannels, TextureFilter::Nearest, false);
+    ASSERT_TRUE(created) << created.error();
+    Texture2D texture = std::move(created).value();
+    // A 3×2 rectangle at (2, 1) of level 0: rows top first.
+    std::vector<float> patch;
+    for (int i = 0; i < 3 * 2 * kChannels; ++i)
+        patch.push_back(-1.0f - float(i));
+    ASSERT_TRUE(texture.updateRegion(0, 2, 1, 3, 2, patch));
+    std::vector<float> expected = levels[0].texels;
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 3; ++x)
+            for (int c = 0; c < kChannels; ++c)
+                expected[size_t(((1 + y) * kWidth + 2 + x) * kChannels + c)] =
+                    patch[size_t((y * 3 + x) * kChannels + c)];
+    const auto pixels = drawTexture(texture);
+    ASSERT_EQ(pixels.size(), size_t(kWidth * kHeight * 4));
+    for (int p = 0; p < kWidth * kHeight; ++p)
+        for (int c = 0; c < kChannels; ++c)
+            EXPECT_EQ(pixels[size_t(p * 4 + c)], expected[size_t(p * kChannels + c)])
+                << "texel " << p << " c " << c;
+    const auto level1 = drawTexture(texture, "texelFetch(uTex, ivec2(vUv * vec2(3.0, 2.0)), 1)");
+    ASSERT_FALSE(level1.empty());
+    // Level 1 (3×2) untouched: its texels all lie at 100 and above.
+    for (size_t i = 0; i < level1.size(); i += 4)
+        EXPECT_GE(level1[i], 100.0f);
+
+    EXPECT_FALSE(texture.updateRegion(2, 0, 0, 1, 1, {0.0f, 0.0f})) << "no level 2";
+    EXPECT_FALSE(texture.updateRegion(0, 4, 0, 3, 1, std::vector<float>(6, 0.0f))) << "past the right edge";
+    EXPECT_FALSE(texture.updateRegion(1, 0, 1, 2, 2, std::vector<float>(8, 0.0f))) << "past level 1's bottom";
+    EXPECT_FALSE(texture.updateRegion(0, 0, 0, 2, 1, std::vector<float>(3, 0.0f))) << "a wrong count";
+    EXPECT_FALSE(texture.updateRegion(0, 0, 0, 1, 1, {0.0f, std::nanf("")})) << "a NaN";
+    EXPECT_EQ(drawTexture(texture), pixels) << "refused updates change nothing";
+}
+
 TEST_F(GpuResources, HalfTextureRoundTrip) {
     // Multiples of 1/8 below 2048 are exact in half precision: the round trip is exact.
     TextureLevel level{4, 2, {}};

@@ -1305,6 +1305,32 @@ TEST(MainWindow, SpecularColourIsTypedAsNumbers) {
     EXPECT_EQ(panel->specularLinearSpin(0)->value(), std::round(gold.r * 1e4) / 1e4) << "fields follow undo";
 }
 
+// A window state saved by another arrangement of the docks is not restored (one from before the
+// texture view was a dock covered the viewport: no frame was ever drawn); the first layout is made
+// instead. A state of this arrangement is restored.
+TEST(MainWindow, AStateSavedForAnotherLayoutIsNotRestored) {
+    QSettings settings;
+    {
+        TestWindow old;
+        old.window.textureDock()->setFloating(true);
+        settings.setValue("window/state", old.window.saveState()); // the old version number: 0
+    }
+    {
+        TestWindow w;
+        w.window.show();
+        QApplication::processEvents();
+        EXPECT_FALSE(w.window.textureDock()->isFloating()) << "the old state was restored";
+        w.window.textureDock()->setFloating(true);
+        w.window.close(); // saves this layout's state
+    }
+    {
+        TestWindow w;
+        EXPECT_TRUE(w.window.textureDock()->isFloating()) << "this layout's state is restored";
+    }
+    settings.remove("window/state");
+    settings.remove("window/geometry");
+}
+
 TEST(MainWindow, ScreenshotIsNotBlank) {
     TestWindow w;
     w.window.resize(1200, 800);

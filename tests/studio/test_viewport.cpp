@@ -302,6 +302,57 @@ TEST(Viewport, EachDabOfAStrokeRedrawsBeforeTheStrokeEnds) {
     EXPECT_EQ(strokeEnds.count(), 1) << "the stroke ends as one undo step";
 }
 
+// Painting with Paint on, the view draws each dab from the paint tool's live bake (only the texels
+// it rebaked uploaded) instead of baking the map again, and draws exactly what a bake draws: after
+// every dab, at the stroke's end and after undo, the frame equals a new view's, which bakes.
+TEST(Viewport, StrokesDrawnFromTheLiveBakeAreTheFramesOfABake) {
+    TestViewport t;
+    t.view.setDistance(2.5f);
+    TextureView canvas;
+    PaintTool tool(&t.doc, &canvas);
+    tool.attachViewport(&t.view);
+    tool.setPaintMode(true); // the live bake is built at once (no background bakes)
+    ASSERT_NE(tool.currentLive(), nullptr);
+    (void)t.grab();
+    auto bakedFrame = [&] {
+        // The same document: a new view over it bakes what it draws.
+        Viewport view{&t.doc};
+        view.resize(kWidth, kHeight);
+        view.show();
+        view.setDistance(2.5f);
+        QApplication::processEvents();
+        return view.grabFrame().convertToFormat(QImage::Format_RGB32);
+    };
+    Brush b;
+    b.radius = kSampleSize / 6.0;
+    b.hardness = 0.5;
+    b.opacity = 1.0;
+    b.value = 0.1f;
+    tool.setBrush(b);
+    const int before = t.view.liveGlossFrames();
+    tool.pressAt(QPointF(kSampleSize * 0.3, kSampleSize * 0.5));
+    const QImage firstDab = t.grab();
+    EXPECT_EQ(t.view.liveGlossFrames(), before + 1);
+    EXPECT_LT(meanAbsDiff(firstDab, bakedFrame(), 0, kWidth), 1e-9) << "the whole live chain, once";
+    tool.moveTo(QPointF(kSampleSize * 0.6, kSampleSize * 0.45));
+    const QImage secondDab = t.grab();
+    EXPECT_EQ(t.view.liveGlossFrames(), before + 2) << "a region of the live chain";
+    EXPECT_GT(meanAbsDiff(firstDab, secondDab, 0, kWidth), 0.01) << "the dab shows";
+    EXPECT_LT(meanAbsDiff(secondDab, bakedFrame(), 0, kWidth), 1e-9) << "the region, exactly";
+    tool.release();
+    EXPECT_LT(meanAbsDiff(t.grab(), bakedFrame(), 0, kWidth), 1e-9) << "the stroke's end";
+    // A second stroke, undone: the first one's paint stays, drawn from the live bake's region.
+    b.value = 0.95f;
+    tool.setBrush(b);
+    tool.pressAt(QPointF(kSampleSize * 0.5, kSampleSize * 0.2));
+    tool.release();
+    (void)t.grab();
+    const int beforeUndo = t.view.liveGlossFrames();
+    t.doc.undoStack()->undo();
+    EXPECT_LT(meanAbsDiff(t.grab(), secondDab, 0, kWidth), 1e-9) << "undo";
+    EXPECT_EQ(t.view.liveGlossFrames(), beforeUndo + 1);
+}
+
 TEST(SceneFromDocument, HandsOverThePaintedGlossKeepingItsIdentityUntilItChanges) {
     MaterialDocument doc;
     SceneFromDocument mapper;

@@ -484,7 +484,11 @@ Result<LiveGlossBake> LiveGlossBake::create(std::shared_ptr<const NormalMap> map
     out.m_authored = *options.authoredGloss;
     out.m_options = options;
     out.m_options.authoredGloss.reset(); // kept once, in m_authored
-    const NormalPyramid pyramid = NormalPyramid::build(map, options.pyramid);
+    // Only the moments read below (the mean and the covariance: 36 bytes a texel, not all 68; the
+    // pyramid of an 8192² map is most of the live bake's peak).
+    PyramidOptions pyramidOptions = options.pyramid;
+    pyramidOptions.moments = kMomentsCov;
+    const NormalPyramid pyramid = NormalPyramid::build(map, pyramidOptions);
     const int levels =
         options.mipCount > 0 ? std::min(options.mipCount, pyramid.levelCount()) : pyramid.levelCount();
     out.m_base = BaseVariancePyramid(pyramid, levels);

@@ -94,10 +94,17 @@ public:
     static Result<Texture2D> create(const std::vector<TextureLevel>& levels, int channels,
                                     TextureFilter filter, bool wrapRepeat = true, bool half = false);
 
+    /// Replaces the texels of a rectangle of one level: `texels` holds its rows, top row first (as
+    /// TextureLevel's image rows), `channels()` floats a texel. Errors: a level or rectangle outside
+    /// the texture, a wrong count, non-finite texels (nothing is uploaded then).
+    Status updateRegion(int level, int x, int y, int width, int height, const std::vector<float>& texels);
+
     unsigned id() const { return m_id; }
     int width() const { return m_width; }
     int height() const { return m_height; }
     int levels() const { return m_levels; }
+    int channels() const { return m_channels; }
+    bool half() const { return m_half; }
     void bind(int unit) const;
 
 private:
@@ -105,6 +112,8 @@ private:
     int m_width = 0;
     int m_height = 0;
     int m_levels = 0;
+    int m_channels = 0;
+    bool m_half = false;
 };
 
 /// Draws one triangle covering the viewport (vertex shader reads gl_VertexID); owns an empty VAO.

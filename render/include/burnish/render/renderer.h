@@ -13,6 +13,11 @@
 #include <string>
 #include <vector>
 
+namespace burnish {
+class LiveGlossBake;
+struct TexelRect;
+} // namespace burnish
+
 namespace burnish::render {
 
 /// Where render() draws: a framebuffer object id (0 = the default framebuffer) and its size.
@@ -95,6 +100,19 @@ public:
     /// level, the default): a display shows no more, and an 8192² chain is gigabytes to upload.
     /// Applies to the bakes uploaded after the call.
     void setMaxTextureSize(int size);
+    /// Painting: the drawn bake's gloss texture made from a live gloss chain (core's LiveGlossBake,
+    /// which its caller keeps up to date stroke by stroke) instead of baking `material` again.
+    /// `material` is the next scene's material, equal to the drawn one but for its glossMap, whose
+    /// values are the live bake's authored gloss (the caller's promise: they are not compared). With
+    /// `dirty` (one rectangle per level of the live chain, as LiveGlossBake::lastRecomputedRects)
+    /// only those texels are uploaded, else every uploaded level; the drawn bake then stands for
+    /// `material`, so the next setScene bakes nothing, and a bake still running is dropped. False,
+    /// changing nothing, where the live chain is not what a bake would upload (another map, method,
+    /// power, encoding, kernel or border; no gloss texture drawn). Errors: an upload that fails.
+    Result<bool> replaceGloss(const MaterialSettings& material, const LiveGlossBake& live,
+                              const std::vector<TexelRect>* dirty);
+    /// The gloss values the drawn bake stands for (null: none, or no bake).
+    std::shared_ptr<const std::vector<float>> drawnGlossMap() const;
     /// Whether the last setScene draws the last baked material because the requested one is still
     /// baking in the background.
     bool bakePending() const;

@@ -194,7 +194,9 @@ int main(int argc, char** argv) {
     const QCommandLineOption repeatsOption("repeats", "gloss changes timed (median)", "N", "5");
     const QCommandLineOption widthOption("width", "window width", "W", "1920");
     const QCommandLineOption heightOption("height", "window height", "H", "1080");
-    parser.addOptions({repeatsOption, widthOption, heightOption});
+    const QCommandLineOption presetOption("preset", "the material's preset (its default method paints)", "P",
+                                          "blackops");
+    parser.addOptions({repeatsOption, widthOption, heightOption, presetOption});
     parser.process(app);
     if (parser.positionalArguments().size() != 1) parser.showHelp(2);
     const QString map = parser.positionalArguments().first();
@@ -223,6 +225,10 @@ int main(int argc, char** argv) {
         }).ms < 0.0)
         return 1;
 
+    if (const auto set = doc.setPreset(parser.value(presetOption)); !set) {
+        std::fprintf(stderr, "burnish_studio_latency: %s\n", set.error().c_str());
+        return 2;
+    }
     const Landing load = timeUntilDrawn(
         *view, [&] { return window.openFile(map); }, [&] { return doc.settings().normalMapPath == map; });
     if (load.ms < 0.0 || doc.settings().normalMapPath != map) {

@@ -11,6 +11,7 @@
 #
 #   core/bench/studio_latency.sh LATENCY_BINARY MAP [SIZES...]   (default sizes: 512 2048 8192)
 #   LATENCY_BINARY: build/bin/burnish_studio_latency
+#   PRESET=gltf core/bench/studio_latency.sh ...   paints under that preset's method (default blackops)
 set -euo pipefail
 binary=$1
 map=$2
@@ -27,5 +28,6 @@ for size in "${sizes[@]}"; do
     # Unassociated alpha: OpenImageIO would otherwise premultiply an RGBA map's normals by its alpha.
     oiiotool --iconfig oiio:UnassociatedAlpha 1 "$map" --ch R,G,B --resize:filter=triangle "${size}x${size}" \
         -o "$work/map.png"
-    HOME="$work/home" QT_QPA_PLATFORM="${QT_QPA_PLATFORM:-offscreen}" "$binary" "$work/map.png"
+    HOME="$work/home" QT_QPA_PLATFORM="${QT_QPA_PLATFORM:-offscreen}" "$binary" --preset "${PRESET:-blackops}" \
+        "$work/map.png"
 done

@@ -1,5 +1,7 @@
 #include <burnish/render/mesh.h>
 
+#include <burnish/core/util/files.h>
+
 #include <burnish/core/util/numeric.h>
 
 #include <epoxy/gl.h>
@@ -233,10 +235,7 @@ void generateTangents(MeshData& mesh) {
 }
 
 Result<MeshData> loadObj(const std::filesystem::path& path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) {
-        return Error{"cannot read '" + path.string() + "': no such file"};
-    }
+    if (const Status st = requireRegularFile(path, "mesh"); !st) return Error{st.error()};
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;
     std::vector<tinyobj::material_t> materials;

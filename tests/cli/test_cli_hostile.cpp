@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sys/stat.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -137,6 +138,36 @@ TEST(CliHostile, EveryNumericOptionRefusesNanAndInfinity) {
 // ("<target>.tmp-<pid>-<n>", pids being guessable) and at the targets themselves: a bake's EXR set
 // and render --out (EXR and PNG) write their files and leave the outside file as it was. Every
 // other writer goes through the same files.h path (test_atomic_file.cpp).
+// Inputs that never end (issue 45, point 3): a FIFO with no writer, /dev/zero, and a link to a FIFO,
+// as the image of every command, as --gloss and as --manifest, are refused at once in one line
+// naming what they are (each hung until killed: opening a FIFO blocks, /dev/zero never ends).
+TEST(CliHostile, InputsThatNeverEndAreRefusedInOneLine) {
+    TempDir dir;
+    const fs::path fifo = dir / "map.png";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    fs::create_symlink(fifo, dir / "link.png");
+    const std::string map = shellQuote(BURNISH_TEST_DATA_DIR "/trak-rust1_nm.png");
+    for (const fs::path& input : {fifo, dir / "link.png", fs::path("/dev/zero")}) {
+        const std::string in = shellQuote(input.string()), out = shellQuote((dir / "out").string());
+        const char* kind = input == "/dev/zero" ? "a character device" : "a FIFO";
+        for (const std::string& args :
+             {"bake " + in + " --preset gltf --out " + out, "render " + in + " --out " + out + ".png",
+              "evaluate " + in, "env " + in + " --out " + out, "gltf " + in + " --out " + out,
+              "bake " + map + " --gloss " + in + " --preset blackops --out " + out,
+              "bake --manifest " + in}) {
+            SCOPED_TRACE(args);
+            ::setenv("ASAN_OPTIONS", "detect_leaks=0", 1);
+            const CliResult r = burnish::test::runBurnish(args, "", 20);
+            EXPECT_NE(r.exitCode, 124) << "it hung";
+            EXPECT_NE(r.exitCode, 0);
+            EXPECT_EQ(lineCount(r.err), 1) << r.err;
+            EXPECT_NE(r.err.find(kind), std::string::npos) << r.err;
+            EXPECT_NE(r.err.find("not a regular file"), std::string::npos) << r.err;
+        }
+    }
+    EXPECT_FALSE(fs::exists(dir / "out")) << "nothing written";
+}
+
 TEST(CliHostile, PlantedLinksAreNeverWrittenThrough) {
     TempDir dir;
     const fs::path outside = dir / "outside";

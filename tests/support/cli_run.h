@@ -29,14 +29,18 @@ inline std::string shellQuote(const std::string& text) {
 
 /// Runs `burnish <args>` (args already shell-quoted where needed), with `environment` (NAME=value
 /// words, quoted as needed) set for it; stdout through a pipe, stderr through a temporary file that
-/// is removed afterwards.
-inline CliResult runBurnish(const std::string& args, const std::string& environment = "") {
+/// is removed afterwards. With `timeoutSeconds` > 0 the run is stopped after that long (exit code
+/// 124, timeout(1)'s): for a test of something that must not hang.
+inline CliResult runBurnish(const std::string& args, const std::string& environment = "",
+                            int timeoutSeconds = 0) {
     static std::atomic<int> counter{0};
     const auto errPath =
         std::filesystem::temp_directory_path() /
         ("burnish-cli-err-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".txt");
-    const std::string command = (environment.empty() ? std::string() : "env " + environment + " ") +
-                                shellQuote(BURNISH_EXE) + " " + args + " 2>" + shellQuote(errPath.string());
+    const std::string command =
+        (environment.empty() ? std::string() : "env " + environment + " ") +
+        (timeoutSeconds > 0 ? "timeout -k 5 " + std::to_string(timeoutSeconds) + " " : "") +
+        shellQuote(BURNISH_EXE) + " " + args + " 2>" + shellQuote(errPath.string());
     CliResult result;
     FILE* pipe = ::popen(command.c_str(), "r");
     if (!pipe) return result;

@@ -651,6 +651,7 @@ Status writePaintLayerExr(const PaintLayer& layer, const fs::path& path) {
 
 Result<PaintLayer> readPaintLayerExr(const fs::path& path, PaintLayerKind kind, int width, int height) {
     const std::string where = "paint layer '" + path.string() + "'";
+    if (const Status st = requireRegularFile(path, "paint layer"); !st) return Error{st.error()};
     auto in = OIIO::ImageInput::open(path.string());
     if (!in) return Error{where + ": " + OIIO::geterror()};
     const OIIO::ImageSpec spec = in->spec();

@@ -327,9 +327,7 @@ std::vector<float> unsignedCodeTable(int bitDepth) {
 }
 
 Result<OpenedImage> openImage(const fs::path& path) {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) return Error{"image '" + path.string() + "' does not exist"};
-    if (fs::is_directory(path, ec)) return Error{"'" + path.string() + "' is a folder, not an image"};
+    if (const Status st = requireRegularFile(path, "image"); !st) return Error{st.error()};
 
     // PNG files are read and their chunks checked first: libpng, which OpenImageIO reads them with,
     // prints its own multi-line messages for damaged headers before any error reaches us.

@@ -552,10 +552,28 @@ void setCommitStepHookForTesting(std::function<void(int)> hook) {
     commitStepHook() = std::move(hook);
 }
 
-Result<std::string> readFile(const fs::path& path) {
+Status requireRegularFile(const fs::path& path, std::string_view what) {
     std::error_code ec;
-    if (!fs::exists(path, ec)) return Error{"file '" + path.string() + "' does not exist"};
-    if (fs::is_directory(path, ec)) return Error{"'" + path.string() + "' is a folder, not a file"};
+    const fs::file_status st = fs::status(path, ec);
+    if (ec || !fs::exists(st)) return Error{std::string(what) + " '" + path.string() + "' does not exist"};
+    if (fs::is_directory(st)) {
+        const bool vowel =
+            !what.empty() && std::string_view("aeiou").find(what.front()) != std::string_view::npos;
+        return Error{"'" + path.string() + "' is a folder, not " + (vowel ? "an " : "a ") +
+                     std::string(what)};
+    }
+    if (fs::is_regular_file(st)) return Status::success();
+    const char* kind = fs::is_fifo(st)             ? "a FIFO"
+                       : fs::is_character_file(st) ? "a character device"
+                       : fs::is_block_file(st)     ? "a block device"
+                       : fs::is_socket(st)         ? "a socket"
+                                                   : "not a regular file";
+    return Error{std::string(what) + " '" + path.string() + "' is " + kind +
+                 ", not a regular file (Burnish reads its inputs from files, which end)"};
+}
+
+Result<std::string> readFile(const fs::path& path) {
+    if (const Status st = requireRegularFile(path, "file"); !st) return Error{st.error()};
     std::ifstream in(path, std::ios::binary);
     if (!in) return Error{describe(path, "cannot read", errno)};
     std::ostringstream ss;

@@ -217,7 +217,12 @@ std::vector<std::string> indexedFiles(const std::filesystem::path& index);
 /// Null (the default) does nothing.
 void setCommitStepHookForTesting(std::function<void(int step)> hook);
 
-/// Reads a whole file; a clear error when it cannot.
+/// Inputs are regular files (after following links): a FIFO, a device such as /dev/zero or a socket
+/// would block or never end, so it is refused in one line naming what it is. `what` names the input
+/// ("image", "manifest", ...). Errors: it does not exist, is a folder, or is not a regular file.
+Status requireRegularFile(const std::filesystem::path& path, std::string_view what);
+
+/// Reads a whole file; a clear error when it cannot (requireRegularFile's refusals included).
 Result<std::string> readFile(const std::filesystem::path& path);
 
 } // namespace burnish

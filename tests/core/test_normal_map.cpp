@@ -388,6 +388,19 @@ TEST(ImageIo, FilesCutShortAreTruncatedNotTexels) {
     ASSERT_FALSE(levels.ok());
     EXPECT_NE(levels.error().find("corrupt"), std::string::npos) << levels.error();
     EXPECT_NE(levels.error().find("905969666 mip levels"), std::string::npos) << levels.error();
+    // The same 8×8 BC5 claiming its 4 levels (4 + 1 + 1 + 1 blocks of 16 bytes): cut inside its mip
+    // tail (level 0 whole, 90 % of the file) it is refused as truncated (issue 45, point 9: it was
+    // read); whole, it is read.
+    put32(28, 4);
+    std::ofstream(dir / "tail-cut.dds", std::ios::binary) << header << std::string(4 * 16 + 2 * 16, '\x80');
+    const auto tailCut = readImage(dir / "tail-cut.dds");
+    ASSERT_FALSE(tailCut.ok());
+    EXPECT_NE(tailCut.error().find("truncated"), std::string::npos) << tailCut.error();
+    EXPECT_NE(tailCut.error().find("4 mip levels"), std::string::npos) << tailCut.error();
+    EXPECT_NE(tailCut.error().find("240 bytes"), std::string::npos) << tailCut.error();
+    std::ofstream(dir / "tail-whole.dds", std::ios::binary) << header << std::string(7 * 16, '\x80');
+    const auto tailWhole = readImage(dir / "tail-whole.dds");
+    EXPECT_TRUE(tailWhole.ok()) << tailWhole.error();
     // The same 8×8 blocks as DXT2 or DXT4 (premultiplied alpha): refused as unsupported before
     // OpenImageIO's reader, which divides by zero on any such file (found by fuzzing); the same
     // blocks as DXT3 and DXT5 are read.

@@ -137,15 +137,39 @@ Status checkDdsHeader(const fs::path& path) {
             blockBytes = 16;
         }
     }
-    std::uint64_t need = 0;
-    if (blockBytes > 0)
-        need = ((width + 3) / 4) * ((height + 3) / 4) * blockBytes;
-    else if (!(pfFlags & kFourCC))
-        need = width * height * (bits / 8);
-    if (need == 0 || fileSize >= header + need) return {}; // a format not checked here: OpenImageIO's
-    return Error{"truncated: its header claims " + std::to_string(width) + "x" + std::to_string(height) +
-                 " texels, whose first level needs " + std::to_string(header + need) +
-                 " bytes, and the file has " + std::to_string(fileSize)};
+    // Every level the header claims, of every surface: a file cut inside its mip tail was read with
+    // level 0 whole and the rest from past the end. Surfaces: a cube's six faces (DDSCAPS2_CUBEMAP
+    // with its face flags, or DX10's TEXTURECUBE), times DX10's array size.
+    auto levelBytes = [&](std::uint64_t w, std::uint64_t hgt) -> std::uint64_t {
+        if (blockBytes > 0) return ((w + 3) / 4) * ((hgt + 3) / 4) * blockBytes;
+        if (!(pfFlags & kFourCC)) return w * hgt * (bits / 8);
+        return 0; // a format not checked here: OpenImageIO's
+    };
+    const std::uint32_t claimedLevels = std::max<std::uint32_t>(u32(28), 1);
+    std::uint64_t surfaces = 1;
+    constexpr std::uint32_t kCubeMap = 0x200, kAllFaces = 0xfc00;
+    if ((u32(112) & kCubeMap) != 0) surfaces = std::uint64_t(__builtin_popcount(u32(112) & kAllFaces));
+    if (header == 148) {
+        const std::uint32_t arraySize = std::max<std::uint32_t>(u32(140), 1);
+        constexpr std::uint32_t kTextureCube = 0x4;
+        surfaces = std::uint64_t(arraySize) * ((u32(136) & kTextureCube) ? 6 : 1);
+    }
+    std::uint64_t first = levelBytes(width, height), chain = 0;
+    for (std::uint32_t k = 0; k < claimedLevels; ++k)
+        chain += levelBytes(std::max<std::uint64_t>(width >> k, 1), std::max<std::uint64_t>(height >> k, 1));
+    if (first == 0) return {};
+    if (fileSize < header + first)
+        return Error{"truncated: its header claims " + std::to_string(width) + "x" + std::to_string(height) +
+                     " texels, whose first level needs " + std::to_string(header + first) +
+                     " bytes, and the file has " + std::to_string(fileSize)};
+    const std::uint64_t need = header + chain * std::max<std::uint64_t>(surfaces, 1);
+    if (fileSize < need)
+        return Error{"truncated: its header claims " + std::to_string(claimedLevels) + " mip levels of " +
+                     std::to_string(width) + "x" + std::to_string(height) + " texels" +
+                     (surfaces > 1 ? " on " + std::to_string(surfaces) + " surfaces" : std::string()) +
+                     ", which need " + std::to_string(need) + " bytes, and the file has " +
+                     std::to_string(fileSize)};
+    return {};
 }
 
 /// An OpenEXR file's headers checked before OpenEXR reads them: every attribute's value must fit in

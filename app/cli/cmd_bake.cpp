@@ -245,7 +245,7 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                                 : run.error());
             Json& summary = run.value().summary;
             for (const auto& w : summary["warnings"])
-                std::fprintf(stderr, "burnish: warning: %s\n", w.get<std::string>().c_str());
+                std::fprintf(stderr, "burnish: warning: %s\n", printable(w.get<std::string>()).c_str());
             if (!*json) {
                 std::printf("%s -> %s: preset %s, method %s, %zu files + bake.json, %d mips, %.2f s\n",
                             jobs[i].spec.input.c_str(), jobs[i].spec.out.c_str(), jobs[i].preset.name.c_str(),

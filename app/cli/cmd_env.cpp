@@ -238,7 +238,7 @@ int runEnv(const EnvCliOptions& o) {
     EnvironmentSource source = std::move(read).value();
     progress.finish();
     for (const auto& w : source.warnings)
-        std::fprintf(stderr, "burnish: warning: %s\n", w.c_str());
+        std::fprintf(stderr, "burnish: warning: %s\n", printable(w).c_str());
     const auto start = std::chrono::steady_clock::now();
     Sh9 sh = projectSh9(source.cube);
     std::optional<glm::dvec3> divisor;
@@ -260,7 +260,7 @@ int runEnv(const EnvCliOptions& o) {
     auto set = FileSet::begin(o.out);
     if (!set) return fail(set.error());
     for (const auto& note : set->recoveryNotes())
-        std::fprintf(stderr, "burnish: note: %s\n", note.c_str());
+        std::fprintf(stderr, "burnish: note: %s\n", printable(note).c_str());
     progress.update(0.87, "writing");
     if (const Status s = stageCubes(o, set.value(), filtered->radiance, *irradiance, sh, divisor); !s)
         return fail(s.error());

@@ -58,7 +58,7 @@ int runEvaluate(const EvaluateCliOptions& o) {
     auto map = loadNormalMap(o.input, toNormalMapOptions(o.normalMap));
     if (!map) return fail(map.error());
     for (const auto& w : map->diagnostics.warnings)
-        std::fprintf(stderr, "burnish: warning: %s\n", w.c_str());
+        std::fprintf(stderr, "burnish: warning: %s\n", printable(w).c_str());
 
     EvaluationReportOptions options;
     if (!o.gloss.empty()) {

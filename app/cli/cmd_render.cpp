@@ -262,7 +262,7 @@ Result<Scene> buildScene(const RenderCliOptions& o) {
         auto map = loadNormalMap(o.input, toNormalMapOptions(o.normalMap));
         if (!map) return Error{map.error()};
         for (const auto& w : map->diagnostics.warnings)
-            std::fprintf(stderr, "burnish: warning: %s\n", w.c_str());
+            std::fprintf(stderr, "burnish: warning: %s\n", printable(w).c_str());
         m.normalMap = std::make_shared<const NormalMap>(std::move(map).value());
     } else {
         auto kind = sampleMapFromName(o.sample);

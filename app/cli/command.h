@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace burnish::cli {
@@ -28,5 +29,8 @@ struct CommandRegistration {
 
 /// Prints "burnish: error: <message>" as one line on stderr and returns the exit code for it (1).
 int fail(const std::string& message);
+/// `text` with its control characters escaped (a newline as \n, others as \xNN): a message with a
+/// path that holds a line break still prints as one line.
+std::string printable(std::string_view text);
 
 } // namespace burnish::cli

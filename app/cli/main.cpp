@@ -21,8 +21,29 @@ std::vector<CommandEntry>& commandRegistry() {
     return registry;
 }
 
+std::string printable(std::string_view text) {
+    std::string out;
+    out.reserve(text.size());
+    for (const char c : text) {
+        const auto u = static_cast<unsigned char>(c);
+        if (c == '\n')
+            out += "\\n";
+        else if (c == '\r')
+            out += "\\r";
+        else if (c == '\t')
+            out += "\\t";
+        else if (u < 0x20 || u == 0x7f) {
+            char hex[8];
+            std::snprintf(hex, sizeof hex, "\\x%02x", unsigned(u));
+            out += hex;
+        } else
+            out += c;
+    }
+    return out;
+}
+
 int fail(const std::string& message) {
-    std::fprintf(stderr, "burnish: error: %s\n", message.c_str());
+    std::fprintf(stderr, "burnish: error: %s\n", printable(message).c_str());
     return 1;
 }
 
@@ -132,7 +153,8 @@ int main(int argc, char** argv) {
         std::string where = "burnish";
         for (const auto& [sub, run] : runners)
             if (sub->parsed()) where = "burnish " + sub->get_name();
-        std::fprintf(stderr, "burnish: error: %s (see '%s --help')\n", e.what(), where.c_str());
+        std::fprintf(stderr, "burnish: error: %s (see '%s --help')\n", printable(e.what()).c_str(),
+                     where.c_str());
         return e.get_exit_code() == 0 ? 2 : e.get_exit_code();
     }
 

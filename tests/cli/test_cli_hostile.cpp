@@ -168,6 +168,29 @@ TEST(CliHostile, InputsThatNeverEndAreRefusedInOneLine) {
     EXPECT_FALSE(fs::exists(dir / "out")) << "nothing written";
 }
 
+// A path holding a line break or an escape sequence is printed escaped (issue 45, point 8): the error
+// stays one line and the terminal is never driven by a file's name.
+TEST(CliHostile, ControlCharactersInPathsArePrintedEscaped) {
+    TempDir dir;
+    const std::string broken = (dir / "a\nb.png").string(), coloured = (dir / "c\x1b[31m.png").string();
+    fs::copy_file(BURNISH_TEST_DATA_DIR "/trak-rust1_nm.png", coloured);
+    for (const std::string& args :
+         {"bake " + shellQuote(broken) + " --preset gltf --out " + shellQuote((dir / "out").string()),
+          "bake " + shellQuote(coloured) + " --preset gltf --format nope --out " +
+              shellQuote((dir / "o").string()),
+          "render " + shellQuote(coloured) + " --mesh " + shellQuote(broken) + " --out " +
+              shellQuote((dir / "x.png").string())}) {
+        SCOPED_TRACE(args);
+        const CliResult r = runBurnish(args);
+        EXPECT_NE(r.exitCode, 0);
+        EXPECT_EQ(lineCount(r.err), 1) << r.err;
+        EXPECT_EQ(r.err.find('\x1b'), std::string::npos) << "a raw escape";
+    }
+    const CliResult missing = runBurnish("bake " + shellQuote(broken) + " --preset gltf --out " +
+                                         shellQuote((dir / "out").string()));
+    EXPECT_NE(missing.err.find("a\\nb.png"), std::string::npos) << missing.err;
+}
+
 TEST(CliHostile, PlantedLinksAreNeverWrittenThrough) {
     TempDir dir;
     const fs::path outside = dir / "outside";

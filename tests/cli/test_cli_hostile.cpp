@@ -191,6 +191,25 @@ TEST(CliHostile, ControlCharactersInPathsArePrintedEscaped) {
     EXPECT_NE(missing.err.find("a\\nb.png"), std::string::npos) << missing.err;
 }
 
+// Huge finite numbers are refused by their option's range, not drawn wrong (issue 45, point 6):
+// --yaw 1e308 drew a black image and exited 0; --light-dir=1e20,0,0 and =-1e20,0,0 drew the same.
+TEST(CliHostile, HugeAnglesAndDirectionsAreRefusedByTheirRange) {
+    TempDir dir;
+    const std::string render = "render --size 8x8 --out " + shellQuote((dir / "x.png").string()) + " ";
+    for (const std::string& option : {"--yaw 1e308", "--yaw -1e30", "--yaw 36001", "--light-dir=1e20,0,0",
+                                      "--light-dir=-1e20,0,0", "--light-dir=0,0,1e7"}) {
+        SCOPED_TRACE(option);
+        const CliResult r = runBurnish(render + option);
+        EXPECT_NE(r.exitCode, 0);
+        EXPECT_EQ(lineCount(r.err), 1) << r.err;
+        EXPECT_NE(r.err.find("not in range"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(dir / "x.png"));
+    }
+    // Inside the ranges: drawn.
+    const CliResult turned = runBurnish(render + "--yaw 720 --light-dir=1e6,1,0");
+    EXPECT_EQ(turned.exitCode, 0) << turned.err;
+}
+
 TEST(CliHostile, PlantedLinksAreNeverWrittenThrough) {
     TempDir dir;
     const fs::path outside = dir / "outside";

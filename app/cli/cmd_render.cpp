@@ -723,13 +723,13 @@ const CommandRegistration registration{
             ->check(CLI::Range(0.01, 1e5));
         sub->add_option("--yaw", o->yaw,
                         "Camera yaw about +y in degrees (default 30; 100 turns either way at most).")
-            ->check(CLI::Range(-36000.0, 36000.0));
+            ->check(rangeOrEmpty(-36000.0, 36000.0));
         sub->add_option("--pitch", o->pitch, "Camera pitch above the horizon in degrees (default 20).")
             ->check(CLI::Range(-89.9, 89.9));
         sub->add_option("--light-dir", o->lightDir,
                         "Direction towards the key light x,y,z, each in [-1e6, 1e6], not all 0 (default "
                         "0.4,0.7,0.6).")
-            ->check(CLI::Range(-1e6, 1e6))
+            ->check(rangeOrEmpty(-1e6, 1e6))
             ->delimiter(',')
             ->expected(3)
             ->type_name("X,Y,Z");

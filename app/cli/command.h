@@ -32,5 +32,8 @@ int fail(const std::string& message);
 /// `text` with its control characters escaped (a newline as \n, others as \xNN): a message with a
 /// path that holds a line break still prints as one line.
 std::string printable(std::string_view text);
+/// CLI::Range(lo, hi) that lets an empty value through to main's own check, which names it as empty
+/// (checks run in the order added, and main adds its own after the command's).
+CLI::Validator rangeOrEmpty(double lo, double hi);
 
 } // namespace burnish::cli

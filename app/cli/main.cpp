@@ -42,6 +42,13 @@ std::string printable(std::string_view text) {
     return out;
 }
 
+CLI::Validator rangeOrEmpty(double lo, double hi) {
+    const CLI::Range range(lo, hi);
+    return CLI::Validator(
+        [range](std::string& value) { return value.empty() ? std::string() : range(value); },
+        range.get_description());
+}
+
 int fail(const std::string& message) {
     std::fprintf(stderr, "burnish: error: %s\n", printable(message).c_str());
     return 1;

@@ -253,7 +253,7 @@ TEST(CliBake, BadManifestEntryFailsBeforeAnythingIsWritten) {
     writeNormalMap(dir / "one.png");
     {
         std::ofstream m(dir / "jobs.json");
-        m << R"({"jobs": [
+        m << R"({"version": 1, "jobs": [
               {"input": "one.png", "out": "out1", "preset": "unity"},
               {"input": "one.png", "out": "out2", "preset": "quake"}
             ]})";
@@ -267,7 +267,7 @@ TEST(CliBake, BadManifestEntryFailsBeforeAnythingIsWritten) {
 
     {
         std::ofstream m(dir / "typo.json");
-        m << R"({"jobs": [{"input": "one.png", "out": "o", "preset": "unity", "metalic": 1}]})";
+        m << R"({"version": 1, "jobs": [{"input": "one.png", "out": "o", "preset": "unity", "metalic": 1}]})";
     }
     r = runBurnish("bake --manifest " + quote((dir / "typo.json").string()));
     EXPECT_NE(r.exitCode, 0);
@@ -282,17 +282,25 @@ TEST(CliBake, ManifestJobsAreAllCheckedBeforeTheFirstRuns) {
     writeNormalMap(dir / "one.png");
     std::ofstream(dir / "garbage.png") << "\x89PNG\r\n\x1a\n this is no image";
     auto write = [&](const char* name, const std::string& text) { std::ofstream(dir / name) << text; };
-    write("clash.json", R"({"jobs": [{"input": "one.png", "out": "out1", "preset": "godot"},
+    write("clash.json", R"({"version": 1, "jobs": [{"input": "one.png", "out": "out1", "preset": "godot"},
                                    {"input": "one.png", "out": "out1", "preset": "gltf"}]})");
-    write("garbage.json", R"({"jobs": [{"input": "one.png", "out": "out1", "preset": "godot"},
+    write("garbage.json", R"({"version": 1, "jobs": [{"input": "one.png", "out": "out1", "preset": "godot"},
                                      {"input": "garbage.png", "out": "out2", "preset": "godot"}]})");
-    write("missing.json", R"({"jobs": [{"input": "one.png", "out": "out1", "preset": "godot"},
+    write("missing.json", R"({"version": 1, "jobs": [{"input": "one.png", "out": "out1", "preset": "godot"},
                                      {"input": "gone.png", "out": "out2", "preset": "godot"}]})");
-    write("nul.json", R"({"jobs": [{"input": "one.png", "out": "out1\u0000/etc", "preset": "godot"}]})");
-    write("away.json", R"({"jobs": [{"input": "one.png", "out": "inside/a", "preset": "godot"},
+    write("nul.json",
+          R"({"version": 1, "jobs": [{"input": "one.png", "out": "out1\u0000/etc", "preset": "godot"}]})");
+    // Two jobs writing one set through a linked folder (issue 45, point 5: both ran, the second
+    // replacing the first).
+    fs::create_directories(dir / "real");
+    fs::create_directory_symlink(dir / "real", dir / "link");
+    write("linked.json", R"({"version": 1, "jobs": [{"input": "one.png", "out": "real/x", "preset": "godot"},
+                                   {"input": "one.png", "out": "link/x", "preset": "godot", "force": true}]})");
+    write("away.json", R"({"version": 1, "jobs": [{"input": "one.png", "out": "inside/a", "preset": "godot"},
                                   {"input": "one.png", "out": "../away", "preset": "godot"}]})");
     for (const auto& [manifest, needle] : std::vector<std::pair<std::string, std::string>>{
              {"clash.json", "which job 1 writes too"},
+             {"linked.json", "which job 1 writes too"},
              {"garbage.json", "garbage.png"},
              {"missing.json", "does not exist"},
              {"nul.json", "NUL"},
@@ -306,11 +314,13 @@ TEST(CliBake, ManifestJobsAreAllCheckedBeforeTheFirstRuns) {
         EXPECT_EQ(countLines(r.err), 1) << r.err;
         EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
         EXPECT_FALSE(fs::exists(dir / "out1"));
+        EXPECT_FALSE(fs::exists(dir / "real" / "x"));
         EXPECT_FALSE(fs::exists(dir / "inside"));
         EXPECT_FALSE(fs::exists(dir.path().parent_path() / "away"));
     }
     // Inside the root, both jobs run; a single job is held to --out-root too.
-    write("inside.json", R"({"jobs": [{"input": "one.png", "out": "inside/a", "preset": "godot"},
+    write("inside.json",
+          R"({"version": 1, "jobs": [{"input": "one.png", "out": "inside/a", "preset": "godot"},
                                     {"input": "one.png", "out": "inside/b/../c", "preset": "godot"}]})");
     auto ok = runBurnish("bake --manifest " + quote((dir / "inside.json").string()) + " --out-root " +
                          quote((dir / "inside").string()));

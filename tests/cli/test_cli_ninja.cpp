@@ -178,7 +178,8 @@ TEST(CliNinja, RefusesWhatItCannotWrite) {
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.err.find("--ninja needs --manifest"), std::string::npos) << r.err;
     // Two jobs writing the same file would make ninja refuse the whole file.
-    writeText(dir / "clash.json", R"({"jobs": [{"input": "one.png", "out": "o", "preset": "godot"},
+    writeText(dir / "clash.json",
+              R"({"version": 1, "jobs": [{"input": "one.png", "out": "o", "preset": "godot"},
                                               {"input": "one.png", "out": "o", "preset": "gltf"}]})");
     r = runBurnish("bake --manifest " + shellQuote((dir / "clash.json").string()) + " --ninja " +
                    shellQuote((dir / "b.ninja").string()));
@@ -188,7 +189,8 @@ TEST(CliNinja, RefusesWhatItCannotWrite) {
     EXPECT_NE(r.err.find("which job 1 writes too"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "b.ninja"));
     // '|' ends a path in Ninja's syntax and has no escape: refused, not written broken.
-    writeText(dir / "bar.json", R"({"jobs": [{"input": "one.png", "out": "a|b", "preset": "godot"}]})");
+    writeText(dir / "bar.json",
+              R"({"version": 1, "jobs": [{"input": "one.png", "out": "a|b", "preset": "godot"}]})");
     r = runBurnish("bake --manifest " + shellQuote((dir / "bar.json").string()) + " --ninja " +
                    shellQuote((dir / "b.ninja").string()));
     EXPECT_NE(r.exitCode, 0);

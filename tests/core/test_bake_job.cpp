@@ -382,14 +382,18 @@ TEST(BakeJob, ManifestJobsStartFromTheDefaultsWithPathsFromItsFolder) {
 TEST(BakeJob, ManifestErrorsNameTheJobAndTheField) {
     test::TempDir dir;
     const std::map<std::string, std::string> cases{
-        {R"({"jobs": [{"input": "a.png", "colour": 1}]})", "job 1: unknown field 'colour'"},
-        {R"({"jobs": [{"input": "a.png"}, {"mips": 1.5}]})", "job 2: 'mips' must be an integer"},
-        {R"({"jobs": [{"force": "yes"}]})", "'force' must be true or false"},
-        {R"({"jobs": []})", "\"jobs\" is empty"},
+        {R"({"version": 1, "jobs": [{"input": "a.png", "colour": 1}]})", "job 1: unknown field 'colour'"},
+        {R"({"version": 1, "jobs": [{"input": "a.png"}, {"mips": 1.5}]})",
+         "job 2: 'mips' must be an integer"},
+        {R"({"version": 1, "jobs": [{"force": "yes"}]})", "'force' must be true or false"},
+        {R"({"version": 1, "jobs": []})", "\"jobs\" is empty"},
         {R"({"version": 2, "jobs": [{}]})", "version must be 1"},
-        {R"({"jobs": [)", "invalid JSON"},
+        {R"({"version": 1, "jobs": [)", "invalid JSON"},
+        {R"({"jobs": [{"input": "a.png"}]})", "no \"version\""},
+        {std::string(R"({"version": 1, "jobs": [{"input": "a.png", "out": "o"}]})") + '\0' + "junk",
+         "a NUL byte at byte 56"},
         // A number beyond a double (found by fuzz_bake_manifest): an error, not an escaping exception.
-        {R"({"jobs": [{"input": "a.png", "power": 1e999}]})", "invalid JSON"}};
+        {R"({"version": 1, "jobs": [{"input": "a.png", "power": 1e999}]})", "invalid JSON"}};
     for (const auto& [text, expected] : cases) {
         const fs::path manifest = dir / "m.json";
         ASSERT_TRUE(writeFileAtomic(manifest, text, Overwrite::Allow));

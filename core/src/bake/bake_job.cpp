@@ -685,6 +685,11 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
 Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const BakeJobSpec& defaults) {
     const auto text = readFile(path);
     if (!text) return Error{"--manifest: " + text.error()};
+    // JSON text holds no raw NUL: one means a file that is not a manifest (the parser stopped at it
+    // and ignored what followed).
+    if (const size_t nul = text->find('\0'); nul != std::string::npos)
+        return Error{"manifest '" + path + "': a NUL byte at byte " + std::to_string(nul) +
+                     " (not a JSON text)"};
     Json root;
     try {
         root = Json::parse(*text);
@@ -697,7 +702,9 @@ Result<std::vector<BakeJobSpec>> readBakeManifest(const std::string& path, const
     for (const auto& [key, value] : root.items())
         if (key != "jobs" && key != "version")
             return Error{where + ": unknown field '" + key + "' (known: version, jobs)"};
-    if (root.contains("version") && !(root["version"].is_number_integer() && root["version"].get<int>() == 1))
+    if (!root.contains("version"))
+        return Error{where + ": no \"version\" (write \"version\": 1, the manifest format it follows)"};
+    if (!(root["version"].is_number_integer() && root["version"].get<int>() == 1))
         return Error{where + ": version must be 1"};
     const fs::path base = fs::path(path).parent_path();
     auto rebase = [&](const std::string& p) {

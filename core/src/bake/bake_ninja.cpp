@@ -139,7 +139,11 @@ Status checkBakeJobs(const std::vector<BakeJob>& jobs, const std::optional<std::
         auto nj = planNinjaJob("burnish", jobs[i], "manifest");
         if (!nj) return Error{at + nj.error()};
         for (const auto& o : nj->outputs) {
-            const auto [it, fresh] = owner.emplace(o, i + 1);
+            // Compared as the files they are: links in the folders resolved (two jobs writing one
+            // file through a linked folder were both run, the second replacing the first).
+            std::error_code ec;
+            const fs::path real = fs::weakly_canonical(fs::path(o), ec);
+            const auto [it, fresh] = owner.emplace(ec ? o : real.string(), i + 1);
             if (!fresh)
                 return Error{at + "writes '" + o + "', which job " + std::to_string(it->second) +
                              " writes too"};

@@ -61,6 +61,8 @@ constexpr int kCompactLayoutBelowWidth = 1500;
 // The docks' arrangement a saved window state belongs to: 2 since the texture view became a dock
 // (a state from 1, with the texture view beside the viewport, hid the viewport behind it).
 constexpr int kLayoutVersion = 2;
+// Redo's second key, beside the platform's (Ctrl+Shift+Z here).
+constexpr QKeyCombination kSecondRedo(Qt::CTRL, Qt::Key_Y);
 constexpr int kCompactLayoutBelowHeight = 900;
 
 QString qs(std::string_view s) {
@@ -90,7 +92,8 @@ protected:
         const auto* key = static_cast<QKeyEvent*>(event);
         const QKeySequence pressed(key->keyCombination());
         auto is = [&](QKeySequence::StandardKey k) { return QKeySequence::keyBindings(k).contains(pressed); };
-        const bool undo = is(QKeySequence::Undo), redo = is(QKeySequence::Redo);
+        const bool undo = is(QKeySequence::Undo),
+                   redo = is(QKeySequence::Redo) || pressed == QKeySequence(kSecondRedo);
         if (!undo && !redo) return false;
         auto* spin = qobject_cast<QAbstractSpinBox*>(watched);
         if (!spin && watched->parent()) spin = qobject_cast<QAbstractSpinBox*>(watched->parent());
@@ -334,7 +337,10 @@ void MainWindow::buildMenus() {
     QAction* undo = m_doc->undoStack()->createUndoAction(this, "&Undo");
     undo->setShortcut(QKeySequence::Undo);
     QAction* redo = m_doc->undoStack()->createRedoAction(this, "&Redo");
-    redo->setShortcut(QKeySequence::Redo);
+    // The platform's redo and Ctrl+Y, which many tools use, both.
+    QList<QKeySequence> redoKeys = QKeySequence::keyBindings(QKeySequence::Redo);
+    if (!redoKeys.contains(QKeySequence(kSecondRedo))) redoKeys << QKeySequence(kSecondRedo);
+    redo->setShortcuts(redoKeys);
     edit->addAction(undo);
     edit->addAction(redo);
 
@@ -362,6 +368,7 @@ void MainWindow::buildMenus() {
     QAction* texture = m_textureDock->toggleViewAction();
     texture->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_6));
     m_viewMenu->addAction(texture);
+    m_viewMenu->addAction("Reset &Layout", this, &MainWindow::resetLayout);
     m_viewMenu->addSeparator();
     // Each shows the texture view (raised from behind its tabs) in that mode; the gloss entries
     // take the preset's own word (retitled by updateStatus).
@@ -859,6 +866,23 @@ void MainWindow::showEvent(QShowEvent* event) {
     m_defaultLayoutPending = false;
     // After the first layout pass, when the docks have their real extents to share.
     QTimer::singleShot(0, this, [this] { applyDefaultDockSizes(); });
+}
+
+void MainWindow::resetLayout() {
+    // Every panel back where the first layout puts it (shown, docked, in its area), then that layout.
+    QDockWidget* environment = findChild<QDockWidget*>("environmentDock");
+    for (QDockWidget* dock : findChildren<QDockWidget*>()) {
+        dock->setFloating(false);
+        dock->show();
+    }
+    addDockWidget(Qt::RightDockWidgetArea, m_materialDock);
+    addDockWidget(Qt::RightDockWidgetArea, m_historyDock);
+    if (environment) tabifyDockWidget(m_historyDock, environment);
+    addDockWidget(Qt::BottomDockWidgetArea, m_chartsDock);
+    addDockWidget(Qt::LeftDockWidgetArea, m_textureDock);
+    tabifyDockWidget(m_historyDock, m_paintDock);
+    m_paintDock->raise();
+    applyDefaultDockSizes();
 }
 
 void MainWindow::applyDefaultDockSizes() {

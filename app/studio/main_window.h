@@ -52,6 +52,8 @@ public:
     PaintTool* paintTool() const { return m_paintTool; }
     /// The dock holding the texture pane (the 2D view).
     QDockWidget* textureDock() const { return m_textureDock; }
+    /// View ▸ Reset Layout: every panel shown, docked and placed as the first layout places it.
+    void resetLayout();
     BakeDialog* bakeDialog();
     QString projectPath() const { return m_projectPath; }
     bool isModified() const;

@@ -1331,6 +1331,52 @@ TEST(MainWindow, AStateSavedForAnotherLayoutIsNotRestored) {
     settings.remove("window/geometry");
 }
 
+// View ▸ Reset Layout brings every panel back, docked, where the first layout puts it (there was
+// no way back from a closed or floated panel but one by one); Ctrl+Y redoes as Ctrl+Shift+Z does.
+TEST(MainWindow, ResetLayoutAndCtrlYRedo) {
+    TestWindow w;
+    w.window.resize(1200, 700);
+    w.window.show();
+    QApplication::processEvents();
+    const QList<QDockWidget*> docks = w.window.findChildren<QDockWidget*>();
+    for (QDockWidget* dock : docks)
+        dock->setFloating(true);
+    w.window.textureDock()->close();
+    QAction* reset = nullptr;
+    for (QAction* a : w.window.menuBar()->actions())
+        if (a->menu() && a->text() == "&View")
+            for (QAction* item : a->menu()->actions())
+                if (item->text() == "Reset &Layout") reset = item;
+    ASSERT_NE(reset, nullptr);
+    reset->trigger();
+    QApplication::processEvents();
+    for (QDockWidget* dock : docks) {
+        EXPECT_FALSE(dock->isFloating()) << dock->objectName().toStdString();
+        EXPECT_FALSE(dock->isHidden()) << dock->objectName().toStdString();
+    }
+    EXPECT_TRUE(w.window.tabifiedDockWidgets(w.window.textureDock())
+                    .contains(w.window.findChild<QDockWidget*>("historyDock")))
+        << "a 1200 px window's compact layout: Texture over History";
+
+    w.window.activateWindow();
+    ASSERT_TRUE(QTest::qWaitForWindowActive(&w.window));
+    MaterialDocument* doc = w.window.document();
+    doc->setGloss(0.25);
+    doc->undoStack()->undo();
+    ASSERT_NE(doc->settings().gloss, 0.25);
+    QAction* redo = nullptr;
+    for (QAction* a : w.window.findChildren<QAction*>())
+        if (a->text().startsWith("&Redo")) redo = a;
+    ASSERT_NE(redo, nullptr);
+    EXPECT_TRUE(redo->shortcuts().contains(QKeySequence(Qt::CTRL | Qt::Key_Y)));
+    EXPECT_TRUE(redo->shortcuts().contains(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z)));
+    // From a number field (the field's own Ctrl+Y would otherwise take it).
+    auto* spin = w.window.findChild<QDoubleSpinBox*>("materialGloss");
+    spin->setFocus();
+    QTest::keyClick(spin, Qt::Key_Y, Qt::ControlModifier);
+    EXPECT_EQ(doc->settings().gloss, 0.25) << "Ctrl+Y redoes from a number field";
+}
+
 TEST(MainWindow, ScreenshotIsNotBlank) {
     TestWindow w;
     w.window.resize(1200, 800);

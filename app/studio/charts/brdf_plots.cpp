@@ -336,8 +336,10 @@ void BrdfPlots::buildGloss() {
         lo = std::min(lo, p.y());
         hi = std::max(hi, p.y());
     }
-    attachAxes(chart, valueAxis(QString("stored %1 g").arg(lower), 0.0, 1.0, "%.1f"),
-               logAxis("Blinn-Phong power n", lo / 2.0, hi * 2.0));
+    // A tick every 0.1, so each label stands at its value (five ticks put "0.3" at 0.25).
+    QValueAxis* storedAxis = valueAxis(QString("stored %1 g").arg(lower), 0.0, 1.0, "%.1f");
+    storedAxis->setTickCount(11);
+    attachAxes(chart, storedAxis, logAxis("Blinn-Phong power n", lo / 2.0, hi * 2.0));
     setChart(m_gloss, chart);
 }
 

@@ -712,7 +712,8 @@ void MaterialDocument::prepareForPainting(PaintLayerKind kind) {
     startWorker(worker);
 }
 
-void MaterialDocument::recomposite(const TexelRect& rect, bool full) {
+const std::vector<float>* MaterialDocument::unpaintedGloss() {
+    if (!m_maps.normal) return nullptr;
     const int w = m_maps.normal->width, h = m_maps.normal->height;
     if (!m_maps.gloss) {
         m_baseGloss.reset();
@@ -723,6 +724,12 @@ void MaterialDocument::recomposite(const TexelRect& rect, bool full) {
         m_baseGloss = gloss ? std::make_shared<const std::vector<float>>(std::move(gloss).value()) : nullptr;
         m_baseGlossOf = m_maps.gloss;
     }
+    return m_baseGloss.get();
+}
+
+void MaterialDocument::recomposite(const TexelRect& rect, bool full) {
+    const int w = m_maps.normal->width, h = m_maps.normal->height;
+    (void)unpaintedGloss(); // m_baseGloss, current
     // The edited rectangle first: a dab's own texels answer at once; only an erase looks further.
     const bool painted = (!full && (anyCoverage(m_glossLayer, rect) || anyCoverage(m_offsetLayer, rect))) ||
                          m_glossLayer.painted() || m_offsetLayer.painted();

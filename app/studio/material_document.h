@@ -220,6 +220,10 @@ public:
     /// rebake it for nothing).
     void strokeCommitted() { emit changed(); }
 
+    /// The authored gloss without paint: the gloss map's values at the normal map's size, or null
+    /// where there is no gloss map (settings().gloss on every texel then).
+    const std::vector<float>* unpaintedGloss();
+
 signals:
     /// Any setting changed (by an edit, undo/redo or reset).
     void changed();

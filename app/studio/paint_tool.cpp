@@ -191,6 +191,10 @@ void PaintTool::attachViewport(Viewport* viewport) {
     viewport->setLiveGloss([this]() -> const LiveGlossBake* { return currentLive(); });
 }
 
+UnpaintedGloss PaintTool::unpainted() const {
+    return {m_doc->unpaintedGloss(), m_doc->settings().gloss};
+}
+
 const LiveGlossBake* PaintTool::currentLive() const {
     // Every stroke so far is in it: it exists, is not being built, and missed nothing.
     return m_paintMode && m_live && !m_liveBuilding && m_liveMissed.empty() ? &*m_live : nullptr;
@@ -263,7 +267,7 @@ void PaintTool::setOverShineMip(int mip) {
     if (m_mipSpin->value() != m_overShineMip) m_mipSpin->setValue(m_overShineMip);
     if (m_live) {
         (void)overShine(*m_live, m_live->authoredGloss(), m_overShineMip, kOverShineStops,
-                        &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine);
+                        &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine, std::nullopt, unpainted());
         updateOverlay(std::nullopt);
     }
 }
@@ -477,7 +481,7 @@ void PaintTool::liveBuilt(quint64 generation, Result<LiveGlossBake> live) {
     }
     m_mipSpin->setRange(0, m_live->levelCount() - 1);
     (void)overShine(*m_live, m_live->authoredGloss(), m_overShineMip, kOverShineStops,
-                    &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine);
+                    &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine, std::nullopt, unpainted());
     updateOverlay(std::nullopt);
     emit liveUpdated();
 }
@@ -502,7 +506,7 @@ void PaintTool::onLayersChanged(const TexelRect& rect) {
     }
     liveRebaked();
     (void)overShine(*m_live, *authored, m_overShineMip, kOverShineStops,
-                    &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine, rect);
+                    &m_doc->paintLayer(PaintLayerKind::Gloss), m_overShine, rect, unpainted());
     updateOverlay(rect);
     emit liveUpdated();
 }

@@ -86,6 +86,9 @@ private:
     void syncWidgets();
     /// Hands the last rebakeRegion's rectangles to the attached viewport.
     void liveRebaked();
+    /// The document's gloss without paint, for the over-shine warning (only paint that raised the
+    /// shine is flagged).
+    UnpaintedGloss unpainted() const;
     /// The gloss layer and its tooltips in the preset's own word (gloss or roughness).
     void retitle();
     QString term(bool capitalised = true) const;

@@ -454,6 +454,49 @@ TEST(Paint, OverShineFlagsMaxGlossOnBumpsAndNotOnAFlatMap) {
     EXPECT_GT(fresh.flaggedCount, 0u);
 }
 
+// A stroke rougher than what it covers is never flagged (issue 48, point 2: a gloss-0.3 stroke on a
+// 0.7 base drew the over-shine ring on 2050 texels, where its soft edge blends into the base that
+// over-shines already); the same stroke shinier than the base is, on the bumps.
+TEST(Paint, OverShineFlagsOnlyPaintThatRaisedTheShine) {
+    const int size = 64, mip = 3;
+    const GlossEncoding enc = GlossEncoding::blackOps();
+    const auto map = std::make_shared<const NormalMap>(makeSampleNormalMap(SampleMapKind::Bumpy, size));
+    for (const auto& [base, painted, flags] : {std::tuple{0.9, 0.3f, false}, std::tuple{0.3, 0.95f, true}}) {
+        SCOPED_TRACE(painted);
+        PaintLayer paint = layer(size, size);
+        PaintStroke s = stroke(paint, brush(12.0, 0.3, 1.0, painted)); // a soft edge blending into the base
+        ASSERT_TRUE(s.addPoint({32.0, 32.0}));
+        std::vector<float> authored(size_t(size * size));
+        ASSERT_TRUE(compositeAuthoredGloss(nullptr, base, &paint, nullptr, enc, size, size,
+                                           TexelRect::full(size, size), authored));
+        BakeOptions options;
+        options.authoredGloss = authored;
+        auto live = LiveGlossBake::create(map, options);
+        ASSERT_TRUE(live) << live.error();
+        OverShineMap measured, unknown;
+        ASSERT_TRUE(overShine(*live, authored, mip, kOverShineStops, &paint, measured, std::nullopt,
+                              UnpaintedGloss{nullptr, base}));
+        ASSERT_TRUE(overShine(*live, authored, mip, kOverShineStops, &paint, unknown));
+        if (flags) {
+            EXPECT_GT(measured.flaggedCount, 0u);
+            EXPECT_EQ(measured.flaggedCount, unknown.flaggedCount) << "all of it raised the shine";
+        } else {
+            EXPECT_EQ(measured.flaggedCount, 0u);
+            EXPECT_GT(unknown.flaggedCount, 0u) << "without the unpainted gloss: the ring of the report";
+        }
+    }
+    // A per-texel unpainted gloss of the wrong size is an error.
+    PaintLayer paint = layer(size, size);
+    std::vector<float> authored(size_t(size * size), 0.5f), wrong(7, 0.5f);
+    BakeOptions options;
+    options.authoredGloss = authored;
+    auto live = LiveGlossBake::create(map, options);
+    ASSERT_TRUE(live);
+    OverShineMap m;
+    EXPECT_FALSE(overShine(*live, authored, mip, kOverShineStops, &paint, m, std::nullopt,
+                           UnpaintedGloss{&wrong, 0.0}));
+}
+
 TEST(Paint, LayersRoundTripThroughExr) {
     const auto dir = std::filesystem::temp_directory_path() / ("burnish-paint-" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);

@@ -583,7 +583,7 @@ glm::ivec2 LiveGlossBake::texelAtLevel(int k, int x, int y) const {
 
 Status overShine(const LiveGlossBake& bake, const std::vector<float>& authoredGloss, int mip,
                  double thresholdStops, const PaintLayer* paintedMask, OverShineMap& inOut,
-                 const std::optional<TexelRect>& region) {
+                 const std::optional<TexelRect>& region, const std::optional<UnpaintedGloss>& unpainted) {
     const int w = bake.width(), h = bake.height();
     const size_t n = size_t(w) * size_t(h);
     if (authoredGloss.size() != n) return Error{"the authored gloss does not match the baked map's size"};
@@ -591,6 +591,8 @@ Status overShine(const LiveGlossBake& bake, const std::vector<float>& authoredGl
         (paintedMask->width != w || paintedMask->height != h || !checkLayer(*paintedMask, "the")))
         return Error{"the paint layer does not match the baked map's size"};
     if (!std::isfinite(thresholdStops)) return Error{"the over-shine threshold must be finite"};
+    if (unpainted && unpainted->values && unpainted->values->size() != n)
+        return Error{"the unpainted gloss does not match the baked map's size"};
     const int k = std::clamp(mip, 0, bake.levelCount() - 1);
     TexelRect r = TexelRect::full(w, h);
     if (region && inOut.width == w && inOut.height == h && inOut.mip == k && inOut.stops.size() == n) {
@@ -619,7 +621,9 @@ Status overShine(const LiveGlossBake& bake, const std::vector<float>& authoredGl
             const double pv = methodLobe(Method::VarianceToGloss, momentsWithVariance(v), np).power;
             // (n+1)/(p+1) >= 1 as p <= n; both terms are >= 1, so the log is finite.
             const double stops = std::max(0.0, std::log2((np + 1.0) / (pv + 1.0)));
-            const bool painted = !paintedMask || paintedMask->coverageAt(i) > 0.0f;
+            // Painted, and (when the unpainted gloss is known) made shinier by the paint.
+            const bool painted = (!paintedMask || paintedMask->coverageAt(i) > 0.0f) &&
+                                 (!unpainted || np > encoding.power(unpainted->at(i)));
             const uint8_t flag = stops > thresholdStops && painted ? 1 : 0;
             uint32_t& under = inOut.flaggedUnder[size_t(p.y) * size_t(inOut.mipWidth) + size_t(p.x)];
             if (flag && !inOut.flagged[i]) {

@@ -272,13 +272,23 @@ struct OverShineMap {
 /// Default over-shine threshold: 1 stop, where the painted lobe is narrower than the normal spread.
 inline constexpr double kOverShineStops = 1.0;
 
+/// What the authored gloss is without paint (the gloss map's values, or one base value): with it,
+/// overShine flags only texels the paint made shinier — a stroke rougher than what it covers never
+/// asks for shine the normals cannot give, however much the surface under it over-shines already.
+struct UnpaintedGloss {
+    const std::vector<float>* values = nullptr; // per texel, in the bake's encoding; null: `value`
+    double value = 0.0;
+    float at(size_t i) const { return values ? (*values)[i] : float(value); }
+};
+
 /// Computes (or, with `region`, updates inside it) the over-shine measure of `authoredGloss` (the
 /// whole map, in the bake's encoding) at `mip` (clamped to the chain). With `paintedMask`, only
-/// texels the mask's layer covers are flagged. `inOut` is resized on a full computation. Errors:
-/// sizes that do not match.
+/// texels the mask's layer covers are flagged; with `unpainted`, only those whose painted power is
+/// above the unpainted one. `inOut` is resized on a full computation. Errors: sizes that do not match.
 Status overShine(const LiveGlossBake& bake, const std::vector<float>& authoredGloss, int mip,
                  double thresholdStops, const PaintLayer* paintedMask, OverShineMap& inOut,
-                 const std::optional<TexelRect>& region = std::nullopt);
+                 const std::optional<TexelRect>& region = std::nullopt,
+                 const std::optional<UnpaintedGloss>& unpainted = std::nullopt);
 
 /// Writes a layer as a float EXR with channels "value" and "coverage", atomically (temporary
 /// file and rename). Errors name the file.

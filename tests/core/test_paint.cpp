@@ -3,6 +3,9 @@
 #include <burnish/core/prefilter/sample_maps.h>
 
 #include <glm/geometric.hpp>
+
+#include "brush_of.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -44,12 +47,7 @@ PaintLayer layer(int w, int h, PaintLayerKind kind = PaintLayerKind::Gloss) {
 }
 
 Brush brush(double radius, double hardness, double opacity, float value) {
-    Brush b;
-    b.radius = radius;
-    b.hardness = hardness;
-    b.opacity = opacity;
-    b.value = value;
-    return b;
+    return test::brushOf(radius, hardness, opacity, value);
 }
 
 PaintStroke stroke(PaintLayer& l, const Brush& b, BorderMode border = BorderMode::Wrap) {

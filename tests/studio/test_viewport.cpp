@@ -8,6 +8,7 @@
 #include "viewport.h"
 #include "viewport_panel.h"
 
+#include "brush_of.h"
 #include "temp_dir.h"
 #include <fstream>
 #include <gtest/gtest.h>
@@ -216,17 +217,14 @@ TEST(Viewport, ABackgroundBakeIsShownUntilItLands) {
     EXPECT_FALSE(t.view.bakingShown());
 }
 
+using test::brushOf;
+
 /// Paints one gloss stroke through the paint tool (one undo step): a brush as wide as the sample,
 /// dragged across its middle row, so the whole visible surface takes the painted gloss.
 void paintAcross(MaterialDocument& doc, float gloss) {
     TextureView canvas;
     PaintTool tool(&doc, &canvas);
-    Brush b;
-    b.radius = kSampleSize; // covers the map from the middle row, with wrap-around
-    b.hardness = 1.0;
-    b.opacity = 1.0;
-    b.value = gloss;
-    tool.setBrush(b);
+    tool.setBrush(brushOf(kSampleSize, 1.0, 1.0, gloss)); // covers the map from the middle row, wrapping
     tool.pressAt(QPointF(0.0, kSampleSize / 2.0));
     tool.moveTo(QPointF(kSampleSize, kSampleSize / 2.0));
     tool.release();
@@ -258,14 +256,9 @@ TEST(Viewport, EachDabOfAStrokeRedrawsBeforeTheStrokeEnds) {
     QSignalSpy strokeEnds(&t.doc, &MaterialDocument::changed);
     TextureView canvas;
     PaintTool tool(&t.doc, &canvas);
-    Brush b;
     // Half the map wide, hard, full strength, gloss 0 (power ~1 against the base 0.7): a dab
     // visibly flattens the highlight where it lands.
-    b.radius = kSampleSize / 2.0;
-    b.hardness = 1.0;
-    b.opacity = 1.0;
-    b.value = 0.0f;
-    tool.setBrush(b);
+    tool.setBrush(brushOf(kSampleSize / 2.0, 1.0, 1.0, 0.0f));
     // A redraw, its re-bake included, must come within this on a loaded software rasterizer.
     constexpr int kFrameTimeoutMs = 30000;
 
@@ -323,12 +316,7 @@ TEST(Viewport, StrokesDrawnFromTheLiveBakeAreTheFramesOfABake) {
         QApplication::processEvents();
         return view.grabFrame().convertToFormat(QImage::Format_RGB32);
     };
-    Brush b;
-    b.radius = kSampleSize / 6.0;
-    b.hardness = 0.5;
-    b.opacity = 1.0;
-    b.value = 0.1f;
-    tool.setBrush(b);
+    tool.setBrush(brushOf(kSampleSize / 6.0, 0.5, 1.0, 0.1f));
     const int before = t.view.liveGlossFrames();
     tool.pressAt(QPointF(kSampleSize * 0.3, kSampleSize * 0.5));
     const QImage firstDab = t.grab();
@@ -342,8 +330,7 @@ TEST(Viewport, StrokesDrawnFromTheLiveBakeAreTheFramesOfABake) {
     tool.release();
     EXPECT_LT(meanAbsDiff(t.grab(), bakedFrame(), 0, kWidth), 1e-9) << "the stroke's end";
     // A second stroke, undone: the first one's paint stays, drawn from the live bake's region.
-    b.value = 0.95f;
-    tool.setBrush(b);
+    tool.setBrush(brushOf(kSampleSize / 6.0, 0.5, 1.0, 0.95f));
     tool.pressAt(QPointF(kSampleSize * 0.5, kSampleSize * 0.2));
     tool.release();
     (void)t.grab();

@@ -517,6 +517,8 @@ void Viewport::drawInto(unsigned framebuffer, int width, int height) {
         }
     }
     if (status) status = e.a->setScene(scene);
+    // The drawn gloss moved on (a bake landed): the old base only held a snapshot buffer alive.
+    if (m_liveGlossBase && e.a->drawnGlossMap() != m_liveGlossBase) m_liveGlossBase.reset();
     if (status) status = e.a->render(left);
     if (status && m_view.split) {
         if (m_view.right.reference) {

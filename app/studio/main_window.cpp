@@ -175,6 +175,8 @@ MainWindow::MainWindow(QWidget* parent)
     // float or close (View menu), and the first layout gives the viewport the most room
     // (applyDefaultDockSizes).
     auto* viewport = new ViewportPanel(m_doc, this);
+    connect(viewport, &ViewportPanel::errorOccurred, this,
+            [this](const QString& title, const QString& text) { showMessage(title, text); });
     setCentralWidget(viewport);
     m_texturePane = new TexturePane(m_doc, this);
     m_textureDock = new QDockWidget("Texture", this);

@@ -687,7 +687,7 @@ float Viewport::cameraDistance() {
 Status Viewport::setMesh(render::MeshKind mesh, const QString& objPath) {
     if (mesh == render::MeshKind::Obj) {
         auto loaded = render::loadObj(objPath.toStdString());
-        if (!loaded) return Error{"OBJ '" + objPath.toStdString() + "': " + loaded.error()};
+        if (!loaded) return Error{loaded.error()}; // it names the file
         m_radiusPath = objPath;
         m_objRadius = farthestVertex(*loaded);
     }

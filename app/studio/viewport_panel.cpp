@@ -255,12 +255,18 @@ void ViewportPanel::chooseMesh(int index) {
         }
         settings.setValue("folders/meshes", QFileInfo(path).absolutePath());
     }
-    // A refused OBJ leaves the mesh as it was; the viewport's error line says why.
-    if (const Status st = m_viewport->setMesh(kind, path); !st) {
-        m_viewport->setToolTip(QString::fromStdString(st.error()));
-        m_mesh->setToolTip(QString::fromStdString(st.error()));
-    }
+    loadMesh(kind, path);
+}
+
+bool ViewportPanel::loadMesh(render::MeshKind kind, const QString& path) {
+    // A refused OBJ leaves the mesh as it was and says why where the user looks (it hid in a tooltip).
+    const Status st = m_viewport->setMesh(kind, path);
     syncFromView();
+    if (!st) {
+        emit errorOccurred("Cannot use this mesh", QString::fromStdString(st.error()));
+        return false;
+    }
+    return true;
 }
 
 void ViewportPanel::chooseMethodB(int index) {

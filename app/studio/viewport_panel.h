@@ -5,6 +5,8 @@
 
 #include "material_document.h"
 
+#include <burnish/render/features.h>
+
 #include <QWidget>
 
 class QCheckBox;
@@ -43,6 +45,13 @@ public:
     QLabel* lightReadout() const { return m_lightValue; }
     /// The height the control rows take at `width` (they wrap onto more rows when narrower).
     int controlsHeightForWidth(int width) const;
+    /// Draws `kind` (an OBJ from `path`). A refused mesh leaves the drawn one and is said in
+    /// errorOccurred (the window shows it); false then.
+    bool loadMesh(render::MeshKind kind, const QString& path = {});
+
+signals:
+    /// A refusal to show the user (a mesh that cannot be read): a title and the reason.
+    void errorOccurred(const QString& title, const QString& message);
 
 protected:
     /// Keeps the panel's minimum height at the control rows its width needs plus the view's

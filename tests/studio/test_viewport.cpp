@@ -15,6 +15,7 @@
 
 #include <QApplication>
 #include <QCheckBox>
+#include <QComboBox>
 #include <QElapsedTimer>
 #include <QImage>
 #include <QLabel>
@@ -134,6 +135,31 @@ TEST(Viewport, ObjMeshesDrawAndBadOnesAreRefused) {
     ASSERT_FALSE(bad);
     EXPECT_NE(bad.error().find("junk.obj"), std::string::npos) << bad.error();
     EXPECT_EQ(t.view.viewSettings().objPath, quad) << "the mesh drawn before stays";
+}
+
+// A refused OBJ is said where the user looks (issue 48, point 3: it hid in the mesh box's tooltip,
+// with the path twice, and stayed there): the window shows one message naming the file once, the
+// mesh drawn before stays, and nothing is left in the tooltips.
+TEST(Viewport, ARefusedMeshIsShownToTheUser) {
+    MainWindow window;
+    window.setAutosaveDelay(0);
+    QStringList shown;
+    window.showMessage = [&](const QString& title, const QString& text) { shown << title + ": " + text; };
+    auto* panel = window.findChild<ViewportPanel*>();
+    ASSERT_NE(panel, nullptr);
+    test::TempDir dir;
+    const QString junk = QString::fromStdString((dir / "renamed.obj").string());
+    std::ofstream(dir / "renamed.obj") << "\x89PNG this was an image";
+    EXPECT_FALSE(panel->loadMesh(render::MeshKind::Obj, junk));
+    ASSERT_EQ(shown.size(), 1);
+    EXPECT_TRUE(shown[0].startsWith("Cannot use this mesh: ")) << shown[0].toStdString();
+    EXPECT_EQ(shown[0].count("renamed.obj"), 1) << shown[0].toStdString();
+    EXPECT_EQ(panel->viewport()->viewSettings().mesh, render::MeshKind::Sphere) << "the sphere stays";
+    EXPECT_TRUE(panel->meshCombo()->toolTip().isEmpty() ||
+                !panel->meshCombo()->toolTip().contains("renamed"));
+    const QString quad = QString(BURNISH_SOURCE_DIR) + "/tests/fuzz/corpus/obj/quad.obj";
+    EXPECT_TRUE(panel->loadMesh(render::MeshKind::Obj, quad));
+    EXPECT_EQ(shown.size(), 1) << "a mesh that loads says nothing";
 }
 
 // The distance counts in the mesh's radii: at the closest setting the camera stays outside an OBJ

@@ -58,12 +58,12 @@ constexpr int kDefaultAutosaveDelaySeconds = 3;
 // Below this window size the first layout is the compact one (see applyDefaultDockSizes): paint,
 // viewport and material side by side need about 1500 px, the charts under the viewport about 900.
 constexpr int kCompactLayoutBelowWidth = 1500;
+constexpr int kCompactLayoutBelowHeight = 900;
 // The docks' arrangement a saved window state belongs to: 2 since the texture view became a dock
 // (a state from 1, with the texture view beside the viewport, hid the viewport behind it).
 constexpr int kLayoutVersion = 2;
 // Redo's second key, beside the platform's (Ctrl+Shift+Z here).
 constexpr QKeyCombination kSecondRedo(Qt::CTRL, Qt::Key_Y);
-constexpr int kCompactLayoutBelowHeight = 900;
 
 QString qs(std::string_view s) {
     return QString::fromUtf8(s.data(), int(s.size()));
@@ -202,14 +202,12 @@ MainWindow::MainWindow(QWidget* parent)
     m_materialDock = new QDockWidget("Material", this);
     m_materialDock->setObjectName("materialDock");
     m_materialDock->setWidget(scroll);
-    addDockWidget(Qt::RightDockWidgetArea, m_materialDock);
 
     auto* history = new QUndoView(m_doc->undoStack(), this);
     history->setEmptyLabel("<opened>");
     m_historyDock = new QDockWidget("History", this);
     m_historyDock->setObjectName("historyDock");
     m_historyDock->setWidget(history);
-    addDockWidget(Qt::RightDockWidgetArea, m_historyDock);
 
     // The environment lighting of the viewport, tabbed with the history. The library lists the HDR
     // files of $BURNISH_ENVIRONMENTS (the repository's shared data folder holds courtyard and studio).
@@ -218,9 +216,6 @@ MainWindow::MainWindow(QWidget* parent)
     auto* environmentDock = new QDockWidget("Environment", this);
     environmentDock->setObjectName("environmentDock");
     environmentDock->setWidget(environment);
-    addDockWidget(Qt::RightDockWidgetArea, environmentDock);
-    tabifyDockWidget(m_historyDock, environmentDock);
-    m_historyDock->raise();
 
     // The charts (specular colour, gloss, BRDF plots, error vs cost) under the central pane.
     // The right column runs the window's full height, so the Material panel is not squeezed above
@@ -228,13 +223,7 @@ MainWindow::MainWindow(QWidget* parent)
     setCorner(Qt::BottomRightCorner, Qt::RightDockWidgetArea);
     auto* charts = new ChartsPanel(m_doc, this);
     m_chartsDock = charts;
-    addDockWidget(Qt::BottomDockWidgetArea, charts);
-    // The wide arrangement (a compact window rearranges it: applyDefaultDockSizes): the 2D texture
-    // view left of the viewport, the Paint panel a tab beside History and Environment.
-    addDockWidget(Qt::LeftDockWidgetArea, m_textureDock);
-    addDockWidget(Qt::RightDockWidgetArea, m_paintDock);
-    tabifyDockWidget(m_historyDock, m_paintDock);
-    m_paintDock->raise();
+    placeDocks();
 
     m_statusPower = new QLabel(this);
     m_statusGloss = new QLabel(this);
@@ -374,9 +363,12 @@ void MainWindow::buildMenus() {
     m_viewMenu->addSeparator();
     // Each shows the texture view (raised from behind its tabs) in that mode; the gloss entries
     // take the preset's own word (retitled by updateStatus).
-    auto showTexture = [this](TextureMode mode) {
+    auto raiseTexture = [this] {
         m_textureDock->show();
         m_textureDock->raise();
+    };
+    auto showTexture = [this, raiseTexture](TextureMode mode) {
+        raiseTexture();
         m_texturePane->setMode(mode);
     };
     m_viewMenu->addAction("Normal Map", QKeySequence(Qt::Key_1), this,
@@ -385,9 +377,8 @@ void MainWindow::buildMenus() {
                                              [showTexture] { showTexture(TextureMode::Gloss); });
     m_bakedAction = m_viewMenu->addAction("Baked Gloss", QKeySequence(Qt::Key_3), this,
                                           [showTexture] { showTexture(TextureMode::BakedGloss); });
-    m_viewMenu->addAction("Fit Texture", QKeySequence(Qt::Key_F), this, [this] {
-        m_textureDock->show();
-        m_textureDock->raise();
+    m_viewMenu->addAction("Fit Texture", QKeySequence(Qt::Key_F), this, [this, raiseTexture] {
+        raiseTexture();
         m_texturePane->view()->fit();
     });
 
@@ -870,20 +861,27 @@ void MainWindow::showEvent(QShowEvent* event) {
     QTimer::singleShot(0, this, [this] { applyDefaultDockSizes(); });
 }
 
+void MainWindow::placeDocks() {
+    // The wide arrangement (a compact window rearranges it: applyDefaultDockSizes): Material over
+    // History, Environment and Paint at the right, the charts under the views, the 2D texture view
+    // left of the viewport.
+    addDockWidget(Qt::RightDockWidgetArea, m_materialDock);
+    addDockWidget(Qt::RightDockWidgetArea, m_historyDock);
+    if (auto* environment = findChild<QDockWidget*>("environmentDock"))
+        tabifyDockWidget(m_historyDock, environment);
+    tabifyDockWidget(m_historyDock, m_paintDock);
+    addDockWidget(Qt::BottomDockWidgetArea, m_chartsDock);
+    addDockWidget(Qt::LeftDockWidgetArea, m_textureDock);
+    m_paintDock->raise();
+}
+
 void MainWindow::resetLayout() {
-    // Every panel back where the first layout puts it (shown, docked, in its area), then that layout.
-    QDockWidget* environment = findChild<QDockWidget*>("environmentDock");
+    // Every panel shown and docked, placed as at the first start, then that start's proportions.
     for (QDockWidget* dock : findChildren<QDockWidget*>()) {
         dock->setFloating(false);
         dock->show();
     }
-    addDockWidget(Qt::RightDockWidgetArea, m_materialDock);
-    addDockWidget(Qt::RightDockWidgetArea, m_historyDock);
-    if (environment) tabifyDockWidget(m_historyDock, environment);
-    addDockWidget(Qt::BottomDockWidgetArea, m_chartsDock);
-    addDockWidget(Qt::LeftDockWidgetArea, m_textureDock);
-    tabifyDockWidget(m_historyDock, m_paintDock);
-    m_paintDock->raise();
+    placeDocks();
     applyDefaultDockSizes();
 }
 

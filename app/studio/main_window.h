@@ -147,6 +147,8 @@ private:
     /// whole middle, at least half the window; Paint and the charts are tabs behind Material, the
     /// texture view a tab over History and Environment.
     void applyDefaultDockSizes();
+    /// Puts every dock in its area and tab group as the first start does (constructor, Reset Layout).
+    void placeDocks();
     void showGuide();
     void fitToScreen();
 

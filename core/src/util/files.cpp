@@ -567,7 +567,7 @@ Status requireRegularFile(const fs::path& path, std::string_view what) {
                        : fs::is_character_file(st) ? "a character device"
                        : fs::is_block_file(st)     ? "a block device"
                        : fs::is_socket(st)         ? "a socket"
-                                                   : "not a regular file";
+                                                   : "a special file";
     return Error{std::string(what) + " '" + path.string() + "' is " + kind +
                  ", not a regular file (Burnish reads its inputs from files, which end)"};
 }

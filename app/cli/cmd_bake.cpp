@@ -6,18 +6,27 @@
 #include "command.h"
 #include "common.h"
 
+#include <burnish/core/bake/bake_farm.h>
 #include <burnish/core/bake/bake_job.h>
 #include <burnish/core/bake/bake_ninja.h>
 #include <burnish/core/bake/export.h>
 #include <burnish/core/bake/presets.h>
 #include <burnish/core/prefilter/methods.h>
 
+#include <burnish/core/util/files.h>
+#include <burnish/core/util/hash.h>
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -95,8 +104,117 @@ std::string helpFooter() {
         "and\n"
         "  bake.json's \"detail\" entry gives the constant variance a shader adds beyond the fade.\n"
         "--ninja FILE (with --manifest) writes a Ninja build file instead of baking: `ninja -f FILE -j N`\n"
-        "  bakes the jobs in parallel and reruns only those whose inputs changed.\n";
+        "  bakes the jobs in parallel and reruns only those whose inputs changed.\n"
+        "A library in parts (with --manifest): --only 3-7,12 bakes those jobs; --skip-current leaves every\n"
+        "  set whose bake.json records the job's options and its inputs' hashes as they are now;\n"
+        "  --keep-going goes past a failed job; --check says which sets are current, failed, stale or not\n"
+        "  baked. --slurm DIR writes DIR/burnish.sbatch (a Slurm job array, one run of jobs per task) and\n"
+        "  DIR/burnish-check.sbatch (run after it: DIR/summary.json and summary.txt) and prints the sbatch\n"
+        "  line that submits both (README, \"Bake a library on a farm\").\n";
     return text;
+}
+
+/// The options of a library's bake in parts (--only, --slurm, --check...).
+struct FarmOptions {
+    std::string only;
+    bool skipCurrent = false;
+    bool keepGoing = false;
+    std::string statusDir;
+    int threads = 0;
+    std::string slurm;
+    size_t tasks = 0;
+    std::string partition;
+    std::string memPerTask;
+    int cpusPerTask = 1;
+    bool check = false;
+    std::string manifestHash;
+};
+
+/// The running burnish binary, which build statements and Slurm tasks run.
+Result<std::string> runningProgram(const std::string& option) {
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (ec)
+        return Error{option + ": cannot find the running burnish binary (/proc/self/exe): " + ec.message()};
+    return exe.string();
+}
+
+/// The job options given on the command line (every manifest job's defaults), as they were given, for
+/// the commands a Slurm plan runs: everything but the manifest, the output's form and the options of
+/// the bake in parts, which the plan sets itself.
+std::vector<std::string> jobDefaults(const CLI::App& cmd) {
+    static const std::set<std::string> kNotDefaults = {
+        "--manifest",     "--json",          "--ninja",      "--force",
+        "--only",         "--skip-current",  "--keep-going", "--status-dir",
+        "--threads",      "--slurm",         "--tasks",      "--partition",
+        "--mem-per-task", "--cpus-per-task", "--check",      "--manifest-fnv1a64",
+        "--help"};
+    std::vector<std::string> args;
+    for (const CLI::Option* o : cmd.get_options()) {
+        if (o->count() == 0 || o->get_lnames().empty()) continue;
+        const std::string name = "--" + o->get_lnames().front();
+        if (kNotDefaults.count(name)) continue;
+        if (o->get_type_size() == 0) {
+            args.push_back(name);
+            continue;
+        }
+        for (const auto& value : o->results())
+            args.insert(args.end(), {name, value});
+    }
+    return args;
+}
+
+/// `burnish bake --manifest M --check [--slurm DIR]`: every set against what its job would bake now.
+int checkSets(const std::string& manifest, const std::vector<BakeJobSpec>& specs, const FarmOptions& farm,
+              bool json) {
+    std::vector<Result<BakeJob>> jobs;
+    for (const auto& s : specs)
+        jobs.push_back(resolveBakeJob(s));
+    std::optional<fs::path> statusDir;
+    if (!farm.statusDir.empty()) statusDir = fs::path(farm.statusDir);
+    std::vector<std::pair<size_t, size_t>> chunks;
+    Json warnings = Json::array();
+    const fs::path folder = farm.slurm.empty() ? fs::path() : fs::absolute(farm.slurm).lexically_normal();
+    if (!farm.slurm.empty()) {
+        const auto plan = readSlurmPlan(folder);
+        if (!plan) return fail(plan.error());
+        chunks = plan->chunks;
+        if (!statusDir) statusDir = folder / "status";
+        const auto hash = fileFnv1a64(manifest);
+        if (hash && hashHex(*hash) != plan->manifestHash)
+            warnings.push_back("the manifest changed since this plan was written: its tasks bake other jobs "
+                               "than the manifest's now (write the plan again with --slurm DIR)");
+    }
+    Json summary = summarizeBakeSets(manifest, specs, jobs, statusDir, chunks);
+    summary["warnings"] = warnings;
+    const std::string rerunJobs = summary["rerunJobs"];
+    if (!farm.slurm.empty()) {
+        summary["slurm"] = folder.string();
+        summary["rerun"] = "Rerun the tasks holding them (sets already current are skipped), then this "
+                           "check:\n  jid=$(sbatch "
+                           "--parsable --array=" +
+                           summary["rerunTasks"].get<std::string>() + " " +
+                           shellQuoted((folder / "burnish.sbatch").string()) +
+                           ") && sbatch --dependency=afterany:${jid%%;*} " +
+                           shellQuoted((folder / "burnish-check.sbatch").string());
+    } else if (!rerunJobs.empty()) {
+        summary["rerun"] = "Rebake them: burnish bake --manifest " + shellQuoted(manifest) + " --only " +
+                           rerunJobs + " --force --skip-current --keep-going";
+    }
+    std::string text = bakeSummaryText(summary);
+    for (const auto& w : warnings)
+        text += "warning: " + w.get<std::string>() + "\n";
+    if (!farm.slurm.empty()) {
+        for (const auto& [name, bytes] : {std::pair{folder / "summary.json", summary.dump(2) + "\n"},
+                                          std::pair{folder / "summary.txt", text}})
+            if (const Status s = writeFileAtomic(name, bytes, Overwrite::Allow); !s)
+                return fail("--check: " + s.error());
+    }
+    if (json)
+        std::printf("%s\n", summary.dump(2).c_str());
+    else
+        std::fputs(text.c_str(), stdout);
+    return summary["counts"]["current"].get<size_t>() == specs.size() ? 0 : 1;
 }
 
 } // namespace
@@ -182,8 +300,61 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
     // Built lazily: listing the presets parses them, which other subcommands need not pay for.
     cmd->footer([] { return helpFooter(); });
 
-    return [spec, manifest, json, ninja, outRoot]() -> int {
+    auto farm = std::make_shared<FarmOptions>();
+    auto* farmGroup = cmd->add_option_group("Library", "Baking a manifest in parts, resuming, on Slurm");
+    farmGroup
+        ->add_option("--only", farm->only, "With --manifest: bake only these jobs, by number (1-5,9,12-13)")
+        ->type_name("LIST");
+    farmGroup->add_flag("--skip-current", farm->skipCurrent,
+                        "Skip every job whose output folder already holds its set as it would bake now "
+                        "(bake.json records the same options and input hashes, its files are there)");
+    farmGroup->add_flag("--keep-going", farm->keepGoing,
+                        "Go on with the other jobs when one fails (exit status 1 at the end, the failed "
+                        "jobs named)");
+    farmGroup
+        ->add_option("--status-dir", farm->statusDir,
+                     "Write each job's outcome (baked, current, failed and its error) to "
+                     "DIR/job-N.json")
+        ->type_name("DIR");
+    farmGroup->add_option("--threads", farm->threads, "Bake with at most N threads (default: every core)")
+        ->check(CLI::Range(1, 4096));
+    farmGroup
+        ->add_option("--slurm", farm->slurm,
+                     "With --manifest: write a Slurm job array baking it (DIR/burnish.sbatch) and a "
+                     "check to run after it (DIR/burnish-check.sbatch), print how to submit them; "
+                     "with --check: check the sets that plan bakes")
+        ->type_name("DIR");
+    farmGroup
+        ->add_option("--tasks", farm->tasks,
+                     "With --slurm: array tasks, each baking a run of consecutive jobs (default: one "
+                     "per job, at most 1000)")
+        ->check(CLI::Range(size_t(1), kMaxSlurmTasks));
+    farmGroup->add_option("--partition", farm->partition, "With --slurm: the Slurm partition")
+        ->type_name("NAME");
+    farmGroup
+        ->add_option("--mem-per-task", farm->memPerTask,
+                     "With --slurm: memory each task asks for: auto (Burnish's own estimate for the "
+                     "largest job) or a size as sbatch --mem reads it (4000M, 8G)")
+        ->type_name("SIZE");
+    farmGroup
+        ->add_option("--cpus-per-task", farm->cpusPerTask,
+                     "With --slurm: CPUs each task asks for and bakes with (default 1)")
+        ->check(CLI::Range(1, 4096));
+    farmGroup->add_flag("--check", farm->check,
+                        "With --manifest: bake nothing; say which sets are current, failed (with the error "
+                        "their bake left in --status-dir), stale or not baked; exit status 1 unless all are "
+                        "current. With --slurm DIR: that plan's statuses, and DIR/summary.json and "
+                        "DIR/summary.txt written");
+    farmGroup
+        ->add_option("--manifest-fnv1a64", farm->manifestHash,
+                     "Refuse to run when the manifest's FNV-1a 64 is not this (the Slurm tasks' guard "
+                     "against a manifest edited after its plan was written)")
+        ->type_name("HEX");
+
+    return [cmd, spec, manifest, json, ninja, outRoot, farm]() -> int {
         if (!builtinPresetErrors().empty()) return fail(builtinPresetErrors().front());
+        const bool farmWork = !farm->only.empty() || farm->check || !farm->slurm.empty() ||
+                              !farm->statusDir.empty() || !farm->manifestHash.empty();
         std::vector<BakeJobSpec> specs;
         if (!manifest->empty()) {
             if (!spec->input.empty()) return fail("give either an input map or --manifest, not both");
@@ -193,31 +364,73 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
         } else {
             if (!ninja->empty())
                 return fail("--ninja needs --manifest FILE (the jobs to write build statements for)");
+            if (farmWork)
+                return fail("--only, --check, --slurm, --status-dir and --manifest-fnv1a64 need --manifest "
+                            "FILE");
             if (spec->input.empty()) return fail("no input normal map given (see 'burnish bake --help')");
             specs.push_back(*spec);
         }
-        // Every job is checked before the first one writes anything.
-        std::vector<BakeJob> jobs;
-        for (size_t i = 0; i < specs.size(); ++i) {
-            auto job = resolveBakeJob(specs[i]);
-            if (!job)
-                return fail(specs.size() > 1 || !manifest->empty()
-                                ? "manifest job " + std::to_string(i + 1) + ": " + job.error()
-                                : job.error());
-            jobs.push_back(std::move(job.value()));
+        if (!ninja->empty() && (!farm->slurm.empty() || farm->check || !farm->only.empty()))
+            return fail("--ninja writes a build file for the whole manifest: give it without --slurm, "
+                        "--check or --only");
+        if (!farm->manifestHash.empty()) {
+            const auto hash = fileFnv1a64(*manifest);
+            if (!hash) return fail("--manifest: " + hash.error());
+            if (hashHex(*hash) != farm->manifestHash)
+                return fail("the manifest '" + *manifest +
+                            "' changed since its Slurm plan was written "
+                            "(FNV-1a 64 " +
+                            hashHex(*hash) + ", the plan's " + farm->manifestHash +
+                            "): write the plan again (--slurm DIR) and submit it");
         }
+        std::optional<tbb::global_control> threads;
+        if (farm->threads > 0)
+            threads.emplace(tbb::global_control::max_allowed_parallelism, size_t(farm->threads));
         std::optional<fs::path> root;
         if (!outRoot->empty()) root = fs::path(*outRoot);
-        if (!manifest->empty() || root)
-            if (const Status s = checkBakeJobs(jobs, root, !manifest->empty()); !s) return fail(s.error());
+        if (farm->check) {
+            if (!farm->only.empty())
+                return fail("--check checks every set of the manifest: give it without --only");
+            return checkSets(*manifest, specs, *farm, *json);
+        }
+
+        std::vector<size_t> selected(specs.size());
+        for (size_t i = 0; i < specs.size(); ++i)
+            selected[i] = i;
+        if (!farm->only.empty()) {
+            auto picked = parseJobList(farm->only, specs.size());
+            if (!picked) return fail(picked.error());
+            selected = std::move(picked.value());
+        }
+        const bool numbered = !manifest->empty();
+        auto at = [&](size_t i) {
+            return numbered ? "manifest job " + std::to_string(i + 1) + " (" + specs[i].input + "): " : "";
+        };
+        // Every job is checked before the first one writes anything; with --keep-going a job that
+        // fails its check is reported and the others go on.
+        std::vector<BakeJob> jobs;
+        std::vector<size_t> numbers;
+        std::vector<std::pair<size_t, std::string>> failed;
+        for (size_t i : selected) {
+            auto job = resolveBakeJob(specs[i]);
+            Status ok = job ? Status{} : Status{Error{job.error()}};
+            if (ok && (numbered || root) && farm->keepGoing) ok = checkBakeJobs({*job}, root, false);
+            if (!ok) {
+                if (!farm->keepGoing) return fail(at(i) + ok.error());
+                std::fprintf(stderr, "burnish: %s\n", printable(at(i) + ok.error()).c_str());
+                failed.emplace_back(i, ok.error());
+                continue;
+            }
+            jobs.push_back(std::move(job.value()));
+            numbers.push_back(i + 1);
+        }
+        if (numbered || root)
+            if (const Status s = checkBakeJobs(jobs, root, numbered, numbers); !s) return fail(s.error());
         if (!ninja->empty()) {
             // The build statements run this very binary.
-            std::error_code ec;
-            const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-            if (ec)
-                return fail("--ninja: cannot find the running burnish binary (/proc/self/exe): " +
-                            ec.message());
-            const auto written = writeBakeNinja(jobs, *manifest, *ninja, exe.string());
+            const auto exe = runningProgram("--ninja");
+            if (!exe) return fail(exe.error());
+            const auto written = writeBakeNinja(jobs, *manifest, *ninja, *exe);
             if (!written) return fail(written.error());
             if (*json)
                 std::printf("%s\n", written->dump(2).c_str());
@@ -226,37 +439,114 @@ static CommandRegistration registration(40, [](CLI::App& app) -> std::function<i
                             jobs.size(), (*written)["outputs"].size(), ninja->c_str());
             return 0;
         }
+        if (!farm->slurm.empty()) {
+            if (!failed.empty()) return fail(at(failed.front().first) + failed.front().second);
+            const auto exe = runningProgram("--slurm");
+            if (!exe) return fail(exe.error());
+            SlurmOptions options;
+            options.tasks = farm->tasks;
+            options.partition = farm->partition;
+            options.memPerTask = farm->memPerTask;
+            options.cpusPerTask = farm->cpusPerTask;
+            options.defaults = jobDefaults(*cmd);
+            options.workingFolder = fs::current_path();
+            const auto written = writeSlurmPlan(jobs, *manifest, farm->slurm, *exe, options);
+            if (!written) return fail(written.error());
+            if (*json) {
+                std::printf("%s\n", written->dump(2).c_str());
+            } else {
+                const Json& w = *written;
+                std::printf(
+                    "%s: %zu sets in %zu array tasks%s. Submit the array, then the check after it:\n"
+                    "  %s\n",
+                    w["dir"].get<std::string>().c_str(), w["jobs"].get<size_t>(), w["tasks"].get<size_t>(),
+                    w["memPerTask"].is_null() ? ""
+                                              : (", " + w["memPerTask"].get<std::string>() + " each").c_str(),
+                    w["submit"].get<std::string>().c_str());
+            }
+            return 0;
+        }
+
         ProgressBar progress;
         Json summaries = Json::array();
-        for (size_t i = 0; i < jobs.size(); ++i) {
-            const std::string name = fs::path(jobs[i].spec.input).filename().string();
+        const fs::path statusDir = farm->statusDir;
+        auto report = [&](size_t number, const BakeJobSpec& job, Json status) {
+            if (farm->statusDir.empty()) return;
+            status["job"] = number;
+            status["input"] = job.input;
+            status["out"] = job.out;
+            for (const char* name : {"SLURM_ARRAY_JOB_ID", "SLURM_ARRAY_TASK_ID", "SLURMD_NODENAME"})
+                if (const char* v = std::getenv(name)) status[name] = v;
+            if (const Status s = writeBakeStatus(statusDir, number, status); !s)
+                std::fprintf(stderr, "burnish: warning: %s\n", printable(s.error()).c_str());
+        };
+        for (const auto& [i, error] : failed)
+            report(i + 1, specs[i], {{"state", "failed"}, {"error", error}});
+        for (size_t k = 0; k < jobs.size(); ++k) {
+            const BakeJob& job = jobs[k];
+            const size_t i = numbers[k] - 1;
+            if (farm->skipCurrent && checkBakeSet(job).state == BakeSetState::Current) {
+                report(i + 1, job.spec, {{"state", "current"}});
+                if (*json)
+                    summaries.push_back(
+                        {{"input", job.spec.input}, {"out", job.spec.out}, {"skipped", "current"}});
+                else
+                    std::printf("%s -> %s: current, skipped\n", job.spec.input.c_str(), job.spec.out.c_str());
+                std::fflush(stdout);
+                continue;
+            }
+            const std::string name = fs::path(job.spec.input).filename().string();
             const std::string label =
-                jobs.size() > 1 ? fmt::format("[{}/{}] {}", i + 1, jobs.size(), name) : name;
+                jobs.size() > 1 ? fmt::format("[{}/{}] {}", k + 1, jobs.size(), name) : name;
             progress.setLabel(label);
-            auto run = runBakeJob(jobs[i], [&](double fraction, std::string_view stage) {
+            auto run = runBakeJob(job, [&](double fraction, std::string_view stage) {
                 progress.update(fraction, std::string(stage));
                 return true;
             });
             progress.finish();
-            if (!run)
-                return fail(jobs.size() > 1 || !manifest->empty()
-                                ? "manifest job " + std::to_string(i + 1) + " (" + jobs[i].spec.input +
-                                      "): " + run.error()
-                                : run.error());
+            if (!run) {
+                report(i + 1, job.spec, {{"state", "failed"}, {"error", run.error()}});
+                if (!farm->keepGoing) return fail(at(i) + run.error());
+                std::fprintf(stderr, "burnish: %s\n", printable(at(i) + run.error()).c_str());
+                failed.emplace_back(i, run.error());
+                continue;
+            }
             Json& summary = run.value().summary;
+            report(i + 1, job.spec, {{"state", "baked"}, {"seconds", summary["seconds"]}});
             for (const auto& w : summary["warnings"])
                 std::fprintf(stderr, "burnish: warning: %s\n", printable(w.get<std::string>()).c_str());
             if (!*json) {
                 std::printf("%s -> %s: preset %s, method %s, %zu files + bake.json, %d mips, %.2f s\n",
-                            jobs[i].spec.input.c_str(), jobs[i].spec.out.c_str(), jobs[i].preset.name.c_str(),
-                            std::string(methodName(jobs[i].method)).c_str(), summary["files"].size(),
+                            job.spec.input.c_str(), job.spec.out.c_str(), job.preset.name.c_str(),
+                            std::string(methodName(job.method)).c_str(), summary["files"].size(),
                             summary["mipCount"].get<int>(), summary["seconds"].get<double>());
                 for (const auto& n : summary["notes"])
                     std::printf("  note: %s\n", n.get<std::string>().c_str());
+                // In a log file (a Slurm task's) each line lands in order with the errors on stderr.
+                std::fflush(stdout);
             }
             summaries.push_back(std::move(summary));
         }
-        if (*json) std::printf("%s\n", Json{{"jobs", summaries}}.dump(2).c_str());
+        if (*json) {
+            Json out = {{"jobs", summaries}};
+            if (farm->keepGoing) {
+                out["failed"] = Json::array();
+                for (const auto& [i, error] : failed)
+                    out["failed"].push_back({{"job", i + 1}, {"input", specs[i].input}, {"error", error}});
+            }
+            std::printf("%s\n", out.dump(2).c_str());
+        }
+        if (!failed.empty()) {
+            std::vector<size_t> jobNumbers;
+            for (const auto& f : failed)
+                jobNumbers.push_back(f.first + 1);
+            std::sort(jobNumbers.begin(), jobNumbers.end());
+            std::string list;
+            for (size_t n : jobNumbers)
+                list += (list.empty() ? "" : ",") + std::to_string(n);
+            return fail(fmt::format("{} of {} jobs failed ({} {}; each error above)", failed.size(),
+                                    selected.size(), failed.size() == 1 ? "job" : "jobs", list));
+        }
         return 0;
     };
 });

@@ -196,8 +196,8 @@ TEST(CliHostile, ControlCharactersInPathsArePrintedEscaped) {
 TEST(CliHostile, HugeAnglesAndDirectionsAreRefusedByTheirRange) {
     TempDir dir;
     const std::string render = "render --size 8x8 --out " + shellQuote((dir / "x.png").string()) + " ";
-    for (const std::string& option : {"--yaw 1e308", "--yaw -1e30", "--yaw 36001", "--light-dir=1e20,0,0",
-                                      "--light-dir=-1e20,0,0", "--light-dir=0,0,1e7"}) {
+    for (const std::string option : {"--yaw 1e308", "--yaw -1e30", "--yaw 36001", "--light-dir=1e20,0,0",
+                                     "--light-dir=-1e20,0,0", "--light-dir=0,0,1e7"}) {
         SCOPED_TRACE(option);
         const CliResult r = runBurnish(render + option);
         EXPECT_NE(r.exitCode, 0);

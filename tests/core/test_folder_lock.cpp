@@ -102,7 +102,7 @@ TEST(FolderLock, TwoWritersAtOnceAlwaysLeaveOneWholeSet) {
             ASSERT_TRUE(set.addBytes("index.txt", index));
             // The previous set's files this one does not write go with it, as a bake's do.
             std::vector<std::string> obsolete;
-            for (const std::string& old : {"c.txt", "d.txt", "e.txt"})
+            for (const std::string old : {"c.txt", "d.txt", "e.txt"}) // NOLINT(performance-for-range-copy)
                 if (std::find(sets.at(tag).begin(), sets.at(tag).end(), old) == sets.at(tag).end())
                     obsolete.push_back(old);
             ASSERT_TRUE(set.commit("index.txt", obsolete, Overwrite::Allow));

@@ -1,5 +1,7 @@
 #include <burnish/core/bake/bake_job.h>
 
+#include <burnish/core/bake/bake_farm.h>
+
 #include <burnish/core/eval/evaluate_report.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/prefilter/detail.h>
@@ -504,6 +506,10 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
                                               availableMemoryBytes(), header->width, header->height);
         if (!memory) return Error{"'" + job.spec.input + "': " + memory.error()};
     }
+    // The inputs' hashes before they are read: a file replaced meanwhile leaves a set that a later
+    // check finds stale, never one that looks current.
+    auto inputHashes = bakeInputHashes(job);
+    if (!inputHashes) return Error{inputHashes.error()};
     auto map = loadBakeInput(job.spec.input, job.normalMap);
     if (!map) return Error{map.error()};
     const double readSeconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -570,6 +576,7 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
                      {"detailMap", job.spec.detail ? Json(*job.spec.detail) : Json(nullptr)},
                      {"width", map->width},
                      {"height", map->height},
+                     {"fnv1a64", *inputHashes},
                      {"source",
                       {{"format", map->source.formatName},
                        {"channelType", map->source.channelType},
@@ -597,7 +604,8 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
         {"encoding", job.spec.encoding.value_or("auto")},
         {"mips", job.spec.mips ? Json(*job.spec.mips) : Json(nullptr)},
         {"allow8bit", job.spec.allowEightBit},
-        {"allowImplausible", job.spec.allowImplausible}};
+        {"allowImplausible", job.spec.allowImplausible},
+        {"fnv1a64", bakeOptionsHash(job)}};
     if (detailRecord) record.options["detailFade"] = {detailRecord->fadeStartMip, detailRecord->fadeEndMip};
     if (job.specular) {
         const SpecularTerms terms =

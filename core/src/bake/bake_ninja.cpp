@@ -27,14 +27,6 @@ std::string inputArgument(const std::string& input) {
     return isSampleBakeInput(input) ? input : absolutePath(input);
 }
 
-/// `text` quoted for /bin/sh (ninja runs commands through sh -c).
-std::string shellQuote(const std::string& text) {
-    std::string q = "'";
-    for (char c : text)
-        q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
-
 /// A path in a ninja build line: '$', ' ' and ':' are escaped with '$'; a line break or '|' (which
 /// ends a path in Ninja's lexer, with no escape) cannot be written.
 Result<std::string> ninjaPath(const std::string& p) {
@@ -88,7 +80,7 @@ Result<NinjaJob> planNinjaJob(const std::string& exe, const BakeJob& job, const 
     if (job.preset.origin != "built-in") nj.inputs.push_back(absolutePath(job.preset.origin));
     nj.inputs.push_back(absolutePath(manifest));
     for (const auto& a : bakeJobCommand(exe, job))
-        nj.command += (nj.command.empty() ? "" : " ") + shellQuote(a);
+        nj.command += (nj.command.empty() ? "" : " ") + shellQuoted(a);
     nj.description = "burnish bake " + fs::path(job.spec.input).filename().string() + " -> " + out.string();
     return nj;
 }
@@ -128,11 +120,12 @@ Result<std::vector<std::string>> plannedBakeOutputs(const BakeJob& job) {
 }
 
 Status checkBakeJobs(const std::vector<BakeJob>& jobs, const std::optional<std::filesystem::path>& outRoot,
-                     bool fromManifest) {
+                     bool fromManifest, const std::vector<size_t>& numbers) {
     std::map<std::string, size_t> owner; // output -> job number
     for (size_t i = 0; i < jobs.size(); ++i) {
+        const size_t number = i < numbers.size() ? numbers[i] : i + 1;
         const std::string at =
-            fromManifest ? "manifest job " + std::to_string(i + 1) + " (" + jobs[i].spec.input + "): " : "";
+            fromManifest ? "manifest job " + std::to_string(number) + " (" + jobs[i].spec.input + "): " : "";
         if (outRoot && !inside(jobs[i].spec.out, *outRoot))
             return Error{at + "its output folder '" + jobs[i].spec.out + "' is outside --out-root '" +
                          outRoot->string() + "'"};
@@ -143,13 +136,20 @@ Status checkBakeJobs(const std::vector<BakeJob>& jobs, const std::optional<std::
             // file through a linked folder were both run, the second replacing the first).
             std::error_code ec;
             const fs::path real = fs::weakly_canonical(fs::path(o), ec);
-            const auto [it, fresh] = owner.emplace(ec ? o : real.string(), i + 1);
+            const auto [it, fresh] = owner.emplace(ec ? o : real.string(), number);
             if (!fresh)
                 return Error{at + "writes '" + o + "', which job " + std::to_string(it->second) +
                              " writes too"};
         }
     }
     return {};
+}
+
+std::string shellQuoted(const std::string& text) {
+    std::string q = "'";
+    for (char c : text)
+        q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
 }
 
 std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& job) {
@@ -194,6 +194,7 @@ std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& j
                                  fmt::format("{}:{}", job.detail.fadeStartMip, job.detail.fadeEndMip)});
     if (s.allowImplausible) args.emplace_back("--allow-implausible");
     if (s.allowEightBit) args.emplace_back("--allow-8bit");
+    if (s.shadedFit) args.emplace_back("--shaded-fit");
     if (s.report) args.emplace_back("--report");
     return args;
 }

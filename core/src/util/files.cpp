@@ -1,5 +1,7 @@
 #include <burnish/core/util/files.h>
 
+#include <burnish/core/util/hash.h>
+
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
@@ -580,6 +582,20 @@ Result<std::string> readFile(const fs::path& path) {
     ss << in.rdbuf();
     if (in.bad()) return Error{describe(path, "cannot read", errno)};
     return ss.str();
+}
+
+Result<std::uint64_t> fileFnv1a64(const fs::path& path) {
+    if (const Status st = requireRegularFile(path, "file"); !st) return Error{st.error()};
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return Error{describe(path, "cannot read", errno)};
+    std::vector<char> block(std::size_t(1) << 20);
+    std::uint64_t hash = kFnv1a64Basis;
+    while (in) {
+        in.read(block.data(), std::streamsize(block.size()));
+        hash = fnv1a64(block.data(), std::size_t(in.gcount()), hash);
+    }
+    if (in.bad()) return Error{describe(path, "cannot read", errno)};
+    return hash;
 }
 
 } // namespace burnish

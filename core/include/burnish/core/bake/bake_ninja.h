@@ -15,10 +15,14 @@
 
 namespace burnish {
 
+/// `text` as one word of a /bin/sh command line (single-quoted; ninja and sbatch scripts run sh).
+std::string shellQuoted(const std::string& text);
+
 /// The `burnish bake` command line (argv, `exe` first) that runs one resolved job on its own: every
 /// option spelled out as resolved, file paths absolute, --force so a rebuild replaces the previous
-/// outputs, --report when the spec asks for it. Options whose absence means "each file's own choice"
-/// or "none" (compression, metallic, mips, gloss, detail) stay absent when the spec leaves them out.
+/// outputs, --shaded-fit and --report when the spec asks for them. Options whose absence means "each file's
+/// own choice" or "none" (compression, metallic, mips, gloss, detail) stay absent when the spec leaves them
+/// out.
 std::vector<std::string> bakeJobCommand(const std::string& exe, const BakeJob& job);
 
 /// Every file a job will write (absolute paths: the export's files, bake.json, the report's files),
@@ -30,9 +34,11 @@ Result<std::vector<std::string>> plannedBakeOutputs(const BakeJob& job);
 /// input (normal map, gloss, detail) opens as an image with a plausible header (a normal map has 2
 /// to 4 channels), each job's plan (its files, bake.json, report files) is valid, no two jobs write
 /// one file, and with `outRoot` every job's output folder lies inside it (links resolved).
-/// Errors: "manifest job N (input): ..." (`fromManifest`), otherwise the reason alone.
+/// Errors: "manifest job N (input): ..." (`fromManifest`; N is numbers[i] when given, for a
+/// selection of a manifest's jobs, else i + 1), otherwise the reason alone.
 Status checkBakeJobs(const std::vector<BakeJob>& jobs,
-                     const std::optional<std::filesystem::path>& outRoot = {}, bool fromManifest = true);
+                     const std::optional<std::filesystem::path>& outRoot = {}, bool fromManifest = true,
+                     const std::vector<size_t>& numbers = {});
 
 /// Writes (atomically, replacing any previous file) a Ninja build file at `path` with one
 /// `burnish_bake` build statement per job (restat, so unchanged outputs stop the rebuild), run by

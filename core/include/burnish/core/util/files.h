@@ -17,6 +17,7 @@
 
 #include <burnish/core/util/result.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -224,5 +225,9 @@ Status requireRegularFile(const std::filesystem::path& path, std::string_view wh
 
 /// Reads a whole file; a clear error when it cannot (requireRegularFile's refusals included).
 Result<std::string> readFile(const std::filesystem::path& path);
+
+/// FNV-1a 64 (util/hash.h) of a file's bytes, read in blocks (a file of any size costs a block of
+/// memory); the same errors as readFile.
+Result<std::uint64_t> fileFnv1a64(const std::filesystem::path& path);
 
 } // namespace burnish

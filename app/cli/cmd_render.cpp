@@ -449,6 +449,9 @@ int runSequence(Renderer& renderer, const Scene& scene, int width, int height, c
     options.height = height;
     options.referenceSamples = o.reference > 0 ? o.reference : kSequenceReferenceSamples;
     options.space = o.shimmerSpace == "display" ? ImageKind::Display : ImageKind::Hdr;
+    // The reference's own sampling noise beside its shimmer, as the studio's meter shows it (its
+    // halves need linear frames and 2 samples).
+    options.estimateReferenceNoise = options.space == ImageKind::Hdr && options.referenceSamples >= 2;
     if (!o.framesDir.empty()) {
         std::error_code ec;
         fs::create_directories(o.framesDir, ec);
@@ -488,23 +491,39 @@ int runSequence(Renderer& renderer, const Scene& scene, int width, int height, c
                          {"reference_deltas", report->referenceDeltas},
                          {"method_mean", report->methodMean},
                          {"reference_mean", report->referenceMean},
+                         {"reference_noise_deltas", report->referenceNoiseDeltas},
+                         {"reference_noise", options.estimateReferenceNoise
+                                                 ? nlohmann::json(report->referenceNoise)
+                                                 : nlohmann::json(nullptr)},
                          {"ratio", report->ratio}};
         std::printf("%s\n", j.dump(2).c_str());
         return 0;
     }
     std::printf("Shimmer of a %d-frame orbit (%g degrees per frame), %dx%d, %s mesh, method %s against the "
                 "%d-sample reference.\nMean |dY| per pixel between consecutive frames, Rec. 709 %s, over the "
-                "%lld pixels the object covers in every frame (silhouette dropped).\n\n",
+                "pixels the object covers in both frames (silhouette dropped; at least %lld). The studio's "
+                "meter takes the same measurement.\n\n",
                 report->frames, double(report->degreesPerFrame), report->width, report->height,
                 std::string(meshKindName(scene.mesh)).c_str(), method.c_str(), report->referenceSamples,
                 report->space == ImageKind::Hdr ? "luminance of linear HDR" : "luma of the display frames",
                 static_cast<long long>(report->measuredPixels));
-    std::printf("| frames | %s | reference |\n| --- | --- | --- |\n", method.c_str());
-    for (size_t i = 0; i < report->methodDeltas.size(); ++i)
-        std::printf("| %zu-%zu | %.6f | %.6f |\n", i, i + 1, report->methodDeltas[i],
+    const bool noise = options.estimateReferenceNoise;
+    std::printf("| frames | %s | reference |%s\n| --- | --- | --- |%s\n", method.c_str(),
+                noise ? " reference's own noise |" : "", noise ? " --- |" : "");
+    for (size_t i = 0; i < report->methodDeltas.size(); ++i) {
+        std::printf("| %zu-%zu | %.6f | %.6f |", i, i + 1, report->methodDeltas[i],
                     report->referenceDeltas[i]);
-    std::printf("| mean | %.6f | %.6f |\n\nratio (method / reference): %.3f\n", report->methodMean,
-                report->referenceMean, report->ratio);
+        if (noise) std::printf(" %.6f |", report->referenceNoiseDeltas[i]);
+        std::printf("\n");
+    }
+    std::printf("| mean | %.6f | %.6f |", report->methodMean, report->referenceMean);
+    if (noise) std::printf(" %.6f |", report->referenceNoise);
+    std::printf("\n\nratio (method / reference): %.3f\n", report->ratio);
+    // Noise between frames adds to the truth's own change about in quadrature: a reference within
+    // twice its noise is mostly noise.
+    if (noise && report->referenceMean < 2.0 * report->referenceNoise)
+        std::printf("The reference's shimmer is within twice its own sampling noise: mostly noise, not the "
+                    "truth's shimmer (raise --reference).\n");
     return 0;
 }
 

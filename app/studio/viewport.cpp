@@ -27,7 +27,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <deque>
 
 namespace burnish::studio {
 
@@ -101,21 +100,6 @@ glm::vec3 lightDirection(float azimuthDegrees, float elevationDegrees) {
     return glm::vec3(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
 }
 
-// Per-pixel object coverage of a UV pass (RGBA floats).
-std::vector<std::uint8_t> coverage(const std::vector<float>& uvPass) {
-    std::vector<std::uint8_t> mask(uvPass.size() / 4);
-    for (size_t p = 0; p < mask.size(); ++p)
-        mask[p] = uvPass[4 * p + 2] > kCoveredThreshold ? 1 : 0;
-    return mask;
-}
-
-double mean(const std::deque<double>& values) {
-    double sum = 0.0;
-    for (double v : values)
-        sum += v;
-    return values.empty() ? 0.0 : sum / double(values.size());
-}
-
 } // namespace
 
 // Everything that lives in the renderer's context.
@@ -132,22 +116,12 @@ struct Viewport::Engine {
     int uvHeight = 0;
     bool uvValid = false;
 
-    // Meter: the previous frame's luma and coverage of each side, and the recent deltas.
-    std::vector<float> previousA;
-    std::vector<float> previousB;
-    std::vector<std::uint8_t> previousMask;
-    std::deque<double> deltasA;
-    std::deque<double> deltasB;
+    // Meter: the one shimmer measurement (render/shimmer.h), made anew when a setting changes.
+    std::optional<render::ShimmerMeter> meter;
 
     bool moving = false;
 
-    void resetMeter() {
-        previousA.clear();
-        previousB.clear();
-        previousMask.clear();
-        deltasA.clear();
-        deltasB.clear();
-    }
+    void resetMeter() { meter.reset(); }
 };
 
 // The QOpenGLWidget surface: the renderer wraps its context and draws into its framebuffer.
@@ -551,57 +525,52 @@ void Viewport::drawInto(unsigned framebuffer, int width, int height) {
 }
 
 void Viewport::meter() {
-    // Measured like render/shimmer.h: display luma of each side at kMeterSize², over the pixels the
-    // object covers in both frames (eroded by one pixel to leave out the silhouette's aliasing).
+    // The measurement `burnish render --sequence` takes (render/shimmer.h): linear HDR luminance of
+    // each side at kMeterSize², over the pixels the object covers in both frames (silhouette
+    // dropped), the reference beside its own sampling noise. Only the deltas kept differ: the last
+    // kMeterWindow.
     Engine& e = *m_engine;
-    render::Scene scene = e.a->scene();
-    scene.debugView = render::DebugView::Uv;
-    if (!e.a->setScene(scene)) return;
-    auto uvPass = e.a->renderToImage(kMeterSize, kMeterSize, render::ImageKind::Hdr);
+    const render::Scene drawn = e.a->scene();
+    render::Scene scene = drawn;
     scene.debugView = render::DebugView::None;
-    if (!uvPass || !e.a->setScene(scene)) return;
-    auto imageA = e.a->renderToImage(kMeterSize, kMeterSize, render::ImageKind::Display);
-    Result<std::vector<float>> imageB = Error{"no B side"};
-    if (m_view.right.reference || !m_view.split) {
-        // Without a split the meter compares with the ground truth, as `burnish render --sequence`.
-        imageB =
-            e.a->renderReference(kMeterSize, kMeterSize, m_view.referenceSamples, render::ImageKind::Display);
+    // Without a split the meter compares with the ground truth, as `burnish render --sequence`.
+    const bool reference = m_view.right.reference || !m_view.split;
+    const int samples = m_view.referenceSamples;
+    const bool noise = reference && samples >= 2;
+    Result<render::ShimmerSample> sample = Error{"no B side"};
+    if (reference) {
+        sample = render::renderShimmerSample(*e.a, scene, kMeterSize, kMeterSize, samples,
+                                             render::ImageKind::Hdr, noise);
     } else {
+        render::ShimmerSample sides;
         render::Scene other = scene;
         other.material.method = m_view.right.method;
-        if (e.b->setScene(other))
-            imageB = e.b->renderToImage(kMeterSize, kMeterSize, render::ImageKind::Display);
-    }
-    if (!imageA || !imageB) return;
-    std::vector<float> lumaA = render::frameLuminance(*imageA);
-    std::vector<float> lumaB = render::frameLuminance(*imageB);
-    std::vector<std::uint8_t> mask = coverage(*uvPass);
-    if (e.previousMask.size() == mask.size()) {
-        std::vector<std::uint8_t> both(mask.size());
-        for (size_t p = 0; p < mask.size(); ++p)
-            both[p] = mask[p] && e.previousMask[p];
-        both = render::erodeMask(both, kMeterSize, kMeterSize);
-        const auto deltaA = render::meanAbsoluteChange(e.previousA, lumaA, both);
-        const auto deltaB = render::meanAbsoluteChange(e.previousB, lumaB, both);
-        if (deltaA && deltaB) {
-            e.deltasA.push_back(*deltaA);
-            e.deltasB.push_back(*deltaB);
-            while (int(e.deltasA.size()) > kMeterWindow) {
-                e.deltasA.pop_front();
-                e.deltasB.pop_front();
-            }
-            ShimmerReading r;
-            r.a = mean(e.deltasA);
-            r.b = mean(e.deltasB);
-            r.ratio = r.a / std::max(r.b, render::kMinShimmer);
-            r.deltas = int(e.deltasA.size());
-            m_shimmer = r;
-            emit shimmerChanged();
+        auto a = e.a->setScene(scene) ? e.a->renderToImage(kMeterSize, kMeterSize, render::ImageKind::Hdr)
+                                      : Result<std::vector<float>>(Error{"scene"});
+        auto b = e.b->setScene(other) ? e.b->renderToImage(kMeterSize, kMeterSize, render::ImageKind::Hdr)
+                                      : Result<std::vector<float>>(Error{"scene"});
+        auto covered = render::objectCoverage(*e.a, scene, kMeterSize, kMeterSize);
+        if (a && b && covered) {
+            sides.method = std::move(a).value();
+            sides.other = std::move(b).value();
+            sides.covered = std::move(covered).value();
+            sample = std::move(sides);
         }
     }
-    e.previousA = std::move(lumaA);
-    e.previousB = std::move(lumaB);
-    e.previousMask = std::move(mask);
+    // The renderers draw the view's scene again.
+    (void)e.a->setScene(drawn);
+    if (!sample) return;
+    if (!e.meter) e.meter.emplace(kMeterSize, kMeterSize, reference ? samples : 0, kMeterWindow);
+    if (!e.meter->add(*sample) || e.meter->methodDeltas().empty()) return;
+    ShimmerReading r;
+    r.a = e.meter->methodMean();
+    r.b = e.meter->otherMean();
+    r.noise = noise ? e.meter->noiseMean() : 0.0;
+    r.reference = reference;
+    r.ratio = r.a / std::max(r.b, render::kMinShimmer);
+    r.deltas = int(e.meter->methodDeltas().size());
+    m_shimmer = r;
+    emit shimmerChanged();
 }
 
 QImage Viewport::grabFrame() {

@@ -61,13 +61,16 @@ struct ViewSettings {
     bool filterAfterShading = false;
 };
 
-/// The live shimmer meter: mean |ΔY'| per object pixel between consecutive auto-orbit frames
-/// (display luma, render/shimmer.h's measure), averaged over the last frames, for each side.
+/// The live shimmer meter: render/shimmer.h's measurement, the one `burnish render --sequence`
+/// takes — mean |ΔY| of linear HDR luminance per object pixel between consecutive auto-orbit frames
+/// at 128² — averaged over the last frames, for each side.
 struct ShimmerReading {
-    double a = 0.0;     // the document's method
-    double b = 0.0;     // the split's right side (the reference when it shows one)
-    double ratio = 0.0; // a / b, b floored at render::kMinShimmer
-    int deltas = 0;     // frame-to-frame changes averaged
+    double a = 0.0;         // the document's method
+    double b = 0.0;         // the split's right side (the reference when it shows one)
+    double noise = 0.0;     // beside the reference, its own sampling noise (ShimmerReport::referenceNoise)
+    bool reference = false; // whether b is the reference
+    double ratio = 0.0;     // a / b, b floored at render::kMinShimmer
+    int deltas = 0;         // frame-to-frame changes averaged
 };
 
 class Viewport : public QWidget {
@@ -116,6 +119,9 @@ public:
     /// The meter's reading; none before two metered frames.
     std::optional<ShimmerReading> shimmer() const { return m_shimmer; }
     void resetShimmer();
+    /// The scene of the current view and document, as the view draws it. Errors: the document's maps
+    /// do not fit together.
+    Result<render::Scene> scene();
 
     /// Renders a fresh frame and returns it as shown (both sides of a split, without the labels). A
     /// mixture filtered after shading is drawn with all its passes, not a pass a frame.
@@ -201,8 +207,6 @@ private:
     /// Makes the renderer's context current; false when there is none.
     bool makeCurrent();
     void doneCurrent();
-    /// The scene of the current view and document. Errors: the document's maps do not fit together.
-    Result<render::Scene> scene();
     QWidget* surface() const;
     void changed(bool camera);
     void requestUpdate();

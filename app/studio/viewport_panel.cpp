@@ -121,8 +121,12 @@ ViewportPanel::ViewportPanel(MaterialDocument* doc, QWidget* parent)
     m_orbit = new QCheckBox("auto-orbit", this);
     m_orbit->setToolTip("Turn the camera slowly and measure the shimmer of A and B");
     m_shimmer = new QLabel("shimmer: —", this);
-    m_shimmer->setToolTip("Mean |ΔY'| per object pixel between consecutive auto-orbit frames (display "
-                          "luma, 0–1), A and B, and A/B. Without the split B is the reference.");
+    m_shimmer->setToolTip(
+        "Shimmer: the mean change of linear luminance per object pixel between consecutive "
+        "auto-orbit frames (0.5° apart, 128² frames), for A and B, and A/B: the measurement "
+        "`burnish render --sequence` prints. Without the split B is the reference; beside it "
+        "its own sampling noise, the shimmer its finite samples alone would show (a "
+        "reference shimmer near its noise is noise; more reference samples lower it).");
     m_frame = new QLabel(this);
     m_frame->setContentsMargins(8, 0, 0, 0);
 
@@ -285,10 +289,11 @@ void ViewportPanel::updateShimmer() {
         m_shimmer->setText("shimmer: —");
         return;
     }
-    m_shimmer->setText(QString("shimmer A %1  B %2  A/B %3")
-                           .arg(r->a, 0, 'f', 4)
-                           .arg(r->b, 0, 'f', 4)
-                           .arg(r->ratio, 0, 'f', 2));
+    const QString b = r->reference
+                          ? QString("truth %1 (noise %2)").arg(r->b, 0, 'f', 4).arg(r->noise, 0, 'f', 4)
+                          : QString("B %1").arg(r->b, 0, 'f', 4);
+    m_shimmer->setText(
+        QString("shimmer A %1  %2  A/B %3").arg(r->a, 0, 'f', 4).arg(b).arg(r->ratio, 0, 'f', 2));
 }
 
 int ViewportPanel::controlsHeightForWidth(int width) const {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 namespace burnish::render {
 
@@ -22,20 +23,6 @@ double mean(const std::vector<double>& values) {
     for (double v : values)
         sum += v;
     return sum / double(values.size());
-}
-
-// Clears covered[p] where `frame` (drawn as its normals view, which leaves the background at 0) does
-// not cover pixel p. Leaves the renderer holding that debug view of the frame.
-Status clearUncovered(Renderer& renderer, Scene frame, int width, int height,
-                      std::vector<std::uint8_t>& covered) {
-    frame.debugView = DebugView::Normals;
-    if (auto s = renderer.setScene(frame); !s) return s;
-    auto normals = renderer.renderToImage(width, height, ImageKind::Hdr);
-    if (!normals) return Error{normals.error()};
-    for (size_t p = 0; p < covered.size(); ++p)
-        if ((*normals)[4 * p] + (*normals)[4 * p + 1] + (*normals)[4 * p + 2] <= kCoveredThreshold)
-            covered[p] = 0;
-    return {};
 }
 
 } // namespace
@@ -78,6 +65,153 @@ std::vector<std::uint8_t> erodeMask(const std::vector<std::uint8_t>& mask, int w
     return out;
 }
 
+Result<std::vector<std::uint8_t>> objectCoverage(Renderer& renderer, const Scene& frame, int width,
+                                                 int height) {
+    Scene normalsView = frame;
+    normalsView.debugView = DebugView::Normals;
+    if (auto s = renderer.setScene(normalsView); !s) return Error{s.error()};
+    auto normals = renderer.renderToImage(width, height, ImageKind::Hdr);
+    if (!normals) return Error{normals.error()};
+    std::vector<std::uint8_t> covered(size_t(width) * size_t(height));
+    for (size_t p = 0; p < covered.size(); ++p)
+        covered[p] =
+            (*normals)[4 * p] + (*normals)[4 * p + 1] + (*normals)[4 * p + 2] > kCoveredThreshold ? 1 : 0;
+    return covered;
+}
+
+Result<ShimmerSample> renderShimmerSample(Renderer& renderer, const Scene& frame, int width, int height,
+                                          int referenceSamples, ImageKind space, bool estimateNoise,
+                                          bool maskToObject) {
+    Scene shaded = frame;
+    shaded.debugView = DebugView::None;
+    if (auto s = renderer.setScene(shaded); !s) return Error{s.error()};
+    ShimmerSample sample;
+    auto method = renderer.renderToImage(width, height, space);
+    if (!method) return Error{method.error()};
+    sample.method = std::move(method).value();
+    auto reference = renderer.renderReference(width, height, referenceSamples, space);
+    if (!reference) return Error{reference.error()};
+    sample.other = std::move(reference).value();
+    if (estimateNoise) {
+        // The first half of the same Halton samples (renderReference always starts at index 1).
+        auto half = renderer.renderReference(width, height, referenceSamples / 2, space);
+        if (!half) return Error{half.error()};
+        sample.otherHalf = std::move(half).value();
+    }
+    if (maskToObject) {
+        auto covered = objectCoverage(renderer, shaded, width, height);
+        if (!covered) return Error{covered.error()};
+        sample.covered = std::move(covered).value();
+    }
+    return sample;
+}
+
+ShimmerMeter::ShimmerMeter(int width, int height, int referenceSamples, std::size_t window)
+    : m_width(std::max(width, 0))
+    , m_height(std::max(height, 0))
+    , m_referenceSamples(referenceSamples)
+    , m_window(window) {}
+
+void ShimmerMeter::reset() {
+    m_previousMethod.clear();
+    m_previousOther.clear();
+    m_previousCovered.clear();
+    m_hasPrevious = false;
+    m_method.clear();
+    m_other.clear();
+    m_noise.clear();
+    m_measuredPixels = 0;
+}
+
+Status ShimmerMeter::add(const ShimmerSample& sample) {
+    const size_t pixels = size_t(m_width) * size_t(m_height);
+    const auto size = [&](const std::vector<float>& rgba, const char* what) -> Status {
+        if (rgba.size() == 4 * pixels) return {};
+        return Error{std::string(what) + " of " + std::to_string(rgba.size() / 4) +
+                     " pixels, the meter measures " + std::to_string(m_width) + "x" +
+                     std::to_string(m_height)};
+    };
+    for (const auto& [rgba, what] :
+         {std::pair{&sample.method, "a method frame"}, std::pair{&sample.other, "an other "
+                                                                                "frame"}})
+        if (auto s = size(*rgba, what); !s) return s;
+    const bool noise = !sample.otherHalf.empty();
+    if (noise) {
+        if (auto s = size(sample.otherHalf, "a half-sample reference"); !s) return s;
+        if (m_referenceSamples < 2)
+            return Error{
+                "the reference's noise is estimated from two halves of its samples: it needs at least 2 "
+                "samples per pixel, got " +
+                std::to_string(m_referenceSamples)};
+    }
+    if (!sample.covered.empty() && sample.covered.size() != pixels)
+        return Error{"a coverage of " + std::to_string(sample.covered.size()) + " pixels for " +
+                     std::to_string(pixels)};
+
+    std::vector<float> methodY = frameLuminance(sample.method);
+    std::vector<float> otherY = frameLuminance(sample.other);
+    if (m_hasPrevious) {
+        // The pixels covered in both frames, silhouette dropped; every pixel without coverage.
+        std::vector<std::uint8_t> mask;
+        if (!sample.covered.empty() && !m_previousCovered.empty()) {
+            mask.resize(pixels);
+            for (size_t p = 0; p < pixels; ++p)
+                mask[p] = sample.covered[p] && m_previousCovered[p] ? 1 : 0;
+            mask = erodeMask(mask, m_width, m_height);
+        }
+        std::int64_t count = mask.empty() ? std::int64_t(pixels) : 0;
+        for (std::uint8_t m : mask)
+            count += m ? 1 : 0;
+        if (count == 0)
+            return Error{"the object covers no pixel in both of two consecutive frames (after dropping its "
+                         "silhouette); move the camera closer or render larger frames"};
+        const auto dm = meanAbsoluteChange(methodY, m_previousMethod, mask);
+        const auto dr = meanAbsoluteChange(otherY, m_previousOther, mask);
+        if (!dm) return Error{dm.error()};
+        if (!dr) return Error{dr.error()};
+        double noiseDelta = 0.0;
+        if (noise) {
+            // The N-sample mean C = (h·A + (N − h)·B)/N, so the second half is B = (N·C − h·A)/(N − h).
+            // With per-sample variance s², var(A − B) = s²·N/(h(N − h)) and the frame-to-frame noise
+            // of C has variance 2s²/N: their ratio of standard deviations is √(2h(N − h))/N.
+            const double N = double(m_referenceSamples);
+            const double h = double(m_referenceSamples / 2);
+            const double toFrameNoise = std::sqrt(2.0 * h * (N - h)) / N;
+            const std::vector<float> A = frameLuminance(sample.otherHalf);
+            std::vector<float> B(otherY.size());
+            for (size_t p = 0; p < otherY.size(); ++p)
+                B[p] = float((N * double(otherY[p]) - h * double(A[p])) / (N - h));
+            const auto d = meanAbsoluteChange(A, B, mask);
+            if (!d) return Error{d.error()};
+            noiseDelta = *d * toFrameNoise;
+        }
+        m_method.push_back(*dm);
+        m_other.push_back(*dr);
+        if (noise) m_noise.push_back(noiseDelta);
+        m_measuredPixels = m_method.size() == 1 ? count : std::min(m_measuredPixels, count);
+        if (m_window > 0)
+            for (auto* deltas : {&m_method, &m_other, &m_noise})
+                if (deltas->size() > m_window) deltas->erase(deltas->begin());
+    }
+    m_previousMethod = std::move(methodY);
+    m_previousOther = std::move(otherY);
+    m_previousCovered = sample.covered;
+    m_hasPrevious = true;
+    return {};
+}
+
+double ShimmerMeter::methodMean() const {
+    return mean(m_method);
+}
+
+double ShimmerMeter::otherMean() const {
+    return mean(m_other);
+}
+
+double ShimmerMeter::noiseMean() const {
+    return mean(m_noise);
+}
+
 Result<ShimmerReport> measureShimmer(Renderer& renderer, const Scene& scene, const ShimmerOptions& options) {
     if (options.frames < 2)
         return Error{"a shimmer sequence needs at least 2 frames, got " + std::to_string(options.frames)};
@@ -102,84 +236,32 @@ Result<ShimmerReport> measureShimmer(Renderer& renderer, const Scene& scene, con
     report.referenceSamples = options.referenceSamples;
     report.space = options.space;
 
-    const size_t pixels = size_t(options.width) * size_t(options.height);
-    std::vector<std::vector<float>> methodY, referenceY, halfY;
-    std::vector<std::uint8_t> covered(pixels, 1);
     auto failed = [&](const std::string& message) -> Result<ShimmerReport> {
         // Leave the renderer with the caller's scene, whatever happened.
         (void)renderer.setScene(scene);
         return Error{message};
     };
-
+    ShimmerMeter meter(options.width, options.height, options.referenceSamples);
     for (int i = 0; i < options.frames; ++i) {
         Scene frame = scene;
-        frame.debugView = DebugView::None;
         frame.camera.yawDegrees = scene.camera.yawDegrees + float(i) * options.degreesPerFrame;
-        if (auto s = renderer.setScene(frame); !s) return failed(s.error());
-        auto method = renderer.renderToImage(options.width, options.height, options.space);
-        if (!method) return failed(method.error());
-        auto reference =
-            renderer.renderReference(options.width, options.height, options.referenceSamples, options.space);
-        if (!reference) return failed(reference.error());
-        methodY.push_back(frameLuminance(*method));
-        referenceY.push_back(frameLuminance(*reference));
-        if (options.estimateReferenceNoise) {
-            // The first half of the same Halton samples (renderReference always starts at index 1).
-            auto half = renderer.renderReference(options.width, options.height, options.referenceSamples / 2,
-                                                 ImageKind::Hdr);
-            if (!half) return failed(half.error());
-            halfY.push_back(frameLuminance(*half));
-        }
-        if (options.maskToObject)
-            if (auto s = clearUncovered(renderer, frame, options.width, options.height, covered); !s)
-                return failed(s.error());
-        if (options.onFrame) options.onFrame(ShimmerFrame{i, frame.camera.yawDegrees, &*method, &*reference});
+        auto sample =
+            renderShimmerSample(renderer, frame, options.width, options.height, options.referenceSamples,
+                                options.space, options.estimateReferenceNoise, options.maskToObject);
+        if (!sample) return failed(sample.error());
+        if (auto s = meter.add(*sample); !s) return failed(s.error());
+        if (options.onFrame)
+            options.onFrame(ShimmerFrame{i, frame.camera.yawDegrees, &sample->method, &sample->other});
     }
     if (auto s = renderer.setScene(scene); !s) return Error{s.error()};
 
-    std::vector<std::uint8_t> mask;
-    if (options.maskToObject) {
-        mask = erodeMask(covered, options.width, options.height);
-        report.measuredPixels = 0;
-        for (std::uint8_t m : mask)
-            report.measuredPixels += m ? 1 : 0;
-        if (report.measuredPixels == 0)
-            return Error{
-                "the object covers no pixel in every frame (after dropping its silhouette); move the "
-                "camera closer or render larger frames"};
-    } else {
-        report.measuredPixels = std::int64_t(pixels);
-    }
-
-    for (int i = 1; i < options.frames; ++i) {
-        auto dm = meanAbsoluteChange(methodY[size_t(i)], methodY[size_t(i - 1)], mask);
-        auto dr = meanAbsoluteChange(referenceY[size_t(i)], referenceY[size_t(i - 1)], mask);
-        if (!dm) return Error{dm.error()};
-        if (!dr) return Error{dr.error()};
-        report.methodDeltas.push_back(*dm);
-        report.referenceDeltas.push_back(*dr);
-    }
-    if (options.estimateReferenceNoise) {
-        const double N = double(options.referenceSamples);
-        const double h = double(options.referenceSamples / 2);
-        // The N-sample mean C = (h·A + (N − h)·B)/N, so the second half is B = (N·C − h·A)/(N − h).
-        // With per-sample variance s², var(A − B) = s²·N/(h(N − h)) and the frame-to-frame noise
-        // of C has variance 2s²/N: their ratio of standard deviations is √(2h(N − h))/N.
-        const double toFrameNoise = std::sqrt(2.0 * h * (N - h)) / N;
-        for (int i = 0; i < options.frames; ++i) {
-            const std::vector<float>& A = halfY[size_t(i)];
-            const std::vector<float>& C = referenceY[size_t(i)];
-            std::vector<float> B(C.size());
-            for (size_t p = 0; p < C.size(); ++p)
-                B[p] = float((N * double(C[p]) - h * double(A[p])) / (N - h));
-            auto d = meanAbsoluteChange(A, B, mask);
-            if (!d) return Error{d.error()};
-            report.referenceNoiseDeltas.push_back(*d * toFrameNoise);
-        }
-        report.referenceNoise = mean(report.referenceNoiseDeltas);
-    }
-    report.methodMean = mean(report.methodDeltas);
-    report.referenceMean = mean(report.referenceDeltas);
+    report.measuredPixels = meter.measuredPixels();
+    report.methodDeltas = meter.methodDeltas();
+    report.referenceDeltas = meter.otherDeltas();
+    report.referenceNoiseDeltas = meter.noiseDeltas();
+    report.referenceNoise = meter.noiseMean();
+    report.methodMean = meter.methodMean();
+    report.referenceMean = meter.otherMean();
     report.ratio = report.methodMean / std::max(report.referenceMean, kMinShimmer);
     return report;
 }
@@ -212,9 +294,9 @@ Result<ImageErrorReport> measureImageError(Renderer& renderer, const Scene& scen
     const size_t pixels = size_t(options.width) * size_t(options.height);
     std::vector<std::uint8_t> mask(pixels, 1);
     if (options.maskToObject) {
-        if (auto s = clearUncovered(renderer, frame, options.width, options.height, mask); !s)
-            return failed(s.error());
-        mask = erodeMask(mask, options.width, options.height);
+        auto covered = objectCoverage(renderer, frame, options.width, options.height);
+        if (!covered) return failed(covered.error());
+        mask = erodeMask(*covered, options.width, options.height);
     }
     if (auto s = renderer.setScene(scene); !s) return Error{s.error()};
 

@@ -8,6 +8,10 @@
 #include "viewport.h"
 #include "viewport_panel.h"
 
+#include <burnish/render/context.h>
+#include <burnish/render/renderer.h>
+#include <burnish/render/shimmer.h>
+
 #include "brush_of.h"
 #include "temp_dir.h"
 #include <fstream>
@@ -24,6 +28,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <string>
 
 namespace burnish::studio {
@@ -485,6 +490,54 @@ TEST(Viewport, ShimmerMeterReadsAfterAutoOrbitFrames) {
     // A view change other than the orbit starts the meter again.
     t.view.setExposure(1.0f);
     EXPECT_FALSE(t.view.shimmer().has_value());
+}
+
+TEST(Viewport, TheShimmerMeterReadsWhatRenderSequenceMeasuresOfTheSameOrbit) {
+    // The meter and `burnish render --sequence` (render::measureShimmer) are one measurement: the
+    // same orbit gives the same figures, the reference's noise included.
+    TestViewport t;
+    ASSERT_TRUE(t.doc.setMethod(Method::Naive));
+    t.view.setDistance(kFarDistance);
+    constexpr int kSamples = 4;
+    t.view.setReferenceSamples(kSamples);
+    t.grab();
+    const auto start = t.view.scene();
+    ASSERT_TRUE(start) << start.error();
+    t.view.setAutoOrbit(true);
+    constexpr int kFrames = 5;
+    for (int i = 0; i < kFrames; ++i) {
+        t.view.stepOrbit();
+        t.grab();
+    }
+    t.view.setAutoOrbit(false);
+    ASSERT_TRUE(t.view.shimmer().has_value());
+    const ShimmerReading meter = *t.view.shimmer();
+    EXPECT_EQ(meter.deltas, kFrames - 1);
+    EXPECT_TRUE(meter.reference);
+
+    // The first metered frame is one orbit step from the scene before; a renderer of the test's own.
+    render::Scene first = *start;
+    first.camera.yawDegrees += Viewport::kOrbitDegreesPerFrame;
+    auto context = render::createHeadlessContext();
+    ASSERT_TRUE(context) << context.error();
+    ASSERT_TRUE((*context)->makeCurrent());
+    auto renderer = render::Renderer::create();
+    ASSERT_TRUE(renderer) << renderer.error();
+    render::ShimmerOptions options;
+    options.frames = kFrames;
+    options.degreesPerFrame = Viewport::kOrbitDegreesPerFrame;
+    options.width = options.height = 128; // the meter's size, `render --sequence`'s default
+    options.referenceSamples = kSamples;
+    options.estimateReferenceNoise = true;
+    const auto report = render::measureShimmer(**renderer, first, options);
+    ASSERT_TRUE(report) << report.error();
+    std::cout << "meter: A " << meter.a << ", truth " << meter.b << " (noise " << meter.noise
+              << "); render --sequence: " << report->methodMean << ", " << report->referenceMean << " ("
+              << report->referenceNoise << ")\n";
+    EXPECT_GT(meter.a, 0.0);
+    EXPECT_DOUBLE_EQ(meter.a, report->methodMean);
+    EXPECT_DOUBLE_EQ(meter.b, report->referenceMean);
+    EXPECT_DOUBLE_EQ(meter.noise, report->referenceNoise);
 }
 
 TEST(Viewport, TheMixtureFilteredAfterShadingDrawsAndTheCheckFollowsTheMethod) {

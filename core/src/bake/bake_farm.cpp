@@ -136,8 +136,7 @@ BakeSetCheck checkBakeSet(const BakeJob& job) {
     const fs::path out = job.spec.out;
     const fs::path index = out / kBakeJson;
     std::error_code ec;
-    if (!fs::exists(index, ec))
-        return {BakeSetState::Missing, "not baked: no bake.json in '" + out.string() + "'"};
+    if (!fs::exists(index, ec)) return {BakeSetState::Missing, "no bake.json in '" + out.string() + "'"};
     const auto text = readFile(index);
     if (!text) return {BakeSetState::Stale, "its bake.json cannot be read: " + text.error()};
     Json record;
@@ -313,9 +312,10 @@ std::string bakeSummaryText(const Json& summary, size_t maxSets) {
     for (size_t i = 0; i < sets.size() && i < maxSets; ++i) {
         const Json& s = sets[i];
         const std::string task = s.contains("task") ? fmt::format(" (task {})", s["task"].get<size_t>()) : "";
-        text += fmt::format("  {:<8} job {}{}: {} -> {}\n           {}\n", s.value("state", ""),
-                            s.value("job", size_t(0)), task, s.value("input", ""), s.value("out", ""),
-                            s.value("reason", ""));
+        const std::string state = s.value("state", "");
+        text += fmt::format("  {:<9} job {}{}: {} -> {}\n            {}\n",
+                            state == "missing" ? "not baked" : state, s.value("job", size_t(0)), task,
+                            s.value("input", ""), s.value("out", ""), s.value("reason", ""));
     }
     if (sets.size() > maxSets)
         text += fmt::format("  ... and {} more (every set is in summary.json)\n", sets.size() - maxSets);

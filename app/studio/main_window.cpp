@@ -189,6 +189,13 @@ MainWindow::MainWindow(QWidget* parent)
     m_paintDock = new QDockWidget("Paint", this);
     m_paintDock->setObjectName("paintDock");
     m_paintDock->setWidget(m_paintTool);
+    // The views paint only while the Paint panel is in view; turning paint mode on brings it there.
+    connect(m_paintDock, &QDockWidget::visibilityChanged, m_paintTool, &PaintTool::setPanelVisible);
+    connect(m_paintTool, &PaintTool::paintModeChanged, this, [this](bool on) {
+        if (!on || m_paintTool->armed()) return;
+        m_paintDock->show();
+        m_paintDock->raise();
+    });
 
     m_panel = new MaterialPanel(m_doc, this);
     auto* scroll = new QScrollArea(this);

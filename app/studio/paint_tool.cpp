@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 namespace burnish::studio {
 
@@ -29,6 +30,23 @@ constexpr double kSeamJumpFraction = 0.25;
 // Over-shining texels: the warning colour over the grey at this strength, so the gloss under it
 // stays readable.
 constexpr double kOverShineMix = 0.65;
+
+/// An eyedropper pick: the brush's value before and after (`set` applies one to the tool).
+class PickCommand : public QUndoCommand {
+public:
+    PickCommand(const QString& text, std::function<void(float)> set, float before, float after)
+        : QUndoCommand(text)
+        , m_set(std::move(set))
+        , m_before(before)
+        , m_after(after) {}
+    void redo() override { m_set(m_after); }
+    void undo() override { m_set(m_before); }
+
+private:
+    std::function<void(float)> m_set;
+    float m_before;
+    float m_after;
+};
 
 /// One stroke (or a clear) on a layer: the changed rectangle before and after.
 class PaintCommand : public QUndoCommand {
@@ -108,7 +126,10 @@ PaintTool::PaintTool(MaterialDocument* doc, TextureView* view, QWidget* parent)
     m_valueSpin->setObjectName("paintValue");
     m_eyedropperButton = new QPushButton("Eyedropper", this);
     m_eyedropperButton->setCheckable(true);
-    m_eyedropperButton->setToolTip("Pick the value under the cursor on the next click");
+    m_eyedropperButton->setObjectName("paintEyedropper");
+    m_eyedropperButton->setToolTip("Pick the value under the cursor on the next click (in paint mode; "
+                                   "Ctrl+Z undoes the pick)");
+    m_eyedropperButton->setStyleSheet(m_paintButton->styleSheet());
     m_clearButton = new QPushButton("Clear layer", this);
     m_overShineCheck = new QCheckBox("Show over-shine", this);
     m_overShineCheck->setChecked(true);
@@ -166,7 +187,7 @@ PaintTool::~PaintTool() {
 
 void PaintTool::attachViewport(Viewport* viewport) {
     m_viewport = viewport;
-    viewport->setPaintMode(m_paintMode);
+    viewport->setPaintMode(armed());
     connect(viewport, &Viewport::paintAt, this, [this](QPointF uv, bool strokeStart) {
         const NormalMap& map = *m_doc->maps().normal;
         // uvAt's v grows upwards; texel rows grow downwards (image pixel (u·w, (1 − v)·h)).
@@ -213,6 +234,7 @@ void PaintTool::syncWidgets() {
     m_valueSpin->setValue(m_brush.value);
     m_layerCombo->setCurrentIndex(m_layerCombo->findData(int(m_layer)));
     m_eyedropperButton->setChecked(m_eyedropper);
+    m_eyedropperButton->setEnabled(m_paintMode);
     m_paintButton->setChecked(m_paintMode);
     m_paintButton->setText(m_paintMode ? "Painting" : "Paint");
     m_view->setBrushRadius(m_brush.radius);
@@ -241,15 +263,29 @@ void PaintTool::setLayer(PaintLayerKind kind) {
 }
 
 void PaintTool::setEyedropper(bool on) {
-    m_eyedropper = on;
+    // Armed only where a click can pick: in paint mode (else it fired on the first click after
+    // paint mode came on, long after it was armed).
+    m_eyedropper = on && m_paintMode;
     syncWidgets();
+}
+
+void PaintTool::applyViewModes() {
+    if (!armed() && m_stroke) release(); // a stroke in progress ends where the panel went
+    m_view->setPaintMode(armed());
+    if (m_viewport) m_viewport->setPaintMode(armed());
+}
+
+void PaintTool::setPanelVisible(bool visible) {
+    if (visible == m_panelVisible) return;
+    m_panelVisible = visible;
+    applyViewModes();
 }
 
 void PaintTool::setPaintMode(bool on) {
     const bool changed = on != m_paintMode;
     m_paintMode = on;
-    m_view->setPaintMode(on);
-    if (m_viewport) m_viewport->setPaintMode(on);
+    if (!on) m_eyedropper = false;
+    applyViewModes();
     syncWidgets();
     if (on) {
         // The arrays a first stroke needs, made off the GUI thread while the artist aims.
@@ -293,10 +329,21 @@ float PaintTool::pickAt(QPointF texel) const {
 
 void PaintTool::pressAt(QPointF texel) {
     if (m_eyedropper) {
-        Brush b = m_brush;
-        b.value = pickAt(texel);
-        setBrush(b);
         setEyedropper(false);
+        const float before = m_brush.value;
+        const float picked = pickAt(texel);
+        if (picked == before) return;
+        // One undo step: Ctrl+Z right after a pick gives the value back (it undid the stroke before).
+        QPointer<PaintTool> tool(this);
+        auto set = [tool](float value) {
+            if (!tool) return;
+            Brush b = tool->m_brush;
+            b.value = value;
+            tool->setBrush(b);
+        };
+        const QString what = m_layer == PaintLayerKind::Gloss ? term(false) : QString("variance offset");
+        m_doc->undoStack()->push(new PickCommand(
+            QString("Pick %1 %2").arg(what).arg(double(picked), 0, 'f', 4), set, before, picked));
         return;
     }
     m_stroke.reset();

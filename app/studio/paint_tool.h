@@ -43,6 +43,12 @@ public:
 
     void setPaintMode(bool on);
     bool paintMode() const { return m_paintMode; }
+    /// Whether the Paint panel is in view (its dock's visibility; true until told otherwise). The
+    /// views paint only while paint mode is on and the panel shows it: with the panel hidden behind a
+    /// tab or closed, a drag on the 3D view orbits (painting by accident otherwise).
+    void setPanelVisible(bool visible);
+    /// Paint mode on and its panel in view: what the views' left button does.
+    bool armed() const { return m_paintMode && m_panelVisible; }
     /// The live bake is built on a worker thread (the studio; an 8192² map's took half a minute on the
     /// GUI thread); strokes paint meanwhile and it catches up with them when it lands. Off (tests that
     /// read it right after a change): built at once.
@@ -56,6 +62,8 @@ public:
     PaintLayerKind layer() const { return m_layer; }
     void setBrush(const Brush& brush);
     const Brush& brush() const { return m_brush; }
+    /// Arms the eyedropper for the next click: only in paint mode (turning paint mode off disarms
+    /// it). A pick sets the brush's value as one undo step ("Pick gloss 0.45").
     void setEyedropper(bool on);
     bool eyedropper() const { return m_eyedropper; }
     /// The value under a texel: the authored gloss (gloss layer) or the painted variance.
@@ -84,6 +92,8 @@ signals:
 
 private:
     void syncWidgets();
+    /// The views' paint mode: armed().
+    void applyViewModes();
     /// Hands the last rebakeRegion's rectangles to the attached viewport.
     void liveRebaked();
     /// The document's gloss without paint, for the over-shine warning (only paint that raised the
@@ -111,6 +121,7 @@ private:
     TextureView* m_view;
     Viewport* m_viewport = nullptr;
     bool m_paintMode = false;
+    bool m_panelVisible = true;
     bool m_eyedropper = false;
     PaintLayerKind m_layer = PaintLayerKind::Gloss;
     Brush m_brush;

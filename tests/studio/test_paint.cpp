@@ -9,6 +9,8 @@
 #include "project.h"
 #include "texture_pane.h"
 #include "texture_view.h"
+#include "viewport.h"
+#include "viewport_panel.h"
 
 #include "cli_run.h"
 #include "temp_dir.h"
@@ -20,6 +22,7 @@
 
 #include <QApplication>
 #include <QComboBox>
+#include <QDockWidget>
 #include <QImage>
 #include <QLabel>
 #include <QLineEdit>
@@ -783,6 +786,79 @@ TEST(StudioPaint, ThePaintButtonShowsItsState) {
     button->click();
     EXPECT_FALSE(tool.paintMode());
     EXPECT_EQ(button->text(), "Paint");
+}
+
+// Painting by accident (issue 48, point 6): with Paint on and its panel hidden behind a tab, a drag on
+// the 3D view painted; an eyedropper armed with Paint off fired after Paint came on; a pick was no
+// undo step.
+TEST(StudioPaint, TheViewsPaintOnlyWhileThePaintPanelIsInViewAndAPickIsAnUndoStep) {
+    MainWindow window;
+    window.setAutosaveDelay(0);
+    window.resize(1152, 648); // compact: the Paint panel is a tab behind the Material panel
+    window.show();
+    window.resetLayout(); // whatever layout a test before saved
+    QApplication::processEvents();
+    ASSERT_TRUE(window.tabifiedDockWidgets(window.findChild<QDockWidget*>("materialDock"))
+                    .contains(window.findChild<QDockWidget*>("paintDock")));
+    PaintTool* tool = window.paintTool();
+    auto* dock = window.findChild<QDockWidget*>("paintDock");
+    auto* materialDock = window.findChild<QDockWidget*>("materialDock");
+    ASSERT_NE(dock, nullptr);
+    ASSERT_NE(materialDock, nullptr);
+    Viewport* viewport = window.findChild<ViewportPanel*>()->viewport();
+    TextureView* view = window.texturePane()->view();
+
+    // The eyedropper cannot be armed with Paint off.
+    auto* eyedropper = tool->findChild<QPushButton*>("paintEyedropper");
+    ASSERT_NE(eyedropper, nullptr);
+    EXPECT_FALSE(eyedropper->isEnabled());
+    tool->setEyedropper(true);
+    EXPECT_FALSE(tool->eyedropper());
+
+    // Turning Paint on brings its panel into view; both views paint.
+    tool->setPaintMode(true);
+    QApplication::processEvents();
+    EXPECT_FALSE(dock->visibleRegion().isEmpty());
+    EXPECT_TRUE(tool->armed());
+    EXPECT_TRUE(viewport->paintMode());
+    EXPECT_TRUE(view->paintMode());
+    // The Material tab raised over it: the views orbit and pan again, Paint stays on for later.
+    materialDock->raise();
+    QApplication::processEvents();
+    EXPECT_TRUE(dock->visibleRegion().isEmpty()); // its tab is behind Material's
+    EXPECT_TRUE(tool->paintMode());
+    EXPECT_FALSE(tool->armed());
+    EXPECT_FALSE(viewport->paintMode());
+    EXPECT_FALSE(view->paintMode());
+    dock->raise();
+    QApplication::processEvents();
+    EXPECT_TRUE(viewport->paintMode());
+
+    // A pick is one undo step, and Ctrl+Z gives the value back.
+    MaterialDocument* doc = window.document();
+    Brush b = tool->brush();
+    b.value = 0.25f;
+    tool->setBrush(b);
+    const int steps = doc->undoStack()->count();
+    tool->setEyedropper(true);
+    EXPECT_TRUE(tool->eyedropper());
+    tool->pressAt(QPointF(10.0, 10.0)); // the sample's base gloss, nothing painted
+    EXPECT_FALSE(tool->eyedropper());
+    const float picked = tool->brush().value;
+    EXPECT_NEAR(picked, float(doc->settings().gloss), kGlossTol);
+    ASSERT_EQ(doc->undoStack()->count(), steps + 1);
+    EXPECT_TRUE(doc->undoStack()->undoText().startsWith("Pick gloss"))
+        << doc->undoStack()->undoText().toStdString();
+    doc->undoStack()->undo();
+    EXPECT_FLOAT_EQ(tool->brush().value, 0.25f);
+    doc->undoStack()->redo();
+    EXPECT_FLOAT_EQ(tool->brush().value, picked);
+    // Paint off disarms an eyedropper left armed.
+    tool->setEyedropper(true);
+    tool->setPaintMode(false);
+    EXPECT_FALSE(tool->eyedropper());
+    tool->setPaintMode(true);
+    EXPECT_FALSE(tool->eyedropper());
 }
 
 // In Paint mode the texture view showed the painted layer under the words "normal map 512×512"

@@ -26,7 +26,7 @@ bool AutosaveWriter::start(Snapshot snapshot) {
         std::vector<const PaintLayer*> layers;
         for (const auto& layer : s.layers)
             layers.push_back(layer.get());
-        Status st = saveProject(s.settings, s.copy, s.autosaveOf, layers);
+        Status st = saveProject(s.settings, s.copy, s.autosaveOf, layers, s.view);
         // The outcome is collected on the GUI thread; a writer gone by then (or one that waited for
         // it already) drops the call.
         QMetaObject::invokeMethod(

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "material_document.h"
+#include "project.h"
 
 #include <burnish/core/util/result.h>
 
@@ -13,6 +14,7 @@
 #include <array>
 #include <future>
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace burnish::studio {
@@ -26,6 +28,7 @@ public:
         QString copy;
         QString autosaveOf;
         std::vector<std::shared_ptr<const PaintLayer>> layers; // painted ones only
+        std::optional<ProjectView> view;                       // the 3D view's mesh and camera
     };
 
     explicit AutosaveWriter(QObject* parent = nullptr);

@@ -388,6 +388,8 @@ void MainWindow::buildMenus() {
         raiseTexture();
         m_texturePane->view()->fit();
     });
+    m_viewMenu->addAction("Frame Object", QKeySequence(Qt::SHIFT | Qt::Key_F), this,
+                          [this] { findChild<ViewportPanel*>("viewportPanel")->viewport()->frameObject(); });
 
     QMenu* help = menuBar()->addMenu("&Help");
     help->addAction("Studio &Guide", QKeySequence::HelpContents, this, &MainWindow::showGuide);
@@ -543,6 +545,7 @@ bool MainWindow::openProject(const QString& path) {
         return false;
     }
     m_autosaveWriter->forgetLayers(); // other layers: the next autosave copies them whole
+    applyView(project->view);
     m_projectPath = absolute;
     claimAutosaveCopy();
     m_autosavedIndex = -1;
@@ -552,6 +555,35 @@ bool MainWindow::openProject(const QString& path) {
     // A newer autosave of this project (a crash after the last save) is offered right away.
     offerRecovery();
     return true;
+}
+
+ProjectView MainWindow::currentView() const {
+    const ViewSettings& v = findChild<ViewportPanel*>("viewportPanel")->viewport()->viewSettings();
+    ProjectView view;
+    view.mesh = v.mesh;
+    view.objPath = v.objPath;
+    view.yawDegrees = v.yawDegrees;
+    view.pitchDegrees = v.pitchDegrees;
+    view.distance = v.distance;
+    view.target = {v.target.x, v.target.y, v.target.z};
+    return view;
+}
+
+void MainWindow::applyView(const std::optional<ProjectView>& view) {
+    auto* panel = findChild<ViewportPanel*>("viewportPanel");
+    const ProjectView shown = view.value_or(ProjectView{});
+    // The mesh first (it aims the camera at its centre), then the camera the project saved. An OBJ
+    // that cannot be read any more is said (loadMesh) and the sphere drawn instead.
+    if (!panel->loadMesh(shown.mesh, shown.objPath))
+        panel->loadMesh(render::MeshKind::Sphere, {});
+    else {
+        ViewSettings v = panel->viewport()->viewSettings();
+        v.yawDegrees = float(shown.yawDegrees);
+        v.pitchDegrees = float(shown.pitchDegrees);
+        v.target = glm::vec3(float(shown.target[0]), float(shown.target[1]), float(shown.target[2]));
+        panel->viewport()->setViewSettings(v);
+        panel->viewport()->setDistance(float(shown.distance)); // clamped to the viewport's range
+    }
 }
 
 void MainWindow::setBackgroundLoads(bool on) {
@@ -584,7 +616,8 @@ bool MainWindow::saveProjectAs(const QString& path) {
     const QString absolute = QFileInfo(path).absoluteFilePath();
     if (const Status st = saveProject(
             m_doc->settings(), absolute, {},
-            {&m_doc->paintLayer(PaintLayerKind::Gloss), &m_doc->paintLayer(PaintLayerKind::VarianceOffset)});
+            {&m_doc->paintLayer(PaintLayerKind::Gloss), &m_doc->paintLayer(PaintLayerKind::VarianceOffset)},
+            currentView());
         !st) {
         showMessage("Cannot save project", QString::fromStdString(st.error()));
         return false;
@@ -604,7 +637,7 @@ bool MainWindow::saveProjectAs(const QString& path) {
 bool MainWindow::autosave() {
     if (!isModified() || m_doc->undoStack()->index() == m_autosavedIndex || m_autosaveWriter->busy())
         return false;
-    AutosaveWriter::Snapshot snapshot{m_doc->settings(), autosaveCopy(), m_projectPath, {}};
+    AutosaveWriter::Snapshot snapshot{m_doc->settings(), autosaveCopy(), m_projectPath, {}, currentView()};
     // The writer's own copies of the layers (the artist paints on while the worker encodes them),
     // brought up to date where they were edited since the last autosave: a stroke's rectangle, not an
     // 8192² layer's 512 MB. The worker skips layers with no paint.
@@ -712,6 +745,7 @@ bool MainWindow::recoverFrom(const QString& copy, const QString& projectPath) {
         return false;
     }
     m_autosaveWriter->forgetLayers(); // other layers: the next autosave copies them whole
+    applyView(project->view);
     // The copy becomes this window's: its next autosave replaces it, saving or discarding removes it.
     if (projectPath != m_projectPath || (projectPath.isEmpty() && copy != m_untitledCopy)) {
         removeAutosave(); // this window's own copy, superseded

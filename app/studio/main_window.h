@@ -4,6 +4,7 @@
 #pragma once
 
 #include "material_document.h"
+#include "project.h"
 
 #include <burnish/core/bake/gltf.h>
 
@@ -86,6 +87,11 @@ public:
     /// opened image the question says that recovering replaces it.
     void offerRecoveryAtLaunch(const QString& opened = {});
     QStringList recentProjects() const;
+    /// The 3D view's mesh and camera, as a project saves them.
+    ProjectView currentView() const;
+    /// Shows a project's view: its mesh (an OBJ that cannot be read is reported, the sphere shown)
+    /// and camera; the defaults where a project has none.
+    void applyView(const std::optional<ProjectView>& view);
     /// Processes a glTF asset into `outDir` as `burnish gltf` does (gltfMethodFor's method), on a worker
     /// thread with a progress dialog that can cancel; an existing output is replaced only after asking.
     /// gltfFinished reports the outcome, which is also shown (showResult, or showMessage for an error).

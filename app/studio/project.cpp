@@ -187,7 +187,7 @@ Status removeProject(const QString& projectFile) {
 }
 
 std::string projectToJson(const MaterialSettings& s, const QString& projectFile, const QString& autosaveOf,
-                          const std::vector<LayerFile>& layers) {
+                          const std::vector<LayerFile>& layers, const std::optional<ProjectView>& view) {
     const QString folder = folderOf(projectFile);
     const ExportSettings& e = s.exportSettings;
     Json root = {
@@ -224,6 +224,14 @@ std::string projectToJson(const MaterialSettings& s, const QString& projectFile,
           {"fis", s.environment.fis},
           {"fisSamples", s.environment.fisSamples},
           {"background", s.environment.background}}}};
+    if (view)
+        root["view"] = {{"mesh", std::string(render::meshKindName(view->mesh))},
+                        {"obj", view->mesh == render::MeshKind::Obj ? relativePath(view->objPath, folder)
+                                                                    : Json(nullptr)},
+                        {"yaw", view->yawDegrees},
+                        {"pitch", view->pitchDegrees},
+                        {"distance", view->distance},
+                        {"target", {view->target[0], view->target[1], view->target[2]}}};
     // "layers" is written only when something is painted.
     if (!layers.empty()) {
         Json list = Json::array();
@@ -258,7 +266,7 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
 
     const Reader top(root, where);
     if (Status st = top.known({"format", "version", "material", "maps", "method", "lobes", "preset", "export",
-                               "environment", "layers", "autosaveOf"});
+                               "environment", "layers", "autosaveOf", "view"});
         !st)
         return Error{st.error()};
 
@@ -409,12 +417,53 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
             return Error{where + ": environment file '" + e.path.toStdString() + "' does not exist"};
     }
 
+    // Projects written before the view was saved open on the default sphere and camera.
+    if (const Json* view = top.get("view", false)) {
+        if (!view->is_object()) return Error{where + ": 'view' must be an object"};
+        const Reader v(*view, where + " view");
+        if (Status st = v.known({"mesh", "obj", "yaw", "pitch", "distance", "target"}); !st)
+            return Error{st.error()};
+        const auto mesh = v.string("mesh");
+        std::optional<render::MeshKind> kind;
+        for (render::MeshKind k : {render::MeshKind::Sphere, render::MeshKind::Plane, render::MeshKind::Torus,
+                                   render::MeshKind::Obj})
+            if (mesh && *mesh == render::meshKindName(k)) kind = k;
+        if (mesh && !kind) v.fail("mesh", "\"sphere\", \"plane\", \"torus\" or \"obj\"");
+        const auto obj = v.string("obj", false, true);
+        if (kind == render::MeshKind::Obj && !obj && !v.error())
+            v.fail("obj", "a path when the mesh is \"obj\"");
+        // The ranges the viewport keeps (its orbit wraps the yaw, stops the pitch short of the poles).
+        const auto yaw = v.number("yaw", -360.0, 360.0);
+        const auto pitch = v.number("pitch", -90.0, 90.0);
+        const auto distance = v.number("distance", 1e-3, 1e4);
+        const Json* target = v.get("target", true);
+        constexpr double kMaxTarget = 1e6;
+        std::array<double, 3> t{};
+        if (target) {
+            bool ok = target->is_array() && target->size() == 3;
+            for (size_t i = 0; ok && i < 3; ++i) {
+                ok = (*target)[i].is_number() && std::abs((*target)[i].get<double>()) <= kMaxTarget;
+                if (ok) t[i] = (*target)[i].get<double>();
+            }
+            if (!ok) v.fail("target", "an array of 3 numbers within ±1e6");
+        }
+        if (v.error()) return *v.error();
+        ProjectView pv;
+        pv.mesh = *kind;
+        pv.objPath = kind == render::MeshKind::Obj ? absolute(obj) : QString();
+        pv.yawDegrees = *yaw;
+        pv.pitchDegrees = *pitch;
+        pv.distance = *distance;
+        pv.target = t;
+        out.view = pv;
+    }
+
     if (Status st = MaterialDocument::validate(s); !st) return Error{where + ": " + st.error()};
     return out;
 }
 
 Status saveProject(const MaterialSettings& settings, const QString& projectFile, const QString& autosaveOf,
-                   const std::vector<const PaintLayer*>& layers) {
+                   const std::vector<const PaintLayer*>& layers, const std::optional<ProjectView>& view) {
     std::vector<LayerFile> files;
     for (const PaintLayer* layer : layers) {
         if (!layer || !layer->painted()) continue;
@@ -428,7 +477,7 @@ Status saveProject(const MaterialSettings& settings, const QString& projectFile,
         files.push_back({layer->kind, path});
     }
     if (Status st = writeFileAtomic(projectFile.toStdString(),
-                                    projectToJson(settings, projectFile, autosaveOf, files));
+                                    projectToJson(settings, projectFile, autosaveOf, files, view));
         !st)
         return st;
     // Only now that the new project names its layers: the files no save names any more go.

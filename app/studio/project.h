@@ -17,6 +17,8 @@
 //     "layers": [{"name": "gloss"|"variance-offset", "file": "<project>.layers/<name>.exr"}],
 //                                          // painted layers: float EXR (value, coverage) beside the
 //                                          // project, written atomically; only painted layers
+//     "view": {"mesh": "sphere"|"plane"|"torus"|"obj", "obj": path|null,  // the 3D view; optional:
+//              "yaw": deg, "pitch": deg, "distance": radii, "target": [x, y, z]},  // absent = defaults
 //     "autosaveOf": path                                                  // autosave copies only
 //   }
 // Paths are relative to the file's folder (absolute when no relative form exists).
@@ -25,11 +27,13 @@
 #include "material_document.h"
 
 #include <burnish/core/util/result.h>
+#include <burnish/render/features.h>
 
 #include <QDateTime>
 #include <QLockFile>
 #include <QString>
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -43,10 +47,22 @@ inline constexpr const char* kProjectFormat = "burnish-project";
 inline constexpr int kProjectVersion = 1;
 inline constexpr const char* kProjectSuffix = "burnish";
 
+/// The 3D view a project reopens with: the viewport's mesh and camera (not undoable edits of the
+/// material, so kept beside its settings).
+struct ProjectView {
+    render::MeshKind mesh = render::MeshKind::Sphere;
+    QString objPath; // absolute; for MeshKind::Obj
+    double yawDegrees = 30.0;
+    double pitchDegrees = 20.0;
+    double distance = 3.0; // from the target, in the mesh's radii
+    std::array<double, 3> target{0.0, 0.0, 0.0};
+};
+
 /// The project JSON for `settings` saved as `projectFile` (paths made relative to its folder).
 /// `autosaveOf` is recorded in autosave copies: the project the copy belongs to.
 std::string projectToJson(const MaterialSettings& settings, const QString& projectFile,
-                          const QString& autosaveOf = {}, const std::vector<LayerFile>& layers = {});
+                          const QString& autosaveOf = {}, const std::vector<LayerFile>& layers = {},
+                          const std::optional<ProjectView>& view = std::nullopt);
 
 /// The folder of a project's painted layers: <folder>/<project name>.layers.
 QString layerFolderFor(const QString& projectFile);
@@ -59,9 +75,10 @@ void removeStaleLayerFiles(const QString& projectFile, const std::vector<LayerFi
 Status removeProject(const QString& projectFile);
 
 struct ParsedProject {
-    MaterialSettings settings;     // paths absolute
-    QString autosaveOf;            // empty unless the file is an autosave copy
-    std::vector<LayerFile> layers; // painted layers to load (paths absolute)
+    MaterialSettings settings;       // paths absolute
+    QString autosaveOf;              // empty unless the file is an autosave copy
+    std::vector<LayerFile> layers;   // painted layers to load (paths absolute)
+    std::optional<ProjectView> view; // absent in projects saved before views were
 };
 
 /// Parses and validates a project read from `projectFile` (relative paths resolve against its
@@ -74,7 +91,8 @@ Result<ParsedProject> parseProject(std::string_view json, const QString& project
 /// layerPathFor() (named by content); the JSON names them; then the layer files no longer named
 /// are removed. A save interrupted anywhere leaves the previous project and its layers whole.
 Status saveProject(const MaterialSettings& settings, const QString& projectFile,
-                   const QString& autosaveOf = {}, const std::vector<const PaintLayer*>& layers = {});
+                   const QString& autosaveOf = {}, const std::vector<const PaintLayer*>& layers = {},
+                   const std::optional<ProjectView>& view = std::nullopt);
 /// Reads and parses a project file.
 Result<ParsedProject> loadProject(const QString& projectFile);
 

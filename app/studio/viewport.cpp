@@ -27,6 +27,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 namespace burnish::studio {
 
@@ -629,12 +630,32 @@ void Viewport::setViewSettings(const ViewSettings& view) {
 
 namespace {
 
-// The farthest vertex of a mesh from the origin (at least 1e-3: a mesh collapsed onto the origin).
-float farthestVertex(const render::MeshData& mesh) {
-    float radius = 1e-3f;
+// A mesh's bounding sphere: its box's centre and the farthest vertex from there (at least 1e-3: a
+// mesh collapsed onto a point). Non-finite vertices are left out.
+struct MeshBounds {
+    glm::vec3 centre{0.0f};
+    float radius = 1.0f;
+};
+
+MeshBounds boundsOf(const render::MeshData& mesh) {
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    bool any = false;
+    auto finite = [](const glm::vec3& p) {
+        return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+    };
     for (const render::Vertex& v : mesh.vertices)
-        if (const float r = glm::length(v.position); std::isfinite(r)) radius = std::max(radius, r);
-    return radius;
+        if (finite(v.position)) {
+            lo = glm::min(lo, v.position);
+            hi = glm::max(hi, v.position);
+            any = true;
+        }
+    if (!any) return {};
+    MeshBounds b;
+    b.centre = 0.5f * (lo + hi);
+    b.radius = 1e-3f;
+    for (const render::Vertex& v : mesh.vertices)
+        if (finite(v.position)) b.radius = std::max(b.radius, glm::length(v.position - b.centre));
+    return b;
 }
 
 } // namespace
@@ -644,9 +665,25 @@ float Viewport::meshRadius() {
     if (m_radiusPath != m_view.objPath) { // a view set with an OBJ not measured yet
         m_radiusPath = m_view.objPath;
         const auto loaded = render::loadObj(m_view.objPath.toStdString());
-        m_objRadius = loaded ? farthestVertex(*loaded) : 1.0f; // an unreadable OBJ fails to draw anyway
+        const MeshBounds b =
+            loaded ? boundsOf(*loaded) : MeshBounds{}; // an unreadable OBJ fails to draw anyway
+        m_objCentre = b.centre;
+        m_objRadius = b.radius;
     }
     return m_objRadius;
+}
+
+glm::vec3 Viewport::meshCentre() {
+    if (m_view.mesh != render::MeshKind::Obj) return glm::vec3(0.0f);
+    (void)meshRadius(); // measures the OBJ when it was not yet
+    return m_objCentre;
+}
+
+void Viewport::frameObject() {
+    m_view.target = meshCentre();
+    m_view.distance = ViewSettings{}.distance;
+    changed(true);
+    emit viewChanged();
 }
 
 float Viewport::cameraDistance() {
@@ -657,11 +694,16 @@ Status Viewport::setMesh(render::MeshKind mesh, const QString& objPath) {
     if (mesh == render::MeshKind::Obj) {
         auto loaded = render::loadObj(objPath.toStdString());
         if (!loaded) return Error{loaded.error()}; // it names the file
+        const MeshBounds b = boundsOf(*loaded);
         m_radiusPath = objPath;
-        m_objRadius = farthestVertex(*loaded);
+        m_objCentre = b.centre;
+        m_objRadius = b.radius;
     }
     m_view.mesh = mesh;
     m_view.objPath = mesh == render::MeshKind::Obj ? objPath : QString();
+    // Aimed at the mesh's centre: an OBJ modelled away from its origin (a hydrant standing on it) is
+    // in view whole.
+    m_view.target = meshCentre();
     changed(true);
     return {};
 }

@@ -92,15 +92,23 @@ public:
     const ViewSettings& viewSettings() const { return m_view; }
     void setViewSettings(const ViewSettings& view);
 
-    /// Mesh choice; an OBJ is read first and refused (nothing changes) when it cannot be drawn.
+    /// Mesh choice; an OBJ is read first and refused (nothing changes) when it cannot be drawn. The
+    /// camera then aims at the new mesh's centre (an OBJ's bounds, not its origin).
     Status setMesh(render::MeshKind mesh, const QString& objPath = {});
     void setDistance(float distance); // clamped to [kMinDistance, kMaxDistance]
     /// The camera's distance from the orbit's centre in world units: the view's distance (in radii)
     /// times the mesh's radius — 1 for the built-in meshes, an OBJ's farthest vertex from the
     /// origin — so the closest distance keeps the camera outside any mesh.
     float cameraDistance();
-    /// The mesh's radius the distance counts in (see cameraDistance).
+    /// The mesh's radius the distance counts in (see cameraDistance): its farthest vertex from its
+    /// centre (1 for the built-in meshes).
     float meshRadius();
+    /// The centre of the mesh's bounding box (the origin for the built-in meshes): where a new mesh
+    /// and frameObject() aim the camera.
+    glm::vec3 meshCentre();
+    /// Frames the object: the camera aims at its centre from the default distance (View ▸ Frame
+    /// Object, Shift+F), its direction kept.
+    void frameObject();
     void setExposure(float stops);
     void setLight(float azimuthDegrees, float elevationDegrees);
     void setDebugView(render::DebugView view);
@@ -220,8 +228,9 @@ private:
 
     MaterialDocument* m_doc;
     ViewSettings m_view;
-    QString m_radiusPath;     // the OBJ meshRadius was measured for
-    float m_objRadius = 1.0f; // its farthest vertex from the origin
+    QString m_radiusPath;        // the OBJ meshRadius was measured for
+    glm::vec3 m_objCentre{0.0f}; // its bounding box's centre
+    float m_objRadius = 1.0f;    // its farthest vertex from that centre
     std::unique_ptr<Engine> m_engine;
     GlSurface* m_glSurface = nullptr;
     ImageSurface* m_imageSurface = nullptr;

@@ -12,6 +12,8 @@
 #include "scene_from_document.h"
 #include "studio_app.h"
 #include "texture_pane.h"
+#include "viewport.h"
+#include "viewport_panel.h"
 
 #include <burnish/core/util/files.h>
 
@@ -384,6 +386,71 @@ TEST(Project, SaveLoadRoundTripsEveryField) {
     const auto noLobes = parseProject(old.dump(), file);
     ASSERT_TRUE(noLobes) << noLobes.error();
     EXPECT_EQ(noLobes->settings.mixtureLobes, kDefaultMixtureLobes);
+}
+
+// The mesh and camera were not saved (issue 48, point 7): a project reopened on the sphere.
+TEST(Project, TheMeshAndCameraAreSavedAndReopened) {
+    test::TempDir dir;
+    const QString quad = QString(BURNISH_SOURCE_DIR) + "/tests/fuzz/corpus/obj/quad.obj";
+    fs::copy_file(quad.toStdString(), dir / "quad.obj");
+    TestWindow a;
+    auto* panelA = a.window.findChild<ViewportPanel*>("viewportPanel");
+    ASSERT_TRUE(panelA->loadMesh(render::MeshKind::Obj, q(dir / "quad.obj")));
+    panelA->viewport()->orbit(50.0f, -12.5f);
+    panelA->viewport()->setDistance(4.25f);
+    ViewSettings panned = panelA->viewport()->viewSettings();
+    panned.target = glm::vec3(0.25f, -0.5f, 0.125f);
+    panelA->viewport()->setViewSettings(panned);
+    const ViewSettings saved = panelA->viewport()->viewSettings();
+    ASSERT_TRUE(a.window.saveProjectAs(q(dir / "scene.burnish")));
+    const auto json = nlohmann::json::parse(burnish::readFile(dir / "scene.burnish").value());
+    EXPECT_EQ(json["view"]["mesh"], "obj");
+    EXPECT_EQ(json["view"]["obj"], "quad.obj") << "relative to the project, as the maps";
+
+    TestWindow b;
+    ASSERT_TRUE(b.window.openProject(q(dir / "scene.burnish")));
+    const ViewSettings opened =
+        b.window.findChild<ViewportPanel*>("viewportPanel")->viewport()->viewSettings();
+    EXPECT_EQ(opened.mesh, render::MeshKind::Obj);
+    EXPECT_EQ(opened.objPath, q(dir / "quad.obj"));
+    EXPECT_FLOAT_EQ(opened.yawDegrees, saved.yawDegrees);
+    EXPECT_FLOAT_EQ(opened.pitchDegrees, saved.pitchDegrees);
+    EXPECT_FLOAT_EQ(opened.distance, 4.25f);
+    EXPECT_EQ(opened.target, saved.target);
+    EXPECT_TRUE(b.messages.isEmpty()) << b.messages.join("; ").toStdString();
+
+    // A project saved before views were: the default sphere and camera.
+    auto old = json;
+    old.erase("view");
+    ASSERT_TRUE(writeFileAtomic(dir / "old.burnish", old.dump(), Overwrite::Allow));
+    ASSERT_TRUE(b.window.openProject(q(dir / "old.burnish")));
+    const ViewSettings reset =
+        b.window.findChild<ViewportPanel*>("viewportPanel")->viewport()->viewSettings();
+    EXPECT_EQ(reset.mesh, render::MeshKind::Sphere);
+    EXPECT_FLOAT_EQ(reset.yawDegrees, ViewSettings{}.yawDegrees);
+    EXPECT_EQ(reset.target, glm::vec3(0.0f));
+
+    // Its OBJ gone: the project opens on the sphere and says why.
+    fs::remove(dir / "quad.obj");
+    TestWindow c;
+    ASSERT_TRUE(c.window.openProject(q(dir / "scene.burnish")));
+    EXPECT_EQ(c.window.findChild<ViewportPanel*>("viewportPanel")->viewport()->viewSettings().mesh,
+              render::MeshKind::Sphere);
+    ASSERT_EQ(c.messages.size(), 1);
+    EXPECT_TRUE(c.messages[0].contains("quad.obj")) << c.messages[0].toStdString();
+
+    // A view that is not one is refused in one line naming the field, as every other field.
+    for (const auto& [field, value, said] : std::vector<std::tuple<const char*, nlohmann::json, const char*>>{
+             {"mesh", "cube", "view: 'mesh' must be \"sphere\", \"plane\", \"torus\" or \"obj\""},
+             {"pitch", 120, "view: 'pitch' must be a number in [-90, 90]"},
+             {"distance", 0, "view: 'distance' must be a number in [0.001, 10000]"},
+             {"target", nlohmann::json::array({1, 2}), "view: 'target' must be an array of 3 numbers"}}) {
+        auto bad = json;
+        bad["view"][field] = value;
+        const auto parsed = parseProject(bad.dump(), q(dir / "bad.burnish"));
+        ASSERT_FALSE(parsed) << field;
+        EXPECT_NE(parsed.error().find(said), std::string::npos) << parsed.error();
+    }
 }
 
 TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {

@@ -197,6 +197,50 @@ TEST(Viewport, TheClosestDistanceStaysOutsideABigMesh) {
     EXPECT_FLOAT_EQ(t.view.cameraDistance(), Viewport::kMinDistance);
 }
 
+// The camera aimed at an OBJ's origin, not its bounds (issue 48, point 7): a tall mesh standing
+// beside its origin was cut off. Now a new mesh is framed by its bounding box's centre, and
+// frameObject() aims there again after the camera moved.
+TEST(Viewport, AMeshIsFramedByItsBoundsAndFrameObjectAimsThereAgain) {
+    TestViewport t;
+    test::TempDir dir;
+    {
+        // A post 2 wide and 6 tall standing at x = 20: its origin lies far outside it.
+        std::ofstream obj(dir / "post.obj");
+        for (int i = 0; i < 8; ++i)
+            obj << "v " << (i & 1 ? 21 : 19) << ' ' << (i & 2 ? 6 : 0) << ' ' << (i & 4 ? 1 : -1) << "\n";
+        obj << "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+        for (const char* face : {"1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6"}) {
+            int a, b, c, d;
+            std::sscanf(face, "%d %d %d %d", &a, &b, &c, &d);
+            obj << "f " << a << "/1 " << b << "/2 " << c << "/3 " << d << "/4\n";
+        }
+    }
+    ASSERT_TRUE(t.view.setMesh(render::MeshKind::Obj, QString::fromStdString((dir / "post.obj").string())));
+    const glm::vec3 centre(20.0f, 3.0f, 0.0f);
+    EXPECT_LT(glm::length(t.view.viewSettings().target - centre), 1e-4f);
+    EXPECT_NEAR(t.view.meshRadius(), std::sqrt(11.0f), 1e-4f); // a corner from the centre: (1, 3, 1)
+    t.grab();
+    EXPECT_TRUE(t.view.uvAt(QPoint(kWidth / 2, kHeight / 2)).has_value()) << "the post fills the centre";
+
+    // Panned away and zoomed out, then framed again: aimed at its centre from the default distance.
+    ViewSettings moved = t.view.viewSettings();
+    moved.target = glm::vec3(0.0f);
+    t.view.setViewSettings(moved);
+    t.view.setDistance(40.0f);
+    t.grab();
+    EXPECT_FALSE(t.view.uvAt(QPoint(kWidth / 2, kHeight / 2)).has_value()) << "looking past it";
+    const float yaw = t.view.viewSettings().yawDegrees;
+    t.view.frameObject();
+    EXPECT_LT(glm::length(t.view.viewSettings().target - centre), 1e-4f);
+    EXPECT_FLOAT_EQ(t.view.viewSettings().distance, ViewSettings{}.distance);
+    EXPECT_FLOAT_EQ(t.view.viewSettings().yawDegrees, yaw) << "its direction kept";
+    t.grab();
+    EXPECT_TRUE(t.view.uvAt(QPoint(kWidth / 2, kHeight / 2)).has_value());
+    // The built-in meshes sit on the origin.
+    ASSERT_TRUE(t.view.setMesh(render::MeshKind::Sphere));
+    EXPECT_EQ(t.view.viewSettings().target, glm::vec3(0.0f));
+}
+
 TEST(Viewport, ChangingTheDocumentsMethodChangesTheImage) {
     TestViewport t;
     t.view.setDistance(kFarDistance);

@@ -851,9 +851,27 @@ void MainWindow::dropEvent(QDropEvent* event) {
     if (urls.isEmpty() || !urls.first().isLocalFile()) return;
     const QString path = urls.first().toLocalFile();
     event->acceptProposedAction();
-    // A project replaces the document (after asking about unsaved changes); an image dropped
-    // anywhere but on a slot goes to the normal slot.
-    if (!isProjectFile(path) || maybeSave()) openFile(path);
+    // Routed by what is dropped, after the drop has finished: a question or a message box inside the
+    // drop kept the drag source waiting until it gave up.
+    QTimer::singleShot(0, this, [this, path] { openDropped(path); });
+}
+
+void MainWindow::openDropped(const QString& path) {
+    // A project replaces the document (after asking about unsaved changes); an OBJ becomes the 3D
+    // view's mesh; an image dropped anywhere but on a slot goes to the normal slot.
+    if (isProjectFile(path)) {
+        if (maybeSave()) openProject(path);
+    } else if (QFileInfo(path).suffix().compare("obj", Qt::CaseInsensitive) == 0) {
+        findChild<ViewportPanel*>("viewportPanel")->loadMesh(render::MeshKind::Obj, path);
+    } else if (isImageFileName(path)) {
+        openFile(path);
+    } else {
+        showMessage(
+            "Cannot use this file",
+            QString("'%1' is not an image (PNG, TGA, JPEG, EXR, TIFF, DDS, HDR), an OBJ mesh or a Burnish "
+                    "project")
+                .arg(path));
+    }
 }
 
 void MainWindow::restoreSettings() {

@@ -87,6 +87,10 @@ public:
     /// opened image the question says that recovering replaces it.
     void offerRecoveryAtLaunch(const QString& opened = {});
     QStringList recentProjects() const;
+    /// A file dropped on the window (or on a slot that does not take it), by its kind: a project is
+    /// opened (after asking about unsaved changes), an OBJ becomes the mesh, an image the normal map;
+    /// anything else is refused with a message. Drops call it once the drop has finished.
+    void openDropped(const QString& path);
     /// The 3D view's mesh and camera, as a project saves them.
     ProjectView currentView() const;
     /// Shows a project's view: its mesh (an OBJ that cannot be read is reported, the sphere shown)

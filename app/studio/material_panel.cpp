@@ -50,10 +50,15 @@ LinearRgb fromQColor(const QColor& c) {
             srgb8ToLinear(uint8_t(c.blue()))};
 }
 
-const QString kImageFilter =
-    "Images (*.png *.tga *.jpg *.jpeg *.exr *.tif *.tiff *.dds *.hdr);;All files (*)";
+// The image formats the studio offers and takes from a drop.
+const QStringList kImageSuffixes = {"png", "tga", "jpg", "jpeg", "exr", "tif", "tiff", "dds", "hdr"};
+const QString kImageFilter = "Images (*." + kImageSuffixes.join(" *.") + ");;All files (*)";
 
 } // namespace
+
+bool isImageFileName(const QString& path) {
+    return kImageSuffixes.contains(QFileInfo(path).suffix().toLower());
+}
 
 QString srgbHex(const LinearRgb& c) {
     return toQColor(c).name(QColor::HexRgb);
@@ -117,10 +122,14 @@ void MapSlotWidget::setState(const QString& path, const QStringList& diagnostics
 }
 
 void MapSlotWidget::dragEnterEvent(QDragEnterEvent* event) {
-    if (event->mimeData()->hasUrls() && event->mimeData()->urls().first().isLocalFile()) {
+    // Only images are a slot's; a project or a mesh is not accepted here and goes to the window.
+    if (event->mimeData()->hasUrls() && event->mimeData()->urls().first().isLocalFile() &&
+        isImageFileName(event->mimeData()->urls().first().toLocalFile())) {
         event->acceptProposedAction();
         setStyleSheet("#mapSlot { border: 1px solid palette(highlight); }");
+        return;
     }
+    event->ignore();
 }
 
 void MapSlotWidget::dragLeaveEvent(QDragLeaveEvent*) {
@@ -130,7 +139,10 @@ void MapSlotWidget::dragLeaveEvent(QDragLeaveEvent*) {
 void MapSlotWidget::dropEvent(QDropEvent* event) {
     setStyleSheet({});
     const QList<QUrl> urls = event->mimeData()->urls();
-    if (urls.isEmpty() || !urls.first().isLocalFile()) return;
+    if (urls.isEmpty() || !urls.first().isLocalFile() || !isImageFileName(urls.first().toLocalFile())) {
+        event->ignore();
+        return;
+    }
     event->acceptProposedAction();
     emit loadRequested(m_slot, urls.first().toLocalFile());
 }

@@ -20,7 +20,12 @@ class QSlider;
 
 namespace burnish::studio {
 
-/// One image slot: title, file name, Load…/Clear, the decoder's diagnostics; accepts dropped files.
+/// Whether a file name is one of the image formats the studio reads (by its extension: PNG, TGA,
+/// JPEG, EXR, TIFF, DDS, HDR): what a map slot takes when dropped on it.
+bool isImageFileName(const QString& path);
+
+/// One image slot: title, file name, Load…/Clear, the decoder's diagnostics; accepts dropped images
+/// (anything else dropped on it goes on to the window, which routes it by its kind).
 class MapSlotWidget : public QFrame {
     Q_OBJECT
 public:

@@ -3,6 +3,7 @@
 #include <burnish/core/bake/bake_job.h>
 
 #include <burnish/core/bake/bake_ninja.h>
+#include <burnish/core/io/image.h>
 #include <burnish/core/util/files.h>
 #include <burnish/core/util/numeric.h>
 
@@ -634,4 +635,54 @@ TEST(BakeMemory, EstimateCoversTheMeasuredPeaksAndRefusesWhatCannotFit) {
     EXPECT_GT(*available, 0u);
 }
 
+} // namespace burnish
+
+namespace burnish {
+namespace {
+
+// A normal map given as the gloss map baked its red channel as gloss, silently (issue 48, point 5:
+// a normal map dropped on the studio's Gloss slot; `bake --gloss` the same).
+TEST(BakeJob, ANormalMapIsRefusedAsTheGlossMap) {
+    const auto normal = readImage(kNormalMap);
+    ASSERT_TRUE(normal) << normal.error();
+    EXPECT_GE(normalLikeFraction(*normal), kNormalLikeFraction);
+    const auto refused = glossFromImage(*normal, normal->width, normal->height);
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.error().find("looks like a tangent-space normal map"), std::string::npos)
+        << refused.error();
+
+    // A grey gloss map stored as RGB, even at the grey whose 2v - 1 is a unit vector, and a colour
+    // image that is no normal map are taken.
+    Image grey;
+    grey.width = grey.height = 8;
+    grey.channels = 3;
+    grey.pixels.resize(grey.texelCount() * 3);
+    for (size_t i = 0; i < grey.pixels.size(); ++i)
+        grey.pixels[i] = float(0.5 + 0.5 / std::sqrt(3.0));
+    EXPECT_EQ(normalLikeFraction(grey), 0.0);
+    EXPECT_TRUE(glossFromImage(grey, 8, 8));
+    Image colour = grey;
+    for (size_t t = 0; t < colour.texelCount(); ++t) {
+        colour.pixels[3 * t] = float(t % 7) / 6.0f; // red ramps, blue dark: no unit vectors facing up
+        colour.pixels[3 * t + 2] = 0.1f;
+    }
+    EXPECT_LT(normalLikeFraction(colour), kNormalLikeFraction);
+    EXPECT_TRUE(glossFromImage(colour, 8, 8));
+
+    // Through a job: the bake refuses before it writes anything.
+    test::TempDir dir;
+    BakeJobSpec spec;
+    spec.input = kNormalMap;
+    spec.gloss = kNormalMap;
+    spec.out = (dir / "out").string();
+    spec.preset = "blackops";
+    const auto job = resolveBakeJob(spec);
+    ASSERT_TRUE(job) << job.error();
+    const auto run = runBakeJob(*job);
+    ASSERT_FALSE(run);
+    EXPECT_NE(run.error().find("--gloss"), std::string::npos) << run.error();
+    EXPECT_FALSE(fs::exists(dir / "out" / "bake.json"));
+}
+
+} // namespace
 } // namespace burnish

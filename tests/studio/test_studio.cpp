@@ -612,6 +612,7 @@ TEST(MainWindow, DroppedImagesLoadIntoTheSlotTheyAreDroppedOn) {
         QApplication::sendEvent(target, &enter);
         QDropEvent dropEvent(QPointF(at), Qt::CopyAction, &data, Qt::LeftButton, Qt::NoModifier);
         QApplication::sendEvent(target, &dropEvent);
+        QApplication::processEvents(); // the window acts once the drop has finished
         return enter.isAccepted();
     };
     // A gloss map of the normal map's (the sample's) size, dropped on the Gloss slot.
@@ -640,6 +641,67 @@ TEST(MainWindow, DroppedImagesLoadIntoTheSlotTheyAreDroppedOn) {
     const int steps = doc->undoStack()->count();
     EXPECT_FALSE(drop(glossSlot, {QUrl("https://example.com/normal.png")}));
     EXPECT_EQ(doc->undoStack()->count(), steps);
+}
+
+// Drops went to the wrong handler (issue 48, point 5): an OBJ dropped on the window was read as a
+// normal map, a project dropped on a slot likewise, a normal map dropped on the Gloss slot was
+// taken, and a project dropped on unsaved work asked inside the drop. Now each goes where it
+// belongs, after the drop has finished.
+TEST(MainWindow, DropsAreRoutedByWhatIsDropped) {
+    test::TempDir dir;
+    TestWindow w;
+    MaterialDocument* doc = w.window.document();
+    auto drop = [](QWidget* target, const QString& path) {
+        QMimeData data;
+        data.setUrls({QUrl::fromLocalFile(path)});
+        const QPoint at(target->width() / 2, target->height() / 2);
+        QDragEnterEvent enter(at, Qt::CopyAction, &data, Qt::LeftButton, Qt::NoModifier);
+        QApplication::sendEvent(target, &enter);
+        if (!enter.isAccepted()) return false;
+        QDropEvent dropEvent(QPointF(at), Qt::CopyAction, &data, Qt::LeftButton, Qt::NoModifier);
+        QApplication::sendEvent(target, &dropEvent);
+        return dropEvent.isAccepted();
+    };
+    MapSlotWidget* glossSlot = w.window.materialPanel()->slotWidget(MapSlot::Gloss);
+    // An OBJ becomes the mesh, once the drop has finished, wherever it is dropped: a slot does not
+    // take it and it goes on to the window.
+    const QString quad = QString(BURNISH_SOURCE_DIR) + "/tests/fuzz/corpus/obj/quad.obj";
+    auto* viewport = w.window.findChild<ViewportPanel*>("viewportPanel")->viewport();
+    EXPECT_TRUE(drop(glossSlot, quad));
+    EXPECT_EQ(viewport->viewSettings().mesh, render::MeshKind::Sphere) << "nothing happens inside the drop";
+    QApplication::processEvents();
+    EXPECT_EQ(viewport->viewSettings().mesh, render::MeshKind::Obj);
+    EXPECT_TRUE(doc->settings().normalMapPath.isEmpty()) << "not read as a normal map";
+    EXPECT_TRUE(doc->settings().glossMapPath.isEmpty()) << "nor as a gloss map";
+    EXPECT_TRUE(w.messages.isEmpty()) << w.messages.join("; ").toStdString();
+
+    // A file of no kind the studio reads is refused in a message naming it.
+    std::ofstream(dir / "notes.txt") << "hello\n";
+    EXPECT_TRUE(drop(&w.window, q(dir / "notes.txt")));
+    QApplication::processEvents();
+    ASSERT_EQ(w.messages.size(), 1);
+    EXPECT_TRUE(w.messages[0].contains("notes.txt") && w.messages[0].contains("not an image"))
+        << w.messages[0].toStdString();
+
+    // A normal map dropped on the Gloss slot is refused with the reason; the slot stays empty.
+    EXPECT_TRUE(drop(glossSlot, kNormalMap));
+    EXPECT_TRUE(doc->settings().glossMapPath.isEmpty());
+    ASSERT_EQ(w.messages.size(), 2);
+    EXPECT_TRUE(w.messages[1].contains("looks like a tangent-space normal map"))
+        << w.messages[1].toStdString();
+
+    // A project dropped on unsaved work: the question comes after the drop, then the project opens.
+    TestWindow saver;
+    saver.window.document()->setGloss(0.3125);
+    ASSERT_TRUE(saver.window.saveProjectAs(q(dir / "scene.burnish")));
+    doc->setGloss(0.75); // unsaved work
+    w.answer = QMessageBox::Discard;
+    EXPECT_TRUE(drop(glossSlot, q(dir / "scene.burnish"))); // on a slot: still the window's to open
+    EXPECT_TRUE(w.questions.isEmpty()) << "no question inside the drop";
+    QApplication::processEvents();
+    EXPECT_EQ(w.questions.size(), 1);
+    EXPECT_DOUBLE_EQ(doc->settings().gloss, 0.3125);
+    EXPECT_EQ(w.window.projectPath(), QFileInfo(q(dir / "scene.burnish")).absoluteFilePath());
 }
 
 TEST(MainWindow, OpenFileTakesAProjectOrAnImageAsTheNormalMap) {

@@ -14,6 +14,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -234,10 +236,34 @@ const BakedTexture* BakeOutput::find(TextureRole role) const {
     return nullptr;
 }
 
+double normalLikeFraction(const Image& image) {
+    if (image.channels < 3 || image.texelCount() == 0) return 0.0;
+    // A grey image stored as RGB (a gloss map saved in colour) is no normal map whatever its value.
+    constexpr double kMinColour = 0.1;
+    constexpr double kUnitTolerance = 0.1;
+    double colour = 0.0;
+    size_t unitUp = 0;
+    const size_t n = image.texelCount();
+    for (size_t i = 0; i < n; ++i) {
+        const float* p = &image.pixels[i * size_t(image.channels)];
+        colour += std::abs(double(p[0]) - double(p[2]));
+        const double x = 2.0 * p[0] - 1.0, y = 2.0 * p[1] - 1.0, z = 2.0 * p[2] - 1.0;
+        if (z > 0.0 && std::abs(std::sqrt(x * x + y * y + z * z) - 1.0) < kUnitTolerance) ++unitUp;
+    }
+    if (colour / double(n) < kMinColour) return 0.0;
+    return double(unitUp) / double(n);
+}
+
 Result<std::vector<float>> glossFromImage(const Image& image, int width, int height) {
     if (image.width != width || image.height != height)
         return Error{"gloss map is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                      " but the normal map is " + std::to_string(width) + "x" + std::to_string(height)};
+    // A normal map taken for a gloss map would bake its red channel as gloss, silently.
+    if (const double f = normalLikeFraction(image); f >= kNormalLikeFraction)
+        return Error{
+            fmt::format("this image looks like a tangent-space normal map, not a gloss map ({:.1f} % of its "
+                        "texels decode to unit vectors facing up): load it as the normal map",
+                        100.0 * f)};
     std::vector<float> gloss(image.texelCount());
     for (size_t i = 0; i < gloss.size(); ++i) {
         const float v = image.pixels[i * size_t(image.channels)];

@@ -148,8 +148,17 @@ struct BakeOutput {
 /// non-finite values, a non-positive base power.
 Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options);
 
+/// The fraction of an image's texels whose first three channels, read as unsigned normals (2v − 1),
+/// are unit vectors (within 0.1) facing up; 0 for fewer than 3 channels or a grey image (mean |R − B|
+/// under 0.1).
+double normalLikeFraction(const Image& image);
+/// From this normalLikeFraction on an image is taken for a normal map: real ones score 0.97–1 (8-bit
+/// rounding and steep texels aside), colour images and packed channel maps far less.
+inline constexpr double kNormalLikeFraction = 0.9;
+
 /// The authored gloss channel of an image (first channel, or the luminance-free first channel of
-/// a grey image), checked against the normal map's size.
+/// a grey image), checked against the normal map's size. Errors: another size, a NaN or infinite
+/// texel, an image that looks like a tangent-space normal map (normalLikeFraction).
 Result<std::vector<float>> glossFromImage(const Image& image, int width, int height);
 
 } // namespace burnish

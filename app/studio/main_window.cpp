@@ -589,7 +589,10 @@ void MainWindow::applyView(const std::optional<ProjectView>& view) {
 void MainWindow::setBackgroundLoads(bool on) {
     m_panel->setBackgroundLoads(on);
     m_paintTool->setBackgroundBakes(on);
-    if (auto* panel = findChild<ViewportPanel*>("viewportPanel")) panel->viewport()->setBackgroundBakes(on);
+    if (auto* panel = findChild<ViewportPanel*>("viewportPanel")) {
+        panel->viewport()->setBackgroundBakes(on);
+        panel->setBackgroundLoads(on);
+    }
 }
 
 bool MainWindow::openFile(const QString& path) {
@@ -862,7 +865,11 @@ void MainWindow::openDropped(const QString& path) {
     if (isProjectFile(path)) {
         if (maybeSave()) openProject(path);
     } else if (QFileInfo(path).suffix().compare("obj", Qt::CaseInsensitive) == 0) {
-        findChild<ViewportPanel*>("viewportPanel")->loadMesh(render::MeshKind::Obj, path);
+        auto* panel = findChild<ViewportPanel*>("viewportPanel");
+        if (panel->backgroundLoads())
+            panel->loadMeshInBackground(path);
+        else
+            panel->loadMesh(render::MeshKind::Obj, path);
     } else if (isImageFileName(path)) {
         openFile(path);
     } else {

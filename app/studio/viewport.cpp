@@ -664,9 +664,9 @@ float Viewport::meshRadius() {
     if (m_view.mesh != render::MeshKind::Obj) return 1.0f;
     if (m_radiusPath != m_view.objPath) { // a view set with an OBJ not measured yet
         m_radiusPath = m_view.objPath;
-        const auto loaded = render::loadObj(m_view.objPath.toStdString());
+        const auto loaded = render::loadObjShared(m_view.objPath.toStdString());
         const MeshBounds b =
-            loaded ? boundsOf(*loaded) : MeshBounds{}; // an unreadable OBJ fails to draw anyway
+            loaded ? boundsOf(**loaded) : MeshBounds{}; // an unreadable OBJ fails to draw anyway
         m_objCentre = b.centre;
         m_objRadius = b.radius;
     }
@@ -692,9 +692,10 @@ float Viewport::cameraDistance() {
 
 Status Viewport::setMesh(render::MeshKind mesh, const QString& objPath) {
     if (mesh == render::MeshKind::Obj) {
-        auto loaded = render::loadObj(objPath.toStdString());
+        // Shared with the renderer's upload (render::loadObjShared): the file is parsed once.
+        auto loaded = render::loadObjShared(objPath.toStdString());
         if (!loaded) return Error{loaded.error()}; // it names the file
-        const MeshBounds b = boundsOf(*loaded);
+        const MeshBounds b = boundsOf(**loaded);
         m_radiusPath = objPath;
         m_objCentre = b.centre;
         m_objRadius = b.radius;

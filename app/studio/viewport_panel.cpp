@@ -4,17 +4,23 @@
 
 #include "flow_layout.h"
 
+#include <burnish/render/mesh.h>
+
 #include <QCheckBox>
 #include <QComboBox>
 #include <QFileDialog>
 #include <QFileInfo>
 #include <QHBoxLayout>
 #include <QLabel>
+#include <QPointer>
+#include <QProgressDialog>
 #include <QResizeEvent>
 #include <QSettings>
 #include <QSlider>
+#include <QThread>
 #include <QVBoxLayout>
 
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 
@@ -259,7 +265,72 @@ void ViewportPanel::chooseMesh(int index) {
         }
         settings.setValue("folders/meshes", QFileInfo(path).absolutePath());
     }
-    loadMesh(kind, path);
+    if (kind == render::MeshKind::Obj && m_backgroundMeshLoads)
+        loadMeshInBackground(path);
+    else
+        loadMesh(kind, path);
+}
+
+ViewportPanel::~ViewportPanel() {
+    // A read still running finishes (it touches nothing of the panel) before the panel goes.
+    for (QThread* worker : m_meshWorkers)
+        worker->wait();
+}
+
+void ViewportPanel::loadMeshInBackground(const QString& path) {
+    const quint64 generation = ++m_meshGeneration;
+    m_meshLoading = true;
+    const std::string file = path.toStdString();
+    QPointer<ViewportPanel> self(this);
+    QThread* worker = QThread::create([self, generation, path, file] {
+        // Reads the file into render::loadObjShared's cache; the GUI thread then draws it from there.
+        const auto read = render::loadObjShared(file);
+        const QString error = read ? QString() : QString::fromStdString(read.error());
+        if (!self) return;
+        QMetaObject::invokeMethod(
+            self,
+            [self, generation, path, error] {
+                if (!self || generation != self->m_meshGeneration) return; // cancelled or superseded
+                self->finishMeshLoad(path, error);
+            },
+            Qt::QueuedConnection);
+    });
+    m_meshWorkers.push_back(worker);
+    connect(worker, &QThread::finished, this, [this, worker] {
+        m_meshWorkers.erase(std::remove(m_meshWorkers.begin(), m_meshWorkers.end(), worker),
+                            m_meshWorkers.end());
+        worker->deleteLater();
+    });
+    if (!m_meshProgress) {
+        m_meshProgress = new QProgressDialog(this);
+        m_meshProgress->setWindowTitle("Reading mesh");
+        m_meshProgress->setRange(0, 0); // a file is read in one piece: busy, not a percentage
+        m_meshProgress->setMinimumDuration(400);
+        m_meshProgress->setAutoReset(false);
+        connect(m_meshProgress, &QProgressDialog::canceled, this, [this] {
+            ++m_meshGeneration; // the read finishes on its own; its result is dropped
+            m_meshLoading = false;
+            m_meshProgress->reset();
+            syncFromView();
+            emit meshLoaded(false);
+        });
+    }
+    m_meshProgress->setLabelText("Reading " + QFileInfo(path).fileName() + "…");
+    m_meshProgress->reset();
+    m_meshProgress->setValue(0); // starts the minimum-duration timer
+    worker->start();
+}
+
+void ViewportPanel::finishMeshLoad(const QString& path, const QString& error) {
+    m_meshLoading = false;
+    if (m_meshProgress) m_meshProgress->reset();
+    if (!error.isEmpty()) {
+        syncFromView();
+        emit errorOccurred("Cannot use this mesh", error);
+        emit meshLoaded(false);
+        return;
+    }
+    emit meshLoaded(loadMesh(render::MeshKind::Obj, path)); // read already: the cache answers
 }
 
 bool ViewportPanel::loadMesh(render::MeshKind kind, const QString& path) {

@@ -9,10 +9,15 @@
 
 #include <QWidget>
 
+#include <vector>
+
 class QCheckBox;
 class QComboBox;
 class QLabel;
 class QSlider;
+
+class QProgressDialog;
+class QThread;
 
 namespace burnish::studio {
 
@@ -48,10 +53,24 @@ public:
     /// Draws `kind` (an OBJ from `path`). A refused mesh leaves the drawn one and is said in
     /// errorOccurred (the window shows it); false then.
     bool loadMesh(render::MeshKind kind, const QString& path = {});
+    /// Reads an OBJ on a worker thread (the studio: a 4-million-triangle file froze the window for
+    /// seconds), with a progress dialog that can cancel after a moment; the mesh is drawn when it is
+    /// read (render::loadObjShared: parsed once), and meshLoaded says how it ended. A newer load or a
+    /// cancel drops an older one's result.
+    void loadMeshInBackground(const QString& path);
+    /// An OBJ read in the background is being read.
+    bool meshLoading() const { return m_meshLoading; }
+    /// OBJ files chosen in the mesh box are read in the background (the studio turns it on; tests that
+    /// read the view right after a choice leave it off).
+    void setBackgroundLoads(bool on) { m_backgroundMeshLoads = on; }
+    bool backgroundLoads() const { return m_backgroundMeshLoads; }
+    ~ViewportPanel() override;
 
 signals:
     /// A refusal to show the user (a mesh that cannot be read): a title and the reason.
     void errorOccurred(const QString& title, const QString& message);
+    /// A background OBJ read ended: drawn (ok), refused (errorOccurred said why) or cancelled.
+    void meshLoaded(bool ok);
 
 protected:
     /// Keeps the panel's minimum height at the control rows its width needs plus the view's
@@ -65,6 +84,8 @@ private:
     void chooseMesh(int index);
     void chooseMethodB(int index);
     void updateShimmer();
+    /// A background read of `path` ended (`error` empty: read); draws it from the cache.
+    void finishMeshLoad(const QString& path, const QString& error);
 
     MaterialDocument* m_doc;
     Viewport* m_viewport;
@@ -86,6 +107,11 @@ private:
     QLabel* m_shimmer;
     QLabel* m_frame;
     bool m_syncing = false;
+    bool m_meshLoading = false;
+    bool m_backgroundMeshLoads = false;
+    quint64 m_meshGeneration = 0;        // the newest background read (older results are dropped)
+    std::vector<QThread*> m_meshWorkers; // in flight, waited for by the destructor
+    QProgressDialog* m_meshProgress = nullptr;
 };
 
 } // namespace burnish::studio

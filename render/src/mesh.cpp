@@ -10,12 +10,16 @@
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <limits>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <tuple>
 #include <utility>
+#include <vector>
 
 namespace burnish::render {
 
@@ -234,8 +238,65 @@ void generateTangents(MeshData& mesh) {
     }
 }
 
-Result<MeshData> loadObj(const std::filesystem::path& path) {
+namespace {
+
+// The OBJ files parsed last, by path and the file's time and size: the studio reads a mesh for its
+// bounds and the renderer uploads it, and a project reopens it; each parse of a big file took seconds.
+struct ObjCacheEntry {
+    std::filesystem::path path;
+    std::filesystem::file_time_type time;
+    std::uintmax_t size = 0;
+    std::shared_ptr<const MeshData> mesh;
+};
+constexpr size_t kObjCacheEntries = 2;
+std::mutex g_objCacheMutex;
+std::vector<ObjCacheEntry> g_objCache; // newest last
+std::atomic<std::uint64_t> g_objParses{0};
+
+Result<MeshData> parseObj(const std::filesystem::path& path);
+
+} // namespace
+
+std::uint64_t objFilesParsed() {
+    return g_objParses.load();
+}
+
+Result<std::shared_ptr<const MeshData>> loadObjShared(const std::filesystem::path& path) {
     if (const Status st = requireRegularFile(path, "mesh"); !st) return Error{st.error()};
+    std::error_code ec;
+    const std::filesystem::path key = std::filesystem::weakly_canonical(path, ec);
+    const auto time = std::filesystem::last_write_time(path, ec);
+    const auto size = ec ? std::uintmax_t(0) : std::filesystem::file_size(path, ec);
+    const bool cacheable = !ec;
+    if (cacheable) {
+        const std::lock_guard<std::mutex> lock(g_objCacheMutex);
+        for (const ObjCacheEntry& e : g_objCache)
+            if (e.path == key && e.time == time && e.size == size) return e.mesh;
+    }
+    auto parsed = parseObj(path);
+    if (!parsed) return Error{parsed.error()};
+    auto mesh = std::make_shared<const MeshData>(std::move(parsed).value());
+    if (cacheable) {
+        const std::lock_guard<std::mutex> lock(g_objCacheMutex);
+        g_objCache.erase(std::remove_if(g_objCache.begin(), g_objCache.end(),
+                                        [&](const ObjCacheEntry& e) { return e.path == key; }),
+                         g_objCache.end());
+        g_objCache.push_back({key, time, size, mesh});
+        if (g_objCache.size() > kObjCacheEntries) g_objCache.erase(g_objCache.begin());
+    }
+    return mesh;
+}
+
+Result<MeshData> loadObj(const std::filesystem::path& path) {
+    auto shared = loadObjShared(path);
+    if (!shared) return Error{shared.error()};
+    return **shared;
+}
+
+namespace {
+
+Result<MeshData> parseObj(const std::filesystem::path& path) {
+    ++g_objParses;
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;
     std::vector<tinyobj::material_t> materials;
@@ -333,6 +394,8 @@ Result<MeshData> loadObj(const std::filesystem::path& path) {
     computeBounds(mesh);
     return mesh;
 }
+
+} // namespace
 
 // ---------------------------------------------------------------------------------------------
 // GpuMesh

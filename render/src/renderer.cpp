@@ -460,23 +460,25 @@ Status Renderer::Impl::prepareMesh() {
     }
     if (mesh && meshKind == scene.mesh && (scene.mesh != MeshKind::Obj || meshPath == scene.objPath))
         return {};
-    MeshData data;
+    // An OBJ shared with whoever read it before (loadObjShared: parsed once), the others made here.
+    std::shared_ptr<const MeshData> shared;
     switch (scene.mesh) {
     case MeshKind::Sphere: // returned above: drawnMesh makes it for each frame's size
         break;
     case MeshKind::Plane:
-        data = makePlane();
+        shared = std::make_shared<const MeshData>(makePlane());
         break;
     case MeshKind::Torus:
-        data = makeTorus();
+        shared = std::make_shared<const MeshData>(makeTorus());
         break;
     case MeshKind::Obj: {
-        auto loaded = loadObj(scene.objPath);
+        auto loaded = loadObjShared(scene.objPath);
         if (!loaded) return Error{loaded.error()};
-        data = std::move(loaded).value();
+        shared = std::move(loaded).value();
         break;
     }
     }
+    const MeshData& data = *shared;
     auto uploaded = GpuMesh::upload(data);
     if (!uploaded) return Error{"uploading the mesh: " + uploaded.error()};
     mesh.emplace(std::move(uploaded).value());

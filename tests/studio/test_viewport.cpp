@@ -9,6 +9,7 @@
 #include "viewport_panel.h"
 
 #include <burnish/render/context.h>
+#include <burnish/render/mesh.h>
 #include <burnish/render/renderer.h>
 #include <burnish/render/shimmer.h>
 
@@ -23,6 +24,7 @@
 #include <QElapsedTimer>
 #include <QImage>
 #include <QLabel>
+#include <QProgressDialog>
 #include <QSignalSpy>
 #include <QTest>
 
@@ -239,6 +241,63 @@ TEST(Viewport, AMeshIsFramedByItsBoundsAndFrameObjectAimsThereAgain) {
     // The built-in meshes sit on the origin.
     ASSERT_TRUE(t.view.setMesh(render::MeshKind::Sphere));
     EXPECT_EQ(t.view.viewSettings().target, glm::vec3(0.0f));
+}
+
+// A 4-million-triangle OBJ froze the window for seconds and was parsed twice (issue 48, point 8):
+// the panel reads it on a worker thread, the bounds and the renderer's upload share that one parse,
+// and a cancelled read leaves the mesh drawn before.
+TEST(Viewport, AnObjIsReadInTheBackgroundOnceAndACancelKeepsTheMeshBefore) {
+    test::TempDir dir;
+    auto writeGrid = [&](const std::string& name, int n) {
+        std::ofstream obj(dir / name);
+        for (int y = 0; y <= n; ++y)
+            for (int x = 0; x <= n; ++x)
+                obj << "v " << x << " 0 " << y << "\nvt " << double(x) / n << ' ' << double(y) / n << "\n";
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const int a = y * (n + 1) + x + 1, b = a + 1, c = a + n + 2, d = a + n + 1;
+                obj << "f " << a << '/' << a << ' ' << b << '/' << b << ' ' << c << '/' << c << ' ' << d
+                    << '/' << d << "\n";
+            }
+        return QString::fromStdString((dir / name).string());
+    };
+    const QString grid = writeGrid("grid.obj", 150); // 45 000 triangles
+    const QString other = writeGrid("other.obj", 120);
+    MaterialDocument doc;
+    ViewportPanel panel(&doc);
+    panel.resize(kWidth, kHeight + 80);
+    panel.show();
+    QApplication::processEvents();
+    panel.setBackgroundLoads(true);
+    QSignalSpy done(&panel, &ViewportPanel::meshLoaded);
+    const std::uint64_t parsedBefore = render::objFilesParsed();
+    panel.loadMeshInBackground(grid);
+    EXPECT_TRUE(panel.meshLoading());
+    EXPECT_EQ(panel.viewport()->viewSettings().mesh, render::MeshKind::Sphere) << "drawn once read";
+    ASSERT_TRUE(done.wait(60000));
+    EXPECT_TRUE(done.at(0).at(0).toBool());
+    EXPECT_FALSE(panel.meshLoading());
+    EXPECT_EQ(panel.viewport()->viewSettings().objPath, grid);
+    const QImage frame = panel.viewport()->grabFrame();
+    EXPECT_EQ(panel.viewport()->lastError(), QString());
+    EXPECT_EQ(render::objFilesParsed(), parsedBefore + 1)
+        << "the worker's read, the bounds and the upload: one parse";
+
+    // Cancelled: the mesh before stays, and the read's late result is dropped.
+    panel.loadMeshInBackground(other);
+    auto* progress = panel.findChild<QProgressDialog*>();
+    ASSERT_NE(progress, nullptr);
+    emit progress->canceled(); // its Cancel button
+    ASSERT_EQ(done.size(), 2);
+    EXPECT_FALSE(done.at(1).at(0).toBool());
+    QElapsedTimer waited;
+    waited.start();
+    while (render::objFilesParsed() < parsedBefore + 2 && waited.elapsed() < 30000)
+        QApplication::processEvents(QEventLoop::AllEvents, 50);
+    for (int i = 0; i < 10; ++i)
+        QApplication::processEvents(QEventLoop::AllEvents, 20); // its queued result, if any, arrives
+    EXPECT_EQ(panel.viewport()->viewSettings().objPath, grid);
+    EXPECT_EQ(done.size(), 2);
 }
 
 TEST(Viewport, ChangingTheDocumentsMethodChangesTheImage) {

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,11 @@ MeshData makeTorus(float majorRadius = 0.7f, float minorRadius = 0.3f, int major
 /// missing UVs are an error (a normal map needs them). Tangents are generated from UVs.
 /// Errors: unreadable file, no triangles, non-finite positions.
 Result<MeshData> loadObj(const std::filesystem::path& path);
+/// loadObj's mesh, shared: the last two files parsed are kept (by path, modification time and size,
+/// thread-safe), so a mesh read for its bounds, uploaded by the renderer and reopened is parsed once.
+Result<std::shared_ptr<const MeshData>> loadObjShared(const std::filesystem::path& path);
+/// OBJ files parsed so far in this process (what the cache could not answer).
+std::uint64_t objFilesParsed();
 /// Recomputes per-vertex tangents from positions, normals and UVs (Lengyel's method, then
 /// Gram–Schmidt against the normal); degenerate UV triangles fall back to any orthonormal tangent.
 void generateTangents(MeshData& mesh);

@@ -574,16 +574,30 @@ void MainWindow::applyView(const std::optional<ProjectView>& view) {
     const ProjectView shown = view.value_or(ProjectView{});
     // The mesh first (it aims the camera at its centre), then the camera the project saved. An OBJ
     // that cannot be read any more is said (loadMesh) and the sphere drawn instead.
-    if (!panel->loadMesh(shown.mesh, shown.objPath))
-        panel->loadMesh(render::MeshKind::Sphere, {});
-    else {
+    auto aim = [panel, shown](bool ok) {
+        if (!ok) {
+            panel->loadMesh(render::MeshKind::Sphere, {});
+            return;
+        }
         ViewSettings v = panel->viewport()->viewSettings();
         v.yawDegrees = float(shown.yawDegrees);
         v.pitchDegrees = float(shown.pitchDegrees);
         v.target = glm::vec3(float(shown.target[0]), float(shown.target[1]), float(shown.target[2]));
         panel->viewport()->setViewSettings(v);
         panel->viewport()->setDistance(float(shown.distance)); // clamped to the viewport's range
+    };
+    if (shown.mesh == render::MeshKind::Obj && panel->backgroundLoads()) {
+        // A big OBJ is read off the GUI thread; the camera follows once it is drawn (a later load
+        // or a cancel leaves the camera as it is).
+        auto* once = new QObject(this);
+        connect(panel, &ViewportPanel::meshLoaded, once, [once, aim, panel, path = shown.objPath](bool ok) {
+            once->deleteLater();
+            if (ok && panel->viewport()->viewSettings().objPath == path) aim(true);
+        });
+        panel->loadMeshInBackground(shown.objPath);
+        return;
     }
+    aim(panel->loadMesh(shown.mesh, shown.objPath));
 }
 
 void MainWindow::setBackgroundLoads(bool on) {

@@ -2,6 +2,7 @@
 // the BRDF plots hold core's values, and the error-against-cost chart measures every method in a
 // worker with the results the texts predict (the naive mean normal is too shiny, LEAN is not).
 #include "charts/brdf_plots.h"
+#include "charts/chart_axes.h"
 #include "charts/charts_panel.h"
 #include "charts/error_cost_chart.h"
 #include "charts/gloss_chart.h"
@@ -22,6 +23,7 @@
 
 #include <QAction>
 #include <QApplication>
+#include <QChartView>
 #include <QElapsedTimer>
 #include <QImage>
 #include <QLineSeries>
@@ -218,6 +220,30 @@ TEST(GlossChart, SpheresFollowTheSpecularColour) {
     EXPECT_EQ(chart.renderCount(), renders + 1) << "a gloss change only moves the marker";
 }
 
+// The NDF's log axis ended a part-decade above its last label (issue 48, point 9): every log axis
+// now runs over whole decades, labelled at both ends.
+TEST(BrdfPlots, LogAxesRunOverWholeDecades) {
+    MaterialDocument doc;
+    doc.setGloss(0.55);
+    BrdfPlots plots(&doc);
+    int logAxes = 0;
+    for (int tab = 0; tab < plots.count(); ++tab) {
+        QChartView* view = plots.view(tab);
+        if (!view || !view->chart()) continue;
+        for (QAbstractAxis* axis : view->chart()->axes()) {
+            auto* log = qobject_cast<QLogValueAxis*>(axis);
+            if (!log) continue;
+            ++logAxes;
+            for (double end : {log->min(), log->max()}) {
+                const double decade = std::log10(end);
+                EXPECT_NEAR(decade, std::round(decade), 1e-9)
+                    << axis->titleText().toStdString() << " ends at " << end;
+            }
+        }
+    }
+    EXPECT_GE(logAxes, 3); // D, V, Blinn-Phong power
+}
+
 TEST(BrdfPlots, SeriesHoldCoresValues) {
     MaterialDocument doc;
     ASSERT_TRUE(doc.setSpecularMaterial("skin"));
@@ -342,6 +368,24 @@ TEST(ErrorCostChart, WorkerShowsOnePointPerMethodAndNaiveIsWorseThanLean) {
         if (mip == kFootprintMip) {
             EXPECT_GT(points[Method::Naive].y(), points[Method::Lean].y()) << "mip " << mip;
         }
+    }
+    // Charts an artist can read a number from (issue 48, point 9): every method its own colour and
+    // marker (naive and Toksvig overlapped, alike), and the value under the pointer.
+    {
+        std::set<std::pair<QRgb, int>> looks;
+        for (Method method : allMethods()) {
+            QScatterSeries* s = chart.methodSeries(method);
+            looks.insert({s->color().rgb(), int(s->markerShape())});
+        }
+        EXPECT_EQ(looks.size(), allMethods().size());
+        QScatterSeries* naive = chart.methodSeries(Method::Naive);
+        emit naive->hovered(naive->at(0), true);
+        const QString readout = naive->property(kHoverReadoutProperty).toString();
+        EXPECT_TRUE(readout.startsWith(naive->name())) << readout.toStdString();
+        EXPECT_TRUE(readout.contains("relative L1 error: " + QString::number(naive->at(0).y(), 'g', 4)))
+            << readout.toStdString();
+        emit naive->hovered(naive->at(0), false);
+        EXPECT_TRUE(naive->property(kHoverReadoutProperty).toString().isEmpty());
     }
     // The Energy kept tab: evaluate's energy split of LEAN per mip, beside the mixture's energy.
     {

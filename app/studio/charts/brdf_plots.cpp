@@ -90,6 +90,12 @@ QLogValueAxis* logAxis(const QString& title, double lo, double hi) {
     a->setTitleText(title);
     a->setBase(10.0);
     a->setLabelFormat("%.3g");
+    // Whole decades: a log axis labels lo·10^k, so a range from 0.37 labelled 0.37, 3.7, 37 and left
+    // the top decade without a label.
+    if (lo > 0.0 && hi > lo && std::isfinite(hi)) {
+        lo = std::pow(10.0, std::floor(std::log10(lo)));
+        hi = std::pow(10.0, std::ceil(std::log10(hi)));
+    }
     a->setRange(lo, hi);
     a->setMinorTickCount(-1); // a minor tick per integer multiple: the decades read at a glance
     return a;

@@ -10,6 +10,7 @@
 #include <QHBoxLayout>
 #include <QHeaderView>
 #include <QLabel>
+#include <QLegend>
 #include <QLogValueAxis>
 #include <QPointer>
 #include <QProgressBar>
@@ -48,6 +49,8 @@ QChart* newChart(const QString& title) {
     chart->setBackgroundRoundness(0);
     chart->setTitle(title);
     chart->legend()->setAlignment(Qt::AlignRight);
+    // The legend shows each series' own marker (its colour and shape), not a square for all.
+    chart->legend()->setMarkerShape(QLegend::MarkerShapeFromSeries);
     return chart;
 }
 
@@ -436,19 +439,26 @@ QString ErrorCostChart::statusText() const {
     return m_status->text();
 }
 
-QColor methodColour(Method method) {
-    // A qualitative palette (Tableau 10) in the method table's order: every method its own colour,
-    // the same in every chart (the chart theme's palette repeats after five series, so naive and
-    // CLEAN were drawn alike).
-    static const QColor kPalette[] = {QColor(0x4e, 0x79, 0xa7), QColor(0xf2, 0x8e, 0x2b),
-                                      QColor(0xe1, 0x57, 0x59), QColor(0x76, 0xb7, 0xb2),
-                                      QColor(0x59, 0xa1, 0x4f), QColor(0xed, 0xc9, 0x48),
-                                      QColor(0xb0, 0x7a, 0xa1), QColor(0xff, 0x9d, 0xa7),
-                                      QColor(0x9c, 0x75, 0x5f), QColor(0xba, 0xb0, 0xac)};
+namespace {
+
+// The method's place in the method table.
+size_t methodIndex(Method method) {
     const auto methods = allMethods();
     const auto at = std::find(methods.begin(), methods.end(), method);
-    const size_t index = at == methods.end() ? 0 : size_t(at - methods.begin());
-    return kPalette[index % std::size(kPalette)];
+    return at == methods.end() ? 0 : size_t(at - methods.begin());
+}
+
+} // namespace
+
+QColor methodColour(Method method) {
+    // Every method its own colour (and marker: methodMarker), the same in every chart, in the method
+    // table's order (the chart theme's palette repeats after five series, so naive and CLEAN were
+    // drawn alike).
+    return groupColour(methodIndex(method));
+}
+
+QScatterSeries::MarkerShape methodMarker(Method method) {
+    return groupMarker(methodIndex(method));
 }
 
 QScatterSeries* ErrorCostChart::methodSeries(Method method) const {
@@ -497,6 +507,9 @@ void ErrorCostChart::showMethods() {
             s->setName(QString::fromStdString(variantLabel(variantOf(e))) + (current ? " (current)" : ""));
             s->setMarkerSize(current ? 16.0 : 11.0);
             s->setColor(methodColour(e.method));
+            // Shapes as well as colours: methods of nearly equal cost and error (naive and Toksvig)
+            // stay told apart where their markers overlap.
+            s->setMarkerShape(methodMarker(e.method));
             s->setBorderColor(current ? QColor(Qt::white) : methodColour(e.method).darker(140));
             s->append(x, y);
             chart->addSeries(s);
@@ -597,11 +610,16 @@ void ErrorCostChart::showApproximations() {
     int shown = 0, left = 0;
     if (m_approximations) {
         std::map<std::string, QScatterSeries*> groups;
-        for (const std::string& g : m_approximations->groups) {
+        for (size_t i = 0; i < m_approximations->groups.size(); ++i) {
+            const std::string& g = m_approximations->groups[i];
             auto* s = new QScatterSeries;
             s->setObjectName(QString::fromStdString(g));
             s->setName(QString::fromStdString(g));
             s->setMarkerSize(10.0);
+            // Nine groups shared the theme's five colours: each its own colour and marker.
+            s->setColor(groupColour(i));
+            s->setBorderColor(groupColour(i).darker(140));
+            s->setMarkerShape(groupMarker(i));
             groups[g] = s;
         }
         for (const ApproximationEntry& e : m_approximations->entries) {
@@ -628,7 +646,8 @@ void ErrorCostChart::showApproximations() {
                 delete s;
         }
         m_approxStatus->setText(
-            QString("%1 approximations shown%2; measured in %3 s on %4 (%5).")
+            QString("%1 approximations shown%2; measured in %3 s on %4 (%5). Headline error: the largest "
+                    "absolute or relative error of each approximation over its domain.")
                 .arg(shown)
                 .arg(left > 0 ? QString(", %1 with zero error or no timing left out").arg(left) : QString())
                 .arg(m_approximations->seconds, 0, 'f', 1)
@@ -636,7 +655,7 @@ void ErrorCostChart::showApproximations() {
                 .arg(QString::fromStdString(m_approximations->compiler)));
     }
     attachAxes(chart, errorCostAxis("ns per evaluation (float kernel)", xLo, xHi),
-               errorCostAxis("headline error (max abs or max rel)", yLo, yHi));
+               errorCostAxis("headline error", yLo, yHi)); // max abs or max rel: the status line says
     setChart(m_approxView, chart);
 }
 

@@ -14,6 +14,7 @@
 #include <QColor>
 #include <QList>
 #include <QPointer>
+#include <QScatterSeries>
 #include <QTabWidget>
 
 #include <atomic>
@@ -26,7 +27,6 @@ class QComboBox;
 class QLabel;
 class QProgressBar;
 class QPushButton;
-class QScatterSeries;
 class QSpinBox;
 class QTableWidget;
 class QThread;
@@ -35,8 +35,10 @@ class QTimer;
 namespace burnish::studio {
 
 /// Each method's colour in the charts: one of ten distinct colours, by the method's place in the
-/// method table.
+/// method table (groupColour).
 QColor methodColour(Method method);
+/// Each method's marker in the error-vs-cost chart (groupMarker), beside its colour.
+QScatterSeries::MarkerShape methodMarker(Method method);
 
 /// The axis the error-vs-cost charts draw values in [lo, hi] on: a log axis over whole decades when
 /// they span more than one decade; within one, a linear axis with rounded ticks (a log axis there

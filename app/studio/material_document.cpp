@@ -215,6 +215,9 @@ QStringList MaterialDocument::diagnostics(MapSlot slot) const {
         if (d->alphaIgnored) flags << "alpha ignored";
         if (d->signedValues) flags << "signed values";
         if (!flags.isEmpty()) lines << flags.join(", ");
+        if (d->noDataTexels)
+            lines << QString("%1 texels of padding (stored 0) filled with their nearest normal")
+                         .arg(d->noDataTexels);
         if (d->nonFiniteTexels || d->zeroLengthTexels)
             lines << QString("%1 non-finite, %2 zero-length texels replaced by flat normals")
                          .arg(d->nonFiniteTexels)

@@ -150,16 +150,23 @@ TEST(NormalMap, NonFiniteTexelsDoNotChangeTheEncoding) {
 // Two-channel maps: (x, y) longer than 1 counts against plausibility like a bad RGB vector, so a
 // map of zeros (decoded to (-1, -1)) is refused as its RGB twin is; the rim of a real map passes.
 TEST(NormalMap, TwoChannelVectorsLongerThanOneAreImplausible) {
-    auto zeros = decodeNormalMap(makeImage(4, 4, 2, std::vector<float>(32, 0.0f)));
-    ASSERT_FALSE(zeros.ok());
-    EXPECT_NE(zeros.error().find("longer than 1"), std::string::npos) << zeros.error();
-    auto zerosRgb = decodeNormalMap(makeImage(4, 4, 3, std::vector<float>(48, 0.0f)));
-    EXPECT_FALSE(zerosRgb.ok());
+    // Stored (0.02, 0.02): (-0.96, -0.96), 1.36 long.
+    auto longer = decodeNormalMap(makeImage(4, 4, 2, std::vector<float>(32, 0.02f)));
+    ASSERT_FALSE(longer.ok());
+    EXPECT_NE(longer.error().find("longer than 1"), std::string::npos) << longer.error();
     NormalMapOptions allow;
     allow.allowImplausible = true;
-    auto allowed = decodeNormalMap(makeImage(4, 4, 2, std::vector<float>(32, 0.0f)), allow);
+    auto allowed = decodeNormalMap(makeImage(4, 4, 2, std::vector<float>(32, 0.02f)), allow);
     ASSERT_TRUE(allowed.ok()) << allowed.error();
     EXPECT_EQ(allowed->diagnostics.offLengthTexels, 16u);
+    // A map of zeros holds no data at all (stored 0 is padding, NormalMap.PaddingStoredAsZero...),
+    // RG and RGB alike, and nothing can be read from it even when implausible maps are allowed.
+    for (int channels : {2, 3}) {
+        auto zeros = decodeNormalMap(
+            makeImage(4, 4, channels, std::vector<float>(size_t(16 * channels), 0.0f)), allow);
+        ASSERT_FALSE(zeros.ok());
+        EXPECT_NE(zeros.error().find("every texel is stored as 0"), std::string::npos) << zeros.error();
+    }
     // A steep but valid map with a corner texel at (1, 1) (8-bit rounding of a grazing normal).
     std::vector<float> px;
     for (int i = 0; i < 16; ++i) {
@@ -487,4 +494,56 @@ TEST(ReadImage, IntegerFilesReadBitForBitAsOpenImageIOsFloatRead) {
                           0)
                     << ext << " " << channels << " channels, " << (eight ? 8 : 16) << "-bit";
             }
+}
+
+// A game asset's atlas with fully transparent padding (RGBA 0, 0, 0, 0) read as "35.5 % of texels
+// point below the surface" and was refused (issue 48, point 4). Texels stored as 0 are no data:
+// left out of the plausibility test and filled with their nearest texel's normal, the same through
+// the PNG decoder and the float path.
+TEST(NormalMap, PaddingStoredAsZeroIsNoDataFilledWithTheNearestNormal) {
+    constexpr int kW = 16, kH = 8, kFilled = 6; // columns 0..5 hold normals, 6..15 padding
+    std::vector<float> px;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            if (x >= kFilled) {
+                px.insert(px.end(), {0.0f, 0.0f, 0.0f, 0.0f});
+                continue;
+            }
+            const glm::vec3 n = glm::normalize(glm::vec3(0.1f * float(x), -0.05f * float(y), 1.0f));
+            px.insert(px.end(), {n.x * 0.5f + 0.5f, n.y * 0.5f + 0.5f, n.z * 0.5f + 0.5f, 1.0f});
+        }
+    const auto map = decodeNormalMap(makeImage(kW, kH, 4, px));
+    ASSERT_TRUE(map) << map.error();
+    EXPECT_EQ(map->diagnostics.noDataTexels, size_t((kW - kFilled) * kH));
+    EXPECT_EQ(map->diagnostics.negativeZTexels, 0u) << "the padding is not counted as the map's";
+    ASSERT_FALSE(map->diagnostics.warnings.empty());
+    EXPECT_NE(map->diagnostics.warnings.back().find("hold no data"), std::string::npos);
+    for (int y = 0; y < kH; ++y)
+        for (int x = kFilled; x < kW; ++x)
+            EXPECT_EQ(map->at(x, y), map->at(kFilled - 1, y)) << "padding texel " << x << ", " << y;
+
+    // The same from an 8-bit PNG (core's own decoder): bit for bit.
+    test::TempDir dir;
+    const auto path = dir / "atlas.png";
+    ASSERT_TRUE(writeImage(path, kW, kH, 4, OIIO::TypeDesc::UINT8, px));
+    const auto png = loadNormalMap(path);
+    ASSERT_TRUE(png) << png.error();
+    EXPECT_EQ(png->diagnostics.noDataTexels, map->diagnostics.noDataTexels);
+    for (int y = 0; y < kH; ++y)
+        EXPECT_EQ(png->at(kW - 1, y), png->at(kFilled - 1, y));
+
+    // All padding: nothing to read.
+    const auto empty = decodeNormalMap(makeImage(2, 2, 4, std::vector<float>(16, 0.0f)));
+    ASSERT_FALSE(empty);
+    EXPECT_NE(empty.error().find("every texel is stored as 0"), std::string::npos) << empty.error();
+    // A signed map's zero vector is no padding: it stays a zero-length texel, made flat.
+    NormalMapOptions signedValues;
+    signedValues.encoding = NormalValueEncoding::Signed;
+    std::vector<float> mostlyFlat;
+    for (int i = 0; i < 16; ++i)
+        mostlyFlat.insert(mostlyFlat.end(), {0.0f, 0.0f, i == 0 ? 0.0f : 1.0f});
+    const auto zero = decodeNormalMap(makeImage(4, 4, 3, mostlyFlat, true), signedValues);
+    ASSERT_TRUE(zero) << zero.error();
+    EXPECT_EQ(zero->diagnostics.noDataTexels, 0u);
+    EXPECT_EQ(zero->diagnostics.zeroLengthTexels, 1u);
 }

@@ -774,6 +774,7 @@ Json diagnosticsJson(const NormalMapDiagnostics& d) {
     return Json{{"texels", d.texels},
                 {"nonFiniteTexels", d.nonFiniteTexels},
                 {"zeroLengthTexels", d.zeroLengthTexels},
+                {"noDataTexels", d.noDataTexels},
                 {"negativeZTexels", d.negativeZTexels},
                 {"offLengthTexels", d.offLengthTexels},
                 {"meanStoredLength", d.meanStoredLength},

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 
 namespace burnish {
@@ -54,8 +55,12 @@ constexpr size_t kBlock = size_t(1) << 16;
 
 struct BlockTally {
     double lengthSum = 0.0;
-    size_t nonFinite = 0, offLength = 0, negativeZ = 0, zeroLength = 0;
+    size_t nonFinite = 0, offLength = 0, negativeZ = 0, zeroLength = 0, noData = 0;
 };
+
+// A texel without data holds this until fillNoData gives it its nearest texel's normal: no decoded
+// normal is (0, 0, 0) (zero lengths become flat).
+const glm::vec3 kNoData(0.0f);
 
 /// How the stored values become normals, decided before any texel is decoded.
 struct DecodeSettings {
@@ -83,6 +88,14 @@ void decodeTexels(const Sample& sample, size_t begin, size_t end, const DecodeSe
         if (!finite) {
             ++tally.nonFinite;
             normals[i] = kFlat;
+            continue;
+        }
+        // No data: every used channel stored as 0 in an unsigned map (an atlas's transparent
+        // padding, RGBA 0, 0, 0, 0), which decodes to (-1, -1, -1), a vector no surface has. Left out
+        // of the tallies (the plausibility test), filled afterwards (fillNoData).
+        if (!settings.isSigned && v[0] == -1.0 && v[1] == -1.0 && (rg || v[2] == -1.0)) {
+            ++tally.noData;
+            normals[i] = kNoData;
             continue;
         }
         if (settings.greenFlipped) v[1] = -v[1];
@@ -166,6 +179,37 @@ void setLayout(NormalMap& map, bool rg, bool constantBlue) {
     map.diagnostics.zRebuilt = rg;
 }
 
+/// Gives every texel without data (kNoData) the normal of its nearest texel with data, by a
+/// breadth-first walk over the 4-neighbours from the texels with data (ties go to the texel met
+/// first in row order): what texture tools' padding dilation does, so filtering across an atlas's
+/// edge blends in the neighbouring surface, never a direction no surface has.
+void fillNoData(NormalMap& map) {
+    const size_t w = size_t(map.width), h = size_t(map.height);
+    std::vector<std::uint32_t> queue;
+    auto hole = [&](size_t i) { return map.normals[i] == kNoData; };
+    auto neighbours = [&](size_t i, auto&& visit) {
+        const size_t x = i % w, y = i / w;
+        if (x > 0) visit(i - 1);
+        if (x + 1 < w) visit(i + 1);
+        if (y > 0) visit(i - w);
+        if (y + 1 < h) visit(i + w);
+    };
+    for (size_t i = 0; i < w * h; ++i) {
+        if (hole(i)) continue;
+        bool edge = false;
+        neighbours(i, [&](size_t j) { edge = edge || hole(j); });
+        if (edge) queue.push_back(std::uint32_t(i));
+    }
+    for (size_t head = 0; head < queue.size(); ++head) {
+        const size_t i = queue[head];
+        neighbours(i, [&](size_t j) {
+            if (!hole(j)) return;
+            map.normals[j] = map.normals[i];
+            queue.push_back(std::uint32_t(j));
+        });
+    }
+}
+
 /// Adds the block tallies up in block order and applies the plausibility check.
 Result<NormalMap> finishDecode(NormalMap map, const std::vector<BlockTally>& tallies,
                                const NormalMapOptions& options) {
@@ -179,8 +223,10 @@ Result<NormalMap> finishDecode(NormalMap map, const std::vector<BlockTally>& tal
         diag.offLengthTexels += tally.offLength;
         diag.negativeZTexels += tally.negativeZ;
         diag.zeroLengthTexels += tally.zeroLength;
+        diag.noDataTexels += tally.noData;
     }
-    const size_t valid = diag.texels - diag.nonFiniteTexels;
+    // Texels without data are not the map's: the plausibility test counts the others.
+    const size_t valid = diag.texels - diag.nonFiniteTexels - diag.noDataTexels;
     if (!rg && valid > 0) diag.meanStoredLength = lengthSum / static_cast<double>(valid);
 
     if (diag.nonFiniteTexels > 0)
@@ -189,6 +235,15 @@ Result<NormalMap> finishDecode(NormalMap map, const std::vector<BlockTally>& tal
     if (diag.zeroLengthTexels > 0)
         diag.warnings.push_back(std::to_string(diag.zeroLengthTexels) +
                                 " texels decoded to a zero-length vector and were replaced by a flat normal");
+    if (diag.noDataTexels > 0 && diag.noDataTexels < diag.texels) {
+        diag.warnings.push_back(
+            std::to_string(diag.noDataTexels) +
+            " texels hold no data (stored 0, as an atlas's transparent padding): left out of "
+            "the plausibility test and filled with the nearest texel's normal");
+        fillNoData(map);
+    }
+    if (diag.noDataTexels == diag.texels)
+        return Error{name + " holds no normals: every texel is stored as 0"};
     if (valid == 0) return Error{name + " has no finite texels"};
 
     // Plausibility: tangent-space normal maps store unit vectors that face +z.

@@ -41,8 +41,11 @@ struct NormalMapOptions {
 /// What the decoder saw and did.
 struct NormalMapDiagnostics {
     size_t texels = 0;
-    size_t nonFiniteTexels = 0;    // NaN/Inf in any used channel: replaced by a flat normal
-    size_t zeroLengthTexels = 0;   // decoded to (near) zero length: replaced by a flat normal
+    size_t nonFiniteTexels = 0;  // NaN/Inf in any used channel: replaced by a flat normal
+    size_t zeroLengthTexels = 0; // decoded to (near) zero length: replaced by a flat normal
+    /// No data: every used channel stored as 0 in an unsigned map (an atlas's transparent padding);
+    /// left out of the plausibility test, filled with the nearest texel's normal (4-neighbour steps).
+    size_t noDataTexels = 0;
     size_t negativeZTexels = 0;    // z < 0 before renormalization (impossible in tangent space)
     size_t offLengthTexels = 0;    // stored length off 1 by more than 25% (RG maps: only longer)
     double meanStoredLength = 1.0; // RGB maps: mean length of the stored vectors

@@ -80,6 +80,20 @@ double meanAbsDiff(const QImage& a, const QImage& b, int x0, int x1) {
 }
 
 /// A shown viewport of kWidth × kHeight over its own document.
+// An axis-aligned box from `lo` to `hi` as an OBJ, each face with the unit square's UVs.
+void writeBoxObj(const std::filesystem::path& path, const glm::vec3& lo, const glm::vec3& hi) {
+    std::ofstream obj(path);
+    for (int i = 0; i < 8; ++i)
+        obj << "v " << (i & 1 ? hi.x : lo.x) << ' ' << (i & 2 ? hi.y : lo.y) << ' ' << (i & 4 ? hi.z : lo.z)
+            << "\n";
+    obj << "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+    for (const char* face : {"1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6"}) {
+        int a, b, c, d;
+        std::sscanf(face, "%d %d %d %d", &a, &b, &c, &d);
+        obj << "f " << a << "/1 " << b << "/2 " << c << "/3 " << d << "/4\n";
+    }
+}
+
 struct TestViewport {
     MaterialDocument doc;
     Viewport view{&doc};
@@ -177,18 +191,7 @@ TEST(Viewport, TheClosestDistanceStaysOutsideABigMesh) {
     t.view.setDistance(0.0f);
     EXPECT_FLOAT_EQ(t.view.cameraDistance(), Viewport::kMinDistance) << "the sphere's radius is 1";
     test::TempDir dir;
-    {
-        std::ofstream obj(dir / "box.obj");
-        for (int i = 0; i < 8; ++i)
-            obj << "v " << (i & 1 ? 10 : -10) << ' ' << (i & 2 ? 10 : -10) << ' ' << (i & 4 ? 10 : -10)
-                << "\n";
-        obj << "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
-        for (const char* face : {"1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6"}) {
-            int a, b, c, d;
-            std::sscanf(face, "%d %d %d %d", &a, &b, &c, &d);
-            obj << "f " << a << "/1 " << b << "/2 " << c << "/3 " << d << "/4\n";
-        }
-    }
+    writeBoxObj(dir / "box.obj", glm::vec3(-10.0f), glm::vec3(10.0f));
     ASSERT_TRUE(t.view.setMesh(render::MeshKind::Obj, QString::fromStdString((dir / "box.obj").string())));
     const float corner = std::sqrt(300.0f);
     EXPECT_NEAR(t.view.meshRadius(), corner, 1e-3f);
@@ -205,18 +208,8 @@ TEST(Viewport, TheClosestDistanceStaysOutsideABigMesh) {
 TEST(Viewport, AMeshIsFramedByItsBoundsAndFrameObjectAimsThereAgain) {
     TestViewport t;
     test::TempDir dir;
-    {
-        // A post 2 wide and 6 tall standing at x = 20: its origin lies far outside it.
-        std::ofstream obj(dir / "post.obj");
-        for (int i = 0; i < 8; ++i)
-            obj << "v " << (i & 1 ? 21 : 19) << ' ' << (i & 2 ? 6 : 0) << ' ' << (i & 4 ? 1 : -1) << "\n";
-        obj << "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
-        for (const char* face : {"1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6"}) {
-            int a, b, c, d;
-            std::sscanf(face, "%d %d %d %d", &a, &b, &c, &d);
-            obj << "f " << a << "/1 " << b << "/2 " << c << "/3 " << d << "/4\n";
-        }
-    }
+    // A post 2 wide and 6 tall standing at x = 20: its origin lies far outside it.
+    writeBoxObj(dir / "post.obj", glm::vec3(19.0f, 0.0f, -1.0f), glm::vec3(21.0f, 6.0f, 1.0f));
     ASSERT_TRUE(t.view.setMesh(render::MeshKind::Obj, QString::fromStdString((dir / "post.obj").string())));
     const glm::vec3 centre(20.0f, 3.0f, 0.0f);
     EXPECT_LT(glm::length(t.view.viewSettings().target - centre), 1e-4f);

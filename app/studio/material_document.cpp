@@ -215,9 +215,7 @@ QStringList MaterialDocument::diagnostics(MapSlot slot) const {
         if (d->alphaIgnored) flags << "alpha ignored";
         if (d->signedValues) flags << "signed values";
         if (!flags.isEmpty()) lines << flags.join(", ");
-        if (d->noDataTexels)
-            lines << QString("%1 texels of padding (stored 0) filled with their nearest normal")
-                         .arg(d->noDataTexels);
+        // Padding (noDataTexels) is said once, by the decoder's warning below.
         if (d->nonFiniteTexels || d->zeroLengthTexels)
             lines << QString("%1 non-finite, %2 zero-length texels replaced by flat normals")
                          .arg(d->nonFiniteTexels)

@@ -323,21 +323,27 @@ std::string bakeSummaryText(const Json& summary, size_t maxSets) {
     return text;
 }
 
+Result<BakeMemoryEstimate> estimatedJobBytes(const BakeJob& job) {
+    BakeMemoryEstimate e{0, kSampleBakeSize, kSampleBakeSize};
+    if (!isSampleBakeInput(job.spec.input)) {
+        const auto header = readImageHeader(job.spec.input);
+        if (!header) return Error{header.error()};
+        e.width = header->width;
+        e.height = header->height;
+    }
+    const auto perTexel = bakeJobBytesPerTexel(job, e.width, e.height);
+    if (!perTexel) return Error{perTexel.error()};
+    e.bytes = estimatedBakeBytes(*perTexel, e.width, e.height);
+    return e;
+}
+
 Result<std::uint64_t> slurmMemoryMiB(const std::vector<BakeJob>& jobs) {
     std::uint64_t most = 0;
     for (size_t i = 0; i < jobs.size(); ++i) {
-        const std::string at = fmt::format("manifest job {} ({}): ", i + 1, jobs[i].spec.input);
-        int width = kSampleBakeSize;
-        int height = kSampleBakeSize;
-        if (!isSampleBakeInput(jobs[i].spec.input)) {
-            const auto header = readImageHeader(jobs[i].spec.input);
-            if (!header) return Error{at + header.error()};
-            width = header->width;
-            height = header->height;
-        }
-        const auto perTexel = bakeJobBytesPerTexel(jobs[i], width, height);
-        if (!perTexel) return Error{at + perTexel.error()};
-        most = std::max(most, estimatedBakeBytes(*perTexel, width, height));
+        const auto need = estimatedJobBytes(jobs[i]);
+        if (!need)
+            return Error{fmt::format("manifest job {} ({}): {}", i + 1, jobs[i].spec.input, need.error())};
+        most = std::max(most, need->bytes);
     }
     constexpr std::uint64_t kMiB = 1 << 20;
     return (most + kMiB - 1) / kMiB;

@@ -498,12 +498,9 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
     // The memory the bake will need, checked against what the system has before anything is
     // allocated: from the file's header (a small file can claim a huge image).
     if (!isSampleBakeInput(job.spec.input)) {
-        const auto header = readImageHeader(job.spec.input);
-        if (!header) return Error{header.error()};
-        const auto perTexel = bakeJobBytesPerTexel(job, header->width, header->height);
-        if (!perTexel) return Error{perTexel.error()};
-        const Status memory = checkBakeMemory(estimatedBakeBytes(*perTexel, header->width, header->height),
-                                              availableMemoryBytes(), header->width, header->height);
+        const auto need = estimatedJobBytes(job);
+        if (!need) return Error{need.error()};
+        const Status memory = checkBakeMemory(need->bytes, availableMemoryBytes(), need->width, need->height);
         if (!memory) return Error{"'" + job.spec.input + "': " + memory.error()};
     }
     // The inputs' hashes before they are read: a file replaced meanwhile leaves a set that a later

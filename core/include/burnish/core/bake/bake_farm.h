@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -87,6 +88,17 @@ struct SlurmOptions {
     std::vector<std::string> defaults;
     std::filesystem::path workingFolder; // the tasks' --chdir: where relative default paths lead
 };
+
+/// The memory one job's bake needs at its peak (estimatedBakeBytes of bakeJobBytesPerTexel), for the
+/// extent its input's header claims (a built-in sample's size for a sample): what the bake checks
+/// against free memory before it reads anything, and what a Slurm task asks for.
+struct BakeMemoryEstimate {
+    std::uint64_t bytes = 0;
+    int width = 0;
+    int height = 0;
+};
+/// Errors: an input whose header cannot be read, a job whose plan fails.
+Result<BakeMemoryEstimate> estimatedJobBytes(const BakeJob& job);
 
 /// The memory `--mem-per-task auto` asks for: the largest over the jobs of estimatedBakeBytes for
 /// each job's input (read from its header; a task bakes its jobs one after another), in MiB rounded

@@ -6,11 +6,11 @@
 #include "command.h"
 #include "common.h"
 
-#include <burnish/core/bake/bake_farm.h>
-#include <burnish/core/bake/bake_job.h>
-#include <burnish/core/bake/bake_ninja.h>
 #include <burnish/core/bake/export.h>
 #include <burnish/core/bake/presets.h>
+#include <burnish/core/jobs/bake_farm.h>
+#include <burnish/core/jobs/bake_job.h>
+#include <burnish/core/jobs/bake_ninja.h>
 #include <burnish/core/prefilter/methods.h>
 
 #include <burnish/core/util/files.h>

@@ -4,12 +4,12 @@
 #include "common.h"
 
 #include <burnish/core/env/cube.h>
+#include <burnish/core/env/cube_dds.h>
 #include <burnish/core/env/prefilter.h>
 #include <burnish/core/env/sampling.h>
+#include <burnish/core/env/sh.h>
 #include <burnish/core/env/storage.h>
-#include <burnish/core/io/cube_dds.h>
 #include <burnish/core/io/image.h>
-#include <burnish/core/shading/sh.h>
 #include <burnish/core/util/files.h>
 
 #include <fmt/format.h>

@@ -1,9 +1,9 @@
 // `burnish gltf`: a glTF 2.0 asset's normal-mapped materials baked (fitted roughness by default) and
-// written back as glTF with KTX2 textures holding Burnish's own mip chains (core's bake/gltf.h).
+// written back as glTF with KTX2 textures holding Burnish's own mip chains (core's jobs/gltf.h).
 #include "command.h"
 #include "common.h"
 
-#include <burnish/core/bake/gltf.h>
+#include <burnish/core/jobs/gltf.h>
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_map.h>
 #include <burnish/core/shading/color.h>

@@ -1,6 +1,6 @@
 #include "bake_dialog.h"
 
-#include <burnish/core/bake/bake_ninja.h>
+#include <burnish/core/jobs/bake_ninja.h>
 #include <burnish/core/util/numeric.h>
 
 #include <QCheckBox>

@@ -6,7 +6,7 @@
 #include "material_document.h"
 #include "worker_runner.h"
 
-#include <burnish/core/bake/bake_job.h>
+#include <burnish/core/jobs/bake_job.h>
 
 #include <QDialog>
 #include <QMessageBox>

@@ -7,7 +7,7 @@
 #include "material_document.h"
 #include "worker_runner.h"
 
-#include <burnish/core/bake/gltf.h>
+#include <burnish/core/jobs/gltf.h>
 
 #include <QObject>
 #include <QString>

@@ -6,7 +6,7 @@
 #include "material_document.h"
 #include "project.h"
 
-#include <burnish/core/bake/gltf.h>
+#include <burnish/core/jobs/gltf.h>
 
 #include <burnish/core/util/result.h>
 

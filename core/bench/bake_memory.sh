@@ -2,7 +2,7 @@
 # Peak memory of `burnish bake` per texel of the input, for every preset (figures, not pass/fail):
 # a map resized to SIZE² (default 2048) is baked with each preset's defaults (full chain, the
 # preset's format), the peak resident set measured by GNU time. The bake's memory check
-# (bakeBytesPerTexel in core/src/bake/bake_job.cpp) must stay above these figures: the test
+# (bakeBytesPerTexel in core/src/jobs/bake_job.cpp) must stay above these figures: the test
 # BakeMemory.EstimateCoversTheMeasuredPeaksAndRefusesWhatCannotFit holds them (update it when they move).
 #
 #   core/bench/bake_memory.sh BURNISH_BINARY NORMAL_MAP [SIZE]

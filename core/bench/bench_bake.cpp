@@ -16,11 +16,11 @@
 // The map is BURNISH_BENCH_NORMAL_MAP (any normal map, tiled to the size) when set, else a
 // deterministic synthetic bumpy map. Run: build/core/burnish_bench --benchmark_filter='Bake|Pyramid|Evaluate'
 #include <burnish/core/bake/bake.h>
-#include <burnish/core/bake/bake_job.h>
 #include <burnish/core/bake/export.h>
 #include <burnish/core/bake/presets.h>
 #include <burnish/core/eval/evaluate.h>
 #include <burnish/core/io/image.h>
+#include <burnish/core/jobs/bake_job.h>
 
 #include <benchmark/benchmark.h>
 #include <glm/geometric.hpp>

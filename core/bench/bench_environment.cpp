@@ -5,11 +5,11 @@
 // `burnish env` does after reading its input, files included:
 //   BURNISH_BENCH_ENV=courtyard.exr burnish_bench --benchmark_filter='Speed|Pipeline'
 #include <burnish/core/env/cube.h>
+#include <burnish/core/env/cube_dds.h>
 #include <burnish/core/env/prefilter.h>
 #include <burnish/core/env/sampling.h>
+#include <burnish/core/env/sh.h>
 #include <burnish/core/env/storage.h>
-#include <burnish/core/io/cube_dds.h>
-#include <burnish/core/shading/sh.h>
 #include <burnish/core/util/files.h>
 
 #include <benchmark/benchmark.h>

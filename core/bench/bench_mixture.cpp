@@ -4,7 +4,7 @@
 //                         directions) of LEAN and of the mixture for K = 1..4 on every map of
 //                         BURNISH_BENCH_MAPS (a folder of normal maps; default the checkout's
 //                         ../shared/data/normal-maps), mips 1-4, base power s: a table on stdout
-//   BM_MixtureRefine/<s>  the experiment behind --shaded-fit (eval/mixture_refine.h, which trains on
+//   BM_MixtureRefine/<s>  the experiment behind --shaded-fit (prefilter/mixture_refine.h, which trains on
 //                         several views with analytic derivatives): does fitting each texel's K = 3 lobes to
 //                         the shaded ground truth itself pay? Up to 64 texels per map and mip (an even grid),
 //                         each fitted mixture refined by Levenberg-Marquardt (Eigen, numerical derivatives)

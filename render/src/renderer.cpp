@@ -1,11 +1,11 @@
 #include <burnish/render/renderer.h>
 
 #include <burnish/core/bake/bake.h>
+#include <burnish/core/bake/detail.h>
 #include <burnish/core/bake/paint.h>
 #include <burnish/core/env/sampling.h>
-#include <burnish/core/prefilter/detail.h>
+#include <burnish/core/env/sh.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
-#include <burnish/core/shading/sh.h>
 #include <burnish/core/util/low_discrepancy.h>
 #include <burnish/render/cubemap.h>
 #include <burnish/render/gpu_resources.h>

@@ -4,7 +4,7 @@
 #include "temp_dir.h"
 
 #include <burnish/core/env/cube.h>
-#include <burnish/core/io/cube_dds.h>
+#include <burnish/core/env/cube_dds.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/shading/color.h>
 #include <burnish/core/util/files.h>

@@ -1,6 +1,6 @@
 // A library baked in parts (bake_farm.h): whether a set on disk is current, job lists and chunks, the
 // summary of a manifest, and the Slurm plan's scripts, run here by bash with a stand-in program.
-#include <burnish/core/bake/bake_farm.h>
+#include <burnish/core/jobs/bake_farm.h>
 
 #include <burnish/core/util/files.h>
 #include <burnish/core/util/hash.h>

@@ -1,9 +1,9 @@
 // The shared "resolve → bake → export" job of `burnish bake` and the studio's Bake & Export dialog,
 // its manifest reader, and the Ninja build file that runs many jobs as one command each.
-#include <burnish/core/bake/bake_job.h>
+#include <burnish/core/jobs/bake_job.h>
 
-#include <burnish/core/bake/bake_ninja.h>
 #include <burnish/core/io/image.h>
+#include <burnish/core/jobs/bake_ninja.h>
 #include <burnish/core/util/files.h>
 #include <burnish/core/util/numeric.h>
 

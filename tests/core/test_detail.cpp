@@ -1,4 +1,4 @@
-#include <burnish/core/prefilter/detail.h>
+#include <burnish/core/bake/detail.h>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

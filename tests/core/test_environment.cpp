@@ -3,10 +3,10 @@
 // energy, no seams, against brute force), half-float storage with a sun, and filtered importance
 // sampling (pdfs that integrate to 1, convergence to the brute-force integral, LEAN = Beckmann).
 #include <burnish/core/env/cube.h>
+#include <burnish/core/env/cube_dds.h>
 #include <burnish/core/env/prefilter.h>
 #include <burnish/core/env/sampling.h>
 #include <burnish/core/env/storage.h>
-#include <burnish/core/io/cube_dds.h>
 
 #include <burnish/core/shading/ndf.h>
 #include <burnish/core/util/files.h>

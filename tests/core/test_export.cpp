@@ -3,7 +3,7 @@
 // Toksvig refusals, all-or-nothing writes and byte-identical output.
 #include <burnish/core/bake/export.h>
 
-#include <burnish/core/prefilter/detail.h>
+#include <burnish/core/bake/detail.h>
 #include <burnish/core/util/files.h>
 
 #include "temp_dir.h"

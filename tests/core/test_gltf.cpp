@@ -1,9 +1,9 @@
 // `burnish gltf`'s core: a glTF asset's normal-mapped materials baked into KTX2 textures with Burnish's
 // own mips, everything else carried over, and bad assets refused in one line with nothing written.
-#include <burnish/core/bake/bake_job.h>
-#include <burnish/core/bake/gltf.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/io/ktx2.h>
+#include <burnish/core/jobs/bake_job.h>
+#include <burnish/core/jobs/gltf.h>
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 

@@ -2,10 +2,10 @@
 // threads), the filtering its premultiplied moments are made for, evaluate's rows per K, and the
 // mixture preset with its --lobes rule.
 #include <burnish/core/bake/bake.h>
-#include <burnish/core/bake/bake_job.h>
 #include <burnish/core/bake/presets.h>
 #include <burnish/core/eval/evaluate.h>
 #include <burnish/core/io/image.h>
+#include <burnish/core/jobs/bake_job.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/methods.h>
 

@@ -1,11 +1,11 @@
-// The mixture fitted to the shaded ground truth (eval/mixture_refine.h): it never raises a texel's
+// The mixture fitted to the shaded ground truth (prefilter/mixture_refine.h): it never raises a texel's
 // training error, keeps the texel's weight and a covariance above the base lobe's, stays finite at
 // the extremes, is deterministic, trains on pairs evaluate does not measure, and on a real map errs
 // less than the moment fit on evaluate's own pairs, aligned and between texels.
-#include <burnish/core/bake/bake_job.h>
 #include <burnish/core/eval/evaluate.h>
-#include <burnish/core/eval/mixture_refine.h>
+#include <burnish/core/jobs/bake_job.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
+#include <burnish/core/prefilter/mixture_refine.h>
 
 #include "box_pyramid_of.h"
 #include "normal_map_of.h"

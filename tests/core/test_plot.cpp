@@ -1,8 +1,8 @@
 // The plotting module: a PNG that OpenImageIO reads back at the requested size, not blank, with
 // text where labels go; clear errors instead of unlabeled plots; FreeType's text measured and placed.
-#include <burnish/core/util/plot.h>
+#include <burnish/core/io/plot.h>
 
-#include "../../core/src/util/font.h"
+#include "../../core/src/io/font.h"
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>

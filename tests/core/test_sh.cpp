@@ -1,7 +1,7 @@
 // SH9 irradiance: exact for a constant environment, equal to the brute-force integral where the
 // environment is itself of order ≤ 2, within Ramamoorthi & Hanrahan's bound on the studio, never
 // negative or NaN next to a sun; the irradiance cube and the average-diffuse normalization.
-#include <burnish/core/shading/sh.h>
+#include <burnish/core/env/sh.h>
 
 #include <burnish/core/env/sampling.h>
 

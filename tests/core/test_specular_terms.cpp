@@ -1,7 +1,7 @@
 // The picked specular colour in each engine's terms (shading/specular_terms.h), and its way through a
 // bake job into bake.json.
-#include <burnish/core/bake/bake_job.h>
-#include <burnish/core/bake/bake_ninja.h>
+#include <burnish/core/jobs/bake_job.h>
+#include <burnish/core/jobs/bake_ninja.h>
 #include <burnish/core/shading/specular_terms.h>
 #include <burnish/core/util/files.h>
 

@@ -1,6 +1,6 @@
 // libFuzzer target: `burnish bake --manifest` reading a manifest and resolving its jobs (names,
 // options, presets), without baking.
-#include <burnish/core/bake/bake_job.h>
+#include <burnish/core/jobs/bake_job.h>
 
 #include "fuzz_support.h"
 

@@ -1,8 +1,8 @@
-// libFuzzer target: `burnish gltf`'s reader and writer (bake/gltf.h's processGltf) on an asset file,
+// libFuzzer target: `burnish gltf`'s reader and writer (jobs/gltf.h's processGltf) on an asset file,
 // .gltf or .glb by its bytes, whose images come in data: URIs or a GLB's binary chunk; output goes to a
 // private folder, replaced each run. Inputs of odd size also write the lobe mixture (--method mixture,
 // two lobes), so its pyramid, its RGBA16F chains and its textureInfos meet the same assets.
-#include <burnish/core/bake/gltf.h>
+#include <burnish/core/jobs/gltf.h>
 
 #include "fuzz_support.h"
 

@@ -6,11 +6,11 @@
 #include <burnish/core/env/cube.h>
 #include <burnish/core/env/prefilter.h>
 #include <burnish/core/env/sampling.h>
+#include <burnish/core/env/sh.h>
 #include <burnish/core/env/storage.h>
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/sample_maps.h>
 #include <burnish/core/shading/color.h>
-#include <burnish/core/shading/sh.h>
 #include <burnish/core/shading/tonemap.h>
 #include <burnish/render/context.h>
 #include <burnish/render/cubemap.h>

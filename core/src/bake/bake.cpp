@@ -1,9 +1,9 @@
 #include <burnish/core/bake/bake.h>
 
 #include <burnish/core/bake/base_variance.h>
-#include <burnish/core/eval/mixture_refine.h>
 #include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
+#include <burnish/core/prefilter/mixture_refine.h>
 #include <burnish/core/util/simd.h>
 
 #if defined(__x86_64__) && defined(__GNUC__)

@@ -3,10 +3,10 @@
 #include "band_batches.h"
 #include "lobe_values.h"
 
-#include <burnish/core/eval/mixture_refine.h>
 #include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
+#include <burnish/core/prefilter/mixture_refine.h>
 #include <burnish/core/shading/ggx_specular.h>
 #include <burnish/core/shading/ndf.h>
 

@@ -5,9 +5,9 @@
 #include <burnish/core/io/image.h>
 
 #include <burnish/core/bake/bake.h>
+#include <burnish/core/io/plot.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/util/files.h>
-#include <burnish/core/util/plot.h>
 
 #include <OpenImageIO/imageio.h>
 

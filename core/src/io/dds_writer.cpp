@@ -1,6 +1,7 @@
-// DDS output through NVIDIA Texture Tools 2.0: the bake's own mip chain, block-compressed or not,
-// collected in memory (export.cpp stages and renames the bytes).
-#include <burnish/core/bake/export.h>
+// DDS output through NVIDIA Texture Tools 2.0: a texture's mip chain, block-compressed or not, collected
+// in memory (the export stages and renames the bytes).
+#include <burnish/core/io/dds.h>
+#include <burnish/core/io/texel_codes.h>
 
 #include "dds_dx10.h"
 
@@ -84,22 +85,15 @@ std::string encodeRgba16f(const std::vector<std::pair<int, int>>& sizes, int cha
 
 } // namespace
 
-Result<std::string> encodeDds(const std::vector<TextureMip>& mips, int channels, DdsCompression compression) {
-    if (mips.empty()) return Error{"DDS: no mip levels to write"};
-    if (channels < 1 || channels > 4) return Error{"DDS: a texture needs 1 to 4 channels"};
-    for (size_t k = 0; k < mips.size(); ++k) {
-        const auto& m = mips[k];
-        if (k > 0 && (m.width != std::max(1, mips[k - 1].width / 2) ||
-                      m.height != std::max(1, mips[k - 1].height / 2)))
-            return Error{"DDS: mip " + std::to_string(k) + " is not half of mip " + std::to_string(k - 1)};
-        if (m.texels.size() != size_t(m.width) * size_t(m.height) * size_t(channels))
-            return Error{"DDS: mip " + std::to_string(k) + " has the wrong number of values"};
-    }
-    return encodeDds(mips[0].width, mips[0].height, int(mips.size()), channels, compression,
-                     [&](size_t k, size_t begin, size_t end, float* out) {
-                         std::copy(mips[k].texels.begin() + std::ptrdiff_t(begin * size_t(channels)),
-                                   mips[k].texels.begin() + std::ptrdiff_t(end * size_t(channels)), out);
-                     });
+std::vector<std::pair<int, int>> mipChainSizes(int width, int height, int mipCount) {
+    std::vector<std::pair<int, int>> sizes;
+    if (width < 1 || height < 1) return sizes;
+    sizes.emplace_back(width, height);
+    // The pyramid's rule (normal_pyramid.h): halve rounding down, at least 1, down to 1×1.
+    while ((sizes.back().first > 1 || sizes.back().second > 1) &&
+           (mipCount <= 0 || int(sizes.size()) < mipCount))
+        sizes.emplace_back(std::max(1, sizes.back().first / 2), std::max(1, sizes.back().second / 2));
+    return sizes;
 }
 
 Result<std::string> encodeDds(int width, int height, int levels, int channels, DdsCompression compression,

@@ -5,6 +5,7 @@
 // options give the same values, bit for bit, on any thread count.
 #pragma once
 
+#include <burnish/core/io/texel_codes.h>
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_map.h>
@@ -31,24 +32,6 @@ namespace burnish {
 /// round-to-nearest-even half of the value clamped to [0, 1], what OpenImageIO writes).
 enum class TexelStorage { Float, Unorm8, Unorm16, Half };
 
-/// The stored code of a value v in [0, 1] (clamped; NaN gives 0) in an unsigned normalized format
-/// of `maxCode` (255, 65535): round to nearest, v·maxCode + 0.5 truncated.
-template <class T> inline T unormCode(float v, double maxCode) {
-    v = v > 0.0f ? v : 0.0f;
-    v = v < 1.0f ? v : 1.0f;
-    return static_cast<T>(static_cast<std::int32_t>(double(v) * maxCode + 0.5));
-}
-inline std::uint8_t unorm8(float v) {
-    return unormCode<std::uint8_t>(v, 255.0);
-}
-inline std::uint16_t unorm16(float v) {
-    return unormCode<std::uint16_t>(v, 65535.0);
-}
-/// The half-float a value in [0, 1] is stored as (clamped; Imath rounds to nearest even, as
-/// OpenImageIO does when it writes floats as half).
-inline Imath::half halfCode(float v) {
-    return Imath::half(std::clamp(v, 0.0f, 1.0f));
-}
 /// halfCode(v).bits() of each of `count` values, eight at a time: the same bits (tested over the
 /// floats of [0, 1], -0, values outside and NaN). By the CPU's F16C conversion where it has one, else
 /// by portableHalfCodes.

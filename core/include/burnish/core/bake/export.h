@@ -18,6 +18,7 @@
 
 #include <burnish/core/bake/bake.h>
 #include <burnish/core/bake/presets.h>
+#include <burnish/core/io/dds.h>
 #include <burnish/core/util/files.h>
 #include <burnish/core/util/result.h>
 
@@ -129,10 +130,6 @@ std::map<TextureRole, TexelStorage> compactStorage(const BakeOutput& shape, cons
 Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const std::filesystem::path& outDir, const BakeRecord& record = {});
 
-/// The level sizes of a bake of a width×height map: level k+1 is ⌊w/2⌋×⌊h/2⌋ (at least 1), down to
-/// 1×1, at most `mipCount` levels (0 = all). Empty for an empty extent.
-std::vector<std::pair<int, int>> mipChainSizes(int width, int height, int mipCount = 0);
-
 /// The textures a bake with `options` of a width×height map holds — roles, channels, decode
 /// rules and mip sizes — without their texels (and with decode scales of a flat map): what
 /// planExport needs to name a job's files before anything is baked. Errors as bake()'s.
@@ -141,20 +138,8 @@ Result<BakeOutput> bakeShape(const BakeOptions& options, int width, int height);
 /// The decoder's diagnostics as JSON (as bake.json records them).
 nlohmann::json diagnosticsJson(const NormalMapDiagnostics& diagnostics);
 
-/// Encodes a mip chain (each level `channels` wide, values in [0, 1]) as DDS bytes with
-/// NVIDIA Texture Tools 2.0. Channels map to R, G, B, A; BC4 stores channel 0, BC5 channels 0 and
-/// 1, BC3 and RGBA8 up to four (missing colour channels 0, or channel 0 repeated for one-channel
-/// images; missing alpha 1). Every level must be half its parent (rounded down, at least 1).
+/// A baked mip chain (each level `channels` wide, values in [0, 1]) as DDS bytes: io/dds.h's
+/// encodeDds over its levels, which must each be half their parent (rounded down, at least 1).
 Result<std::string> encodeDds(const std::vector<TextureMip>& mips, int channels, DdsCompression compression);
-
-/// Texels [begin, end) of level k of a DDS file's texture, `channels` values per texel into `out`,
-/// each in [0, 1]: what the streaming encodeDds reads instead of a whole chain of floats.
-using DdsLevelReader = std::function<void(size_t k, size_t begin, size_t end, float* out)>;
-
-/// encodeDds for a chain of `levels` levels from width×height down (each half its parent, at least
-/// 1), read through `read` a block of texels at a time: the same bytes as the chain's encodeDds,
-/// without a float copy of the chain (the export's DDS files are written this way).
-Result<std::string> encodeDds(int width, int height, int levels, int channels, DdsCompression compression,
-                              const DdsLevelReader& read);
 
 } // namespace burnish

@@ -4,6 +4,7 @@
 // library), never a code path per engine; export.h applies it.
 #pragma once
 
+#include <burnish/core/io/dds.h>
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/methods.h>
 #include <burnish/core/prefilter/normal_map.h>
@@ -31,15 +32,6 @@ enum class ExportFormat {
     Tiff16,    // 16-bit TIFF, one file, MIP levels as reduced-image subimages
     TiffFloat, // float TIFF, one file, MIP levels as reduced-image subimages
     Dds,       // DDS (BC4/BC5/BC3 or uncompressed RGBA8), the whole chain in one file
-};
-
-/// DDS block compression (or none) of one file.
-enum class DdsCompression {
-    Bc4,     // one channel (ATI1)
-    Bc5,     // two channels (ATI2): normal x, y; z is rebuilt by the shader
-    Bc3,     // RGB + alpha (DXT5): normal + gloss in alpha
-    Rgba8,   // uncompressed 8-bit A8R8G8B8
-    Rgba16f, // uncompressed half float R16G16B16A16_FLOAT (DX10 header): moments that need 16 bits
 };
 
 const std::vector<ExportFormat>& allExportFormats();

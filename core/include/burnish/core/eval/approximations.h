@@ -3,9 +3,9 @@
 // the same run. Also exposes the timed float kernels, so Google Benchmark times the same loops.
 #pragma once
 
+#include <burnish/core/io/plot.h>
 #include <burnish/core/shading/spherical_gaussian.h>
 #include <burnish/core/util/error_accumulator.h>
-#include <burnish/core/util/plot.h>
 #include <burnish/core/util/result.h>
 
 #include <nlohmann/json.hpp>

@@ -4,7 +4,7 @@
 #pragma once
 
 #include <burnish/core/eval/evaluate.h>
-#include <burnish/core/util/plot.h>
+#include <burnish/core/io/plot.h>
 #include <burnish/core/util/report.h>
 
 #include <nlohmann/json.hpp>

@@ -1,9 +1,7 @@
 // Helpers shared by Burnish's reports (approximations, bake): number formatting that never prints
 // NaN/Inf, Markdown tables, JSON numbers, Pareto fronts, and a description of the machine that
-// measured the numbers. Includes plot.h: reports draw their plots with it.
+// measured the numbers.
 #pragma once
-
-#include <burnish/core/util/plot.h>
 
 #include <nlohmann/json.hpp>
 

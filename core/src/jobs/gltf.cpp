@@ -2,11 +2,11 @@
 // The asset's JSON is edited in place (nlohmann::json keeps every member it does not touch), so
 // whatever Burnish does not know — extensions, extras, animations — passes through as it was.
 #include <burnish/core/bake/bake.h>
-#include <burnish/core/bake/bake_job.h>
 #include <burnish/core/bake/export.h>
-#include <burnish/core/bake/gltf.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/io/ktx2.h>
+#include <burnish/core/jobs/bake_job.h>
+#include <burnish/core/jobs/gltf.h>
 #include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/shading/specular_terms.h>

@@ -1,9 +1,9 @@
-#include <burnish/core/util/plot.h>
+#include <burnish/core/io/plot.h>
 
 #include <burnish/core/util/files.h>
 
+#include "io/font.h"
 #include "io/png_encode.h"
-#include "util/font.h"
 
 #include <fmt/format.h>
 

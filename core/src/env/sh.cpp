@@ -1,4 +1,4 @@
-#include <burnish/core/shading/sh.h>
+#include <burnish/core/env/sh.h>
 
 #include <burnish/core/env/storage.h>
 #include <burnish/core/util/numeric.h>

@@ -1,8 +1,8 @@
-#include <burnish/core/io/cube_dds.h>
+#include <burnish/core/env/cube_dds.h>
 
 #include <burnish/core/env/storage.h>
 
-#include "dds_dx10.h"
+#include "io/dds_dx10.h"
 
 #include <Imath/half.h>
 #include <fmt/format.h>

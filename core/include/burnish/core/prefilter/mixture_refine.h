@@ -14,7 +14,7 @@
 // texel keeps its moment fit wherever the refinement does not lower the training error.
 #pragma once
 
-#include <burnish/core/eval/evaluate.h>
+#include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 
 #include <vector>

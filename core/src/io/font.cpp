@@ -1,4 +1,4 @@
-#include "util/font.h"
+#include "io/font.h"
 
 #include <ft2build.h>
 #include FT_FREETYPE_H

@@ -1,10 +1,10 @@
-#include <burnish/core/bake/bake_job.h>
+#include <burnish/core/jobs/bake_job.h>
 
-#include <burnish/core/bake/bake_farm.h>
+#include <burnish/core/jobs/bake_farm.h>
 
+#include <burnish/core/bake/detail.h>
 #include <burnish/core/eval/evaluate_report.h>
 #include <burnish/core/io/image.h>
-#include <burnish/core/prefilter/detail.h>
 #include <burnish/core/prefilter/gloss.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/sample_maps.h>

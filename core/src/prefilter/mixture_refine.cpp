@@ -1,6 +1,4 @@
-#include <burnish/core/eval/mixture_refine.h>
-
-#include "lobe_values.h"
+#include <burnish/core/prefilter/mixture_refine.h>
 
 #include <burnish/core/util/numeric.h>
 

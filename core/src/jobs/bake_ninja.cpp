@@ -1,4 +1,4 @@
-#include <burnish/core/bake/bake_ninja.h>
+#include <burnish/core/jobs/bake_ninja.h>
 
 #include <burnish/core/io/image.h>
 #include <burnish/core/util/files.h>

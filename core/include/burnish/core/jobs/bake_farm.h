@@ -4,7 +4,7 @@
 // (`burnish bake --manifest M --slurm DIR`; README, "Bake a library on a farm").
 #pragma once
 
-#include <burnish/core/bake/bake_job.h>
+#include <burnish/core/jobs/bake_job.h>
 #include <burnish/core/util/result.h>
 
 #include <nlohmann/json.hpp>

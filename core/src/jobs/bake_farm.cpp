@@ -1,7 +1,7 @@
-#include <burnish/core/bake/bake_farm.h>
+#include <burnish/core/jobs/bake_farm.h>
 
-#include <burnish/core/bake/bake_ninja.h>
 #include <burnish/core/io/image.h>
+#include <burnish/core/jobs/bake_ninja.h>
 #include <burnish/core/util/files.h>
 #include <burnish/core/util/hash.h>
 

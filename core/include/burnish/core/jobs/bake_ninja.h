@@ -3,7 +3,7 @@
 // (named by export's plan, nothing baked) and its inputs (maps, preset file, manifest).
 #pragma once
 
-#include <burnish/core/bake/bake_job.h>
+#include <burnish/core/jobs/bake_job.h>
 #include <burnish/core/util/result.h>
 
 #include <nlohmann/json.hpp>

@@ -6,9 +6,9 @@
 #pragma once
 
 #include <burnish/core/bake/bake.h>
+#include <burnish/core/bake/detail.h>
 #include <burnish/core/bake/export.h>
 #include <burnish/core/bake/presets.h>
-#include <burnish/core/prefilter/detail.h>
 #include <burnish/core/prefilter/normal_map.h>
 #include <burnish/core/util/result.h>
 

@@ -136,8 +136,13 @@ TEST(Detail, ShapeHasTheBakesRolesChannelsAndSizes) {
     EXPECT_EQ(shape->role, baked->texture.role);
     EXPECT_EQ(shape->channels, baked->texture.channels);
     ASSERT_EQ(shape->decode.size(), baked->texture.decode.size());
-    for (size_t c = 0; c < shape->decode.size(); ++c)
+    for (size_t c = 0; c < shape->decode.size(); ++c) {
         EXPECT_EQ(shape->decode[c].name, baked->texture.decode[c].name);
+        EXPECT_EQ(shape->decode[c].scale, baked->texture.decode[c].scale);
+        EXPECT_EQ(shape->decode[c].bias, baked->texture.decode[c].bias);
+    }
+    EXPECT_EQ(shape->description, baked->texture.description);
+    EXPECT_EQ(shape->needsHighPrecision, baked->texture.needsHighPrecision);
     ASSERT_EQ(shape->mips.size(), baked->texture.mips.size()); // 12x5, 6x2, 3x1
     for (size_t k = 0; k < shape->mips.size(); ++k) {
         EXPECT_EQ(shape->mips[k].width, baked->texture.mips[k].width) << k;
@@ -145,4 +150,8 @@ TEST(Detail, ShapeHasTheBakesRolesChannelsAndSizes) {
         EXPECT_TRUE(shape->mips[k].texels.empty());
     }
     EXPECT_FALSE(detailShape(0, 4).ok());
+    DetailOptions badFade;
+    badFade.fadeStartMip = 5;
+    badFade.fadeEndMip = 2;
+    EXPECT_FALSE(detailShape(8, 8, badFade).ok()); // the options bakeDetail refuses
 }

@@ -818,6 +818,68 @@ TEST(Export, DetailFlipsWithDirectXAndKeepsFourChannelsInDds) {
     EXPECT_NE(bc5->files.back().notes[0].find("stored as rgba8"), std::string::npos);
 }
 
+// The shape comes from the method table, not from a bake: for every method and preset (their params,
+// storage and roles), it is what a bake of a flat map of the same size holds, texture for texture —
+// role, description, channels, every decode's name, scale and bias, precision, storage, mip sizes —
+// with no texel.
+TEST(Export, ShapeIsAFlatMapsBakeWithoutItsTexels) {
+    const NormalMap flat = makeNormalMap(12, 5, std::vector<glm::vec3>(60, glm::vec3(0.0f, 0.0f, 1.0f)));
+    std::vector<BakeOptions> cases;
+    for (Method m : allMethods()) {
+        BakeOptions o;
+        o.method = m;
+        o.mipCount = 3;
+        cases.push_back(o);
+        o.basePower = 2.0; // the moments' scale follows a low base power (1/s above 1/16)
+        o.mipCount = 0;
+        cases.push_back(o);
+    }
+    for (const char* name : {"godot", "lean", "unity", "mixture", "filament"}) {
+        const Preset p = preset(name);
+        BakeOptions o;
+        o.method = p.method;
+        o.encoding = p.encoding;
+        o.params.mixtureLobes = 3;
+        o.storage[TextureRole::Gloss] = TexelStorage::Unorm8;
+        cases.push_back(o);
+    }
+    for (const BakeOptions& o : cases) {
+        SCOPED_TRACE(std::string(methodName(o.method)) + " s=" + std::to_string(o.basePower));
+        const auto real = bake(flat, o);
+        const auto shape = bakeShape(o, flat.width, flat.height);
+        ASSERT_TRUE(real && shape) << (real ? shape.error() : real.error());
+        EXPECT_EQ(shape->method, real->method);
+        EXPECT_EQ(shape->stats.mipCount, real->stats.mipCount);
+        ASSERT_EQ(shape->textures.size(), real->textures.size());
+        for (size_t i = 0; i < real->textures.size(); ++i) {
+            const BakedTexture& a = real->textures[i];
+            const BakedTexture& b = shape->textures[i];
+            EXPECT_EQ(b.role, a.role);
+            EXPECT_EQ(b.description, a.description);
+            EXPECT_EQ(b.channels, a.channels);
+            EXPECT_EQ(b.needsHighPrecision, a.needsHighPrecision);
+            EXPECT_EQ(b.storage, a.storage);
+            ASSERT_EQ(b.decode.size(), a.decode.size());
+            for (size_t c = 0; c < a.decode.size(); ++c) {
+                EXPECT_EQ(b.decode[c].name, a.decode[c].name);
+                EXPECT_EQ(b.decode[c].scale, a.decode[c].scale) << b.decode[c].name;
+                EXPECT_EQ(b.decode[c].bias, a.decode[c].bias) << b.decode[c].name;
+            }
+            ASSERT_EQ(b.mips.size(), a.mips.size());
+            for (size_t k = 0; k < a.mips.size(); ++k) {
+                EXPECT_EQ(b.mips[k].width, a.mips[k].width);
+                EXPECT_EQ(b.mips[k].height, a.mips[k].height);
+                EXPECT_TRUE(b.mips[k].texels.empty() && b.mips[k].unorm8.empty() &&
+                            b.mips[k].unorm16.empty() && b.mips[k].halfBits.empty());
+            }
+        }
+    }
+    BakeOptions bad;
+    bad.basePower = 0.0;
+    EXPECT_FALSE(bakeShape(bad, 4, 4).ok());
+    EXPECT_FALSE(bakeShape(BakeOptions{}, 0, 4).ok());
+}
+
 // planExport of a bake's shape names exactly the files a real export writes.
 TEST(Export, ShapePlansTheFilesOfTheRealBake) {
     const NormalMap map = smoothMap(40, 24);

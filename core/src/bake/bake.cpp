@@ -1,6 +1,7 @@
 #include <burnish/core/bake/bake.h>
 
 #include <burnish/core/bake/base_variance.h>
+#include <burnish/core/io/dds.h>
 #include <burnish/core/prefilter/fitted_lobe.h>
 #include <burnish/core/prefilter/lobe_mixture.h>
 #include <burnish/core/prefilter/mixture_refine.h>
@@ -276,10 +277,16 @@ Result<std::vector<float>> glossFromImage(const Image& image, int width, int hei
 
 namespace {
 
-Status checkBakeInput(const NormalMap& map, const BakeOptions& options) {
-    if (map.texelCount() == 0) return Error{"the normal map is empty"};
+// What bake() refuses in its options alone, whatever the map.
+Status checkBakeOptions(const BakeOptions& options) {
     if (!(options.basePower > 0.0) || !(options.basePower <= kMaxPower))
         return Error{"base power must lie in (0, 1e9]"};
+    return {};
+}
+
+Status checkBakeInput(const NormalMap& map, const BakeOptions& options) {
+    if (map.texelCount() == 0) return Error{"the normal map is empty"};
+    if (const Status s = checkBakeOptions(options); !s) return s;
     if (options.authoredGloss) {
         if (options.authoredGloss->size() != map.texelCount())
             return Error{"authored gloss has " + std::to_string(options.authoredGloss->size()) +
@@ -288,6 +295,14 @@ Status checkBakeInput(const NormalMap& map, const BakeOptions& options) {
             if (!std::isfinite(g)) return Error{"authored gloss has a NaN or infinite texel"};
     }
     return {};
+}
+
+// The slope textures' scales of a map whose largest slope max(|b.x|, |b.y|) is maxSlope and whose
+// smallest power (base or authored) is minPower.
+ChannelScales slopeScalesFor(float maxSlope, double minPower) {
+    const double maxB = double(maxSlope);
+    const double maxM = double(maxSlope * maxSlope);
+    return {binaryScale(maxB), binaryScale(maxM + 1.0 / std::max(minPower, 1e-6)), 1.0};
 }
 
 // Binary scales for the slope textures, so their [0, 1] storage covers every mip. Every box moment
@@ -311,13 +326,11 @@ ChannelScales slopeScales(const NormalMap& map, const BakeOptions& options) {
             return b;
         },
         [](float a, float b) { return std::max(a, b); }); // max is exact: any order gives the same
-    const double maxB = double(maxSlope);
-    const double maxM = double(maxSlope * maxSlope);
     double minPower = options.basePower;
     if (options.authoredGloss)
         for (float g : *options.authoredGloss)
             minPower = std::min(minPower, options.encoding.power(g));
-    return {binaryScale(maxB), binaryScale(maxM + 1.0 / std::max(minPower, 1e-6)), 1.0};
+    return slopeScalesFor(maxSlope, minPower);
 }
 
 // What every row of one bake shares: the method's row in the table as flags, the textures' roles,
@@ -697,6 +710,27 @@ bool skipsLevel(const PyramidLevel& level, int k, int levels, int largestLevel) 
 }
 
 } // namespace
+
+Result<BakeOutput> bakeShape(const BakeOptions& options, int width, int height) {
+    if (width < 1 || height < 1) return Error{"a bake needs a map of at least 1x1 texels"};
+    if (const Status s = checkBakeOptions(options); !s) return Error{s.error()};
+    BakeOutput shape;
+    shape.method = options.method;
+    // The method table's textures with a flat map's decodes: no slope, the base power (an authored
+    // gloss map is not read).
+    shape.textures = planTextures(
+        options, storesSlopes(options.method) ? slopeScalesFor(0.0f, options.basePower) : ChannelScales{});
+    const auto sizes = mipChainSizes(width, height, options.mipCount);
+    for (auto& t : shape.textures) {
+        t.mips.assign(sizes.size(), TextureMip{});
+        for (size_t k = 0; k < sizes.size(); ++k) {
+            t.mips[k].width = sizes[k].first;
+            t.mips[k].height = sizes[k].second;
+        }
+    }
+    shape.stats.mipCount = int(sizes.size());
+    return shape;
+}
 
 Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options) {
     if (const Status s = checkBakeInput(map, options); !s) return Error{s.error()};

@@ -1,6 +1,6 @@
 #include <burnish/core/bake/detail.h>
 
-#include <burnish/core/bake/export.h>
+#include <burnish/core/io/dds.h>
 #include <burnish/core/prefilter/gloss.h>
 
 #include <glm/geometric.hpp>
@@ -26,14 +26,42 @@ double addVarianceToPower(double s, double sigma2) {
     return powerFromVariance(v, VarianceConvention::InversePower);
 }
 
-Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& options) {
-    if (detail.texelCount() == 0) return Error{"the detail normal map is empty"};
+namespace {
+
+// What bakeDetail refuses in its options alone.
+Status checkDetailOptions(const DetailOptions& options) {
     if (options.fadeStartMip < 0 || options.fadeEndMip < options.fadeStartMip)
         return Error{"detail fade mips must satisfy 0 <= start <= end (got " +
                      std::to_string(options.fadeStartMip) + ".." + std::to_string(options.fadeEndMip) + ")"};
     if (options.mipCount < 0)
         return Error{"detail mip count must be 0 (all) or positive (got " + std::to_string(options.mipCount) +
                      ")"};
+    return {};
+}
+
+// The variance channel's binary scale for the largest variance stored (at least 2^-10).
+double varianceScale(double maxVariance) {
+    return std::exp2(std::ceil(std::log2(std::max(maxVariance, 1.0 / 1024.0))));
+}
+
+// The detail texture's description and decodes, without mips.
+BakedTexture detailTexture(double constantVariance, double scale) {
+    BakedTexture tex;
+    tex.role = TextureRole::Detail;
+    tex.description = "detail normal [x, y, 0, variance]; blend with reoriented normal mapping and use "
+                      "1/s' = 1/s + variance; constant variance beyond the fade: " +
+                      std::to_string(constantVariance);
+    tex.decode = textureDecode(TextureRole::Detail, {1.0, 1.0, scale});
+    tex.channels = int(tex.decode.size());
+    tex.needsHighPrecision = textureSpec(TextureRole::Detail).needsHighPrecision;
+    return tex;
+}
+
+} // namespace
+
+Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& options) {
+    if (detail.texelCount() == 0) return Error{"the detail normal map is empty"};
+    if (const Status s = checkDetailOptions(options); !s) return Error{s.error()};
     const std::shared_ptr<const NormalMap> borrowed(&detail, [](const NormalMap*) {});
     const NormalPyramid pyramid = NormalPyramid::build(borrowed, options.pyramid);
     const int levels = pyramid.levelCount();
@@ -69,16 +97,10 @@ Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& opti
         for (float v : variance[size_t(k)])
             maxVariance = std::max(maxVariance, double(v));
     }
-    const double scale = std::exp2(std::ceil(std::log2(std::max(maxVariance, 1.0 / 1024.0))));
+    const double scale = varianceScale(maxVariance);
 
+    out.texture = detailTexture(out.constantVariance, scale);
     BakedTexture& tex = out.texture;
-    tex.role = TextureRole::Detail;
-    tex.description = "detail normal [x, y, 0, variance]; blend with reoriented normal mapping and use "
-                      "1/s' = 1/s + variance; constant variance beyond the fade: " +
-                      std::to_string(out.constantVariance);
-    tex.decode = textureDecode(TextureRole::Detail, {1.0, 1.0, scale});
-    tex.channels = int(tex.decode.size());
-    tex.needsHighPrecision = textureSpec(TextureRole::Detail).needsHighPrecision;
     // Every level above shaped the variance scale, so a short chain is a prefix of the full one.
     const int stored = options.mipCount > 0 ? std::min(options.mipCount, levels) : levels;
     tex.mips.resize(size_t(stored));
@@ -99,12 +121,10 @@ Result<DetailBake> bakeDetail(const NormalMap& detail, const DetailOptions& opti
 
 Result<BakedTexture> detailShape(int width, int height, const DetailOptions& options) {
     if (width < 1 || height < 1) return Error{"a detail map needs at least 1x1 texels"};
-    DetailOptions flat = options;
-    flat.mipCount = 0;
-    auto shape = bakeDetail(makeNormalMap(1, 1, {glm::vec3(0.0f, 0.0f, 1.0f)}), flat);
-    if (!shape) return Error{shape.error()};
+    if (const Status s = checkDetailOptions(options); !s) return Error{s.error()};
+    // A flat map's texture: no variance anywhere.
+    BakedTexture tex = detailTexture(0.0, varianceScale(0.0));
     const auto sizes = mipChainSizes(width, height, options.mipCount);
-    BakedTexture tex = std::move(shape.value().texture);
     tex.mips.assign(sizes.size(), TextureMip{});
     for (size_t k = 0; k < sizes.size(); ++k) {
         tex.mips[k].width = sizes[k].first;

@@ -802,29 +802,6 @@ Result<std::string> encodeDds(const std::vector<TextureMip>& mips, int channels,
                      });
 }
 
-Result<BakeOutput> bakeShape(const BakeOptions& options, int width, int height) {
-    if (width < 1 || height < 1) return Error{"a bake needs a map of at least 1x1 texels"};
-    // A 1×1 flat map gives the method's textures, channels and decode rules (its method-table row
-    // as bake() builds them), without the cost of the real map.
-    BakeOptions flat = options;
-    flat.authoredGloss.reset();
-    flat.mipCount = 0;
-    auto baked = bake(makeNormalMap(1, 1, {glm::vec3(0.0f, 0.0f, 1.0f)}), flat);
-    if (!baked) return Error{baked.error()};
-    BakeOutput shape = std::move(baked.value());
-    const auto sizes = mipChainSizes(width, height, options.mipCount);
-    for (auto& t : shape.textures) {
-        t.mips.assign(sizes.size(), TextureMip{});
-        for (size_t k = 0; k < sizes.size(); ++k) {
-            t.mips[k].width = sizes[k].first;
-            t.mips[k].height = sizes[k].second;
-        }
-    }
-    shape.stats = {};
-    shape.stats.mipCount = int(sizes.size());
-    return shape;
-}
-
 Result<ExportResult> planExport(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const BakeRecord& record) {
     auto plan = makePlan(bake, preset, options, record, false);

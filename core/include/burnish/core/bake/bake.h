@@ -131,6 +131,12 @@ struct BakeOutput {
 /// non-finite values, a non-positive base power.
 Result<BakeOutput> bake(const NormalMap& map, const BakeOptions& options);
 
+/// The textures a bake with `options` of a width×height map holds — roles, channels, decode
+/// rules and mip sizes — without their texels (and with decode scales of a flat map), from the
+/// method table without baking anything: what planExport needs to name a job's files before anything
+/// is baked. Errors as bake()'s options.
+Result<BakeOutput> bakeShape(const BakeOptions& options, int width, int height);
+
 /// The fraction of an image's texels whose first three channels, read as unsigned normals (2v − 1),
 /// are unit vectors (within 0.1) facing up; 0 for fewer than 3 channels or a grey image (mean |R − B|
 /// under 0.1).

@@ -130,11 +130,6 @@ std::map<TextureRole, TexelStorage> compactStorage(const BakeOutput& shape, cons
 Result<ExportResult> exportBake(const BakeOutput& bake, const Preset& preset, const ExportOptions& options,
                                 const std::filesystem::path& outDir, const BakeRecord& record = {});
 
-/// The textures a bake with `options` of a width×height map holds — roles, channels, decode
-/// rules and mip sizes — without their texels (and with decode scales of a flat map): what
-/// planExport needs to name a job's files before anything is baked. Errors as bake()'s.
-Result<BakeOutput> bakeShape(const BakeOptions& options, int width, int height);
-
 /// The decoder's diagnostics as JSON (as bake.json records them).
 nlohmann::json diagnosticsJson(const NormalMapDiagnostics& diagnostics);
 

@@ -30,38 +30,34 @@ allowed() {
 concerns="util io shading prefilter bake eval jobs env"
 
 check() {
-  local root="$1" bad=0 file folder inc target ok a
+  local root="$1" bad=0 hits
   [ -d "$root/core/src" ] || { echo "check_layers: no core/src under $root" >&2; return 2; }
-  # Core's folders.
-  for folder in "$root"/core/src/* "$root"/core/include/burnish/core/*; do
-    [ -d "$folder" ] || continue
-    local name; name=$(basename "$folder")
-    if [ -z "$(allowed "$name")" ]; then
-      echo "check_layers: core folder '$name' has no place in the order (add it to tests/check_layers.sh)"
-      bad=1
-      continue
-    fi
-    while IFS= read -r -d '' file; do
-      while IFS= read -r inc; do
-        target=""
-        if [[ "$inc" =~ ^\#include[[:space:]]*\<burnish/core/([a-z_]+)/ ]]; then
-          target="${BASH_REMATCH[1]}"
-        elif [[ "$inc" =~ ^\#include[[:space:]]*\"([a-z_]+)/ ]]; then
-          target="${BASH_REMATCH[1]}"
-          case " $concerns " in *" $target "*) ;; *) target="" ;; esac
-        fi
-        [ -n "$target" ] || continue
-        ok=0
-        for a in $(allowed "$name"); do [ "$a" = "$target" ] && ok=1; done
-        if [ "$ok" = 0 ]; then
-          echo "${file#"$root"/} -> $inc (core/$name may include only: $(allowed "$name"))"
-          bad=1
-        fi
-      done < <(grep -E '^#include' "$file")
-    done < <(find "$folder" -type f \( -name '*.h' -o -name '*.cpp' \) -print0)
-  done
+  # Core's folders: every include line of every file, read in one pass.
+  local table="" c
+  for c in $concerns; do table+="$c=$(allowed "$c" | tr ' ' ,);"; done
+  hits=$(cd "$root/core" && grep -rnE --include='*.h' --include='*.cpp' '^#include' src include/burnish/core |
+    awk -v table="$table" -v concerns=" $concerns " '
+      BEGIN { n = split(table, rows, ";"); for (i = 1; i <= n; i++) if (rows[i] != "") {
+                split(rows[i], kv, "="); allowed[kv[1]] = kv[2] } }
+      {
+        split($0, parts, ":"); file = parts[1]
+        folder = file; sub(/^src\//, "", folder); sub(/^include\/burnish\/core\//, "", folder); sub(/\/.*/, "", folder)
+        line = substr($0, length(parts[1]) + length(parts[2]) + 3)
+        if (!(folder in allowed)) { unknown[folder] = 1; next }
+        target = ""
+        if (match(line, /^#include[ \t]*<burnish\/core\/[a-z_]+\//)) {
+          target = substr(line, RSTART, RLENGTH); sub(/.*<burnish\/core\//, "", target); sub(/\/$/, "", target)
+        } else if (match(line, /^#include[ \t]*"[a-z_]+\//)) {
+          target = substr(line, RSTART, RLENGTH); sub(/.*"/, "", target); sub(/\/$/, "", target)
+          if (index(concerns, " " target " ") == 0) target = ""
+        }
+        if (target == "") next
+        if (index("," allowed[folder] ",", "," target ",") == 0)
+          printf "core/%s -> %s (core/%s may include only: %s)\n", file, line, folder, allowed[folder]
+      }
+      END { for (f in unknown) printf "check_layers: core folder %s has no place in the order (add it to tests/check_layers.sh)\n", f }')
+  [ -n "$hits" ] && { echo "$hits"; bad=1; }
   # Between the layers.
-  local hits
   hits=$(grep -rnE '^#include[[:space:]]*[<"](burnish/(render|app)/|Q[A-Za-z]+[>/.]|epoxy/|GL/|EGL/)' \
     "$root/core/src" "$root/core/include" 2>/dev/null)
   [ -n "$hits" ] && { echo "core includes a layer above it or a GUI library:"; echo "${hits//"$root"\//}"; bad=1; }

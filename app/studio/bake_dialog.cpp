@@ -88,6 +88,9 @@ BakeJobSpec bakeJobSpecFor(const MaterialDocument& doc, const QString& presetNam
         spec.compression = s.exportSettings.compression.toStdString();
     if (s.exportSettings.mips > 0) spec.mips = s.exportSettings.mips;
     if (!s.detailMapPath.isEmpty()) spec.detail = s.detailMapPath.toStdString();
+    // A map the artist loaded anyway bakes as `--allow-implausible` (which covers the job's detail map too).
+    spec.allowImplausible =
+        (s.allowImplausibleNormal && !s.normalMapPath.isEmpty()) || (s.allowImplausibleDetail && spec.detail);
     if (encodingPreset.findParameter("metallic"))
         spec.metallic = s.materialClass == MaterialClass::Metal ? 1.0 : 0.0;
     // The picked colour as numbers (a calibrated pick is its table value), so bake.json records it in the

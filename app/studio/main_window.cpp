@@ -259,6 +259,13 @@ MainWindow::MainWindow(QWidget* parent)
                     return;
                 }
                 statusBar()->clearMessage();
+                if (m_doc->holdsRefusedMap(slot)) {
+                    // Refused by the plausibility check alone: the artist may know better (an odd but
+                    // real map). Asked after this signal returns, never inside a drop or a load.
+                    QTimer::singleShot(0, this,
+                                       [this, slot, path, error] { offerLoadAnyway(slot, path, error); });
+                    return;
+                }
                 showMessage(QString("Cannot load the %1 map").arg(mapSlotName(slot)), error);
             });
     connect(m_doc->undoStack(), &QUndoStack::cleanChanged, this, &MainWindow::updateTitle);
@@ -846,6 +853,29 @@ void MainWindow::exportGltf(const QString& outDir) {
     const QString target = QDir(outDir).filePath(QString::fromStdString(name) + ".gltf");
     if (!beginGltfJob("Exporting the material as glTF…", target, options)) return;
     m_gltfRunner->startExport(std::move(material), outDir, std::move(options));
+}
+
+void MainWindow::offerLoadAnyway(MapSlot slot, const QString& path, const QString& reason) {
+    if (!m_doc->holdsRefusedMap(slot)) return; // superseded by a newer load meanwhile
+    const QString name = QFileInfo(path).fileName();
+    const auto answer =
+        ask(QString("Load the %1 map anyway?").arg(mapSlotName(slot)),
+            QString("%1\n\nBurnish would refuse %2 as a %3 map. Load it anyway if you know it is a "
+                    "tangent-space normal map: the views, exports and bakes will use it as one, and the "
+                    "project remembers the choice.")
+                .arg(reason, name, mapSlotName(slot)),
+            QMessageBox::Yes | QMessageBox::No);
+    if (answer != QMessageBox::Yes) {
+        m_doc->dropRefusedMap(slot);
+        statusBar()->showMessage(QString("The %1 map %2 was not loaded").arg(mapSlotName(slot), name), 8000);
+        return;
+    }
+    if (const Status st = m_doc->acceptRefusedMap(slot); !st) {
+        showMessage(QString("Cannot load the %1 map").arg(mapSlotName(slot)),
+                    QString::fromStdString(st.error()));
+        return;
+    }
+    statusBar()->showMessage(QString("Loaded the %1 map %2 anyway").arg(mapSlotName(slot), name), 8000);
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {

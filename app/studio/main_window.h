@@ -105,6 +105,9 @@ public:
     /// gltfFinished.
     void exportGltf(const QString& outDir);
     GltfRunner* gltfRunner() const { return m_gltfRunner; }
+    /// A map the plausibility check refused (held by the document, decoded): asks whether to load it
+    /// anyway (`ask`), then takes it in (one undo step, remembered by the project) or drops it.
+    void offerLoadAnyway(MapSlot slot, const QString& path, const QString& reason);
 
 signals:
     void gltfFinished(bool ok, const QString& message);

@@ -210,6 +210,7 @@ QStringList MaterialDocument::diagnostics(MapSlot slot) const {
     }
     if (d) {
         QStringList flags;
+        if (d->implausible) flags << "loaded anyway";
         if (d->zRebuilt) flags << "z rebuilt";
         if (d->greenFlipped) flags << "green flipped";
         if (d->alphaIgnored) flags << "alpha ignored";
@@ -348,7 +349,7 @@ Status MaterialDocument::setPreset(const QString& name) {
     return pushCarryingLayers(s, m_maps, "Preset: " + name, (*p)->encoding);
 }
 
-Result<DecodedMap> MaterialDocument::decodeMap(MapSlot slot, const QString& path) {
+Result<DecodedMap> MaterialDocument::decodeMap(MapSlot slot, const QString& path, bool allowImplausible) {
     DecodedMap d;
     d.slot = slot;
     d.path = path;
@@ -358,15 +359,27 @@ Result<DecodedMap> MaterialDocument::decodeMap(MapSlot slot, const QString& path
         d.gloss = std::make_shared<const Image>(std::move(image.value()));
         return d;
     }
-    auto map = loadNormalMap(path.toStdString());
-    if (!map)
-        return Error{std::string(slot == MapSlot::Normal ? "normal" : "detail") + " map: " + map.error()};
+    const std::string what = slot == MapSlot::Normal ? "normal map: " : "detail map: ";
+    NormalMapOptions options;
+    options.allowImplausible = allowImplausible;
+    auto map = loadNormalMap(path.toStdString(), options);
+    d.accepted = allowImplausible;
+    if (!map) {
+        // Refused: by the plausibility check alone when the map decodes past it. Then it is held,
+        // decoded, with the reason, for the artist to load anyway.
+        options.allowImplausible = true;
+        auto past = loadNormalMap(path.toStdString(), options);
+        if (!past || !past->diagnostics.implausible) return Error{what + map.error()};
+        d.refusal = QString::fromStdString(what + map.error());
+        map = std::move(past);
+    }
     (slot == MapSlot::Normal ? d.normal : d.detail) =
         std::make_shared<const NormalMap>(std::move(map.value()));
     return d;
 }
 
 Status MaterialDocument::applyDecodedMap(const DecodedMap& d) {
+    if (!d.refusal.isEmpty() && !d.accepted) return Error{d.refusal.toStdString()};
     MaterialSettings s = m_settings;
     // Keep the maps of the other slots shared (no reload, same undo data).
     LoadedMaps next = m_maps;
@@ -374,6 +387,7 @@ Status MaterialDocument::applyDecodedMap(const DecodedMap& d) {
     case MapSlot::Normal:
         if (!d.normal) return Error{"normal map: nothing was decoded"};
         s.normalMapPath = d.path;
+        s.allowImplausibleNormal = d.normal->diagnostics.implausible;
         next.normal = d.normal;
         break;
     case MapSlot::Gloss:
@@ -384,6 +398,7 @@ Status MaterialDocument::applyDecodedMap(const DecodedMap& d) {
     case MapSlot::Detail:
         if (!d.detail) return Error{"detail map: nothing was decoded"};
         s.detailMapPath = d.path;
+        s.allowImplausibleDetail = d.detail->diagnostics.implausible;
         next.detail = d.detail;
         break;
     }
@@ -398,9 +413,26 @@ Status MaterialDocument::loadMap(MapSlot slot, const QString& path) {
     return applyDecodedMap(*decoded);
 }
 
+bool MaterialDocument::holdsRefusedMap(MapSlot slot) const {
+    return m_refused[size_t(slot)].has_value();
+}
+
+Status MaterialDocument::acceptRefusedMap(MapSlot slot) {
+    std::optional<DecodedMap> held = std::move(m_refused[size_t(slot)]);
+    m_refused[size_t(slot)].reset();
+    if (!held) return Error{QString("no refused %1 map is held").arg(mapSlotName(slot)).toStdString()};
+    held->accepted = true;
+    return applyDecodedMap(*held);
+}
+
+void MaterialDocument::dropRefusedMap(MapSlot slot) {
+    m_refused[size_t(slot)].reset();
+}
+
 void MaterialDocument::loadMapInBackground(MapSlot slot, const QString& path) {
     // A newer request for the slot supersedes an older one: its result is dropped on arrival.
     const quint64 generation = ++m_loadGeneration[int(slot)];
+    m_refused[size_t(slot)].reset();
     emit mapLoadStarted(slot, path);
     QPointer<MaterialDocument> self(this);
     QThread* worker = QThread::create([self, slot, path, generation] {
@@ -412,6 +444,7 @@ void MaterialDocument::loadMapInBackground(MapSlot slot, const QString& path) {
                 self->m_loadDone[int(slot)] = generation;
                 const Status st =
                     *decoded ? self->applyDecodedMap(**decoded) : Status(Error{decoded->error()});
+                if (*decoded && !(*decoded)->refusal.isEmpty()) self->m_refused[size_t(slot)] = **decoded;
                 emit self->mapLoadFinished(slot, path, st.ok(),
                                            st.ok() ? QString() : QString::fromStdString(st.error()));
             },
@@ -443,9 +476,11 @@ MaterialDocument::~MaterialDocument() {
 void MaterialDocument::clearMap(MapSlot slot) {
     MaterialSettings s = m_settings;
     LoadedMaps next = m_maps;
+    m_refused[size_t(slot)].reset();
     switch (slot) {
     case MapSlot::Normal:
         s.normalMapPath.clear();
+        s.allowImplausibleNormal = false;
         next.normal = sampleNormalMap();
         break;
     case MapSlot::Gloss:
@@ -454,6 +489,7 @@ void MaterialDocument::clearMap(MapSlot slot) {
         break;
     case MapSlot::Detail:
         s.detailMapPath.clear();
+        s.allowImplausibleDetail = false;
         next.detail.reset();
         break;
     }
@@ -521,7 +557,9 @@ Result<LoadedMaps> MaterialDocument::loadMaps(const MaterialSettings& s) {
     if (s.normalMapPath.isEmpty()) {
         maps.normal = sampleNormalMap();
     } else {
-        auto normal = loadNormalMap(s.normalMapPath.toStdString());
+        NormalMapOptions options;
+        options.allowImplausible = s.allowImplausibleNormal;
+        auto normal = loadNormalMap(s.normalMapPath.toStdString(), options);
         if (!normal) return Error{"normal map: " + normal.error()};
         maps.normal = std::make_shared<const NormalMap>(std::move(normal.value()));
     }
@@ -533,7 +571,9 @@ Result<LoadedMaps> MaterialDocument::loadMaps(const MaterialSettings& s) {
         maps.gloss = std::make_shared<const Image>(std::move(image.value()));
     }
     if (!s.detailMapPath.isEmpty()) {
-        auto detail = loadNormalMap(s.detailMapPath.toStdString());
+        NormalMapOptions options;
+        options.allowImplausible = s.allowImplausibleDetail;
+        auto detail = loadNormalMap(s.detailMapPath.toStdString(), options);
         if (!detail) return Error{"detail map: " + detail.error()};
         maps.detail = std::make_shared<const NormalMap>(std::move(detail.value()));
     }
@@ -554,8 +594,10 @@ Status MaterialDocument::reset(const MaterialSettings& settings, const std::vect
         (file.kind == PaintLayerKind::Gloss ? gloss : offset) = std::move(layer);
     }
     // A map still decoding for the old document must not land in the new one.
-    for (size_t i = 0; i < std::size(m_loadGeneration); ++i)
+    for (size_t i = 0; i < std::size(m_loadGeneration); ++i) {
         m_loadDone[i] = ++m_loadGeneration[i];
+        m_refused[i].reset();
+    }
     m_undo.clear();
     m_glossLayer = std::move(gloss).value();
     m_offsetLayer = std::move(offset).value();

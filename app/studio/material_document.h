@@ -20,6 +20,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <vector>
 
 class QThread;
@@ -72,6 +73,10 @@ struct MaterialSettings {
     QString normalMapPath;
     QString glossMapPath;
     QString detailMapPath;
+    /// The normal (detail) map was loaded past the normal-map plausibility check, which refused it: the
+    /// artist chose "Load Anyway" (`burnish bake --allow-implausible`). Reset by loading another map.
+    bool allowImplausibleNormal = false;
+    bool allowImplausibleDetail = false;
     Method method = Method::VarianceToGloss;
     /// The lobe mixture's lobes per texel, K in 1..kMaxMixtureLobes (with method mixture: the viewport's,
     /// and the export's lobe files mixture-lobe0..K−1).
@@ -103,6 +108,10 @@ struct DecodedMap {
     std::shared_ptr<const NormalMap> normal; // MapSlot::Normal
     std::shared_ptr<const Image> gloss;      // MapSlot::Gloss
     std::shared_ptr<const NormalMap> detail; // MapSlot::Detail
+    /// Not empty: the normal-map plausibility check refused the map, for this reason; the map above was
+    /// decoded past the check, and a document takes it only when `accepted` (the artist's "Load Anyway").
+    QString refusal;
+    bool accepted = false;
 };
 
 /// A painted layer saved as a file (a project's "layers" entry; path absolute).
@@ -163,11 +172,21 @@ public:
     void loadMapInBackground(MapSlot slot, const QString& path);
     /// Whether a background load of the slot is in flight.
     bool loading(MapSlot slot) const;
-    /// The expensive half of loadMap: reads and decodes the file (any thread; no document state).
-    static Result<DecodedMap> decodeMap(MapSlot slot, const QString& path);
+    /// The expensive half of loadMap: reads and decodes the file (any thread; no document state). A
+    /// normal or detail map the plausibility check refuses is decoded past it and returned with its
+    /// `refusal` (unless `allowImplausible`, which lets it through as accepted).
+    static Result<DecodedMap> decodeMap(MapSlot slot, const QString& path, bool allowImplausible = false);
     /// The other half, on the document's thread: checks the map against the document (a gloss map
-    /// has the normal map's size), carries the painted layers over, pushes one undo step.
+    /// has the normal map's size), carries the painted layers over, pushes one undo step. A map with a
+    /// refusal is refused unless accepted.
     Status applyDecodedMap(const DecodedMap& decoded);
+    /// A background load the plausibility check refused is held, decoded, until the artist decides:
+    /// whether the slot holds one (mapLoadFinished said why it was not loaded), and taking it in as
+    /// loaded anyway (one undo step, allowImplausible* set) or dropping it. A newer load of the slot, a
+    /// reset or a cleared map drops it.
+    bool holdsRefusedMap(MapSlot slot) const;
+    Status acceptRefusedMap(MapSlot slot);
+    void dropRefusedMap(MapSlot slot);
     /// Removes a map (the normal slot returns to the built-in sample).
     void clearMap(MapSlot slot);
     void setExportSettings(const ExportSettings& exportSettings);
@@ -258,6 +277,7 @@ private:
 
     MaterialSettings m_settings;
     LoadedMaps m_maps;
+    std::array<std::optional<DecodedMap>, 3> m_refused; // per MapSlot: a refused map held for "Load Anyway"
     QUndoStack m_undo;
     int m_mergeEpoch = 0;
     PaintLayer m_glossLayer;

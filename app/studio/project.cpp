@@ -232,6 +232,11 @@ std::string projectToJson(const MaterialSettings& s, const QString& projectFile,
                         {"pitch", view->pitchDegrees},
                         {"distance", view->distance},
                         {"target", {view->target[0], view->target[1], view->target[2]}}};
+    // Written only for a map loaded past the plausibility check ("Load Anyway").
+    Json allowed = Json::array();
+    if (s.allowImplausibleNormal && !s.normalMapPath.isEmpty()) allowed.push_back("normal");
+    if (s.allowImplausibleDetail && !s.detailMapPath.isEmpty()) allowed.push_back("detail");
+    if (!allowed.empty()) root["maps"]["allowImplausible"] = allowed;
     // "layers" is written only when something is painted.
     if (!layers.empty()) {
         Json list = Json::array();
@@ -303,7 +308,8 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
     s.specular = *linear;
 
     const Reader mp(*maps, where + " maps");
-    if (Status st = mp.known({"normal", "gloss", "detail"}); !st) return Error{st.error()};
+    if (Status st = mp.known({"normal", "gloss", "detail", "allowImplausible"}); !st)
+        return Error{st.error()};
     const auto normalPath = mp.string("normal", true, true);
     const auto glossPath = mp.string("gloss", true, true);
     const auto detailPath = mp.string("detail", true, true);
@@ -311,6 +317,22 @@ Result<ParsedProject> parseProject(std::string_view text, const QString& project
     s.normalMapPath = absolute(normalPath);
     s.glossMapPath = absolute(glossPath);
     s.detailMapPath = absolute(detailPath);
+    // The maps loaded past the plausibility check ("Load Anyway"); optional.
+    if (const Json* allowed = mp.get("allowImplausible", false)) {
+        if (!allowed->is_array()) return Error{where + " maps: 'allowImplausible' must be an array"};
+        for (const Json& slot : *allowed) {
+            const std::string name = slot.is_string() ? slot.get<std::string>() : std::string();
+            if (name == "normal" && !s.normalMapPath.isEmpty())
+                s.allowImplausibleNormal = true;
+            else if (name == "detail" && !s.detailMapPath.isEmpty())
+                s.allowImplausibleDetail = true;
+            else
+                return Error{
+                    where +
+                    " maps: 'allowImplausible' holds \"normal\" or \"detail\" for a map that is set, not " +
+                    slot.dump()};
+        }
+    }
 
     const auto method = top.string("method");
     const auto preset = top.string("preset");

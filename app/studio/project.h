@@ -7,7 +7,9 @@
 //     "material": {"class": "metal"|"dielectric",
 //                  "specular": {"material": "iron"|null, "linear": [r, g, b]},
 //                  "albedo": [r, g, b], "gloss": g},          // gloss in the preset's encoding
-//     "maps": {"normal": path|null, "gloss": path|null, "detail": path|null},  // null normal = sample
+//     "maps": {"normal": path|null, "gloss": path|null, "detail": path|null,  // null normal = sample
+//              "allowImplausible": ["normal", "detail"]},  // optional: maps loaded past the
+//                                                          // plausibility check ("Load Anyway")
 //     "method": "variance-to-gloss", "preset": "blackops",
 //     "export": {"format": name|null, "compression": name|null, "mips": 0, "outputFolder": path|null,
 //                "overwrite": false},

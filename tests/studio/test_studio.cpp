@@ -535,6 +535,20 @@ TEST(Project, InvalidFilesLeaveTheDocumentUntouched) {
               return j.dump();
           }(),
           "missing.png"}},
+        {"allow-implausible-not-a-list",
+         {[&] {
+              auto j = nlohmann::json::parse(valid);
+              j["maps"]["allowImplausible"] = "normal";
+              return j.dump();
+          }(),
+          "'allowImplausible' must be an array"}},
+        {"allow-implausible-gloss",
+         {[&] {
+              auto j = nlohmann::json::parse(valid);
+              j["maps"]["allowImplausible"] = {"gloss"};
+              return j.dump();
+          }(),
+          "'allowImplausible' holds \"normal\" or \"detail\""}},
     };
     for (const auto& [name, c] : cases) {
         const fs::path file = dir / (name + ".burnish");
@@ -596,6 +610,76 @@ TEST(MaterialDocument, BackgroundLoadsKeepTheWindowLiveAndTheNewestWins) {
     EXPECT_TRUE(finished.at(0).at(3).toString().contains("bad.png"))
         << finished.at(0).at(3).toString().toStdString();
     EXPECT_EQ(doc.settings().normalMapPath, second);
+}
+
+// A map the plausibility check refuses (here every texel points below the surface) can be loaded
+// anyway: the window asks once the load has ended, showing the measured reason; No leaves the document
+// as it was, Yes takes the map in as one undo step that the project, its bake job and a reopened
+// window keep; a later ordinary map clears the choice. A synchronous load still refuses it.
+TEST(MainWindow, ARefusedNormalMapCanBeLoadedAnywayAndTheProjectRemembersIt) {
+    test::TempDir dir;
+    QImage below(64, 64, QImage::Format_RGB888);
+    below.fill(QColor(128, 128, 20)); // z = 2·20/255 − 1 < 0
+    const QString odd = q(dir / "odd.png");
+    ASSERT_TRUE(below.save(odd));
+
+    TestWindow w;
+    MaterialDocument* doc = w.window.document();
+    const MaterialSettings before = doc->settings();
+    const int steps = doc->undoStack()->count();
+    EXPECT_FALSE(doc->loadMap(MapSlot::Normal, odd).ok());
+    EXPECT_FALSE(doc->holdsRefusedMap(MapSlot::Normal)) << "only a background load holds one";
+
+    QSignalSpy finished(doc, &MaterialDocument::mapLoadFinished);
+    auto load = [&](const QString& path) {
+        finished.clear();
+        doc->loadMapInBackground(MapSlot::Normal, path);
+        EXPECT_TRUE(finished.wait(kWorkerTimeoutMs));
+        QApplication::processEvents(); // the question comes after the load's signal
+    };
+    w.answer = QMessageBox::No;
+    load(odd);
+    ASSERT_EQ(w.questions.size(), 1);
+    EXPECT_TRUE(w.questions[0].contains("point below the surface")) << w.questions[0].toStdString();
+    EXPECT_TRUE(w.questions[0].contains("odd.png")) << w.questions[0].toStdString();
+    EXPECT_TRUE(w.messages.isEmpty()) << "a question, not an error box";
+    EXPECT_FALSE(doc->holdsRefusedMap(MapSlot::Normal));
+    EXPECT_EQ(doc->settings(), before);
+    EXPECT_EQ(doc->undoStack()->count(), steps);
+
+    w.answer = QMessageBox::Yes;
+    load(odd);
+    ASSERT_EQ(w.questions.size(), 2);
+    EXPECT_EQ(doc->settings().normalMapPath, odd);
+    EXPECT_TRUE(doc->settings().allowImplausibleNormal);
+    EXPECT_EQ(doc->maps().normal->width, 64);
+    EXPECT_EQ(doc->undoStack()->count(), steps + 1);
+    EXPECT_TRUE(doc->diagnostics(MapSlot::Normal).join("\n").contains("loaded anyway"))
+        << doc->diagnostics(MapSlot::Normal).join("\n").toStdString();
+    EXPECT_TRUE(bakeJobSpecFor(*doc).allowImplausible);
+    doc->undoStack()->undo();
+    EXPECT_EQ(doc->settings(), before);
+    doc->undoStack()->redo();
+    EXPECT_TRUE(doc->settings().allowImplausibleNormal);
+
+    // Saved, and reopened without a question.
+    const QString project = q(dir / "odd.burnish");
+    ASSERT_TRUE(w.window.saveProjectAs(project)) << w.messages.join("\n").toStdString();
+    QFile file(project);
+    ASSERT_TRUE(file.open(QIODevice::ReadOnly));
+    EXPECT_TRUE(QString::fromUtf8(file.readAll()).contains("\"allowImplausible\""));
+    TestWindow again;
+    ASSERT_TRUE(again.window.openProject(project)) << again.messages.join("\n").toStdString();
+    EXPECT_EQ(again.window.document()->settings().normalMapPath, odd);
+    EXPECT_TRUE(again.window.document()->settings().allowImplausibleNormal);
+    EXPECT_TRUE(again.questions.isEmpty());
+
+    // An ordinary map in its place clears the choice.
+    load(kNormalMap);
+    EXPECT_EQ(doc->settings().normalMapPath, kNormalMap);
+    EXPECT_FALSE(doc->settings().allowImplausibleNormal);
+    EXPECT_FALSE(bakeJobSpecFor(*doc).allowImplausible);
+    EXPECT_EQ(w.questions.size(), 2);
 }
 
 // Drag and drop as a user does it: an image dropped on a map slot loads into that slot; one

@@ -268,6 +268,7 @@ Result<NormalMap> finishDecode(NormalMap map, const std::vector<BlockTally>& tal
     if (!implausible.empty()) {
         const std::string what = name + " does not look like a tangent-space normal map: " + implausible;
         if (!options.allowImplausible) return Error{what + " (a photo, height map or object-space map?)"};
+        diag.implausible = true;
         diag.warnings.push_back(what);
     }
     return map;

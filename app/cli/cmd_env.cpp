@@ -11,6 +11,7 @@
 #include <burnish/core/env/storage.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/util/files.h>
+#include <burnish/core/util/memory.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -112,6 +113,27 @@ Result<EnvironmentSource> readSource(const EnvCliOptions& o) {
     }
 
     return source;
+}
+
+// The memory the run will need (estimatedEnvironmentBytes) against what may be used, from the inputs'
+// headers before any is read.
+Status checkEnvironmentMemory(const EnvCliOptions& o) {
+    int faceSize = o.faceSize;
+    std::uint64_t inputTexels = 0;
+    if (!o.faces.empty()) {
+        // The faces set the cube (a smaller --face-size is their box-filtered level, made from them).
+        const auto header = readImageHeader(o.faces[0]);
+        if (!header) return Error{header.error()};
+        faceSize = header->width;
+        inputTexels = 6 * std::uint64_t(std::max(faceSize, 1)) * std::uint64_t(std::max(faceSize, 1));
+    } else if (!o.input.empty()) {
+        const auto header = readImageHeader(o.input);
+        if (!header) return Error{header.error()};
+        inputTexels = std::uint64_t(header->width) * std::uint64_t(header->height);
+    }
+    return checkMemory(estimatedEnvironmentBytes(faceSize, inputTexels),
+                       fmt::format("an environment cube of face size {}", faceSize),
+                       "close other programs, or ask for a smaller --face-size");
 }
 
 // The radiance and irradiance cubes in the asked formats and sh.json, staged into the set.
@@ -231,6 +253,8 @@ int runEnv(const EnvCliOptions& o) {
     if (!o.force && fs::exists(index))
         return fail("refusing to replace the environment in '" + o.out + "' (use --force)");
     const std::vector<std::string> previous = indexedFiles(index);
+    // One memory ceiling for every command: refused before anything is allocated.
+    if (const Status memory = checkEnvironmentMemory(o); !memory) return fail(memory.error());
     ProgressBar progress("env");
     progress.update(0.0, "reading");
     auto read = readSource(o);

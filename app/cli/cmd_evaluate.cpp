@@ -8,6 +8,9 @@
 #include <burnish/core/eval/evaluate_report.h>
 #include <burnish/core/io/image.h>
 #include <burnish/core/prefilter/gloss.h>
+#include <burnish/core/util/memory.h>
+
+#include <fmt/format.h>
 
 #include <nlohmann/json.hpp>
 
@@ -55,6 +58,28 @@ struct EvaluateCliOptions {
 };
 
 int runEvaluate(const EvaluateCliOptions& o) {
+    // One memory ceiling for every command: estimated from the map's header, refused before it is decoded.
+    {
+        const auto header = readImageHeader(o.input);
+        if (!header) return fail(header.error());
+        EvaluationMemoryInput need;
+        need.mapTexels = std::uint64_t(header->width) * std::uint64_t(header->height);
+        need.lobeCounts = o.lobes.size();
+        need.betweenTexels = o.betweenTexels;
+        need.errorMaps = o.errorMaps;
+        need.gloss = !o.gloss.empty();
+        need.openImageIo = !decodedByCore(header->source.formatName, header->source.channelType);
+        if (need.gloss)
+            if (const auto gloss = readImageHeader(o.gloss))
+                need.openImageIo =
+                    need.openImageIo || !decodedByCore(gloss->source.formatName, gloss->source.channelType);
+        if (const Status memory =
+                checkMemory(estimatedEvaluationBytes(need),
+                            fmt::format("evaluating a {}x{} map", header->width, header->height),
+                            "close other programs, or evaluate a smaller map");
+            !memory)
+            return fail(memory.error());
+    }
     auto map = loadNormalMap(o.input, toNormalMapOptions(o.normalMap));
     if (!map) return fail(map.error());
     for (const auto& w : map->diagnostics.warnings)

@@ -12,12 +12,14 @@
 #include <burnish/core/prefilter/sample_maps.h>
 #include <burnish/core/shading/materials.h>
 #include <burnish/core/util/files.h>
+#include <burnish/core/util/memory.h>
 #include <burnish/render/context.h>
 #include <burnish/render/gpu_resources.h>
 #include <burnish/render/renderer.h>
 #include <burnish/render/shimmer.h>
 
 #include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <sys/resource.h>
 
@@ -600,6 +602,35 @@ int runRender(const RenderCliOptions& o, bool sizeGiven) {
         if (!size) return fail(size.error());
         width = size->first;
         height = size->second;
+    }
+
+    // One memory ceiling for every command: estimated from the map's header and the options, refused
+    // before anything is decoded.
+    {
+        RenderMemoryInput need;
+        need.frameWidth = width;
+        need.frameHeight = height;
+        need.everyMethod = o.bench;
+        need.reference = o.reference > 0 || o.sequence > 0 || o.compare > 0;
+        if (!o.method.empty()) {
+            if (auto method = methodFromName(o.method)) need.method = *method;
+        } else if (!o.preset.empty()) {
+            if (auto preset = findPreset(o.preset)) need.method = preset->method;
+        }
+        std::string what =
+            fmt::format("rendering the {}x{} sample at {}x{}", o.sampleSize, o.sampleSize, width, height);
+        need.mapTexels = std::uint64_t(o.sampleSize) * std::uint64_t(o.sampleSize);
+        if (!o.input.empty()) {
+            const auto header = readImageHeader(o.input);
+            if (!header) return fail(header.error());
+            need.mapTexels = std::uint64_t(header->width) * std::uint64_t(header->height);
+            what =
+                fmt::format("rendering a {}x{} map at {}x{}", header->width, header->height, width, height);
+        }
+        if (const Status memory = checkMemory(estimatedRenderBytes(need), what,
+                                              "close other programs, or render a smaller map or frame");
+            !memory)
+            return fail(memory.error());
     }
 
     auto scene = buildScene(o);

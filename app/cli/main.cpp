@@ -124,6 +124,9 @@ int main(int argc, char** argv) {
                  "Every formula is measured against its exact form and its cost.",
                  "burnish"};
     app.set_version_flag("--version", "burnish 0.1.0");
+    app.footer("Environment: BURNISH_MEMORY_LIMIT=SIZE (bytes, or K/M/G) caps the memory every command plans "
+               "for: each estimates its peak from the inputs' headers and refuses, before reading, what "
+               "needs more than that or than the system has available.\n");
     app.require_subcommand(1);
 
     auto& registry = commandRegistry();

@@ -76,4 +76,18 @@ FeatureSet Scene::features() const {
     return f;
 }
 
+std::uint64_t estimatedRenderBytes(const RenderMemoryInput& in) {
+    constexpr double kProcess = 220e6, kPerTexel = 80.0, kMixture = 340.0, kSlopeMoments = 90.0,
+                     kReference = 40.0, kPerPixel = 45.0;
+    double perTexel = kPerTexel;
+    if (in.everyMethod || in.method == Method::Mixture)
+        perTexel += kMixture;
+    else if (in.method == Method::Lean || in.method == Method::Clean)
+        perTexel += kSlopeMoments;
+    if (in.reference) perTexel += kReference;
+    return std::uint64_t(kProcess + perTexel * double(in.mapTexels) +
+                         kPerPixel * double(std::max(in.frameWidth, 0)) *
+                             double(std::max(in.frameHeight, 0)));
+}
+
 } // namespace burnish::render

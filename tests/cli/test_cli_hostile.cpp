@@ -36,9 +36,9 @@ using burnish::test::TempDir;
 
 // `burnish render` loads Mesa's drivers, whose allocations LeakSanitizer cannot attribute (see
 // BURNISH_GL_TEST_ENV in tests/CMakeLists.txt); the setting reaches only this file's children.
-CliResult runBurnish(const std::string& args) {
+CliResult runBurnish(const std::string& args, const std::string& environment = "") {
     ::setenv("ASAN_OPTIONS", "detect_leaks=0", 1);
-    return burnish::test::runBurnish(args);
+    return burnish::test::runBurnish(args, environment);
 }
 
 // The subcommand names in a --help text's "Subcommands:" section.
@@ -365,31 +365,91 @@ TEST(CliHostile, AKilledCommitIsFinishedByTheNextRun) {
     EXPECT_EQ(kills, 27);
 }
 
-// A 200-byte PNG whose header claims 30000² texels (below the 2^30-texel limit): the bake's memory
-// need (about 79 GB at the default preset) is checked against what the system has before anything
-// is allocated, and refused with the size and the need in one line, at once.
-TEST(CliHostile, ABakeThatCannotFitIsRefusedBeforeAllocating) {
-    TempDir dir;
-    auto chunk = [](const std::string& type, const std::string& data) {
-        auto u32 = [](uint32_t v) {
-            return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
-        };
+// A PNG of a few hundred bytes whose header claims side × side RGB8 texels (its one IDAT holds nothing):
+// what reads the header sees a huge image, what decodes it finds it cut short.
+void writeClaimingPng(const fs::path& path, uint32_t side) {
+    auto u32 = [](uint32_t v) { return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)}; };
+    auto chunk = [&](const std::string& type, const std::string& data) {
         const std::string body = type + data;
         return u32(uint32_t(data.size())) + body +
                u32(uint32_t(crc32(0, reinterpret_cast<const Bytef*>(body.data()), uInt(body.size()))));
     };
-    std::string ihdr = {0, 0, 0x75, 0x30, 0, 0, 0x75, 0x30, 8, 2, 0, 0, 0}; // 30000 x 30000 RGB8
-    const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) +
-                            chunk("IDAT", std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8)) +
-                            chunk("IEND", "");
-    std::ofstream(dir / "claims-huge.png", std::ios::binary) << png;
+    const std::string ihdr = u32(side) + u32(side) + std::string{8, 2, 0, 0, 0}; // RGB8
+    std::ofstream(path, std::ios::binary)
+        << std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) +
+               chunk("IDAT", std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8)) + chunk("IEND", "");
+}
+
+// A 200-byte PNG whose header claims 30000² texels (below the 2^30-texel limit): the bake's memory
+// need (about 25 GB at godot) is checked against what may be used (8 GB here, by BURNISH_MEMORY_LIMIT:
+// a machine with more would rightly go on to decode it) before anything is allocated, and refused with
+// the size and the need in one line, at once.
+TEST(CliHostile, ABakeThatCannotFitIsRefusedBeforeAllocating) {
+    TempDir dir;
+    writeClaimingPng(dir / "claims-huge.png", 30000);
     const CliResult r = runBurnish("bake " + shellQuote((dir / "claims-huge.png").string()) +
-                                   " --preset godot --out " + shellQuote((dir / "out").string()));
+                                       " --preset godot --out " + shellQuote((dir / "out").string()),
+                                   "BURNISH_MEMORY_LIMIT=8G");
     EXPECT_NE(r.exitCode, 0);
     EXPECT_EQ(lineCount(r.err), 1) << r.err;
     EXPECT_NE(r.err.find("30000x30000"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("needs about"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "out" / "bake.json"));
+}
+
+// One memory ceiling for every command (issue 45, point 2): bake, render, evaluate and env estimate
+// their need from the inputs' headers and the options and refuse, before decoding anything, in one line
+// that gives the need and what may be used (BURNISH_MEMORY_LIMIT caps it, as on a shared farm node). A
+// 16384² map claimed by a 200-byte file is refused by each command as too big, never decoded (it would
+// be found cut short); an --face-size of 16384 likewise; a --detail map's memory counts; a --gloss map of
+// another size is refused from its header; an unreadable limit is an error.
+TEST(CliHostile, EveryCommandChecksItsMemoryBeforeReading) {
+    TempDir dir;
+    const fs::path huge = dir / "claims-16384.png";
+    writeClaimingPng(huge, 16384);
+    const std::string map = shellQuote(BURNISH_TEST_DATA_DIR "/trak-rust1_nm.png");
+    const std::string big = shellQuote(huge.string()), out = shellQuote((dir / "out").string());
+    auto refused = [&](const std::string& args, const std::string& limit, const std::string& what) {
+        SCOPED_TRACE(args + " with BURNISH_MEMORY_LIMIT=" + limit);
+        const CliResult r = runBurnish(args, "BURNISH_MEMORY_LIMIT=" + limit);
+        EXPECT_NE(r.exitCode, 0);
+        EXPECT_EQ(lineCount(r.err), 1) << r.err;
+        EXPECT_NE(r.err.find("needs about"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("are available"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find(what), std::string::npos) << r.err;
+        EXPECT_EQ(r.err.find("truncated"), std::string::npos) << "decoded before the check: " << r.err;
+        EXPECT_FALSE(fs::exists(dir / "out")) << "nothing written";
+    };
+    // A small map under a small limit.
+    refused("bake " + map + " --preset gltf --out " + out, "10M", "10 MB are available");
+    refused("render " + map + " --out " + out + ".png", "100M", "rendering a 512x512 map at 512x512");
+    refused("evaluate " + map + " --json", "100M", "evaluating a 512x512 map");
+    refused("env --out " + out, "100M", "an environment cube of face size 256");
+    // What claims more than a big machine holds.
+    refused("bake " + big + " --preset gltf --out " + out, "4G", "16384x16384");
+    refused("render " + big + " --out " + out + ".png", "16G", "rendering a 16384x16384 map");
+    refused("evaluate " + big + " --json", "16G", "evaluating a 16384x16384 map");
+    refused("env --face-size 16384 --out " + out, "16G", "face size 16384");
+    refused("bake " + map + " --preset godot --detail " + big + " --out " + out, "16G", "512x512");
+    // The same bake without the detail map fits.
+    const CliResult fits =
+        runBurnish("bake " + map + " --preset godot --out " + out, "BURNISH_MEMORY_LIMIT=16G");
+    EXPECT_EQ(fits.exitCode, 0) << fits.err;
+    fs::remove_all(dir / "out");
+
+    const CliResult gloss = runBurnish("bake " + map + " --preset blackops --gloss " + big + " --out " + out);
+    EXPECT_NE(gloss.exitCode, 0);
+    EXPECT_EQ(lineCount(gloss.err), 1) << gloss.err;
+    EXPECT_NE(gloss.err.find("gloss map is 16384x16384 but the normal map is 512x512"), std::string::npos)
+        << gloss.err;
+    EXPECT_FALSE(fs::exists(dir / "out"));
+
+    for (const std::string limit : {"lots", "-5G", "6T", "99999999999999999999", "5G5"}) {
+        const CliResult r = runBurnish("evaluate " + map + " --json", "BURNISH_MEMORY_LIMIT=" + limit);
+        EXPECT_NE(r.exitCode, 0) << limit;
+        EXPECT_EQ(lineCount(r.err), 1) << r.err;
+        EXPECT_NE(r.err.find("BURNISH_MEMORY_LIMIT"), std::string::npos) << r.err;
+    }
 }
 
 // `burnish env --force` killed at every step of its set's commit (the 8² set of DDS and EXR files

@@ -721,4 +721,38 @@ TEST_F(RendererTest, BadInputsAreErrors) {
     EXPECT_FALSE(renderer().setScene(scene).ok());
 }
 
+// `burnish render`'s memory estimate against the peaks core/bench/command_memory.sh measured
+// (trak-rust1 resized, llvmpipe): within 1.5x in both directions.
+TEST(RenderMemory, EstimatesMatchMeasuredPeaks) {
+    struct Case {
+        int side, width, height;
+        Method method;
+        bool everyMethod, reference;
+        double measuredMB;
+    };
+    for (const Case& c : std::vector<Case>{
+             {512, 512, 512, Method::VarianceToGloss, false, false, 239.3},
+             {1024, 512, 512, Method::VarianceToGloss, false, false, 267.8},
+             {2048, 512, 512, Method::VarianceToGloss, false, false, 524.3},
+             {2048, 512, 512, Method::VarianceToGloss, false, true, 725.5},
+             {1024, 2048, 2048, Method::VarianceToGloss, false, false, 435.7},
+             {1024, 512, 512, Method::Mixture, false, false, 605.3},
+             {1024, 512, 512, Method::Fitted, false, false, 270.5},
+             {1024, 512, 512, Method::Lean, false, false, 356.3},
+             {1024, 512, 512, Method::Clean, false, false, 310.8},
+             {1024, 1280, 720, Method::VarianceToGloss, true, false, 602.3},
+         }) {
+        RenderMemoryInput in;
+        in.mapTexels = std::uint64_t(c.side) * std::uint64_t(c.side);
+        in.frameWidth = c.width;
+        in.frameHeight = c.height;
+        in.method = c.method;
+        in.everyMethod = c.everyMethod;
+        in.reference = c.reference;
+        const double estimate = double(estimatedRenderBytes(in));
+        EXPECT_LE(estimate, 1.5 * c.measuredMB * 1e6) << c.side << " " << methodName(c.method);
+        EXPECT_GE(estimate, c.measuredMB * 1e6 / 1.5) << c.side << " " << methodName(c.method);
+    }
+}
+
 } // namespace

@@ -1,5 +1,7 @@
 #include <burnish/core/env/prefilter.h>
 
+#include <burnish/core/util/memory.h>
+
 #include "env/cube_faces.h"
 
 #include <burnish/core/util/numeric.h>
@@ -622,6 +624,13 @@ glm::dvec3 referencePrefilteredRadiance(const CubeMap& source, const glm::dvec3&
                 wsum += w;
             }
     return wsum > 0.0 ? sum / wsum : sampleCube(source, R, 0);
+}
+
+std::uint64_t estimatedEnvironmentBytes(int faceSize, std::uint64_t inputTexels) {
+    constexpr double kPerCubeTexel = 48.0, kPerInputTexel = 32.0;
+    const double cubeTexels = 6.0 * double(std::max(faceSize, 1)) * double(std::max(faceSize, 1));
+    return std::uint64_t(double(kProcessBytes) + kPerCubeTexel * cubeTexels +
+                         kPerInputTexel * double(inputTexels));
 }
 
 } // namespace burnish

@@ -557,4 +557,16 @@ Status writeEvaluationReport(const EvaluationReport& r, const fs::path& dir) {
     return report.commit("evaluate.json", {}, Overwrite::Allow);
 }
 
+std::uint64_t estimatedEvaluationBytes(const EvaluationMemoryInput& in) {
+    constexpr double kBase = 40e6, kPerTexel = 330.0, kPerExtraLobeCount = 90.0, kBetween = 180.0,
+                     kBetweenPerExtraLobeCount = 60.0, kErrorMaps = 100.0, kGloss = 20.0;
+    const double extra = double(std::max<size_t>(in.lobeCounts, 1) - 1);
+    double perTexel = kPerTexel + kPerExtraLobeCount * extra;
+    if (in.betweenTexels) perTexel += kBetween + kBetweenPerExtraLobeCount * extra;
+    if (in.errorMaps) perTexel += kErrorMaps;
+    if (in.gloss) perTexel += kGloss;
+    constexpr double kOpenImageIo = 50e6;
+    return std::uint64_t(kBase + (in.openImageIo ? kOpenImageIo : 0.0) + perTexel * double(in.mapTexels));
+}
+
 } // namespace burnish

@@ -325,15 +325,36 @@ std::string bakeSummaryText(const Json& summary, size_t maxSets) {
 
 Result<BakeMemoryEstimate> estimatedJobBytes(const BakeJob& job) {
     BakeMemoryEstimate e{0, kSampleBakeSize, kSampleBakeSize};
+    // OpenImageIO is loaded for a map core does not decode itself, or a file format it does not write.
+    const ExportFormat format = job.exportOptions.format.value_or(job.preset.format);
+    bool openImageIo =
+        format != ExportFormat::Png8 && format != ExportFormat::Png16 && format != ExportFormat::Dds;
+    bool coreDecoded = isSampleBakeInput(job.spec.input); // a sample is made in memory, not decoded
     if (!isSampleBakeInput(job.spec.input)) {
         const auto header = readImageHeader(job.spec.input);
         if (!header) return Error{header.error()};
         e.width = header->width;
         e.height = header->height;
+        coreDecoded = decodedByCore(header->source.formatName, header->source.channelType);
+        openImageIo = openImageIo || !coreDecoded;
     }
-    const auto perTexel = bakeJobBytesPerTexel(job, e.width, e.height);
+    const auto perTexel = bakeJobBytesPerTexel(job, e.width, e.height, coreDecoded);
     if (!perTexel) return Error{perTexel.error()};
-    e.bytes = estimatedBakeBytes(*perTexel, e.width, e.height);
+    if (job.spec.gloss) {
+        const auto gloss = readImageHeader(*job.spec.gloss);
+        if (gloss)
+            openImageIo = openImageIo || !decodedByCore(gloss->source.formatName, gloss->source.channelType);
+    }
+    std::uint64_t detailBytes = 0;
+    if (job.spec.detail) {
+        // The detail map is baked after the method's textures, which stay: its decoded normals, pyramid
+        // and four-channel chain add about kDetailBytesPerTexel per detail texel.
+        const auto detail = readImageHeader(*job.spec.detail);
+        if (!detail) return Error{"--detail: " + detail.error()};
+        detailBytes = std::uint64_t(kDetailBytesPerTexel * double(detail->width) * double(detail->height));
+        openImageIo = openImageIo || !decodedByCore(detail->source.formatName, detail->source.channelType);
+    }
+    e.bytes = estimatedBakeBytes(*perTexel, e.width, e.height, openImageIo) + detailBytes;
     return e;
 }
 
@@ -346,7 +367,7 @@ Result<std::uint64_t> slurmMemoryMiB(const std::vector<BakeJob>& jobs) {
         most = std::max(most, need->bytes);
     }
     constexpr std::uint64_t kMiB = 1 << 20;
-    return (most + kMiB - 1) / kMiB;
+    return std::max(kSlurmMinimumMiB, (most + kMiB - 1) / kMiB);
 }
 
 Result<Json> writeSlurmPlan(const std::vector<BakeJob>& jobs, const std::string& manifest,

@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -382,10 +383,13 @@ Result<BakeOutput> bakeJobShape(const BakeJob& job, int width, int height, BakeR
     return shape;
 }
 
-double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile>& files, bool glossMap) {
+double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile>& files, bool glossMap,
+                         bool decodedByCore) {
     constexpr double kMargin = 1.25;
     constexpr double kNormals = 12.0; // the decoded normals (three floats), held to the end
-    constexpr double kRead = 16.0;    // the file's decoded samples beside them (four floats at most)
+    // The file's decoded samples beside them: four floats at most through OpenImageIO, 8 bytes at most
+    // of codes through core's PNG decoder.
+    const double kRead = decodedByCore ? 8.0 : 16.0;
     constexpr double kGloss = 20.0; // a gloss map: its decoded samples, then a float and a variance per texel
     constexpr double kCoarser = 1.0 / 3.0; // levels 1, 2, … hold a third of level 0's texels
     constexpr double kChain = 1.0 + kCoarser;
@@ -396,30 +400,38 @@ double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile
                                                                  : 2.0;
         textures += bytes * t.channels;
     }
-    // What the export holds beside the textures, every file at once (they are written in
-    // parallel): the finest level converted to the file's type, or for a DDS file nvtt's 8-bit
-    // chain and the file's bytes.
-    double exportCopies = 0.0;
+    // What the export holds beside the textures: the PNG, TGA, EXR or TIFF files being written at once
+    // (in parallel, as many as the machine has cores), each the finest level converted to the file's
+    // type; then each DDS file alone (nvtt runs one at a time), its 8-bit chain and the file's bytes.
+    std::vector<double> parallel;
+    double ddsCopies = 0.0;
     for (const ExportedFile& f : files) {
         switch (f.format) {
         case ExportFormat::Png8:
         case ExportFormat::Tga:
-            exportCopies += 1.0 * f.storedChannels;
+            parallel.push_back(1.0 * f.storedChannels);
             break;
         case ExportFormat::Png16:
         case ExportFormat::Tiff16:
         case ExportFormat::ExrHalf:
-            exportCopies += 2.0 * f.storedChannels;
+            parallel.push_back(2.0 * f.storedChannels);
             break;
         case ExportFormat::ExrFloat:
         case ExportFormat::TiffFloat:
-            exportCopies += 4.0 * f.storedChannels;
+            parallel.push_back(4.0 * f.storedChannels);
             break;
         case ExportFormat::Dds:
-            exportCopies += (4.0 + (f.compression == DdsCompression::Rgba16f ? 8.0 : 4.0)) * kChain;
+            ddsCopies =
+                std::max(ddsCopies, (4.0 + (f.compression == DdsCompression::Rgba16f ? 8.0 : 4.0)) * kChain);
             break;
         }
     }
+    std::sort(parallel.begin(), parallel.end(), std::greater<>());
+    const size_t atOnce = std::max<size_t>(1, std::thread::hardware_concurrency());
+    double parallelCopies = 0.0;
+    for (size_t i = 0; i < std::min(atOnce, parallel.size()); ++i)
+        parallelCopies += parallel[i];
+    const double exportCopies = std::max(parallelCopies, ddsCopies);
     // A mixture of K >= 2 lobes keeps K lobes and a count per texel of the levels above the finest,
     // and a slot per finest texel; baking its own textures alone, it reads no moments.
     const auto lobes = std::count_if(shape.textures.begin(), shape.textures.end(),
@@ -440,7 +452,7 @@ double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile
     return kMargin * (kNormals + (glossMap ? kGloss : 0.0) + std::max({kRead, coarser, finest}));
 }
 
-Result<double> bakeJobBytesPerTexel(const BakeJob& job, int width, int height) {
+Result<double> bakeJobBytesPerTexel(const BakeJob& job, int width, int height, bool decodedByCore) {
     BakeRecord planned;
     auto shape = bakeJobShape(job, width, height, planned);
     if (!shape) return Error{shape.error()};
@@ -449,39 +461,17 @@ Result<double> bakeJobBytesPerTexel(const BakeJob& job, int width, int height) {
         if (const auto it = storage.find(t.role); it != storage.end()) t.storage = it->second;
     const auto plan = planExport(*shape, job.preset, job.exportOptions, planned);
     if (!plan) return Error{plan.error()};
-    return bakeBytesPerTexel(*shape, plan->files, job.spec.gloss || job.spec.authoredGloss);
+    return bakeBytesPerTexel(*shape, plan->files, job.spec.gloss || job.spec.authoredGloss, decodedByCore);
 }
 
-std::uint64_t estimatedBakeBytes(double bytesPerTexel, int width, int height) {
-    constexpr double kProcessBytes = 150e6;
-    return std::uint64_t(kProcessBytes + bytesPerTexel * double(width) * double(height));
-}
-
-std::optional<std::uint64_t> availableMemoryBytes() {
-    std::ifstream meminfo("/proc/meminfo");
-    if (!meminfo) return std::nullopt;
-    std::uint64_t available = 0;
-    bool found = false;
-    std::string key;
-    std::uint64_t kb = 0;
-    std::string unit;
-    while (meminfo >> key >> kb) {
-        std::getline(meminfo, unit);
-        if (key == "MemAvailable:" || key == "SwapFree:") {
-            available += kb * 1024;
-            found = found || key == "MemAvailable:";
-        }
-    }
-    if (!found) return std::nullopt;
-    return available;
+std::uint64_t estimatedBakeBytes(double bytesPerTexel, int width, int height, bool openImageIo) {
+    const double process = double(openImageIo ? kProcessBytes : kCoreProcessBytes);
+    return std::uint64_t(process + bytesPerTexel * double(width) * double(height));
 }
 
 Status checkBakeMemory(std::uint64_t need, std::optional<std::uint64_t> available, int width, int height) {
-    if (!available || need <= *available) return {};
-    return Error{
-        fmt::format("baking a {}x{} map needs about {:.1f} GB of memory, and {:.1f} GB are available "
-                    "(close other programs, or bake a smaller map)",
-                    width, height, double(need) / 1e9, double(*available) / 1e9)};
+    return checkMemory(need, available, fmt::format("baking a {}x{} map", width, height),
+                       "close other programs, or bake a smaller map");
 }
 
 Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& progress) {
@@ -497,11 +487,24 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
     if (!step(0, "reading")) return cancelled;
     // The memory the bake will need, checked against what the system has before anything is
     // allocated: from the file's header (a small file can claim a huge image).
-    if (!isSampleBakeInput(job.spec.input)) {
+    {
         const auto need = estimatedJobBytes(job);
         if (!need) return Error{need.error()};
-        const Status memory = checkBakeMemory(need->bytes, availableMemoryBytes(), need->width, need->height);
-        if (!memory) return Error{"'" + job.spec.input + "': " + memory.error()};
+        if (!isSampleBakeInput(job.spec.input)) {
+            auto usable = usableMemoryBytes();
+            if (!usable) return Error{usable.error()};
+            const Status memory = checkBakeMemory(need->bytes, *usable, need->width, need->height);
+            if (!memory) return Error{"'" + job.spec.input + "': " + memory.error()};
+        }
+        // A gloss map of another size is refused from its header, before either image is decoded.
+        if (job.spec.gloss && !job.spec.authoredGloss) {
+            const auto header = readImageHeader(*job.spec.gloss);
+            if (!header) return Error{"--gloss: " + header.error()};
+            if (header->width != need->width || header->height != need->height)
+                return Error{fmt::format("--gloss '{}': gloss map is {}x{} but the normal map is {}x{}",
+                                         *job.spec.gloss, header->width, header->height, need->width,
+                                         need->height)};
+        }
     }
     // The inputs' hashes before they are read: a file replaced meanwhile leaves a set that a later
     // check finds stale, never one that looks current.

@@ -17,6 +17,7 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -159,6 +160,23 @@ inline constexpr int kBackdropFaceSize = 512;
 /// The linear F0 of a calibrated material of core's table (materials.h), by name (case-insensitive);
 /// a range gives its middle. Errors: an unknown name.
 Result<glm::vec3> calibratedSpecularColor(std::string_view name);
+
+/// What a render's peak memory is estimated from, known before any image is decoded.
+struct RenderMemoryInput {
+    std::uint64_t mapTexels = 0; // the normal map's (and a gloss map's, the same size)
+    int frameWidth = 0, frameHeight = 0;
+    Method method = Method::VarianceToGloss;
+    bool everyMethod = false; // --bench: each method baked and drawn in turn
+    bool reference = false;   // the supersampled ground truth drawn too (--reference, --sequence, --compare)
+};
+/// The peak memory of one `burnish render`: the process with its OpenGL driver (220 MB), 80 bytes per map
+/// texel (the decoded map, its pyramid, the baked chain and its textures), 340 more for the mixture (its
+/// lobes) or 90 for LEAN and CLEAN (their slope moments), 40 for the reference's finest normals, and 45
+/// per frame pixel. Measured peaks against this (core/bench/command_memory.sh, trak-rust1 resized, llvmpipe):
+/// 512² map at 512×512 239 / 253 MB, 1024² 268 / 316, 2048² 524 / 567, 2048² with a 16-sample reference
+/// 725 / 735, 1024² mixture 605 / 672, LEAN 356 / 410, at 2048×2048 436 / 493, --bench at 1280×720 602
+/// / 701 MB (tests/render/test_renderer.cpp's RenderMemory holds them).
+std::uint64_t estimatedRenderBytes(const RenderMemoryInput& input);
 
 struct Scene {
     MeshKind mesh = MeshKind::Sphere;

@@ -8,6 +8,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <vector>
@@ -66,6 +67,15 @@ struct PrefilteredEnvironment {
 /// lobe of power n_m. The integral runs over directions (not per face), so texels that touch across a
 /// cube edge agree. Errors: empty or non-power-of-two source, mips out of range, bad options.
 Result<PrefilteredEnvironment> prefilterRadiance(const CubeMap& source, const PrefilterOptions& options);
+
+/// The peak memory of `burnish env` making a cube of face size `faceSize` with its full mip chain from
+/// an input of `inputTexels` texels (an equirectangular image, or the six face files together; 0 for
+/// the procedural studio): the process, 48 bytes per texel of the finest level's six faces (the source,
+/// its box chain, the prefiltered chain, the staged files) and 32 per input texel (its float copies).
+/// Measured peaks (core/bench/command_memory.sh, courtyard.exr 1024×512) against this: face 256 181 /
+/// 186 MB, 512 241 / 243 MB, 1024 443 / 469 MB, 2048 1362 / 1375 MB; the procedural studio at 512 222 /
+/// 226 MB.
+std::uint64_t estimatedEnvironmentBytes(int faceSize, std::uint64_t inputTexels);
 
 /// The lobe's weight for cosine c = R·L (0 outside its support), never NaN.
 double lobeWeight(LobeModel lobe, double power, double c);

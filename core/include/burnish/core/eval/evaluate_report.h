@@ -9,6 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
+
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -47,6 +49,24 @@ struct EvaluationReportOptions {
 Result<EvaluationReport> buildEvaluationReport(const NormalMap& map, const EvaluationReportOptions& options,
                                                const std::function<void(double)>& progress = {},
                                                const std::atomic<bool>* cancel = nullptr);
+
+/// What an evaluation's peak memory is estimated from, known before the map is decoded.
+struct EvaluationMemoryInput {
+    std::uint64_t mapTexels = 0;
+    size_t lobeCounts = 1; // the mixture's K values evaluated (--lobes 1,2,3,4: 4)
+    bool betweenTexels = false;
+    bool errorMaps = false;
+    bool gloss = false;       // a gloss map: a power per texel
+    bool openImageIo = false; // a map (or gloss map) core does not decode itself
+};
+/// The peak memory of `burnish evaluate` (all methods, the default mips and directions): 40 MB and per
+/// map texel 330 bytes (the pyramid, each method's bake, the truth's bands), 90 more per extra K of the
+/// mixture, 180 more between texels (and 60 more there per extra K), 100 with error maps, 20 with a
+/// gloss map; 50 MB more when OpenImageIO reads the map (a 512² EXR: 149 MB, its PNG 98). Measured peaks
+/// against this (core/bench/command_memory.sh, trak-rust1 resized): 512² 98 / 127 MB, 1024² 355 / 386 MB,
+/// 2048² 1381 / 1424 MB; at 1024²: --between-texels 544 / 575, --lobes 1,2,3,4 629 / 669, both 975 / 1047,
+/// --error-maps 456 / 491, --gloss 375 / 407 MB.
+std::uint64_t estimatedEvaluationBytes(const EvaluationMemoryInput& input);
 
 std::string evaluationMarkdown(const EvaluationReport& report);
 nlohmann::json evaluationJson(const EvaluationReport& report);

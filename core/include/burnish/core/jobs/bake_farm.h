@@ -89,21 +89,27 @@ struct SlurmOptions {
     std::filesystem::path workingFolder; // the tasks' --chdir: where relative default paths lead
 };
 
-/// The memory one job's bake needs at its peak (estimatedBakeBytes of bakeJobBytesPerTexel), for the
-/// extent its input's header claims (a built-in sample's size for a sample): what the bake checks
-/// against free memory before it reads anything, and what a Slurm task asks for.
+/// The memory one job's bake needs at its peak (estimatedBakeBytes of bakeJobBytesPerTexel, plus its detail
+/// map's), for the extent its input's header claims (a built-in sample's size for a sample): what the bake
+/// checks against free memory before it reads anything, and what a Slurm task asks for.
 struct BakeMemoryEstimate {
     std::uint64_t bytes = 0;
     int width = 0;
     int height = 0;
 };
 /// Errors: an input whose header cannot be read, a job whose plan fails.
+/// Memory a --detail map adds per texel of it (measured: a 2048² detail over a 1024² godot bake raised
+/// the peak from 39 MB to 323 MB, 68 bytes per detail texel; core/bench/command_memory.sh).
+inline constexpr double kDetailBytesPerTexel = 72.0;
 Result<BakeMemoryEstimate> estimatedJobBytes(const BakeJob& job);
 
 /// The memory `--mem-per-task auto` asks for: the largest over the jobs of estimatedBakeBytes for
 /// each job's input (read from its header; a task bakes its jobs one after another), in MiB rounded
-/// up. Errors: an input whose header cannot be read, a job whose plan fails.
+/// up, at least kSlurmMinimumMiB. Errors: an input whose header cannot be read, a job whose plan fails.
 Result<std::uint64_t> slurmMemoryMiB(const std::vector<BakeJob>& jobs);
+/// The least a task asks for: a node's memory cgroup counts the task's page cache and the shell and
+/// srun around it too, so a request of a small bake's own 20 MB would be killed by its first writes.
+inline constexpr std::uint64_t kSlurmMinimumMiB = 256;
 
 /// Writes a Slurm plan for a manifest's resolved jobs into `dir` (created): burnish.sbatch, a job
 /// array whose task k runs `exe bake --manifest M --only <chunk k> --force --skip-current --keep-going

@@ -10,6 +10,7 @@
 #include <burnish/core/bake/export.h>
 #include <burnish/core/bake/presets.h>
 #include <burnish/core/prefilter/normal_map.h>
+#include <burnish/core/util/memory.h>
 #include <burnish/core/util/result.h>
 
 #include <nlohmann/json.hpp>
@@ -91,18 +92,20 @@ inline constexpr std::string_view kPaintedGlossSource = "painted layers";
 /// gloss map is read: the normals beside the largest of the read, the coarser levels (the pyramid's
 /// moments, the mixture's lobes) and the finest level with the export's copies, with a quarter more
 /// for margin. It covers the peaks core/bench/bake_memory.sh measures (tested against them).
-double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile>& files, bool glossMap);
-/// The memory a bake of a width×height map needs at its peak: the process's own ~150 MB plus
-/// bytesPerTexel (bakeBytesPerTexel) per texel.
-std::uint64_t estimatedBakeBytes(double bytesPerTexel, int width, int height);
+double bakeBytesPerTexel(const BakeOutput& shape, const std::vector<ExportedFile>& files, bool glossMap,
+                         bool decodedByCore = false);
+/// The memory a bake of a width×height map needs at its peak: the process's own (16 MB, and 135 MB more
+/// when OpenImageIO reads the map or writes a file: util/memory.h) plus bytesPerTexel
+/// (bakeBytesPerTexel) per texel.
+std::uint64_t estimatedBakeBytes(double bytesPerTexel, int width, int height, bool openImageIo = true);
 struct BakeJob;
 /// bakeBytesPerTexel of a job for a width×height input: its textures as the bake keeps them
 /// (compactStorage) and its export's files. Errors: the job's shape or export plan fails.
-Result<double> bakeJobBytesPerTexel(const BakeJob& job, int width, int height);
-/// What the system can still hand out now: MemAvailable plus SwapFree of /proc/meminfo; nullopt
-/// where that cannot be read.
-std::optional<std::uint64_t> availableMemoryBytes();
-/// An error naming the map's size, the need and what is available when `need` exceeds `available`.
+/// `decodedByCore`: the map is an 8/16-bit PNG core decodes itself (its codes, not four floats a texel,
+/// beside the normals while it is read).
+Result<double> bakeJobBytesPerTexel(const BakeJob& job, int width, int height, bool decodedByCore = false);
+/// An error naming the map's size, the need and what is available when `need` exceeds `available`
+/// (util/memory.h's checkMemory; the bake checks against usableMemoryBytes()).
 Status checkBakeMemory(std::uint64_t need, std::optional<std::uint64_t> available, int width, int height);
 
 /// A job with every name resolved and checked: nothing of it is read or written yet.

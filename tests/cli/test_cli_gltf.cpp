@@ -2,6 +2,7 @@
 // itself is tested in core's test_gltf.cpp; the third-party readers in CTest gltf_validator_ktx_parse).
 #include <burnish/core/util/files.h>
 
+#include "claiming_png.h"
 #include "cli_run.h"
 #include "temp_dir.h"
 
@@ -39,6 +40,25 @@ TEST(CliGltf, ProcessesAnAssetAndPrintsWhatItWrote) {
                    " --out " + burnish::test::shellQuote(out.string()));
     EXPECT_EQ(again.exitCode, 1);
     EXPECT_EQ(std::count(again.err.begin(), again.err.end(), '\n'), 1) << again.err;
+}
+
+// An asset whose normal map claims 16384² texels (a 200-byte file) is refused from the image's header by
+// the bake's memory check, before it is decoded (it would be found cut short), under a 4 GB limit.
+TEST(CliGltf, ANormalMapThatCannotFitIsRefusedBeforeDecoding) {
+    burnish::test::TempDir dir;
+    fs::create_directories(dir.path() / "in");
+    fs::copy_file(kData / "gltf" / "plane.gltf", dir.path() / "in" / "plane.gltf");
+    burnish::test::writeClaimingPng(dir.path() / "in" / "normal.png", 16384);
+    const auto out = dir.path() / "out";
+    const auto r =
+        runBurnish("gltf " + burnish::test::shellQuote((dir.path() / "in" / "plane.gltf").string()) +
+                       " --out " + burnish::test::shellQuote(out.string()),
+                   "BURNISH_MEMORY_LIMIT=4G");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("baking a 16384x16384 map needs about"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("truncated"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out / "plane.gltf"));
 }
 
 TEST(CliGltf, RefusesWhatItCannotDoInOneLine) {

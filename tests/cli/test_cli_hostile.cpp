@@ -5,6 +5,7 @@
 #include <burnish/core/io/image.h>
 #include <burnish/core/util/files.h>
 
+#include "claiming_png.h"
 #include "cli_run.h"
 #include "temp_dir.h"
 
@@ -33,6 +34,7 @@ using burnish::test::CliResult;
 using burnish::test::lineCount;
 using burnish::test::shellQuote;
 using burnish::test::TempDir;
+using burnish::test::writeClaimingPng;
 
 // `burnish render` loads Mesa's drivers, whose allocations LeakSanitizer cannot attribute (see
 // BURNISH_GL_TEST_ENV in tests/CMakeLists.txt); the setting reaches only this file's children.
@@ -363,21 +365,6 @@ TEST(CliHostile, AKilledCommitIsFinishedByTheNextRun) {
     }
     // journal, old bake.json, 12 renames, 12 old TGA levels removed, bake.json
     EXPECT_EQ(kills, 27);
-}
-
-// A PNG of a few hundred bytes whose header claims side × side RGB8 texels (its one IDAT holds nothing):
-// what reads the header sees a huge image, what decodes it finds it cut short.
-void writeClaimingPng(const fs::path& path, uint32_t side) {
-    auto u32 = [](uint32_t v) { return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)}; };
-    auto chunk = [&](const std::string& type, const std::string& data) {
-        const std::string body = type + data;
-        return u32(uint32_t(data.size())) + body +
-               u32(uint32_t(crc32(0, reinterpret_cast<const Bytef*>(body.data()), uInt(body.size()))));
-    };
-    const std::string ihdr = u32(side) + u32(side) + std::string{8, 2, 0, 0, 0}; // RGB8
-    std::ofstream(path, std::ios::binary)
-        << std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) +
-               chunk("IDAT", std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8)) + chunk("IEND", "");
 }
 
 // A 200-byte PNG whose header claims 30000² texels (below the 2^30-texel limit): the bake's memory

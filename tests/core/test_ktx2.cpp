@@ -188,4 +188,23 @@ TEST(Ktx2, TheReaderRefusesDamagedFilesInOneLine) {
     ASSERT_NE(key, std::string::npos);
     unsorted[key + 3] = 'z';
     refused(unsorted, "keys out of order");
+
+    // Every level's bytes must be there (issue 45): the file cut inside each level in turn — its first
+    // byte, its middle, its last — is refused, for a compressed chain as for an 8-bit one.
+    for (Ktx2Format format : {Ktx2Format::Rgba8, Ktx2Format::Bc5}) {
+        auto file = encodeKtx2(chain(format, 16, 16));
+        ASSERT_TRUE(file);
+        const std::uint32_t levels = u32(*file, 40);
+        ASSERT_GE(levels, 3u);
+        for (std::uint32_t k = 0; k < levels; ++k) {
+            const std::uint64_t offset = u64(*file, 80 + size_t(k) * 24),
+                                length = u64(*file, 80 + size_t(k) * 24 + 8);
+            for (std::uint64_t cut : {offset, offset + length / 2, offset + length - 1}) {
+                const auto r = decodeKtx2(file->substr(0, size_t(cut)));
+                ASSERT_FALSE(r) << "level " << k << " cut at " << cut;
+                EXPECT_NE(r.error().find("outside"), std::string::npos) << r.error();
+            }
+        }
+        EXPECT_TRUE(decodeKtx2(*file)) << "the whole file reads";
+    }
 }

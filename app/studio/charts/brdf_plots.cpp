@@ -89,7 +89,7 @@ QLogValueAxis* logAxis(const QString& title, double lo, double hi) {
     auto* a = new QLogValueAxis;
     a->setTitleText(title);
     a->setBase(10.0);
-    a->setLabelFormat("%.3g");
+    a->setLabelFormat("%.6g"); // decades: 1000, not 1e+03
     // Whole decades: a log axis labels lo·10^k, so a range from 0.37 labelled 0.37, 3.7, 37 and left
     // the top decade without a label.
     if (lo > 0.0 && hi > lo && std::isfinite(hi)) {

@@ -82,7 +82,7 @@ QAbstractAxis* errorCostAxis(const QString& title, double lo, double hi) {
     auto* a = new QLogValueAxis;
     a->setTitleText(title);
     a->setBase(10.0);
-    a->setLabelFormat("%.3g");
+    a->setLabelFormat("%.6g"); // decades: 1000, not 1e+03
     a->setMinorTickCount(-1);
     a->setRange(a0, a1);
     return a;

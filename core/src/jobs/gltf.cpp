@@ -21,6 +21,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <set>
 
@@ -282,9 +283,21 @@ Result<Resource> Asset::image(int index) const {
     return Error{fmt::format("{}: {} has neither a uri nor a bufferView", name, what)};
 }
 
-// Reads image bytes through the importer (which reads files): a private temporary file.
-Result<Image> decodeImage(const Resource& r, const std::string& what) {
+// Checks an image's header before it is decoded (the memory its use will need).
+using HeaderCheck = std::function<Status(const ImageHeader&)>;
+
+// Reads image bytes through the importer (which reads files): a private temporary file. `check` (if
+// set) sees the header first; its error stops the read.
+Result<Image> decodeImage(const Resource& r, const std::string& what, const HeaderCheck& check = {}) {
+    auto checked = [&](const fs::path& file) -> Status {
+        if (!check) return {};
+        const auto header = readImageHeader(file);
+        if (!header) return Error{what + ": " + header.error()};
+        if (const Status s = check(*header); !s) return Error{what + ": " + s.error()};
+        return {};
+    };
     if (!r.file.empty()) {
+        if (const Status s = checked(r.file); !s) return Error{s.error()};
         auto image = readImage(r.file);
         if (!image) return Error{what + ": " + image.error()};
         return image;
@@ -297,6 +310,7 @@ Result<Image> decodeImage(const Resource& r, const std::string& what) {
     if (!staging) return Error{what + ": " + staging.error()};
     const fs::path file = staging.value().fileFor(png ? "image.png" : "image.jpg");
     if (Status s = writeNewFile(file, r.bytes); !s) return Error{what + ": " + s.error()};
+    if (const Status s = checked(file); !s) return Error{s.error()};
     auto image = readImage(file);
     if (!image) return Error{what + ": " + image.error()};
     return image;
@@ -760,8 +774,19 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
 
         auto normalBytes = a.image(w.normal.image);
         if (!normalBytes) return Error{normalBytes.error()};
-        auto normalImage = decodeImage(
-            *normalBytes, fmt::format("{}: {} normal map (image {})", name, what, w.normal.image));
+        // The bake's memory, checked from the image's header before it is decoded (as `burnish bake`'s).
+        auto bakeMemory = [&job](const ImageHeader& h) -> Status {
+            const auto perTexel = bakeJobBytesPerTexel(
+                job, h.width, h.height, decodedByCore(h.source.formatName, h.source.channelType));
+            if (!perTexel) return Error{perTexel.error()};
+            auto usable = usableMemoryBytes();
+            if (!usable) return Error{usable.error()};
+            return checkBakeMemory(estimatedBakeBytes(*perTexel, h.width, h.height), *usable, h.width,
+                                   h.height);
+        };
+        auto normalImage =
+            decodeImage(*normalBytes, fmt::format("{}: {} normal map (image {})", name, what, w.normal.image),
+                        bakeMemory);
         if (!normalImage) return Error{normalImage.error()};
         auto map = decodeNormalMap(*normalImage, job.normalMap);
         if (!map)

@@ -658,6 +658,9 @@ TEST(Viewport, TheMixtureFilteredAfterShadingDrawsAndTheCheckFollowsTheMethod) {
         EXPECT_EQ(view->lastError(), QString());
         return image;
     };
+    EXPECT_TRUE(check->isChecked()) << "on by default";
+    check->setChecked(false);
+    EXPECT_FALSE(view->viewSettings().filterAfterShading);
     const QImage moments = grab();
     check->setChecked(true);
     EXPECT_TRUE(view->viewSettings().filterAfterShading);

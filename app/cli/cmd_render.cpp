@@ -146,7 +146,29 @@ glm::vec3 toVec3(const std::vector<double>& v) {
 }
 
 // The scene the options describe (everything but the frame size).
-Result<Scene> buildScene(const RenderCliOptions& o) {
+// The memory the render will need (render::estimatedRenderBytes) against what may be used, from the
+// map's header and the resolved method before anything is decoded.
+Status checkRenderMemory(const RenderCliOptions& o, Method method, int width, int height) {
+    RenderMemoryInput need;
+    need.frameWidth = width;
+    need.frameHeight = height;
+    need.method = method;
+    need.everyMethod = o.bench;
+    need.reference = o.reference > 0 || o.sequence > 0 || o.compare > 0;
+    need.mapTexels = std::uint64_t(o.sampleSize) * std::uint64_t(o.sampleSize);
+    std::string what =
+        fmt::format("rendering the {}x{} sample at {}x{}", o.sampleSize, o.sampleSize, width, height);
+    if (!o.input.empty()) {
+        const auto header = readImageHeader(o.input);
+        if (!header) return Error{header.error()};
+        need.mapTexels = std::uint64_t(header->width) * std::uint64_t(header->height);
+        what = fmt::format("rendering a {}x{} map at {}x{}", header->width, header->height, width, height);
+    }
+    return checkMemory(estimatedRenderBytes(need), what,
+                       "close other programs, or render a smaller map or frame");
+}
+
+Result<Scene> buildScene(const RenderCliOptions& o, int width, int height) {
     Scene scene;
     MaterialSettings& m = scene.material;
 
@@ -259,6 +281,9 @@ Result<Scene> buildScene(const RenderCliOptions& o) {
     }
     scene.exposure = o.exposure;
 
+    // One memory ceiling for every command: checked before the map is decoded.
+    if (const Status memory = checkRenderMemory(o, m.method, width, height); !memory)
+        return Error{memory.error()};
     // Normal map: a file, or the built-in sample (last, after the cheap checks above).
     if (!o.input.empty()) {
         auto map = loadNormalMap(o.input, toNormalMapOptions(o.normalMap));
@@ -604,36 +629,7 @@ int runRender(const RenderCliOptions& o, bool sizeGiven) {
         height = size->second;
     }
 
-    // One memory ceiling for every command: estimated from the map's header and the options, refused
-    // before anything is decoded.
-    {
-        RenderMemoryInput need;
-        need.frameWidth = width;
-        need.frameHeight = height;
-        need.everyMethod = o.bench;
-        need.reference = o.reference > 0 || o.sequence > 0 || o.compare > 0;
-        if (!o.method.empty()) {
-            if (auto method = methodFromName(o.method)) need.method = *method;
-        } else if (!o.preset.empty()) {
-            if (auto preset = findPreset(o.preset)) need.method = preset->method;
-        }
-        std::string what =
-            fmt::format("rendering the {}x{} sample at {}x{}", o.sampleSize, o.sampleSize, width, height);
-        need.mapTexels = std::uint64_t(o.sampleSize) * std::uint64_t(o.sampleSize);
-        if (!o.input.empty()) {
-            const auto header = readImageHeader(o.input);
-            if (!header) return fail(header.error());
-            need.mapTexels = std::uint64_t(header->width) * std::uint64_t(header->height);
-            what =
-                fmt::format("rendering a {}x{} map at {}x{}", header->width, header->height, width, height);
-        }
-        if (const Status memory = checkMemory(estimatedRenderBytes(need), what,
-                                              "close other programs, or render a smaller map or frame");
-            !memory)
-            return fail(memory.error());
-    }
-
-    auto scene = buildScene(o);
+    auto scene = buildScene(o, width, height);
     if (!scene) return fail(scene.error());
 
     auto context = makeContext(o.gl);

@@ -210,7 +210,7 @@ QStringList MaterialDocument::diagnostics(MapSlot slot) const {
     }
     if (d) {
         QStringList flags;
-        if (d->implausible) flags << "loaded anyway";
+        if (!d->implausible.empty()) flags << "loaded anyway";
         if (d->zRebuilt) flags << "z rebuilt";
         if (d->greenFlipped) flags << "green flipped";
         if (d->alphaIgnored) flags << "alpha ignored";
@@ -349,7 +349,7 @@ Status MaterialDocument::setPreset(const QString& name) {
     return pushCarryingLayers(s, m_maps, "Preset: " + name, (*p)->encoding);
 }
 
-Result<DecodedMap> MaterialDocument::decodeMap(MapSlot slot, const QString& path, bool allowImplausible) {
+Result<DecodedMap> MaterialDocument::decodeMap(MapSlot slot, const QString& path) {
     DecodedMap d;
     d.slot = slot;
     d.path = path;
@@ -360,19 +360,14 @@ Result<DecodedMap> MaterialDocument::decodeMap(MapSlot slot, const QString& path
         return d;
     }
     const std::string what = slot == MapSlot::Normal ? "normal map: " : "detail map: ";
+    // Decoded once, past the plausibility check: a map it refuses carries the refusal, and is held with
+    // it for the artist to load anyway.
     NormalMapOptions options;
-    options.allowImplausible = allowImplausible;
+    options.allowImplausible = true;
     auto map = loadNormalMap(path.toStdString(), options);
-    d.accepted = allowImplausible;
-    if (!map) {
-        // Refused: by the plausibility check alone when the map decodes past it. Then it is held,
-        // decoded, with the reason, for the artist to load anyway.
-        options.allowImplausible = true;
-        auto past = loadNormalMap(path.toStdString(), options);
-        if (!past || !past->diagnostics.implausible) return Error{what + map.error()};
-        d.refusal = QString::fromStdString(what + map.error());
-        map = std::move(past);
-    }
+    if (!map) return Error{what + map.error()};
+    if (!map->diagnostics.implausible.empty())
+        d.refusal = QString::fromStdString(what + map->diagnostics.implausible);
     (slot == MapSlot::Normal ? d.normal : d.detail) =
         std::make_shared<const NormalMap>(std::move(map.value()));
     return d;
@@ -387,7 +382,7 @@ Status MaterialDocument::applyDecodedMap(const DecodedMap& d) {
     case MapSlot::Normal:
         if (!d.normal) return Error{"normal map: nothing was decoded"};
         s.normalMapPath = d.path;
-        s.allowImplausibleNormal = d.normal->diagnostics.implausible;
+        s.allowImplausibleNormal = !d.normal->diagnostics.implausible.empty();
         next.normal = d.normal;
         break;
     case MapSlot::Gloss:
@@ -398,7 +393,7 @@ Status MaterialDocument::applyDecodedMap(const DecodedMap& d) {
     case MapSlot::Detail:
         if (!d.detail) return Error{"detail map: nothing was decoded"};
         s.detailMapPath = d.path;
-        s.allowImplausibleDetail = d.detail->diagnostics.implausible;
+        s.allowImplausibleDetail = !d.detail->diagnostics.implausible.empty();
         next.detail = d.detail;
         break;
     }

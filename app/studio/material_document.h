@@ -173,9 +173,9 @@ public:
     /// Whether a background load of the slot is in flight.
     bool loading(MapSlot slot) const;
     /// The expensive half of loadMap: reads and decodes the file (any thread; no document state). A
-    /// normal or detail map the plausibility check refuses is decoded past it and returned with its
-    /// `refusal` (unless `allowImplausible`, which lets it through as accepted).
-    static Result<DecodedMap> decodeMap(MapSlot slot, const QString& path, bool allowImplausible = false);
+    /// normal or detail map the plausibility check refuses is decoded past it, once, and returned with
+    /// its `refusal`.
+    static Result<DecodedMap> decodeMap(MapSlot slot, const QString& path);
     /// The other half, on the document's thread: checks the map against the document (a gloss map
     /// has the normal map's size), carries the painted layers over, pushes one undo step. A map with a
     /// refusal is refused unless accepted.

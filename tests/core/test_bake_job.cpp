@@ -615,9 +615,7 @@ TEST(BakeMemory, EstimateCoversTheMeasuredPeaksAndRefusesWhatCannotFit) {
         ASSERT_TRUE(perTexel) << perTexel.error();
         EXPECT_GE(*perTexel, m.bytes);
         // The whole estimate within 1.5x of the whole peak (the process's own beside the texels').
-        const ExportFormat format = job->exportOptions.format.value_or(job->preset.format);
-        const bool oiio =
-            format != ExportFormat::Png8 && format != ExportFormat::Png16 && format != ExportFormat::Dds;
+        const bool oiio = exportFormatUsesOpenImageIo(job->exportOptions.format.value_or(job->preset.format));
         const double peak = (oiio ? 148e6 : 12.5e6) + m.bytes * 2048.0 * 2048.0;
         const double estimate = double(estimatedBakeBytes(*perTexel, 2048, 2048, oiio));
         EXPECT_LE(estimate, 1.5 * peak) << m.preset << " " << estimate / 1e6 << " MB against " << peak / 1e6;

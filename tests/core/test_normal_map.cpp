@@ -159,7 +159,7 @@ TEST(NormalMap, TwoChannelVectorsLongerThanOneAreImplausible) {
     auto allowed = decodeNormalMap(makeImage(4, 4, 2, std::vector<float>(32, 0.02f)), allow);
     ASSERT_TRUE(allowed.ok()) << allowed.error();
     EXPECT_EQ(allowed->diagnostics.offLengthTexels, 16u);
-    EXPECT_TRUE(allowed->diagnostics.implausible); // let through, and says so
+    EXPECT_EQ(allowed->diagnostics.implausible, longer.error()); // let through, with the refusal it passed
     // A map of zeros holds no data at all (stored 0 is padding, NormalMap.PaddingStoredAsZero...),
     // RG and RGB alike, and nothing can be read from it even when implausible maps are allowed.
     for (int channels : {2, 3}) {
@@ -204,14 +204,14 @@ TEST(NormalMap, RejectsPhotosAndAcceptsThemOnRequest) {
     auto forced = decodeNormalMap(makeImage(64, 64, 3, px), options);
     ASSERT_TRUE(forced.ok());
     EXPECT_FALSE(forced->diagnostics.warnings.empty());
-    EXPECT_TRUE(forced->diagnostics.implausible);
+    EXPECT_EQ(forced->diagnostics.implausible, map.error());
     // A plausible map allowed through is not marked.
     std::vector<float> flat(48, 0.5f);
     for (size_t i = 2; i < flat.size(); i += 3)
         flat[i] = 1.0f;
     auto plain = decodeNormalMap(makeImage(4, 4, 3, flat), options);
     ASSERT_TRUE(plain.ok()) << plain.error();
-    EXPECT_FALSE(plain->diagnostics.implausible);
+    EXPECT_TRUE(plain->diagnostics.implausible.empty());
 }
 
 TEST(NormalMap, RejectsMidGreyHeightMapsStoredAsRgb) {

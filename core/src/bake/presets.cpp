@@ -451,6 +451,10 @@ bool exportFormatIsEightBit(ExportFormat format) {
     return true;
 }
 
+bool exportFormatUsesOpenImageIo(ExportFormat format) {
+    return format != ExportFormat::Png8 && format != ExportFormat::Png16 && format != ExportFormat::Dds;
+}
+
 bool storesEightBits(ExportFormat format, std::optional<DdsCompression> compression) {
     if (format == ExportFormat::Dds && compression == DdsCompression::Rgba16f) return false;
     return exportFormatIsEightBit(format);

@@ -326,9 +326,7 @@ std::string bakeSummaryText(const Json& summary, size_t maxSets) {
 Result<BakeMemoryEstimate> estimatedJobBytes(const BakeJob& job) {
     BakeMemoryEstimate e{0, kSampleBakeSize, kSampleBakeSize};
     // OpenImageIO is loaded for a map core does not decode itself, or a file format it does not write.
-    const ExportFormat format = job.exportOptions.format.value_or(job.preset.format);
-    bool openImageIo =
-        format != ExportFormat::Png8 && format != ExportFormat::Png16 && format != ExportFormat::Dds;
+    bool openImageIo = exportFormatUsesOpenImageIo(job.exportOptions.format.value_or(job.preset.format));
     bool coreDecoded = isSampleBakeInput(job.spec.input); // a sample is made in memory, not decoded
     if (!isSampleBakeInput(job.spec.input)) {
         const auto header = readImageHeader(job.spec.input);

@@ -469,6 +469,12 @@ std::uint64_t estimatedBakeBytes(double bytesPerTexel, int width, int height, bo
     return std::uint64_t(process + bytesPerTexel * double(width) * double(height));
 }
 
+Status checkBakeMemory(std::uint64_t need, int width, int height) {
+    auto usable = usableMemoryBytes();
+    if (!usable) return Error{usable.error()};
+    return checkBakeMemory(need, *usable, width, height);
+}
+
 Status checkBakeMemory(std::uint64_t need, std::optional<std::uint64_t> available, int width, int height) {
     return checkMemory(need, available, fmt::format("baking a {}x{} map", width, height),
                        "close other programs, or bake a smaller map");
@@ -491,9 +497,7 @@ Result<BakeJobResult> runBakeJob(const BakeJob& job, const BakeJobProgress& prog
         const auto need = estimatedJobBytes(job);
         if (!need) return Error{need.error()};
         if (!isSampleBakeInput(job.spec.input)) {
-            auto usable = usableMemoryBytes();
-            if (!usable) return Error{usable.error()};
-            const Status memory = checkBakeMemory(need->bytes, *usable, need->width, need->height);
+            const Status memory = checkBakeMemory(need->bytes, need->width, need->height);
             if (!memory) return Error{"'" + job.spec.input + "': " + memory.error()};
         }
         // A gloss map of another size is refused from its header, before either image is decoded.

@@ -779,10 +779,9 @@ Result<GltfResult> processGltf(const fs::path& input, const fs::path& outDir, co
             const auto perTexel = bakeJobBytesPerTexel(
                 job, h.width, h.height, decodedByCore(h.source.formatName, h.source.channelType));
             if (!perTexel) return Error{perTexel.error()};
-            auto usable = usableMemoryBytes();
-            if (!usable) return Error{usable.error()};
-            return checkBakeMemory(estimatedBakeBytes(*perTexel, h.width, h.height), *usable, h.width,
-                                   h.height);
+            // OpenImageIO counted: the asset's other images (JPEG among them) are read through it.
+            return checkBakeMemory(estimatedBakeBytes(*perTexel, h.width, h.height, /*openImageIo=*/true),
+                                   h.width, h.height);
         };
         auto normalImage =
             decodeImage(*normalBytes, fmt::format("{}: {} normal map (image {})", name, what, w.normal.image),

@@ -267,8 +267,9 @@ Result<NormalMap> finishDecode(NormalMap map, const std::vector<BlockTally>& tal
     }
     if (!implausible.empty()) {
         const std::string what = name + " does not look like a tangent-space normal map: " + implausible;
-        if (!options.allowImplausible) return Error{what + " (a photo, height map or object-space map?)"};
-        diag.implausible = true;
+        const std::string refusal = what + " (a photo, height map or object-space map?)";
+        if (!options.allowImplausible) return Error{refusal};
+        diag.implausible = refusal;
         diag.warnings.push_back(what);
     }
     return map;

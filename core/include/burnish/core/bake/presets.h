@@ -41,6 +41,9 @@ Result<ExportFormat> exportFormatFromName(std::string_view name);
 std::string_view exportFormatExtension(ExportFormat format);
 /// 8 bits or fewer per stored channel (PNG8, TGA, every DDS variant).
 bool exportFormatIsEightBit(ExportFormat format);
+/// Whether the export writes this format through OpenImageIO (loaded on its first call): TGA, EXR and
+/// TIFF; PNG has core's own encoder and DDS goes through nvtt.
+bool exportFormatUsesOpenImageIo(ExportFormat format);
 /// The same for a file with its DDS compression: DDS stores 8 bits except as rgba16f.
 bool storesEightBits(ExportFormat format, std::optional<DdsCompression> compression);
 

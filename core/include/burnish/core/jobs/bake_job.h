@@ -107,6 +107,8 @@ Result<double> bakeJobBytesPerTexel(const BakeJob& job, int width, int height, b
 /// An error naming the map's size, the need and what is available when `need` exceeds `available`
 /// (util/memory.h's checkMemory; the bake checks against usableMemoryBytes()).
 Status checkBakeMemory(std::uint64_t need, std::optional<std::uint64_t> available, int width, int height);
+/// checkBakeMemory against usableMemoryBytes() now (an invalid BURNISH_MEMORY_LIMIT is the error).
+Status checkBakeMemory(std::uint64_t need, int width, int height);
 
 /// A job with every name resolved and checked: nothing of it is read or written yet.
 struct BakeJob {

@@ -50,9 +50,9 @@ struct NormalMapDiagnostics {
     size_t offLengthTexels = 0;    // stored length off 1 by more than 25% (RG maps: only longer)
     double meanStoredLength = 1.0; // RGB maps: mean length of the stored vectors
     bool zRebuilt = false;
-    /// The plausibility check refused the map and allowImplausible let it through (its reason is the
-    /// first warning that names the map "does not look like a tangent-space normal map").
-    bool implausible = false;
+    /// Where the plausibility check refused the map and allowImplausible let it through: the refusal it
+    /// would have given (the error decodeNormalMap returns without allowImplausible); empty where it passed.
+    std::string implausible;
     bool alphaIgnored = false;
     bool greenFlipped = false;
     bool signedValues = false;
